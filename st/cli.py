@@ -1,0 +1,151 @@
+"""The `st` command line: check, compile, run, explain."""
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+
+from .diagnostics import CompileError, Severity, render_all
+from .errors_doc import EXPLANATIONS
+
+
+def _compile(files, emit_python=False, time_unit="ms", f_trig_first_scan=False, use_cache=True):
+    from .api import compile_paths
+    return compile_paths(list(files), emit_python=emit_python, time_unit=time_unit,
+                         f_trig_first_scan=f_trig_first_scan, use_cache=use_cache, raise_on_error=False)
+
+
+def _report(result) -> bool:
+    """Print diagnostics; True when there were errors."""
+    diags = [d for d in result.diagnostics if not d.span.file.endswith("standard_fbs.st")]
+    if diags:
+        click.echo(render_all(diags, result.sources), err=True)
+    return any(d.is_error for d in diags)
+
+
+_dialect_options = [
+    click.option("--time-unit", type=click.Choice(["ms", "s"]), default="ms", show_default=True,
+                 help="What TIME_TO_<int>/<int>_TO_TIME count: ms (IEC, CODESYS) or s (MatIEC)."),
+    click.option("--f-trig-first-scan/--no-f-trig-first-scan", default=False,
+                 help="F_TRIG pulses on the first scan when CLK is FALSE (MatIEC)."),
+]
+
+
+def dialect(f):
+    for opt in reversed(_dialect_options):
+        f = opt(f)
+    return f
+
+
+@click.group()
+@click.version_option(package_name="st-plc")
+def main():
+    """st: compile, check and run IEC 61131-3 Structured Text."""
+
+
+@main.command()
+@click.argument("files", nargs=-1, required=True, type=click.Path())
+@dialect
+def check(files, time_unit, f_trig_first_scan):
+    """Check ST files and report every error and warning."""
+    try:
+        result = _compile(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
+    except CompileError as e:
+        click.echo(e.render(), err=True)
+        sys.exit(1)
+    if _report(result):
+        sys.exit(1)
+    n = len(result.project.user_pous())
+    click.echo(f"ok: {len(files)} file(s), {n} POU(s)")
+
+
+@main.command()
+@click.argument("files", nargs=-1, required=True, type=click.Path())
+@click.option("--emit", type=click.Choice(["python"]), default=None, help="Print the generated code.")
+@dialect
+def compile(files, emit, time_unit, f_trig_first_scan):
+    """Compile ST files (to Python bytecode, cached)."""
+    try:
+        result = _compile(files, emit_python=emit == "python", time_unit=time_unit,
+                          f_trig_first_scan=f_trig_first_scan, use_cache=emit != "python")
+    except CompileError as e:
+        click.echo(e.render(), err=True)
+        sys.exit(1)
+    if _report(result):
+        sys.exit(1)
+    if emit == "python":
+        for path, text in result.python_source.items():
+            if path.endswith("standard_fbs.st"):
+                continue
+            click.echo(f"# ---- generated from {path}")
+            click.echo(text)
+    else:
+        click.echo(f"ok: {len(result.modules)} module(s)" + (" (from cache)" if result.from_cache else ""))
+
+
+@main.command()
+@click.argument("files", nargs=-1, required=True, type=click.Path())
+@click.option("--scans", type=int, default=None, help="Stop after N base ticks.")
+@click.option("--duration", default=None, help="Stop after this much PLC time (e.g. 5s).")
+@click.option("--cycle", default=None, help="Task cycle for a program without CONFIGURATION (default 10ms).")
+@click.option("--virtual/--realtime", default=None,
+              help="Run on virtual time (as fast as possible) or paced by the clock. "
+                   "Default: virtual when --scans or --duration is given, else real time.")
+@click.option("--dump-json", is_flag=True, help="After the run, print every variable as one JSON object.")
+@dialect
+def run(files, scans, duration, cycle, virtual, dump_json, time_unit, f_trig_first_scan):
+    """Run a program: its CONFIGURATION's tasks, or its PROGRAM as one cyclic task."""
+    from .runtime.plc import PLC, PLCFaultError
+    try:
+        result = _compile(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
+    except CompileError as e:
+        click.echo(e.render(), err=True)
+        sys.exit(1)
+    if _report(result):
+        sys.exit(1)
+    try:
+        plc = PLC(result, cycle)
+    except ValueError as e:
+        click.echo(f"error: {e}", err=True)
+        sys.exit(2)
+    if not plc.instances:
+        click.echo("error: nothing to run: no PROGRAM and no CONFIGURATION", err=True)
+        sys.exit(1)
+    if virtual is None:
+        virtual = scans is not None or duration is not None
+    code = 0
+    try:
+        if virtual:
+            if scans is not None:
+                plc.scan(scans)
+            if duration is not None:
+                plc.advance(duration)
+        else:
+            plc.run_realtime(scans=scans, duration=duration)
+    except PLCFaultError as e:
+        click.echo(str(e.fault), err=True)
+        code = 3
+    except KeyboardInterrupt:
+        pass
+    if dump_json:
+        click.echo(json.dumps(plc.variables(), indent=None))
+    else:
+        click.echo(f"stopped after {plc.scans} scan(s) at PLC time {plc.time / 1e9:g} s, state {plc.state}",
+                   err=True)
+    sys.exit(code)
+
+
+@main.command()
+@click.argument("code")
+def explain(code):
+    """Explain a diagnostic code, e.g. `st explain E104`."""
+    text = EXPLANATIONS.get(code.upper())
+    if text is None:
+        click.echo(f"unknown code {code}; codes: {', '.join(sorted(EXPLANATIONS))}", err=True)
+        sys.exit(1)
+    click.echo(f"{code.upper()}: {text}")
+
+
+if __name__ == "__main__":
+    main()

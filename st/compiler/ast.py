@@ -1,0 +1,402 @@
+"""The abstract syntax tree: small slotted dataclasses, each with a source span.
+
+Expression nodes carry a `ty` slot that the checker fills in (the resolved
+IEC type) and a `const` slot for folded constant values; everything else is
+what the source said.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+from ..source import Span
+
+# --------------------------------------------------------------------------- expressions
+
+
+@dataclass(slots=True, eq=False)
+class Expr:
+    span: Span
+    ty: Any = field(default=None, init=False, repr=False)
+    const: Any = field(default=None, init=False, repr=False)
+
+
+@dataclass(slots=True, eq=False)
+class Literal(Expr):
+    kind: str = ""          # int real bool string wstring time date tod dt
+    value: Any = None
+    type_name: str = ""     # the typed prefix (INT#5 → "INT"), or "" when untyped
+    text: str = ""          # the source text, for messages
+
+
+@dataclass(slots=True, eq=False)
+class EnumLit(Expr):
+    type_name: str = ""
+    member: str = ""
+
+
+@dataclass(slots=True, eq=False)
+class Name(Expr):
+    name: str = ""
+    sym: Any = field(default=None, repr=False)   # resolved by the checker
+
+
+@dataclass(slots=True, eq=False)
+class Direct(Expr):
+    address: str = ""       # "%IX0.0"
+
+
+@dataclass(slots=True, eq=False)
+class Field(Expr):
+    base: Expr = None
+    name: str = ""
+    name_span: Span = None
+    sym: Any = field(default=None, repr=False)
+
+
+@dataclass(slots=True, eq=False)
+class Bit(Expr):
+    base: Expr = None
+    index: int = 0
+    size: str = "X"         # X (bit), B, W, D, L for partial access x.%B1
+
+
+@dataclass(slots=True, eq=False)
+class Index(Expr):
+    base: Expr = None
+    indices: list = None
+
+
+@dataclass(slots=True, eq=False)
+class Deref(Expr):
+    base: Expr = None
+
+
+@dataclass(slots=True, eq=False)
+class Arg:
+    span: Span
+    name: str = ""          # "" for a positional argument
+    value: Expr = None
+    output: bool = False    # name => variable
+    negated: bool = False   # NOT name => variable
+
+
+@dataclass(slots=True, eq=False)
+class Call(Expr):
+    callee: Expr = None
+    args: list = None
+    # filled by the checker: what is being called
+    target: Any = field(default=None, repr=False)
+
+
+@dataclass(slots=True, eq=False)
+class Unary(Expr):
+    op: str = ""            # "-", "+", "NOT"
+    operand: Expr = None
+
+
+@dataclass(slots=True, eq=False)
+class Binary(Expr):
+    op: str = ""            # + - * / MOD ** = <> < > <= >= AND OR XOR AND_THEN OR_ELSE
+    left: Expr = None
+    right: Expr = None
+
+
+# --------------------------------------------------------------------------- initializers
+
+
+@dataclass(slots=True, eq=False)
+class ArrayInit:
+    span: Span
+    items: list             # of initializers or RepeatInit
+
+
+@dataclass(slots=True, eq=False)
+class RepeatInit:
+    span: Span
+    count: int
+    items: list
+
+
+@dataclass(slots=True, eq=False)
+class StructInit:
+    span: Span
+    fields: list            # of (name, span, initializer)
+
+
+# --------------------------------------------------------------------------- statements
+
+
+@dataclass(slots=True, eq=False)
+class Stmt:
+    span: Span
+
+
+@dataclass(slots=True, eq=False)
+class Assign(Stmt):
+    target: Expr = None
+    value: Expr = None
+    kind: str = ":="        # ":=", "S=", "R=", "?="
+
+
+@dataclass(slots=True, eq=False)
+class CallStmt(Stmt):
+    call: Call = None
+
+
+@dataclass(slots=True, eq=False)
+class If(Stmt):
+    branches: list = None   # [(cond, [stmt])]
+    orelse: list = None     # [stmt] or None
+
+
+@dataclass(slots=True, eq=False)
+class CaseBranch:
+    span: Span
+    labels: list            # [(lo Expr, hi Expr | None)]
+    body: list
+
+
+@dataclass(slots=True, eq=False)
+class Case(Stmt):
+    selector: Expr = None
+    branches: list = None
+    orelse: list = None
+
+
+@dataclass(slots=True, eq=False)
+class For(Stmt):
+    var: Expr = None
+    start: Expr = None
+    end: Expr = None
+    step: Optional[Expr] = None
+    body: list = None
+
+
+@dataclass(slots=True, eq=False)
+class While(Stmt):
+    cond: Expr = None
+    body: list = None
+
+
+@dataclass(slots=True, eq=False)
+class Repeat(Stmt):
+    body: list = None
+    cond: Expr = None
+
+
+@dataclass(slots=True, eq=False)
+class Exit(Stmt):
+    pass
+
+
+@dataclass(slots=True, eq=False)
+class Continue(Stmt):
+    pass
+
+
+@dataclass(slots=True, eq=False)
+class Return(Stmt):
+    pass
+
+
+@dataclass(slots=True, eq=False)
+class Empty(Stmt):
+    pass
+
+
+# --------------------------------------------------------------------------- type specs
+
+
+@dataclass(slots=True, eq=False)
+class TypeSpec:
+    span: Span
+
+
+@dataclass(slots=True, eq=False)
+class NamedType(TypeSpec):
+    name: str = ""
+
+
+@dataclass(slots=True, eq=False)
+class StringType(TypeSpec):
+    wide: bool = False
+    length: Optional[Expr] = None
+
+
+@dataclass(slots=True, eq=False)
+class ArrayType(TypeSpec):
+    ranges: list = None     # [(lo Expr, hi Expr)] or [None] for [*]
+    element: TypeSpec = None
+
+
+@dataclass(slots=True, eq=False)
+class RefType(TypeSpec):
+    target: TypeSpec = None
+    kind: str = "REF_TO"    # REF_TO, POINTER, REFERENCE
+
+
+@dataclass(slots=True, eq=False)
+class SubrangeType(TypeSpec):
+    base: str = ""
+    lo: Expr = None
+    hi: Expr = None
+
+
+@dataclass(slots=True, eq=False)
+class EnumValue:
+    span: Span
+    name: str
+    value: Optional[Expr] = None
+
+
+@dataclass(slots=True, eq=False)
+class EnumType(TypeSpec):
+    values: list = None     # [EnumValue]
+    base: str = ""          # "" → INT
+    default: str = ""
+
+
+@dataclass(slots=True, eq=False)
+class StructType(TypeSpec):
+    members: list = None    # [VarDecl]
+
+
+# --------------------------------------------------------------------------- declarations
+
+
+@dataclass(slots=True, eq=False)
+class VarDecl:
+    span: Span
+    names: list             # [(name, span)]
+    type: TypeSpec
+    init: Any = None        # Expr, ArrayInit, StructInit or None
+    location: str = ""      # "%IX0.0"
+    edge: str = ""          # R_EDGE / F_EDGE
+    path: list = None       # VAR_CONFIG: instance path [names]
+
+
+@dataclass(slots=True, eq=False)
+class VarBlock:
+    span: Span
+    kind: str               # VAR, VAR_INPUT, ... (upper case)
+    qualifiers: list        # CONSTANT, RETAIN, NON_RETAIN, PERSISTENT
+    decls: list
+
+
+@dataclass(slots=True, eq=False)
+class TypeDecl:
+    span: Span
+    name: str
+    spec: TypeSpec
+    init: Any = None
+
+
+@dataclass(slots=True, eq=False)
+class TypeBlock:
+    span: Span
+    types: list
+
+
+@dataclass(slots=True, eq=False)
+class ActionAssoc:
+    span: Span
+    action: str
+    qualifier: str
+    time: Optional[Expr] = None
+
+
+@dataclass(slots=True, eq=False)
+class Step:
+    span: Span
+    name: str
+    initial: bool
+    actions: list
+
+
+@dataclass(slots=True, eq=False)
+class Transition:
+    span: Span
+    name: str
+    priority: Optional[Expr]
+    sources: list           # [(name, span)]
+    targets: list
+    cond: Optional[Expr] = None
+    body: Optional[list] = None     # transition given as statements assigning the transition name
+
+
+@dataclass(slots=True, eq=False)
+class ActionDecl:
+    span: Span
+    name: str
+    body: list
+
+
+@dataclass(slots=True, eq=False)
+class POU:
+    span: Span
+    kind: str               # FUNCTION, FUNCTION_BLOCK, PROGRAM
+    name: str
+    return_type: Optional[TypeSpec] = None
+    var_blocks: list = field(default_factory=list)
+    body: list = field(default_factory=list)
+    steps: list = field(default_factory=list)
+    transitions: list = field(default_factory=list)
+    actions: list = field(default_factory=list)
+    modifiers: list = field(default_factory=list)
+    extends: str = ""
+    implements: list = field(default_factory=list)
+    end_span: Optional[Span] = None
+
+
+@dataclass(slots=True, eq=False)
+class TaskDecl:
+    span: Span
+    name: str
+    params: dict            # upper-case name → Expr
+
+
+@dataclass(slots=True, eq=False)
+class ProgramConfig:
+    span: Span
+    instance: str
+    task: str
+    type_name: str
+    args: list              # [Arg]
+    retain: str = ""
+
+
+@dataclass(slots=True, eq=False)
+class Resource:
+    span: Span
+    name: str
+    target: str
+    var_blocks: list
+    tasks: list
+    programs: list
+
+
+@dataclass(slots=True, eq=False)
+class Configuration:
+    span: Span
+    name: str
+    var_blocks: list
+    resources: list
+
+
+@dataclass(slots=True, eq=False)
+class TestBlock:
+    span: Span
+    kind: str               # TEST, SETUP, TEARDOWN
+    name: str
+    var_blocks: list
+    body: list
+
+
+@dataclass(slots=True, eq=False)
+class Unit:
+    """Everything declared in one source file."""
+
+    path: str
+    items: list             # TypeBlock, POU, Configuration, VarBlock, TestBlock
+    pragmas: list = field(default_factory=list)

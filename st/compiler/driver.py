@@ -1,0 +1,232 @@
+"""The compiler pipeline: sources → parse → check → generate → code objects (cached).
+
+`compile_sources` is the one entry point; the CLI, the PLC API and the tests
+all go through it.
+"""
+from __future__ import annotations
+
+import hashlib
+import marshal
+import os
+import pickle
+import sys
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional
+
+from ..diagnostics import CompileError, Diagnostic, DiagnosticSink, Severity
+from ..source import SourceFile, Span
+from . import ast as A
+from .build import AstBuilder
+from .check import Checker
+from .codegen import ModuleGen
+from .library import Library
+from .model import Project
+
+COMPILER_VERSION = "0.1.0-8"
+_parser_lock = threading.Lock()
+_parser = None
+_builder = None
+
+
+def _get_parser():
+    global _parser, _builder
+    if _parser is None:
+        from ..grammar.parser import StParser
+        _builder = AstBuilder("")
+        _parser = StParser(_builder)
+    return _parser, _builder
+
+
+@dataclass
+class CompiledProgram:
+    """Everything the runtime needs: code objects and the checked model."""
+
+    modules: list                      # [(filename, code object)]
+    project: Project
+    diagnostics: list
+    sources: dict                      # path → SourceFile (for rendering diagnostics)
+    helpers: dict = field(default_factory=dict)
+    python_source: dict = field(default_factory=dict)   # path → Python text (emit python)
+    from_cache: bool = False
+
+
+def parse_source(src: SourceFile, sink: DiagnosticSink) -> Optional[A.Unit]:
+    with _parser_lock:
+        parser, builder = _get_parser()
+        builder.path = src.path
+        builder.errors = []
+        unit, diags = parser.parse(src)
+        errors = list(builder.errors)
+    for d in diags:
+        sink.add(d)
+    for e in errors:
+        sink.error(e.code, e.span, e.message)
+    if unit is not None:
+        unit.path = src.path
+    return unit
+
+
+def _cache_dir() -> Optional[Path]:
+    if os.environ.get("ST_NO_CACHE"):
+        return None
+    base = os.environ.get("ST_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "st")
+    p = Path(base) / "compiled"
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    return p
+
+
+def _cache_key(sources: list[SourceFile], libraries: list[Library], emit_python: bool) -> str:
+    h = hashlib.sha256()
+    h.update(COMPILER_VERSION.encode())
+    h.update(sys.version.encode())
+    h.update(b"py" if emit_python else b"-")
+    for lib in libraries:
+        h.update(lib.name.encode() + lib.version.encode())
+        for path, text in lib.sources:
+            h.update(text.encode())
+    for s in sources:
+        h.update(s.path.encode() + b"\0" + s.text.encode() + b"\0")
+    return h.hexdigest()
+
+
+def compile_sources(sources: list[SourceFile], libraries: list[Library], *, emit_python: bool = False,
+                    use_cache: bool = True, raise_on_error: bool = True) -> CompiledProgram:
+    all_sources = {s.path: s for s in sources}
+    key = _cache_key(sources, libraries, emit_python)
+    cdir = _cache_dir() if use_cache else None
+    if cdir is not None:
+        hit = _load_cache(cdir / key, all_sources, libraries)
+        if hit is not None:
+            return hit
+    sink = DiagnosticSink()
+    units = []
+    lib_paths = set()
+    for lib in libraries:
+        for path, text in lib.sources:
+            src = SourceFile(path, text)
+            all_sources[path] = src
+            lib_paths.add(path)
+            u = parse_source(src, sink)
+            if u is not None:
+                units.append(u)
+    for s in sources:
+        u = parse_source(s, sink)
+        if u is not None:
+            units.append(u)
+    checker = Checker(sink, libraries)
+    project = checker.run(units, lib_paths)
+    modules = []
+    pysrc = {}
+    if not sink.has_errors:
+        gen = ModuleGen(project, sink)
+        py_modules = gen.generate()
+        if not sink.has_errors:
+            for path, mod in py_modules.items():
+                if emit_python:
+                    import ast as pyast
+                    pysrc[path] = pyast.unparse(mod)
+                modules.append((path, compile(mod, path, "exec")))
+    diags = sink.sorted()
+    helpers = {}
+    for lib in libraries:
+        helpers.update(lib.helpers)
+    result = CompiledProgram(modules, project, diags, all_sources, helpers, pysrc)
+    if any(d.is_error for d in diags):
+        if raise_on_error:
+            raise CompileError(diags, all_sources)
+        return result
+    if cdir is not None:
+        _store_cache(cdir / key, result)
+    return result
+
+
+def _strip_for_cache(project: Project) -> None:
+    """Drop what only the compiler needed (AST bodies) before pickling."""
+    for pou in project.pous.values():
+        if pou.decl is not None:
+            pou.decl = _PouStub(pou.decl.span, pou.decl.kind, pou.decl.name)
+        for v in pou.vars.values():
+            v.init = None
+        pou.actions = {k: None for k in pou.actions}
+    for t in project.types.values():
+        if hasattr(t, "members") and isinstance(t.members, dict):
+            for m in t.members.values():
+                if hasattr(m, "init"):
+                    m.init = None
+        if hasattr(t, "init"):
+            t.init = None
+    for g in project.globals.values():
+        g.init = None
+    for cfg in project.configs:
+        for inst in cfg.instances:
+            inst.args = [(p, None, o) for p, _, o in inst.args]
+
+
+@dataclass
+class _PouStub:
+    span: Span
+    kind: str
+    name: str
+
+
+def _store_cache(path: Path, result: CompiledProgram) -> None:
+    try:
+        if result.project.tests:
+            return      # unit-test ASTs are compiled on demand; keep it simple
+        import copy
+        proj = result.project
+        _strip_for_cache(proj)
+        payload = pickle.dumps({
+            "modules": [(p, marshal.dumps(c)) for p, c in result.modules],
+            "project": proj,
+            "diagnostics": result.diagnostics,
+            "python": result.python_source,
+        }, protocol=pickle.HIGHEST_PROTOCOL)
+        tmp = path.with_suffix(".tmp%d" % os.getpid())
+        tmp.write_bytes(payload)
+        os.replace(tmp, path)
+    except Exception:  # the cache is an optimisation; never fail a compile for it
+        pass
+
+
+def _load_cache(path: Path, sources: dict, libraries: list[Library]) -> Optional[CompiledProgram]:
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    try:
+        d = pickle.loads(data)
+        modules = [(p, marshal.loads(c)) for p, c in d["modules"]]
+    except Exception:
+        return None
+    helpers = {}
+    for lib in libraries:
+        helpers.update(lib.helpers)
+        for p, text in lib.sources:
+            sources[p] = SourceFile(p, text)
+    d["project"].libraries = libraries
+    return CompiledProgram(modules, d["project"], d["diagnostics"], sources, helpers, d["python"], True)
+
+
+def load_files(paths: list[str]) -> list[SourceFile]:
+    out = []
+    for p in paths:
+        try:
+            raw = Path(p).read_bytes()
+        except OSError as e:
+            raise CompileError([Diagnostic("E000", Severity.ERROR, Span(str(p), 0, 0),
+                                           f"cannot read file: {e.strerror}")], {}) from None
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError:
+            text = raw.decode("latin-1")
+        if text.startswith("\ufeff"):
+            text = text[1:]
+        out.append(SourceFile(str(p), text.replace("\r\n", "\n").replace("\r", "\n")))
+    return out

@@ -1,0 +1,57 @@
+"""What a library gives the compiler: ST sources, native functions and runtime helpers.
+
+The compiler knows no standard function by itself; `st.stdlib` (and later
+`st.stdlib.plcopen`) describe theirs with `FuncSig`, so every library plugs in
+the same way.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Optional
+
+
+@dataclass
+class Param:
+    name: str
+    constraint: str         # a type name (INT, TIME, ...) or a generic (ANY_NUM, ANY_INT, ...)
+    group: str = ""         # params of the same group unify to one type ("T")
+
+
+@dataclass
+class FuncSig:
+    """A native (Python-implemented) function callable from ST.
+
+    `result` is a type name, the name of a group ("T": the unified type of
+    that group's arguments), or a callable(arg_types) → Type.
+    `emit(ctx, args, arg_types, result_type)` returns a Python `ast.expr`;
+    by default the call is `helper(*args, *extra(arg_types, result_type))`.
+    """
+
+    name: str
+    params: list
+    result: Any
+    extensible: bool = False
+    helper: str = ""
+    extra: Optional[Callable] = None
+    emit: Optional[Callable] = None
+    min_args: int = 0
+    doc: str = ""
+
+
+@dataclass
+class Library:
+    name: str
+    sources: list = field(default_factory=list)       # [(path, text)]
+    functions: dict = field(default_factory=dict)     # upper name → FuncSig
+    helpers: dict = field(default_factory=dict)       # python name → object (module namespace)
+    conversion: Optional[Callable] = None             # name → FuncSig | None (X_TO_Y family)
+    version: str = "1"
+
+    def add(self, sig: FuncSig) -> None:
+        self.functions[sig.name.upper()] = sig
+
+    def lookup(self, name: str) -> Optional[FuncSig]:
+        sig = self.functions.get(name.upper())
+        if sig is None and self.conversion is not None:
+            sig = self.conversion(name.upper())
+        return sig

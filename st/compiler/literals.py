@@ -1,0 +1,209 @@
+"""Literal text → values. Time and date values are integers of nanoseconds.
+
+TIME/LTIME: a duration in ns.  DATE/DT: ns since 1970-01-01 (UTC, no zone).
+TOD: ns since midnight.  These are also the runtime representations.
+"""
+from __future__ import annotations
+
+import re
+from datetime import date, datetime, timezone
+
+NS = 1
+US = 1_000
+MS = 1_000_000
+SEC = 1_000_000_000
+MIN = 60 * SEC
+HOUR = 60 * MIN
+DAY = 24 * HOUR
+
+_UNITS = {"d": DAY, "h": HOUR, "m": MIN, "s": SEC, "ms": MS, "us": US, "ns": NS}
+_TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(ms|us|ns|d|h|m|s)", re.I)
+_EPOCH = datetime(1970, 1, 1, tzinfo=timezone.utc)
+
+
+class LiteralError(ValueError):
+    pass
+
+
+def parse_int(text: str) -> int:
+    t = text.replace("_", "")
+    if "#" in t:
+        base, digits = t.split("#", 1)
+        if not digits:
+            raise LiteralError(f"missing digits in '{text}'")
+        return int(digits, int(base))
+    return int(t)
+
+
+def parse_real(text: str) -> float:
+    return float(text.replace("_", ""))
+
+
+def parse_duration(body: str) -> int:
+    """'1h2m3s4ms', '1.5s', '-5s', '1d_2h' → ns."""
+    s = body.strip()
+    sign = 1
+    if s[:1] in "+-":
+        sign = -1 if s[0] == "-" else 1
+        s = s[1:]
+    s = s.replace("_", "") if "." not in s else s
+    pos = 0
+    total = 0
+    s_clean = s.replace("_", "")
+    for m in _TIME_PART.finditer(s_clean):
+        if m.start() != pos:
+            raise LiteralError(f"malformed duration '{body}'")
+        num, unit = m.group(1).replace("_", ""), m.group(2).lower()
+        if "." in num:
+            whole, frac = num.split(".")
+            total += int(whole or "0") * _UNITS[unit] + int(frac) * _UNITS[unit] // 10 ** len(frac)
+        else:
+            total += int(num) * _UNITS[unit]
+        pos = m.end()
+    if pos != len(s_clean) or pos == 0:
+        raise LiteralError(f"malformed duration '{body}': expected e.g. T#1h2m3s4ms")
+    return sign * total
+
+
+def parse_time_literal(text: str) -> int:
+    return parse_duration(text.split("#", 1)[1])
+
+
+def _date_ns(y: int, mo: int, d: int) -> int:
+    try:
+        dd = date(y, mo, d)
+    except ValueError as e:
+        raise LiteralError(str(e)) from None
+    return (dd - date(1970, 1, 1)).days * DAY
+
+
+def _tod_ns(body: str) -> int:
+    parts = body.split(":")
+    if len(parts) not in (2, 3):
+        raise LiteralError(f"malformed time of day '{body}'")
+    h, m = int(parts[0]), int(parts[1])
+    sec_ns = 0
+    if len(parts) == 3:
+        sec = parts[2]
+        if "." in sec:
+            whole, frac = sec.split(".")
+            frac = (frac + "000000000")[:9]
+            sec_ns = int(whole) * SEC + int(frac)
+        else:
+            sec_ns = int(sec) * SEC
+    if h > 23 or m > 59 or sec_ns >= 60 * SEC:
+        raise LiteralError(f"time of day out of range '{body}'")
+    return h * HOUR + m * MIN + sec_ns
+
+
+def parse_date_literal(text: str) -> int:
+    y, mo, d = (int(x) for x in text.split("#", 1)[1].split("-"))
+    return _date_ns(y, mo, d)
+
+
+def parse_tod_literal(text: str) -> int:
+    return _tod_ns(text.split("#", 1)[1])
+
+
+def parse_dt_literal(text: str) -> int:
+    body = text.split("#", 1)[1]
+    y, mo, d, rest = body.split("-", 3)
+    return _date_ns(int(y), int(mo), int(d)) + _tod_ns(rest)
+
+
+_ESC = {"$": "$", "'": "'", '"': '"', "L": "\n", "N": "\n", "P": "\f", "R": "\r", "T": "\t"}
+
+
+def parse_string(text: str, wide: bool) -> str:
+    """Decode an IEC string literal including its quotes; '$' escapes."""
+    body = text[1:-1]
+    if "$" not in body:
+        return body
+    out = []
+    i = 0
+    n = len(body)
+    hexlen = 4 if wide else 2
+    while i < n:
+        c = body[i]
+        if c != "$":
+            out.append(c)
+            i += 1
+            continue
+        if i + 1 >= n:
+            raise LiteralError("'$' at the end of a string")
+        e = body[i + 1]
+        if e.upper() in _ESC:
+            out.append(_ESC[e.upper()])
+            i += 2
+            continue
+        h = body[i + 1:i + 1 + hexlen]
+        if len(h) == hexlen and all(ch in "0123456789abcdefABCDEF" for ch in h):
+            out.append(chr(int(h, 16)))
+            i += 1 + hexlen
+            continue
+        raise LiteralError(f"unknown escape '${e}' in string")
+    return "".join(out)
+
+
+# --------------------------------------------------------------------------- formatting
+
+
+def format_duration(ns: int, prefix: str = "T#") -> str:
+    """ns → 'T#1h2m3s4ms' (the shortest IEC form, exact to the ns)."""
+    if ns == 0:
+        return prefix + "0s"
+    sign = "-" if ns < 0 else ""
+    v = abs(ns)
+    parts = []
+    for unit, size in (("d", DAY), ("h", HOUR), ("m", MIN), ("s", SEC), ("ms", MS), ("us", US), ("ns", NS)):
+        q, v = divmod(v, size)
+        if q:
+            parts.append(f"{q}{unit}")
+    return prefix + sign + "".join(parts)
+
+
+def format_date(ns: int, prefix: str = "D#") -> str:
+    d = date.fromordinal(date(1970, 1, 1).toordinal() + ns // DAY)
+    return f"{prefix}{d.year:04d}-{d.month:02d}-{d.day:02d}"
+
+
+def _format_tod_body(ns: int) -> str:
+    ns %= DAY
+    h, r = divmod(ns, HOUR)
+    m, r = divmod(r, MIN)
+    s, frac = divmod(r, SEC)
+    text = f"{h:02d}:{m:02d}:{s:02d}"
+    if frac:
+        text += "." + f"{frac:09d}".rstrip("0")
+    return text
+
+
+def format_tod(ns: int, prefix: str = "TOD#") -> str:
+    return prefix + _format_tod_body(ns)
+
+
+def format_dt(ns: int, prefix: str = "DT#") -> str:
+    return format_date(ns - ns % DAY, prefix) + "-" + _format_tod_body(ns % DAY)
+
+
+def format_string(s: str, wide: bool = False) -> str:
+    q = '"' if wide else "'"
+    out = []
+    for ch in s:
+        if ch == "$":
+            out.append("$$")
+        elif ch == q:
+            out.append("$" + q)
+        elif ch == "\n":
+            out.append("$N")
+        elif ch == "\r":
+            out.append("$R")
+        elif ch == "\t":
+            out.append("$T")
+        elif ch == "\f":
+            out.append("$P")
+        elif ord(ch) < 32 or ord(ch) > 126:
+            out.append(f"${ord(ch):04X}" if wide else f"${ord(ch) & 0xFF:02X}")
+        else:
+            out.append(ch)
+    return q + "".join(out) + q

@@ -1,0 +1,79 @@
+"""The checked program: what the checker produces and code generation consumes."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+from .types import POUType, Type, VarSym
+
+
+@dataclass(eq=False)
+class TaskModel:
+    name: str
+    interval: int = 0           # ns; 0 for an event task
+    priority: int = 0
+    single: str = ""            # the name of the BOOL global that triggers an event task
+    span: Any = None
+
+
+@dataclass(eq=False)
+class InstanceModel:
+    name: str
+    type: POUType
+    task: str                   # task name ("" = runs every base tick)
+    resource: str = ""
+    args: list = field(default_factory=list)   # connections [(param, Expr, is_output)]
+    span: Any = None
+
+
+@dataclass(eq=False)
+class ConfigModel:
+    name: str
+    tasks: list = field(default_factory=list)          # [TaskModel]
+    instances: list = field(default_factory=list)      # [InstanceModel]
+    var_config: list = field(default_factory=list)     # [(path list, location, init Expr|None, type, span)]
+    implicit: bool = False      # made up for a file with only a PROGRAM
+
+
+@dataclass(eq=False)
+class StepModel:
+    name: str
+    index: int
+    initial: bool
+    actions: list               # [(action name, qualifier, time Expr|None)]
+    span: Any = None
+
+
+@dataclass(eq=False)
+class TransitionModel:
+    index: int
+    sources: list               # step indices
+    targets: list
+    cond: Any                   # Expr (BOOL)
+    priority: int = 0
+    span: Any = None
+
+
+@dataclass(eq=False)
+class SfcModel:
+    steps: list
+    transitions: list
+    actions: list               # action names in use (lower)
+    action_index: dict          # lower name → index
+
+
+@dataclass(eq=False)
+class Project:
+    types: dict = field(default_factory=dict)          # lower → Type
+    pous: dict = field(default_factory=dict)           # lower → POUType
+    globals: dict = field(default_factory=dict)        # unique key → VarSym
+    global_names: dict = field(default_factory=dict)   # lower name → [VarSym]
+    configs: list = field(default_factory=list)        # [ConfigModel]
+    enum_members: dict = field(default_factory=dict)   # lower member → [(EnumType, name, value)]
+    direct_vars: dict = field(default_factory=dict)    # "%QX0.0" → (pyname, Type)
+    sfc: dict = field(default_factory=dict)            # pou lower → SfcModel
+    tests: list = field(default_factory=list)          # ast.TestBlock (issue: unit tests)
+    libraries: list = field(default_factory=list)
+
+    def user_pous(self):
+        return [p for p in self.pous.values() if not p.library]

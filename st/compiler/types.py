@@ -1,0 +1,409 @@
+"""The IEC type model: elementary types, strings, arrays, structs, enums, refs, POUs.
+
+Runtime representation (what generated code stores), decided here once:
+BOOL → bool; integers and bit strings → int; REAL/LREAL → float;
+TIME/DATE/TOD/DT (and L-variants) → int nanoseconds; STRING/WSTRING/CHAR → str;
+enums → int; arrays → list (multi-dimensional: flat, row-major); structs and
+FB/program instances → instances of generated slotted classes.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+
+class Type:
+    name: str = "?"
+    kind: str = "?"
+
+    def __str__(self) -> str:
+        return self.name
+
+    @property
+    def is_int(self) -> bool:
+        return self.kind == "int"
+
+    @property
+    def is_bit(self) -> bool:
+        return self.kind == "bit"
+
+    @property
+    def is_intlike(self) -> bool:
+        return self.kind in ("int", "bit")
+
+    @property
+    def is_real(self) -> bool:
+        return self.kind == "real"
+
+    @property
+    def is_num(self) -> bool:
+        return self.kind in ("int", "real")
+
+    @property
+    def is_bool(self) -> bool:
+        return self.kind == "bool"
+
+    @property
+    def is_string(self) -> bool:
+        return self.kind == "string"
+
+    @property
+    def is_time(self) -> bool:
+        return self.kind == "time"
+
+    @property
+    def is_datetime(self) -> bool:
+        return self.kind in ("date", "tod", "dt")
+
+    @property
+    def is_elementary(self) -> bool:
+        return self.kind in ("bool", "int", "bit", "real", "time", "date", "tod", "dt", "string", "char")
+
+    @property
+    def is_aggregate(self) -> bool:
+        return self.kind in ("array", "struct", "fb")
+
+
+@dataclass(eq=False)
+class ElemType(Type):
+    name: str
+    kind: str
+    bits: int = 0
+    signed: bool = False
+    lo: Any = None
+    hi: Any = None
+    default: Any = 0
+    long: bool = False      # LTIME, LDATE, ... (64-bit variants)
+
+    def __repr__(self) -> str:
+        return self.name
+
+    def __reduce__(self):
+        # keep the canonical instances canonical across pickling (the compile cache)
+        if ELEMENTARY.get(self.name) is self or ELEMENTARY.get({"TIME_OF_DAY": "TOD"}.get(self.name, "")) is self:
+            return (_elementary, (self.name,))
+        return (_rebuild, (type(self), dict(self.__dict__)))
+
+
+def _elementary(name):
+    return ELEMENTARY[name]
+
+
+def _rebuild(cls, state):
+    obj = cls.__new__(cls)
+    obj.__dict__.update(state)
+    return obj
+
+
+def _int(name, bits, signed):
+    lo, hi = (-(1 << (bits - 1)), (1 << (bits - 1)) - 1) if signed else (0, (1 << bits) - 1)
+    return ElemType(name, "int", bits, signed, lo, hi, 0)
+
+
+def _bit(name, bits):
+    return ElemType(name, "bit", bits, False, 0, (1 << bits) - 1, 0)
+
+
+BOOL = ElemType("BOOL", "bool", 1, False, 0, 1, False)
+SINT, INT, DINT, LINT = _int("SINT", 8, True), _int("INT", 16, True), _int("DINT", 32, True), _int("LINT", 64, True)
+USINT, UINT, UDINT, ULINT = (_int("USINT", 8, False), _int("UINT", 16, False), _int("UDINT", 32, False),
+                             _int("ULINT", 64, False))
+BYTE, WORD, DWORD, LWORD = _bit("BYTE", 8), _bit("WORD", 16), _bit("DWORD", 32), _bit("LWORD", 64)
+REAL = ElemType("REAL", "real", 32, True, -3.4028234663852886e38, 3.4028234663852886e38, 0.0)
+LREAL = ElemType("LREAL", "real", 64, True, -1.7976931348623157e308, 1.7976931348623157e308, 0.0)
+_T64 = (-(1 << 63), (1 << 63) - 1)
+TIME = ElemType("TIME", "time", 64, True, *_T64, 0)
+LTIME = ElemType("LTIME", "time", 64, True, *_T64, 0, long=True)
+DATE = ElemType("DATE", "date", 64, True, *_T64, 0)
+LDATE = ElemType("LDATE", "date", 64, True, *_T64, 0, long=True)
+TOD = ElemType("TIME_OF_DAY", "tod", 64, True, *_T64, 0)
+LTOD = ElemType("LTIME_OF_DAY", "tod", 64, True, *_T64, 0, long=True)
+DT = ElemType("DATE_AND_TIME", "dt", 64, True, *_T64, 0)
+LDT = ElemType("LDATE_AND_TIME", "dt", 64, True, *_T64, 0, long=True)
+CHAR = ElemType("CHAR", "char", 8, False, 0, 255, "\0")
+WCHAR = ElemType("WCHAR", "char", 16, False, 0, 65535, "\0")
+
+
+@dataclass(eq=False)
+class StringType(Type):
+    length: int = 80
+    wide: bool = False
+    kind: str = "string"
+    default: str = ""
+
+    @property
+    def name(self) -> str:  # type: ignore[override]
+        base = "WSTRING" if self.wide else "STRING"
+        return base if self.length == 80 else f"{base}[{self.length}]"
+
+
+STRING = StringType(80, False)
+WSTRING = StringType(80, True)
+
+ELEMENTARY: dict[str, Type] = {
+    "BOOL": BOOL, "SINT": SINT, "INT": INT, "DINT": DINT, "LINT": LINT,
+    "USINT": USINT, "UINT": UINT, "UDINT": UDINT, "ULINT": ULINT,
+    "BYTE": BYTE, "WORD": WORD, "DWORD": DWORD, "LWORD": LWORD,
+    "REAL": REAL, "LREAL": LREAL, "TIME": TIME, "LTIME": LTIME,
+    "DATE": DATE, "LDATE": LDATE, "TIME_OF_DAY": TOD, "TOD": TOD, "LTIME_OF_DAY": LTOD, "LTOD": LTOD,
+    "DATE_AND_TIME": DT, "DT": DT, "LDATE_AND_TIME": LDT, "LDT": LDT,
+    "STRING": STRING, "WSTRING": WSTRING, "CHAR": CHAR, "WCHAR": WCHAR,
+}
+
+
+@dataclass(eq=False)
+class LiteralType(Type):
+    """An untyped numeric literal (or constant expression of literals): fits any numeric context."""
+
+    name: str
+    kind: str  # "lit_int" or "lit_real"
+
+
+LIT_INT = LiteralType("integer literal", "lit_int")
+LIT_REAL = LiteralType("real literal", "lit_real")
+
+
+@dataclass(eq=False)
+class ArrayType(Type):
+    dims: list = None       # [(lo, hi)]
+    element: Type = None
+    kind: str = "array"
+
+    @property
+    def name(self) -> str:  # type: ignore[override]
+        return "ARRAY[" + ", ".join(f"{lo}..{hi}" for lo, hi in self.dims) + f"] OF {self.element}"
+
+    @property
+    def size(self) -> int:
+        n = 1
+        for lo, hi in self.dims:
+            n *= hi - lo + 1
+        return n
+
+
+@dataclass(eq=False)
+class Member:
+    name: str
+    type: Type
+    init: Any = None        # AST initializer or None
+    span: Any = None
+    pyname: str = ""
+
+
+@dataclass(eq=False)
+class StructType(Type):
+    name: str
+    members: dict = field(default_factory=dict)   # lower name → Member
+    kind: str = "struct"
+    pyname: str = ""
+    resolved: bool = False
+
+
+@dataclass(eq=False)
+class EnumType(Type):
+    name: str
+    members: dict = field(default_factory=dict)   # lower name → (name, value)
+    base: ElemType = INT
+    default_value: int = 0
+    kind: str = "enum"
+    names_by_value: dict = field(default_factory=dict)
+
+
+@dataclass(eq=False)
+class SubrangeType(Type):
+    name: str = "?"
+    base: ElemType = None
+    lo: int = 0
+    hi: int = 0
+
+    @property
+    def kind(self) -> str:  # type: ignore[override]
+        return self.base.kind
+
+    @property
+    def bits(self):
+        return self.base.bits
+
+    @property
+    def signed(self):
+        return self.base.signed
+
+
+@dataclass(eq=False)
+class RefType(Type):
+    target: Type = None
+    ref_kind: str = "REF_TO"
+    kind: str = "ref"
+
+    @property
+    def name(self) -> str:  # type: ignore[override]
+        return f"REF_TO {self.target}"
+
+
+@dataclass(eq=False)
+class AliasType(Type):
+    """A named alias whose only difference from its target is a default value."""
+
+    name: str = "?"
+    target: Type = None
+    init: Any = None
+
+
+@dataclass(eq=False)
+class VarSym:
+    name: str
+    type: Type
+    section: str            # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL
+    span: Any = None
+    init: Any = None
+    location: str = ""
+    constant: bool = False
+    retain: bool = False
+    persistent: bool = False
+    edge: str = ""
+    pyname: str = ""
+    owner: Any = None       # the POUType or None for globals
+    used: bool = False
+    written: bool = False
+    address_taken: bool = False
+    const_value: Any = None
+    is_global: bool = False
+    global_ref: Any = None  # VAR_EXTERNAL → the VAR_GLOBAL symbol
+
+
+@dataclass(eq=False)
+class POUType(Type):
+    name: str = "?"
+    pou_kind: str = "FUNCTION_BLOCK"   # FUNCTION, FUNCTION_BLOCK, PROGRAM
+    decl: Any = None        # ast.POU (None for native)
+    vars: dict = field(default_factory=dict)      # lower → VarSym, declaration order
+    return_type: Optional[Type] = None
+    pyname: str = ""
+    library: str = ""       # "" for user code, else the library name
+    native: Any = None      # a native implementation (Python) for library POUs
+    actions: dict = field(default_factory=dict)   # lower → ast.ActionDecl
+    resolved: bool = False
+
+    @property
+    def kind(self) -> str:  # type: ignore[override]
+        return {"FUNCTION": "function", "FUNCTION_BLOCK": "fb", "PROGRAM": "fb"}[self.pou_kind]
+
+    def inputs(self):
+        return [v for v in self.vars.values() if v.section == "VAR_INPUT"]
+
+    def outputs(self):
+        return [v for v in self.vars.values() if v.section == "VAR_OUTPUT"]
+
+    def in_outs(self):
+        return [v for v in self.vars.values() if v.section == "VAR_IN_OUT"]
+
+    def params(self):
+        return [v for v in self.vars.values() if v.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]
+
+
+def unalias(t: Type) -> Type:
+    while isinstance(t, AliasType):
+        t = t.target
+    return t
+
+
+def base_of(t: Type) -> Type:
+    """The type a value is computed in (subranges → base, aliases → target)."""
+    t = unalias(t)
+    if isinstance(t, SubrangeType):
+        return t.base
+    return t
+
+
+# --------------------------------------------------------------------------- conversions
+
+# IEC 61131-3 3rd edition, implicit (widening) conversions.
+_WIDEN: dict[str, set[str]] = {
+    "SINT": {"INT", "DINT", "LINT", "REAL", "LREAL"},
+    "INT": {"DINT", "LINT", "REAL", "LREAL"},
+    "DINT": {"LINT", "LREAL"},
+    "LINT": set(),
+    "USINT": {"UINT", "UDINT", "ULINT", "INT", "DINT", "LINT", "REAL", "LREAL"},
+    "UINT": {"UDINT", "ULINT", "DINT", "LINT", "REAL", "LREAL"},
+    "UDINT": {"ULINT", "LINT", "LREAL"},
+    "ULINT": set(),
+    "REAL": {"LREAL"},
+    "LREAL": set(),
+    "BOOL": {"BYTE", "WORD", "DWORD", "LWORD"},
+    "BYTE": {"WORD", "DWORD", "LWORD"},
+    "WORD": {"DWORD", "LWORD"},
+    "DWORD": {"LWORD"},
+    "LWORD": set(),
+    "TIME": {"LTIME"}, "LTIME": set(),
+    "DATE": {"LDATE"}, "LDATE": set(),
+    "TIME_OF_DAY": {"LTIME_OF_DAY"}, "LTIME_OF_DAY": set(),
+    "DATE_AND_TIME": {"LDATE_AND_TIME"}, "LDATE_AND_TIME": set(),
+    "CHAR": {"STRING"}, "WCHAR": {"WSTRING"},
+}
+
+
+def widens_to(src: Type, dst: Type) -> bool:
+    s, d = base_of(src), base_of(dst)
+    if s is d:
+        return True
+    if isinstance(s, ElemType) and isinstance(d, ElemType):
+        return d.name in _WIDEN.get(s.name, ())
+    if isinstance(s, ElemType) and isinstance(d, StringType):
+        return s.kind == "char" and d.wide == (s.name == "WCHAR")
+    return False
+
+
+_RANK = ["SINT", "USINT", "INT", "UINT", "DINT", "UDINT", "LINT", "ULINT", "REAL", "LREAL"]
+
+
+def common_type(a: Type, b: Type) -> Optional[Type]:
+    """The smallest type both operands widen to, or None."""
+    a, b = base_of(a), base_of(b)
+    if a is b:
+        return a
+    if isinstance(a, LiteralType) or isinstance(b, LiteralType):
+        if isinstance(a, LiteralType) and isinstance(b, LiteralType):
+            return LIT_REAL if LIT_REAL in (a, b) else LIT_INT
+        lit, other = (a, b) if isinstance(a, LiteralType) else (b, a)
+        if lit is LIT_INT and (other.is_num or other.is_bit):
+            return other
+        if lit is LIT_REAL:
+            if other.is_real:
+                return other
+            if other.is_int:
+                return REAL if other.bits <= 16 else LREAL
+        return None
+    if widens_to(a, b):
+        return b
+    if widens_to(b, a):
+        return a
+    if isinstance(a, StringType) and isinstance(b, StringType) and a.wide == b.wide:
+        return a if a.length >= b.length else b
+    if isinstance(a, ElemType) and isinstance(b, ElemType):
+        if a.is_num and b.is_num:
+            for name in _RANK:
+                t = ELEMENTARY[name]
+                if widens_to(a, t) and widens_to(b, t):
+                    return t
+        if a.is_bit and b.is_bit:
+            return a if a.bits >= b.bits else b
+    return None
+
+
+def literal_fits(value, t: Type) -> bool:
+    t = base_of(t)
+    if isinstance(t, SubrangeType):
+        return t.lo <= value <= t.hi
+    if isinstance(t, ElemType) and t.kind in ("int", "bit"):
+        return t.lo <= value <= t.hi
+    return True
+
+
+def default_type_for_literal(t: Type, value=None) -> Type:
+    if t is LIT_INT:
+        if value is not None and not (DINT.lo <= value <= DINT.hi):
+            return LINT
+        return DINT
+    if t is LIT_REAL:
+        return LREAL
+    return t

@@ -1,0 +1,72 @@
+"""PLC runtime faults and how a Python exception maps to an ST location."""
+from __future__ import annotations
+
+import types
+from dataclasses import dataclass
+
+
+class PLCFault(Exception):
+    """Raised by generated code or its helpers for an IEC runtime error."""
+
+    def __init__(self, message: str, kind: str = "FAULT"):
+        super().__init__(message)
+        self.message = message
+        self.kind = kind
+
+
+@dataclass
+class FaultInfo:
+    kind: str           # DIV0, INDEX, RANGE, NULL, LOOP, WATCHDOG, CONVERSION, ...
+    message: str
+    file: str = ""
+    line: int = 0
+    pou: str = ""
+    task: str = ""
+
+    def __str__(self) -> str:
+        where = f"{self.file}:{self.line}: " if self.file else ""
+        ctx = f" (in {self.pou}" + (f", task {self.task}" if self.task else "") + ")" if self.pou else ""
+        return f"{where}PLC fault [{self.kind}]: {self.message}{ctx}"
+
+
+_PY_KINDS = {
+    ZeroDivisionError: ("DIV0", "division by zero"),
+    IndexError: ("INDEX", "array index out of range"),
+    RecursionError: ("RECURSION", "call depth exceeded (recursion)"),
+    OverflowError: ("OVERFLOW", "numeric overflow"),
+    AttributeError: ("NULL", "invalid reference"),
+}
+
+
+def fault_from_exception(exc: BaseException, task: str = "") -> FaultInfo:
+    """Describe an exception raised while running generated code, at its ST line."""
+    if isinstance(exc, PLCFault):
+        kind, msg = exc.kind, exc.message
+    else:
+        kind, msg = "FAULT", f"{type(exc).__name__}: {exc}"
+        for cls, (k, m) in _PY_KINDS.items():
+            if isinstance(exc, cls):
+                kind, msg = k, m
+                break
+    file, line, pou = "", 0, ""
+    tb: types.TracebackType | None = exc.__traceback__
+    while tb is not None:
+        code = tb.tb_frame.f_code
+        if tb.tb_frame.f_globals.get("_st_namespace"):
+            file, line = code.co_filename, tb.tb_lineno
+            pou = _pou_name(tb.tb_frame)
+        tb = tb.tb_next
+    return FaultInfo(kind, msg, file, line, pou, task)
+
+
+def _pou_name(frame) -> str:
+    name = frame.f_code.co_name
+    self = frame.f_locals.get("self")
+    if self is not None:
+        cls = type(self).__name__
+        for p in ("_fb_", "_prg_"):
+            if cls.startswith(p):
+                return cls[len(p):]
+    if name.startswith("_fn_"):
+        return name[4:]
+    return name

@@ -1,0 +1,260 @@
+"""The names generated code may use: one namespace per PLC is built from these.
+
+Everything here is small and hot. Generated code reaches Python only through
+these names (all begin with '_'), never through builtins directly.
+"""
+from __future__ import annotations
+
+import math
+import struct
+
+from .faults import PLCFault
+
+_F32 = struct.Struct("<f")
+_pack, _unpack = _F32.pack, _F32.unpack
+
+
+def _f32(v):
+    """Round to IEEE single precision (REAL on store)."""
+    try:
+        return _unpack(_pack(v))[0]
+    except OverflowError:
+        if v != v:
+            return v
+        return math.inf if v > 0 else -math.inf
+    except struct.error:
+        return math.nan
+
+
+def _idiv(a, b):
+    """Integer division truncating toward zero (IEC/C)."""
+    if b == 0:
+        raise PLCFault("division by zero", "DIV0")
+    q = a // b
+    if q < 0 and q * b != a:
+        q += 1
+    return q
+
+
+def _imod(a, b):
+    """MOD with the sign of the dividend; x MOD 0 = 0 (IEC 61131-3)."""
+    if b == 0:
+        return 0
+    r = abs(a) % abs(b)
+    return -r if a < 0 else r
+
+
+def _umod(a, b):
+    return a % b if b else 0
+
+
+def _fdiv(a, b):
+    """REAL division: IEEE semantics for a zero divisor."""
+    try:
+        return a / b
+    except ZeroDivisionError:
+        if a == 0 or a != a:
+            return math.nan
+        neg = (a < 0) != (math.copysign(1.0, b) < 0)
+        return -math.inf if neg else math.inf
+
+
+def _pow(a, b):
+    try:
+        r = math.pow(a, b)
+    except OverflowError:
+        return math.inf
+    except ValueError:
+        return math.nan
+    return r
+
+
+def _round(v):
+    """Nearest integer, halves away from zero (IEC REAL_TO_INT)."""
+    if v != v or v in (math.inf, -math.inf):
+        raise PLCFault(f"cannot convert {v} to an integer", "CONVERSION")
+    return int(math.floor(v + 0.5)) if v >= 0 else -int(math.floor(-v + 0.5))
+
+
+def _trunc(v):
+    if v != v or v in (math.inf, -math.inf):
+        raise PLCFault(f"cannot convert {v} to an integer", "CONVERSION")
+    return int(v)
+
+
+def _ix(i, lo, hi):
+    """Array index check → 0-based offset."""
+    if lo <= i <= hi:
+        return i - lo
+    raise PLCFault(f"array index {i} is outside the bounds {lo}..{hi}", "INDEX")
+
+
+def _subrange(v, lo, hi):
+    if lo <= v <= hi:
+        return v
+    raise PLCFault(f"value {v} is outside the subrange {lo}..{hi}", "RANGE")
+
+
+def _setbit(x, n, v, bits, signed):
+    x = (x | (1 << n)) if v else (x & ~(1 << n))
+    x &= (1 << bits) - 1
+    if signed and x >> (bits - 1):
+        x -= 1 << bits
+    return x
+
+
+def _for_dir(step):
+    if step > 0:
+        return 1
+    if step < 0:
+        return -1
+    raise PLCFault("FOR loop with a step of 0 never ends", "LOOP")
+
+
+class _Struct:
+    """Base of generated STRUCT classes: value semantics on assignment."""
+
+    __slots__ = ()
+
+    def _copy(self):
+        new = object.__new__(type(self))
+        for s in self.__slots__:
+            setattr(new, s, _copy(getattr(self, s)))
+        return new
+
+
+class _FB:
+    """Base of generated FUNCTION_BLOCK and PROGRAM classes."""
+
+    __slots__ = ()
+
+    def _body(self):  # pragma: no cover - always overridden
+        pass
+
+    def _copy(self):
+        new = object.__new__(type(self))
+        for s in self.__slots__:
+            setattr(new, s, _copy(getattr(self, s)))
+        return new
+
+
+def _copy(v):
+    if isinstance(v, list):
+        if v and isinstance(v[0], (list, _Struct, _FB)):
+            return [_copy(x) for x in v]
+        return v[:]
+    if isinstance(v, (_Struct, _FB)):
+        return v._copy()
+    return v
+
+
+def _assign(dst, src):
+    """Aggregate assignment in place (so references into dst stay valid)."""
+    if isinstance(dst, list):
+        if len(dst) != len(src):
+            raise PLCFault(f"cannot assign an array of {len(src)} elements to one of {len(dst)}", "INDEX")
+        if dst and isinstance(dst[0], (list, _Struct, _FB)):
+            for d, s in zip(dst, src):
+                _assign(d, s)
+        else:
+            dst[:] = src
+        return
+    for s in dst.__slots__:
+        sv = getattr(src, s)
+        if isinstance(sv, (list, _Struct, _FB)):
+            _assign(getattr(dst, s), sv)
+        else:
+            setattr(dst, s, sv)
+
+
+def _init_fields(obj, pairs):
+    for name, value in pairs:
+        setattr(obj, name, value)
+    return obj
+
+
+# ------------------------------------------------------------------ references
+
+
+def _wrap_to(v, spec):
+    if spec is None:
+        return v
+    if spec == "f32":
+        return _f32(v)
+    if spec[0] == "str":
+        return v[:spec[1]]
+    bits, signed = spec
+    if isinstance(v, bool):
+        return v
+    m = (1 << bits) - 1
+    if signed:
+        h = 1 << (bits - 1)
+        return ((v + h) & m) - h
+    return v & m
+
+
+class _AttrRef:
+    """A reference to an attribute (a variable of an instance or a struct field)."""
+
+    __slots__ = ("obj", "name", "spec")
+
+    def __init__(self, obj, name, spec=None):
+        self.obj, self.name, self.spec = obj, name, spec
+
+    def get(self):
+        return getattr(self.obj, self.name)
+
+    def set(self, v):
+        setattr(self.obj, self.name, _wrap_to(v, self.spec))
+
+    def __eq__(self, other):
+        return isinstance(other, _AttrRef) and other.obj is self.obj and other.name == self.name
+
+    __hash__ = None
+
+
+class _ItemRef:
+    """A reference to a list element or a namespace (global) entry."""
+
+    __slots__ = ("obj", "key", "spec")
+
+    def __init__(self, obj, key, spec=None):
+        self.obj, self.key, self.spec = obj, key, spec
+
+    def get(self):
+        return self.obj[self.key]
+
+    def set(self, v):
+        self.obj[self.key] = _wrap_to(v, self.spec)
+
+    def __eq__(self, other):
+        return isinstance(other, _ItemRef) and other.obj is self.obj and other.key == self.key
+
+    __hash__ = None
+
+
+class _NegRef:
+    __slots__ = ("ref",)
+
+    def __init__(self, ref):
+        self.ref = ref
+
+    def get(self):
+        return not self.ref.get()
+
+    def set(self, v):
+        self.ref.set(not v)
+
+
+def _deref_null():
+    raise PLCFault("dereference of a NULL reference", "NULL")
+
+
+BASE_NAMESPACE = {
+    "_f32": _f32, "_idiv": _idiv, "_imod": _imod, "_umod": _umod, "_fdiv": _fdiv, "_pow": _pow,
+    "_round": _round, "_trunc": _trunc, "_ix": _ix, "_subrange": _subrange, "_setbit": _setbit,
+    "_for_dir": _for_dir, "_Struct": _Struct, "_FB": _FB, "_copy": _copy, "_assign": _assign,
+    "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
+    "_float": float, "_int": int, "_range": range, "_abs": abs, "_min": min, "_max": max, "_len": len,
+    "_str": str, "_bool": bool, "_PLCFault": PLCFault,
+}

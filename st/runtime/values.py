@@ -1,0 +1,150 @@
+"""Runtime values ↔ Python API values and JSON, driven by IEC types."""
+from __future__ import annotations
+
+import math
+
+from ..compiler import types as T
+from ..compiler.literals import (format_date, format_dt, format_duration, format_tod, parse_date_literal,
+                                 parse_dt_literal, parse_duration, parse_time_literal, parse_tod_literal)
+from .helpers import _f32
+
+
+class ValueError_(ValueError):
+    pass
+
+
+def to_python(v, t: T.Type):
+    """A runtime value as a plain Python value (API reads). TIME etc. stay ns integers."""
+    t = T.unalias(t)
+    if isinstance(t, T.EnumType):
+        return t.names_by_value.get(v, v)
+    if isinstance(t, T.ArrayType):
+        return _nest([to_python(x, t.element) for x in v], t.dims)
+    if isinstance(t, T.StructType):
+        return {m.name: to_python(getattr(v, m.pyname), m.type) for m in t.members.values()}
+    if isinstance(t, T.POUType):
+        return {s.name: to_python(getattr(v, s.pyname), s.type) for s in t.vars.values()
+                if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT")}
+    return v
+
+
+def to_json(v, t: T.Type):
+    """A runtime value as JSON: times and dates as IEC literal text, enums by name."""
+    t = T.unalias(t)
+    if isinstance(t, T.SubrangeType):
+        return v
+    if isinstance(t, T.ElemType):
+        k = t.kind
+        if k == "time":
+            return format_duration(v, "LTIME#" if t.long else "T#")
+        if k == "date":
+            return format_date(v, "LDATE#" if t.long else "D#")
+        if k == "tod":
+            return format_tod(v, "LTOD#" if t.long else "TOD#")
+        if k == "dt":
+            return format_dt(v, "LDT#" if t.long else "DT#")
+        if k == "real":
+            if v != v or v in (math.inf, -math.inf):
+                return str(v)
+            return v
+        return v
+    if isinstance(t, T.EnumType):
+        return t.names_by_value.get(v, v)
+    if isinstance(t, T.ArrayType):
+        return _nest([to_json(x, t.element) for x in v], t.dims)
+    if isinstance(t, T.StructType):
+        return {m.name: to_json(getattr(v, m.pyname), m.type) for m in t.members.values()}
+    if isinstance(t, T.POUType):
+        return {s.name: to_json(getattr(v, s.pyname), s.type) for s in t.vars.values()
+                if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT")}
+    if isinstance(t, T.RefType):
+        return None
+    return v
+
+
+def _nest(flat: list, dims: list) -> list:
+    if len(dims) <= 1:
+        return flat
+    inner = 1
+    for lo, hi in dims[1:]:
+        inner *= hi - lo + 1
+    return [_nest(flat[i:i + inner], dims[1:]) for i in range(0, len(flat), inner)]
+
+
+def from_python(v, t: T.Type, where: str = ""):
+    """A Python value (API write) as a runtime value of type t, checked and converted."""
+    ut = T.unalias(t)
+    bt = T.base_of(t)
+    if isinstance(ut, T.EnumType):
+        if isinstance(v, str):
+            for name, val in ut.members.values():
+                if name.lower() == v.lower() or f"{ut.name}#{name}".lower() == v.lower():
+                    return val
+            raise ValueError_(f"{where}: '{v}' is not a value of {ut.name}")
+        if isinstance(v, int) and v in ut.names_by_value:
+            return v
+        raise ValueError_(f"{where}: {v!r} is not a value of {ut.name}")
+    if isinstance(ut, T.ArrayType):
+        raise ValueError_(f"{where}: write array elements one by one (e.g. {where}[1])")
+    if isinstance(ut, (T.StructType, T.POUType)):
+        raise ValueError_(f"{where}: write the fields one by one")
+    if isinstance(bt, T.StringType):
+        if not isinstance(v, str):
+            raise ValueError_(f"{where}: expected a string, got {v!r}")
+        return v[:bt.length]
+    k = bt.kind
+    if k == "bool":
+        if isinstance(v, bool) or v in (0, 1):
+            return bool(v)
+        raise ValueError_(f"{where}: expected a BOOL, got {v!r}")
+    if k in ("int", "bit"):
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise ValueError_(f"{where}: expected an integer, got {v!r}")
+        if isinstance(ut, T.SubrangeType) and not (ut.lo <= v <= ut.hi):
+            raise ValueError_(f"{where}: {v} is outside {ut.lo}..{ut.hi}")
+        if not (bt.lo <= v <= bt.hi):
+            raise ValueError_(f"{where}: {v} does not fit in {bt.name} ({bt.lo}..{bt.hi})")
+        return v
+    if k == "real":
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise ValueError_(f"{where}: expected a number, got {v!r}")
+        return _f32(float(v)) if bt.bits == 32 else float(v)
+    if k in ("time", "date", "tod", "dt"):
+        if isinstance(v, int) and not isinstance(v, bool):
+            return v
+        if isinstance(v, str):
+            try:
+                if "#" not in v:
+                    return parse_duration(v) if k == "time" else _raise(where, v)
+                return {"time": parse_time_literal, "date": parse_date_literal, "tod": parse_tod_literal,
+                        "dt": parse_dt_literal}[k](v)
+            except ValueError as e:
+                raise ValueError_(f"{where}: {e}") from None
+        if hasattr(v, "total_seconds") and k == "time":
+            return round(v.total_seconds() * 1e9)
+        raise ValueError_(f"{where}: expected a {bt.name}, got {v!r}")
+    if k == "char":
+        if isinstance(v, str) and len(v) == 1:
+            return v
+        raise ValueError_(f"{where}: expected one character, got {v!r}")
+    return v
+
+
+def _raise(where, v):
+    raise ValueError_(f"{where}: '{v}' needs an IEC literal such as D#2024-01-31")
+
+
+def parse_duration_arg(d) -> int:
+    """'2.5s', 'T#20ms', 2.5 (seconds) or an int of ns → ns."""
+    if isinstance(d, bool):
+        raise ValueError(f"not a duration: {d!r}")
+    if isinstance(d, int):
+        return d
+    if isinstance(d, float):
+        return round(d * 1e9)
+    if hasattr(d, "total_seconds"):
+        return round(d.total_seconds() * 1e9)
+    s = str(d).strip()
+    if "#" in s:
+        return parse_time_literal(s)
+    return parse_duration(s)

@@ -1,0 +1,307 @@
+"""Runtime implementations of the IEC standard functions (called by generated code).
+
+Values follow the representation in st.compiler.types: times are ns integers.
+String positions are 1-based as in IEC 61131-3.
+"""
+from __future__ import annotations
+
+import math
+from datetime import date
+
+from ..compiler.literals import (DAY, LiteralError, format_date, format_dt, format_duration, format_tod,
+                                 parse_duration, parse_int, parse_real)
+from ..runtime.faults import PLCFault
+from ..runtime.helpers import _f32
+
+# ------------------------------------------------------------------ numeric
+
+
+def _std_sqrt(x):
+    return math.sqrt(x) if x >= 0 else math.nan
+
+
+def _std_ln(x):
+    if x > 0:
+        return math.log(x)
+    return -math.inf if x == 0 else math.nan
+
+
+def _std_log(x):
+    if x > 0:
+        return math.log10(x)
+    return -math.inf if x == 0 else math.nan
+
+
+def _std_exp(x):
+    try:
+        return math.exp(x)
+    except OverflowError:
+        return math.inf
+
+
+def _safe(fn):
+    def f(x):
+        try:
+            return fn(x)
+        except ValueError:
+            return math.nan
+    f.__name__ = fn.__name__
+    return f
+
+
+_std_asin = _safe(math.asin)
+_std_acos = _safe(math.acos)
+
+
+def _std_tan(x):
+    return math.tan(x)
+
+
+# ------------------------------------------------------------------ bit shifts
+
+
+def _std_shl(v, n, bits):
+    return (v << n) & ((1 << bits) - 1) if n < bits else 0
+
+
+def _std_shr(v, n, bits):
+    return (v & ((1 << bits) - 1)) >> n
+
+
+def _std_rol(v, n, bits):
+    m = (1 << bits) - 1
+    v &= m
+    n %= bits
+    return ((v << n) | (v >> (bits - n))) & m
+
+
+def _std_ror(v, n, bits):
+    m = (1 << bits) - 1
+    v &= m
+    n %= bits
+    return ((v >> n) | (v << (bits - n))) & m
+
+
+def _signed(v, bits):
+    """Reinterpret an unsigned bit pattern as signed (for shifts on signed ints)."""
+    v &= (1 << bits) - 1
+    return v - (1 << bits) if v >> (bits - 1) else v
+
+
+# ------------------------------------------------------------------ selection
+
+
+def _std_limit(mn, v, mx):
+    return mn if v < mn else (mx if v > mx else v)
+
+
+def _std_mux(k, *args):
+    if 0 <= k < len(args):
+        return args[k]
+    raise PLCFault(f"MUX selector {k} is outside 0..{len(args) - 1}", "INDEX")
+
+
+def _std_sel(g, a, b):
+    return b if g else a
+
+
+def _cmp_chain(op):
+    def f(*args):
+        return all(op(args[i], args[i + 1]) for i in range(len(args) - 1))
+    return f
+
+
+_std_gt = _cmp_chain(lambda a, b: a > b)
+_std_ge = _cmp_chain(lambda a, b: a >= b)
+_std_eq = _cmp_chain(lambda a, b: a == b)
+_std_le = _cmp_chain(lambda a, b: a <= b)
+_std_lt = _cmp_chain(lambda a, b: a < b)
+
+
+def _std_ne(a, b):
+    return a != b
+
+
+# ------------------------------------------------------------------ strings (1-based)
+
+
+def _std_left(s, n):
+    return s[:n] if n > 0 else ""
+
+
+def _std_right(s, n):
+    return s[-n:] if n > 0 else ""
+
+
+def _std_mid(s, n, p):
+    if p < 1:
+        raise PLCFault(f"MID: position {p} must be at least 1", "RANGE")
+    return s[p - 1:p - 1 + n] if n > 0 else ""
+
+
+def _std_concat(*parts):
+    return "".join(parts)
+
+
+def _std_insert(s1, s2, p):
+    if p < 0 or p > len(s1):
+        raise PLCFault(f"INSERT: position {p} is outside 0..{len(s1)}", "RANGE")
+    return s1[:p] + s2 + s1[p:]
+
+
+def _std_delete(s, n, p):
+    if p < 1 or p > len(s) + 1:
+        raise PLCFault(f"DELETE: position {p} is outside 1..{len(s)}", "RANGE")
+    return s[:p - 1] + s[p - 1 + max(n, 0):]
+
+
+def _std_replace(s1, s2, n, p):
+    if p < 1 or p > len(s1) + 1:
+        raise PLCFault(f"REPLACE: position {p} is outside 1..{len(s1)}", "RANGE")
+    return s1[:p - 1] + s2 + s1[p - 1 + max(n, 0):]
+
+
+def _std_find(s1, s2):
+    return s1.find(s2) + 1 if s2 else 0
+
+
+# ------------------------------------------------------------------ conversions
+
+
+def _round_half_away(v):
+    if v != v or v in (math.inf, -math.inf):
+        raise PLCFault(f"cannot convert {v} to an integer", "CONVERSION")
+    return int(math.floor(v + 0.5)) if v >= 0 else -int(math.floor(-v + 0.5))
+
+
+def _real_to_string(v, bits=64):
+    if v != v:
+        return "NaN"
+    if v in (math.inf, -math.inf):
+        return "INF" if v > 0 else "-INF"
+    if bits == 32:
+        # the shortest text that reads back as the same float32
+        for digits in range(1, 10):
+            t = f"{v:.{digits}g}"
+            if _f32(float(t)) == v:
+                break
+    else:
+        t = repr(float(v))
+    if "e" in t or "E" in t:
+        m, e = t.lower().split("e")
+        if "." not in m:
+            m += ".0"
+        return f"{m}E{int(e)}"
+    if "." not in t and "inf" not in t and "nan" not in t:
+        t += ".0"
+    return t
+
+
+def _to_string(v, kind, bits=0):
+    if kind == "bool":
+        return "TRUE" if v else "FALSE"
+    if kind == "real":
+        return _real_to_string(v, bits)
+    if kind == "time":
+        return format_duration(v, "LT#" if bits == 1 else "T#")
+    if kind == "date":
+        return format_date(v)
+    if kind == "tod":
+        return format_tod(v)
+    if kind == "dt":
+        return format_dt(v)
+    if kind == "char":
+        return v
+    return str(v)
+
+
+def _str_to_int(s):
+    t = s.strip().replace("_", "")
+    if "#" in t and not t.split("#", 1)[0].isdigit():
+        t = t.split("#", 1)[1]
+    try:
+        return parse_int(t)
+    except (ValueError, LiteralError):
+        try:
+            return _round_half_away(float(t))
+        except ValueError:
+            return 0
+
+
+def _str_to_real(s):
+    t = s.strip()
+    if "#" in t:
+        t = t.split("#", 1)[1]
+    try:
+        return parse_real(t)
+    except ValueError:
+        return 0.0
+
+
+def _str_to_bool(s):
+    t = s.strip().upper()
+    if "#" in t:
+        t = t.split("#", 1)[1]
+    return t in ("TRUE", "1")
+
+
+def _str_to_time(s):
+    t = s.strip()
+    if "#" in t:
+        t = t.split("#", 1)[1]
+    try:
+        return parse_duration(t)
+    except (ValueError, LiteralError):
+        return 0
+
+
+def _to_bcd(v, bits):
+    if v < 0:
+        raise PLCFault(f"cannot convert the negative value {v} to BCD", "CONVERSION")
+    out, shift = 0, 0
+    while v:
+        v, d = divmod(v, 10)
+        out |= d << shift
+        shift += 4
+    if shift > bits:
+        raise PLCFault("value too large for BCD", "CONVERSION")
+    return out
+
+
+def _from_bcd(v):
+    out, mul = 0, 1
+    while v:
+        d = v & 0xF
+        if d > 9:
+            raise PLCFault(f"invalid BCD digit {d}", "CONVERSION")
+        out += d * mul
+        mul *= 10
+        v >>= 4
+    return out
+
+
+# ------------------------------------------------------------------ dates
+
+
+def _concat_date(y, m, d):
+    try:
+        return (date(y, m, d) - date(1970, 1, 1)).days * DAY
+    except ValueError:
+        raise PLCFault(f"invalid date {y}-{m}-{d}", "RANGE") from None
+
+
+def _concat_tod(h, m, s, ms):
+    return ((h * 60 + m) * 60 + s) * 1_000_000_000 + ms * 1_000_000
+
+
+def _day_of_week(d):
+    # 1970-01-01 was a Thursday; IEC/CODESYS: 0 = Sunday
+    return (d // DAY + 4) % 7
+
+
+NAMESPACE = {name: obj for name, obj in list(globals().items())
+             if name.startswith("_std_") or name in (
+                 "_to_string", "_str_to_int", "_str_to_real", "_str_to_bool", "_str_to_time", "_to_bcd",
+                 "_from_bcd", "_concat_date", "_concat_tod", "_day_of_week", "_signed", "_round_half_away",
+                 "_real_to_string")}
+NAMESPACE.update({"_sin": math.sin, "_cos": math.cos, "_atan": math.atan, "_atan2": math.atan2})
