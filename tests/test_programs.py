@@ -172,11 +172,13 @@ CYCLE_FROM_10S = [
 ]
 
 
-def press(plc, at_ms, hold_ms=200):
-    """Press the pedestrian button from `at_ms` for `hold_ms`, returning the phase trace."""
-    rows = trace(plc, at_ms, "instance0.phase")
+def press(plc, at_ms, *paths, hold_ms=200):
+    """Press the pedestrian button at `at_ms` for `hold_ms`; returns the trace of `paths`
+    (default: the phase) from the current time until the button is released."""
+    paths = paths or ("instance0.phase",)
+    rows = trace(plc, at_ms, *paths)
     plc["%IX0.0"] = True
-    rows += trace(plc, at_ms + hold_ms, "instance0.phase")
+    rows += trace(plc, at_ms + hold_ms, *paths)
     plc["%IX0.0"] = False
     return rows
 
@@ -202,8 +204,7 @@ def test_traffic_lamps_in_every_phase(traffic):
     press(traffic, 2000)
     seen = {}
     for t, phase in CYCLE_FROM_10S[1:]:
-        scan_at(traffic, t - 20)  # last scan of the previous phase
-        scan_at(traffic, t)
+        scan_at(traffic, t)  # the first scan of each phase
         assert traffic["instance0.phase"] == phase
         seen[phase] = tuple(traffic[s] for s in SIGNALS)
     assert seen == LAMPS
@@ -219,11 +220,9 @@ def test_traffic_request_after_min_green_is_served_at_once(traffic):
 
 
 def test_traffic_wait_lamp_shows_request_until_walk(traffic):
-    scan_at(traffic, 1980)
-    assert traffic[WAIT] is False
-    rows = press(traffic, 2000)
-    rows = trace(traffic, 16_000, WAIT)
-    assert changes(rows) == [(2200, True), (14_000, False)]
+    rows = press(traffic, 2000, WAIT)
+    rows += trace(traffic, 16_000, WAIT)
+    assert changes(rows) == [(0, False), (2000, True), (14_000, False)]
     assert traffic["instance0.request"] is False
 
 
@@ -260,19 +259,21 @@ def test_traffic_press_during_clearance_is_served_after_next_min_green(traffic):
     assert traffic["instance0.crossing_counter.CV"] == 2
 
 
-def test_traffic_walk_never_shown_unless_cars_have_red(traffic):
-    rows = press(traffic, 2000)
-    rows += press(traffic, 21_000)
-    rows += press(traffic, 45_000)
-    rows = trace(traffic, 90_000, *SIGNALS)
-    walked = 0
+def test_traffic_walk_only_while_cars_have_red(traffic):
+    rows = press(traffic, 2000, *SIGNALS)
+    rows += press(traffic, 21_000, *SIGNALS)
+    rows += press(traffic, 47_000, *SIGNALS)
+    rows += trace(traffic, 90_000, *SIGNALS)
+    assert len(rows) == 4500
+    walk_scans = 0
     for t, red, amber, green, dont_walk, walk in rows:
-        assert [red, green].count(True) == 1 or (amber and not red and not green), t
+        assert red or amber or green, t
+        assert not (green and (red or amber)), t
         assert walk != dont_walk, t
         if walk:
-            walked += 1
-            assert red and not amber and not green, t
-    assert walked == 300  # two walk phases of 6 s in the traced part
+            walk_scans += 1
+            assert red and not amber, t
+    assert walk_scans == 3 * 300  # three walk phases of 6 s
 
 
 # ============================================================================ tank level

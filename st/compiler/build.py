@@ -392,16 +392,21 @@ class AstBuilder(Transformer):
         return ("else", self._stmts(c[1:]))
 
     def case_stmt(self, c):
-        branches = [x for x in c if isinstance(x, A.CaseBranch)]
+        branches = []
         orelse = None
-        for x in c:
-            if isinstance(x, tuple) and x[0] == "else":
+        for x in c[3:]:
+            if isinstance(x, tuple) and x[0] == "labels":
+                branches.append(A.CaseBranch(x[1][0][0].span, x[1], []))
+            elif isinstance(x, tuple) and x[0] == "else":
                 orelse = x[1]
+            elif isinstance(x, A.Stmt):
+                if not branches:
+                    raise BuildError(x.span, "a statement in a CASE needs a label before it", "E001")
+                branches[-1].body.append(x)
         return A.Case(self.sp(c[0]), c[1], branches, orelse)
 
-    def case_branch(self, c):
-        labels = [x for x in c if isinstance(x, tuple) and x[0] == "label"]
-        return A.CaseBranch(labels[0][1].span, [(lo, hi) for _, lo, hi in labels], self._stmts(c))
+    def case_labels(self, c):
+        return ("labels", [(lo, hi) for _, lo, hi in c])
 
     def case_else(self, c):
         return ("else", self._stmts(c[1:]))

@@ -1,0 +1,110 @@
+"""Fixture tables: ST programs with their expected results, and ST files with marked errors.
+
+tests/fixtures/run/**.st   header comments:  (* @scans N *)  (* @cycle T#10ms *)
+                           (* @expect path = JSON *)   one per expectation
+tests/fixtures/errors/*.st  a line that must report an error ends with (* @error E104 *)
+"""
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from st import PLC
+from st.api import compile_paths
+from st.compiler import types as T
+from st.compiler.codegen import f32
+from st.diagnostics import CompileError
+
+HERE = Path(__file__).parent / "fixtures"
+RUN = sorted((HERE / "run").rglob("*.st"))
+ERRORS = sorted((HERE / "errors").rglob("*.st"))
+
+_EXPECT = re.compile(r"@expect\s+([^=]+?)\s*=\s*(.+?)\s*\*\)")
+_SCANS = re.compile(r"@scans\s+(\d+)")
+_CYCLE = re.compile(r"@cycle\s+(\S+?)\s*\*\)")
+_ERROR = re.compile(r"@error\s+([EW]\d{3})")
+
+
+def _ids(paths, root):
+    return [str(p.relative_to(root)) for p in paths]
+
+
+def _resolve_type(plc: PLC, path: str):
+    if path.strip().startswith("%"):
+        return None
+    return plc._resolve(path)[2]
+
+
+def _same(actual, expected, t) -> bool:
+    b = T.base_of(t) if t is not None else None
+    if isinstance(expected, float) or (isinstance(expected, int) and isinstance(actual, float)):
+        if b is not None and b.is_real and b.bits == 32:
+            return actual == f32(float(expected))
+        return actual == float(expected)
+    if isinstance(expected, list) and isinstance(actual, list):
+        et = T.unalias(t).element if isinstance(T.unalias(t), T.ArrayType) else None
+        if len(actual) != len(expected):
+            return False
+        inner = et
+        if isinstance(T.unalias(t), T.ArrayType) and len(T.unalias(t).dims) > 1:
+            sub = T.ArrayType(T.unalias(t).dims[1:], et)
+            return all(_same(a, e, sub) for a, e in zip(actual, expected))
+        return all(_same(a, e, inner) for a, e in zip(actual, expected))
+    if isinstance(expected, dict) and isinstance(actual, dict):
+        ut = T.unalias(t)
+        if set(k.lower() for k in expected) != set(k.lower() for k in actual):
+            return False
+        amap = {k.lower(): v for k, v in actual.items()}
+        for k, v in expected.items():
+            mt = None
+            if isinstance(ut, T.StructType) and k.lower() in ut.members:
+                mt = ut.members[k.lower()].type
+            if not _same(amap[k.lower()], v, mt):
+                return False
+        return True
+    return actual == expected
+
+
+@pytest.mark.parametrize("path", RUN, ids=_ids(RUN, HERE / "run"))
+def test_run_fixture(path: Path):
+    text = path.read_text()
+    expects = _EXPECT.findall(text)
+    assert expects, f"{path} has no @expect line"
+    m = _SCANS.search(text)
+    scans = int(m.group(1)) if m else 1
+    m = _CYCLE.search(text)
+    cycle = m.group(1) if m else None
+    plc = PLC.from_files(str(path), cycle=cycle)
+    plc.scan(scans)
+    from st.runtime.values import to_json
+    failures = []
+    for var, raw in expects:
+        expected = json.loads(raw)
+        if var.strip().startswith("%"):
+            actual = plc[var]
+            t = None
+        else:
+            container, key, t = plc._resolve(var)
+            value = container[key] if not isinstance(key, str) else (
+                container[key] if isinstance(container, dict) else getattr(container, key))
+            actual = to_json(value, t)
+        if not _same(actual, expected, t):
+            failures.append(f"{var}: expected {expected!r}, got {actual!r}")
+    assert not failures, "\n".join(failures)
+
+
+@pytest.mark.parametrize("path", ERRORS, ids=_ids(ERRORS, HERE / "errors"))
+def test_error_fixture(path: Path):
+    lines = path.read_text().splitlines()
+    wanted = {(i + 1, m.group(1)) for i, line in enumerate(lines) for m in [_ERROR.search(line)] if m}
+    assert wanted, f"{path} marks no @error"
+    with pytest.raises(CompileError) as info:
+        compile_paths([str(path)], use_cache=False)
+    got = {(d.span.line, d.code) for d in info.value.diagnostics if d.span.file == str(path)}
+    missing = wanted - got
+    rendered = info.value.render()
+    assert not missing, f"missing {sorted(missing)}; reported:\n{rendered}"
+    assert "Traceback" not in rendered
