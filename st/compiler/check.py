@@ -832,7 +832,7 @@ class Checker:
         if isinstance(e, A.Unary):
             return self._unary(e, scope, expected)
         if isinstance(e, A.Call):
-            return self.call(e, scope)
+            return self.call(e, scope, expected=expected)
         if isinstance(e, A.Field):
             return self._field(e, scope)
         if isinstance(e, A.Index):
@@ -1191,7 +1191,7 @@ class Checker:
         return b.element
 
     # ---------------------------------------------------------------- calls
-    def call(self, c: A.Call, scope: Scope, statement: bool = False) -> Optional[T.Type]:
+    def call(self, c: A.Call, scope: Scope, statement: bool = False, expected=None) -> Optional[T.Type]:
         callee = c.callee
         if isinstance(callee, A.Name):
             key = callee.name.lower()
@@ -1217,7 +1217,7 @@ class Checker:
                 return self._function_call(c, pou, scope)
             sig = self._native(key)
             if sig is not None:
-                return self._native_call(c, sig, scope)
+                return self._native_call(c, sig, scope, expected)
             if self.p.enum_members.get(key) or sym is not None:
                 self.err("E111", c.span, f"'{callee.name}' is not callable")
                 return None
@@ -1326,7 +1326,7 @@ class Checker:
                     self.err("E108", c.span, f"VAR_IN_OUT '{p.name}' of {pou.name} must be given")
         return {"params": bind, "en": extras.get("en"), "eno": extras.get("eno")}
 
-    def _native_call(self, c: A.Call, sig: FuncSig, scope: Scope):
+    def _native_call(self, c: A.Call, sig: FuncSig, scope: Scope, expected=None):
         args = []
         en = eno = None
         named = {}
@@ -1412,7 +1412,13 @@ class Checker:
             return None
         for g, t in list(groups.items()):
             if isinstance(t, T.LiteralType):
-                groups[g] = T.default_type_for_literal(t)
+                # all-literal arguments take the type the context expects (IEC: ANY_NUM literals)
+                eb = T.base_of(expected) if expected is not None else None
+                if sig.result == g and eb is not None and isinstance(eb, T.ElemType) and \
+                        (eb.is_num or (eb.is_bit and t is T.LIT_INT)) and not (t is T.LIT_REAL and not eb.is_real):
+                    groups[g] = eb
+                else:
+                    groups[g] = T.default_type_for_literal(t)
         # settle literal arguments to their group's type
         for i, a in enumerate(args):
             p = sig.params[min(i, len(sig.params) - 1)]
