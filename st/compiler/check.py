@@ -1196,6 +1196,9 @@ class Checker:
         if isinstance(callee, A.Name):
             key = callee.name.lower()
             sym = self._lookup(key, scope)
+            if isinstance(sym, T.VarSym) and not isinstance(T.unalias(sym.type), T.POUType) and (
+                    key in self.p.pous or self._native(key) is not None):
+                sym = None      # LEN(x) is the function even where a variable is called len
             if isinstance(sym, T.VarSym):
                 sym.used = True
                 callee.sym = sym

@@ -163,6 +163,12 @@ def _strip_for_cache(project: Project) -> None:
             t.init = None
     for g in project.globals.values():
         g.init = None
+    for sfc in project.sfc.values():
+        for t in sfc.transitions:
+            t.cond = None
+        for st in sfc.steps:
+            st.actions = [(a, q, None) for a, q, _ in st.actions]
+    project.libraries = []
     for cfg in project.configs:
         for inst in cfg.instances:
             inst.args = [(p, None, o) for p, _, o in inst.args]
@@ -179,8 +185,8 @@ def _store_cache(path: Path, result: CompiledProgram) -> None:
     try:
         if result.project.tests:
             return      # unit-test ASTs are compiled on demand; keep it simple
-        import copy
         proj = result.project
+        libs = proj.libraries
         _strip_for_cache(proj)
         payload = pickle.dumps({
             "modules": [(p, marshal.dumps(c)) for p, c in result.modules],
@@ -188,6 +194,7 @@ def _store_cache(path: Path, result: CompiledProgram) -> None:
             "diagnostics": result.diagnostics,
             "python": result.python_source,
         }, protocol=pickle.HIGHEST_PROTOCOL)
+        proj.libraries = libs
         tmp = path.with_suffix(".tmp%d" % os.getpid())
         tmp.write_bytes(payload)
         os.replace(tmp, path)

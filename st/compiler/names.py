@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import keyword
 
-_SOFT = {"match", "case", "type", "_"}
+_SOFT = {"match", "case", "type", "_", "self"}
 
 
 def mangle(name: str) -> str:

@@ -83,18 +83,14 @@ class StParser:
             return "end of file"
         return f"'{tok}'"
 
-    def _hint(self, src: SourceFile, tok: Token, expected: set, prev: Token | None) -> str:
+    def _hint(self, src: SourceFile, tok: Token, expected: set, semicolon_fixes: bool) -> str:
         t = tok.type
         if t == "EQ" and "ASSIGN" in expected:
             return "use ':=' to assign a value; '=' compares"
-        if "SEMICOLON" in expected and prev is not None and tok.line > prev.end_line:
-            return f"a ';' is missing at the end of line {prev.end_line}"
-        if "SEMICOLON" in expected:
-            return "a ';' may be missing before this"
+        if semicolon_fixes:
+            return "a ';' is missing here"
         if "END_IF" in expected and re.search(r"\bELSE\s+IF\b", src.text, re.I):
             return "'ELSE IF' opens a nested IF that needs its own END_IF; did you mean ELSIF?"
-        if t == "IF" and prev is not None and prev.type == "ELSE":
-            return "did you mean ELSIF?"
         if t == "$END":
             ends = [e for e in expected if e.startswith("END_")]
             if ends:
@@ -102,6 +98,19 @@ class StParser:
         if t == "ASSIGN" and "EQ" in expected:
             return "':=' assigns; use '=' to compare"
         return ""
+
+    @staticmethod
+    def _semicolon_fixes(ip, tok) -> bool:
+        """Would inserting ';' before this token let the parse go on?"""
+        if ip is None or tok.type == "$END":
+            return False
+        try:
+            trial = ip.copy()
+            trial.feed_token(Token("SEMICOLON", ";"))
+            trial.feed_token(tok)
+            return True
+        except UnexpectedInput:
+            return False
 
     # ------------------------------------------------------------------ parse
     def parse(self, src: SourceFile):
@@ -128,28 +137,30 @@ class StParser:
                 tok = e.token
                 expected = set(e.accepts or e.expected)
                 ip = e.interactive_parser
-                prev = getattr(ip.lexer_thread.state, "last_token", None) if ip else None
-                if prev is tok:
-                    prev = None
-                hint = self._hint(src, tok, expected, prev)
-                line = tok.line if tok.type != "$END" else src.text.count("\n") + 1
-                col = tok.column if tok.type != "$END" else 1
-                if "SEMICOLON" in expected and prev is not None and tok.line > prev.end_line:
-                    span = Span(src.path, prev.end_line, prev.end_column)
+                fixes = "SEMICOLON" in expected and self._semicolon_fixes(ip, tok)
+                hint = self._hint(src, tok, expected, fixes)
+                if tok.type == "$END":
+                    span = Span(src.path, src.text.count("\n") + 1, 1)
+                elif fixes:
+                    # point just after the previous token: where the ';' belongs
+                    i = tok.start_pos - 1
+                    while i >= 0 and text[i].isspace():
+                        i -= 1
+                    line, col = src.position(i + 1)
+                    span = Span(src.path, line, col)
+                    if line < tok.line:
+                        hint = f"a ';' is missing at the end of line {line}"
                 else:
-                    span = Span(src.path, line, col, getattr(tok, "end_line", 0) or 0,
+                    span = Span(src.path, tok.line, tok.column, getattr(tok, "end_line", 0) or 0,
                                 getattr(tok, "end_column", 0) or 0)
                 msg = f"syntax error: unexpected {self._describe(tok)}; expected {self._expected(expected)}"
                 diags.append(Diagnostic("E001", Severity.ERROR, span, msg, hint))
                 # repair a missing ';' and go on, so that later errors are reported too
-                if "SEMICOLON" in expected and tok.type != "$END" and ip is not None and len(diags) < 50:
-                    try:
-                        ip.feed_token(Token("SEMICOLON", ";", start_pos=tok.start_pos, line=tok.line,
-                                            column=tok.column, end_line=tok.line, end_column=tok.column))
-                        ip.feed_token(tok)
-                        return True
-                    except UnexpectedInput:
-                        return False
+                if fixes and len(diags) < 50:
+                    ip.feed_token(Token("SEMICOLON", ";", start_pos=tok.start_pos, line=tok.line,
+                                        column=tok.column, end_line=tok.line, end_column=tok.column))
+                    ip.feed_token(tok)
+                    return True
                 return False
             return False
 
