@@ -969,6 +969,9 @@ class Checker:
             if sym.constant and sym.const_value is not None:
                 e.const = sym.const_value
             return sym.type
+        if key == "null":
+            e.sym = _NULL
+            return _NULL
         mems = self.p.enum_members.get(key)
         if mems:
             pick = None
@@ -1204,6 +1207,8 @@ class Checker:
                 callee.sym = sym
                 callee.ty = sym.type
                 return self._fb_call(c, sym.type, scope, statement)
+            if key == "ref" and sym is None and key not in self.p.pous:
+                return self._ref_call(c, scope)
             if key in scope.actions or (scope.pou is not None and key in scope.pou.actions):
                 if c.args:
                     self.err("E108", c.span, "an action takes no arguments")
@@ -1234,6 +1239,24 @@ class Checker:
         if t is None:
             return None
         return self._fb_call(c, t, scope, statement)
+
+    def _ref_call(self, c: A.Call, scope: Scope):
+        """REF(x): a reference to a variable (IEC 61131-3 3rd edition)."""
+        if len(c.args) != 1 or c.args[0].name:
+            self.err("E108", c.span, "REF takes exactly one variable")
+            return None
+        arg = c.args[0].value
+        if not isinstance(arg, (A.Name, A.Field, A.Index)):
+            self.err("E122", arg.span, "REF needs a variable")
+            return None
+        t = self.lvalue(arg, scope)
+        root = arg
+        while isinstance(root, (A.Field, A.Index)):
+            root = root.base
+        if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
+            root.sym.address_taken = True
+        c.target = CallTarget("ref", arg=arg)
+        return T.RefType(t) if t is not None else None
 
     def _fb_call(self, c: A.Call, t: T.Type, scope: Scope, statement: bool):
         fb = T.unalias(t)

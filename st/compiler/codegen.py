@@ -427,6 +427,8 @@ class ExprGen:
             return _const(e.const)
         if isinstance(sym, T.EnumType):
             return _const(e.const)
+        if getattr(sym, "kind", "") == "null":
+            return _const(None)
         raise Unsupported(e.span, f"cannot use '{e.name}' here")
 
     def x_Direct(self, e: A.Direct) -> py.expr:
@@ -578,6 +580,8 @@ class ExprGen:
             return self.function_call(e, tgt)
         if tgt.kind == "native":
             return self.native_call(e, tgt)
+        if tgt.kind == "ref":
+            return self.ref_to(tgt.arg)
         raise Unsupported(e.span, "a function block call has no value")
 
     def native_call(self, e: A.Call, tgt) -> py.expr:
@@ -638,7 +642,7 @@ class ExprGen:
         return node
 
     def ref_to(self, e, negated: bool = False) -> py.expr:
-        """A reference object for an output or in-out argument (see runtime.refs)."""
+        """A reference object for an output or in-out argument, or REF(x) (runtime.helpers)."""
         if negated:
             return _call("_NegRef", self.ref_to(e))
         if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym):
