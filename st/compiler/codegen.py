@@ -63,13 +63,29 @@ def _store(node: py.expr) -> py.expr:
 
 
 def _set_lines(node: py.AST, line: int) -> py.AST:
-    for n in py.walk(node):
+    """Give a node and its children without a position the ST line `line`.
+
+    Children that already have a line (inner statements, placed earlier) are
+    not descended into, so placing a whole body costs one pass.
+    """
+    stack = [node]
+    pop, push = stack.pop, stack.append
+    while stack:
+        n = pop()
         if "lineno" in n._attributes:
+            if getattr(n, "lineno", None) is not None and n is not node:
+                continue
             if getattr(n, "lineno", None) is None:
-                n.lineno = line
-                n.end_lineno = line
-                n.col_offset = 0
-                n.end_col_offset = 0
+                n.lineno = n.end_lineno = line
+                n.col_offset = n.end_col_offset = 0
+        for f in n._fields:
+            v = getattr(n, f, None)
+            if isinstance(v, list):
+                for x in v:
+                    if isinstance(x, py.AST):
+                        push(x)
+            elif isinstance(v, py.AST):
+                push(v)
     return node
 
 
@@ -151,7 +167,8 @@ class ModuleGen:
         modules = {}
         for path, body in by_file.items():
             m = py.Module(body=body, type_ignores=[])
-            py.fix_missing_locations(m)
+            for node in body:
+                _set_lines(node, getattr(node, "lineno", None) or 1)
             modules[path] = m
         return modules
 

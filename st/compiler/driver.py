@@ -5,6 +5,7 @@ all go through it.
 """
 from __future__ import annotations
 
+import gc
 import hashlib
 import marshal
 import os
@@ -97,6 +98,19 @@ def _cache_key(sources: list[SourceFile], libraries: list[Library], emit_python:
 
 def compile_sources(sources: list[SourceFile], libraries: list[Library], *, emit_python: bool = False,
                     use_cache: bool = True, raise_on_error: bool = True) -> CompiledProgram:
+    # The compiler allocates millions of small objects that all live until the end:
+    # the cyclic GC would rescan them again and again (a third of the time on 20k lines).
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return _compile_sources(sources, libraries, emit_python=emit_python, use_cache=use_cache,
+                                raise_on_error=raise_on_error)
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_error) -> CompiledProgram:
     all_sources = {s.path: s for s in sources}
     key = _cache_key(sources, libraries, emit_python)
     cdir = _cache_dir() if use_cache else None
