@@ -96,7 +96,7 @@ def default_value(t: T.Type):
         return t.lo if t.lo > 0 else (0 if t.lo <= 0 <= t.hi else t.hi)
     if isinstance(t, T.ElemType):
         if t.kind == "char":
-            return "\0" if False else ""
+            return "\0"
         return t.default
     if isinstance(t, T.StringType):
         return ""

@@ -82,9 +82,26 @@ def _cache_dir() -> Optional[Path]:
     return p
 
 
+_toolchain_digest: Optional[str] = None
+
+
+def _toolchain() -> str:
+    """A digest of the compiler's own code: a new compiler never reuses old cached output."""
+    global _toolchain_digest
+    if _toolchain_digest is None:
+        h = hashlib.sha256(COMPILER_VERSION.encode())
+        root = Path(__file__).resolve().parents[1]
+        for sub in ("grammar", "compiler", "stdlib", "runtime"):
+            for f in sorted((root / sub).rglob("*")):
+                if f.suffix in (".py", ".lark", ".st"):
+                    h.update(f.read_bytes())
+        _toolchain_digest = h.hexdigest()
+    return _toolchain_digest
+
+
 def _cache_key(sources: list[SourceFile], libraries: list[Library], emit_python: bool) -> str:
     h = hashlib.sha256()
-    h.update(COMPILER_VERSION.encode())
+    h.update(_toolchain().encode())
     h.update(sys.version.encode())
     h.update(b"py" if emit_python else b"-")
     for lib in libraries:
