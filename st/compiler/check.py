@@ -59,6 +59,10 @@ class Checker:
         self._decl_span: dict = {}
         self._unit_library: dict = {}
         self._pending_types: dict = {}
+        self._raw_const_busy: set = set()
+        self._deferred_inits: list = []
+        self._configs: list = []
+        self._global_blocks: list = []
 
     # ================================================================ entry
     def run(self, units: list[A.Unit], library_units: set[str]) -> Project:
@@ -94,9 +98,6 @@ class Checker:
 
     # ================================================================ collection
     def _collect(self, u: A.Unit) -> None:
-        if not hasattr(self, "_configs"):
-            self._configs = []
-            self._global_blocks = []
         for item in u.items:
             if isinstance(item, A.TypeBlock):
                 for td in item.types:
@@ -160,6 +161,10 @@ class Checker:
     def _type_from_decl(self, td: A.TypeDecl) -> T.Type:
         spec = td.spec
         if isinstance(spec, A.EnumType):
+            if isinstance(td.init, A.Name) and not spec.default:
+                spec.default = td.init.name       # TYPE E : (A, B) := B;
+            elif td.init is not None and not spec.default:
+                self.err("E104", td.init.span, "an enumeration's default must be one of its values")
             return self._enum(td.name, spec)
         if isinstance(spec, A.StructType):
             st = T.StructType(td.name, pyname="_st_" + mangle(td.name))
@@ -337,7 +342,9 @@ class Checker:
                 table[key] = sym
                 if decl.location:
                     self._check_location(decl.location, t, sp)
-            if decl.init is not None and kind != "VAR_EXTERNAL":
+            if decl.init is not None and kind != "VAR_EXTERNAL" and owner is None:
+                self._deferred_inits.append((decl, t))
+            elif decl.init is not None and kind != "VAR_EXTERNAL":
                 self.check_initializer(decl.init, t, scope)
                 if "CONSTANT" in quals:
                     cv = self.const_value(decl.init, scope) if isinstance(decl.init, A.Expr) else None
@@ -385,6 +392,10 @@ class Checker:
                     continue
                 self.p.globals[uniq] = sym
                 self.p.global_names.setdefault(key, []).append(sym)
+        # global initializers may name other globals: check them once all are declared
+        for decl, t in self._deferred_inits:
+            self.check_initializer(decl.init, t, None)
+        self._deferred_inits = []
         # bind VAR_EXTERNAL declarations
         for pou in self.p.pous.values():
             for sym in pou.vars.values():
@@ -441,7 +452,7 @@ class Checker:
             mems = self.p.enum_members.get(key)
             if mems and len({m[2] for m in mems}) == 1:
                 return mems[0][2]
-            return None
+            return self._raw_global_constant(key)
         if isinstance(e, A.Unary):
             v = self.const_value(e.operand, scope)
             if v is None:
@@ -483,6 +494,27 @@ class Checker:
             except (ZeroDivisionError, OverflowError):
                 return None
             return None
+        return None
+
+    def _raw_global_constant(self, key: str):
+        """A VAR_GLOBAL CONSTANT not declared yet (types and POU interfaces are resolved first)."""
+        if key in self._raw_const_busy:
+            return None
+        blocks = list(self._global_blocks)
+        for cfg in getattr(self, "_configs", []):
+            blocks += [("", b) for b in cfg.var_blocks]
+            for r in cfg.resources:
+                blocks += [("", b) for b in r.var_blocks]
+        for _, b in blocks:
+            if "CONSTANT" not in b.qualifiers:
+                continue
+            for d in b.decls:
+                if any(n.lower() == key for n, _ in d.names) and isinstance(d.init, A.Expr):
+                    self._raw_const_busy.add(key)
+                    try:
+                        return self.const_value(d.init, None)
+                    finally:
+                        self._raw_const_busy.discard(key)
         return None
 
     # ================================================================ initializers

@@ -281,6 +281,7 @@ class ExprGen:
         self.mod = mod
         self.pou = pou
         self.cached: set = set()        # VarSyms held in Python locals
+        self.boxed: set = set()         # VarSyms held in one-element lists (passed by reference)
         self.self_name = "self"
         self.globals_written: set = set()
         self.loop_vars: list = []
@@ -301,6 +302,8 @@ class ExprGen:
     def var_load(self, sym: T.VarSym) -> py.expr:
         if sym.is_global or sym.section == "VAR_EXTERNAL":
             return _name(sym.global_ref.pyname if sym.global_ref else sym.pyname)
+        if sym in self.boxed:
+            return py.Subscript(_name(sym.pyname), _const(0), py.Load())
         if sym in self.cached or self.self_name is None:
             return _name(sym.pyname)
         return _attr(_name(self.self_name), sym.pyname)
@@ -310,6 +313,8 @@ class ExprGen:
             name = sym.global_ref.pyname if sym.global_ref else sym.pyname
             self.globals_written.add(name)
             return _name(name, py.Store())
+        if sym in self.boxed:
+            return py.Subscript(_name(sym.pyname), _const(0), py.Store())
         if sym in self.cached or self.self_name is None:
             self.written_locals.add(sym)
             return _name(sym.pyname, py.Store())
@@ -668,6 +673,8 @@ class ExprGen:
             if sym.is_global or sym.section == "VAR_EXTERNAL":
                 name = sym.global_ref.pyname if sym.global_ref else sym.pyname
                 return _call("_ItemRef", _name("_ns"), _const(name), _const(_wrap_spec(t)))
+            if sym in self.boxed:
+                return _call("_ItemRef", _name(sym.pyname), _const(0), _const(_wrap_spec(t)))
             if sym in self.cached or self.self_name is None:
                 raise Unsupported(e.span, f"internal: '{sym.name}' is held in a local but passed by reference")
             return _call("_AttrRef", _name(self.self_name), _const(sym.pyname), _const(_wrap_spec(t)))
@@ -1145,37 +1152,41 @@ class FuncGen(StmtGen):
         pou = self.pou
         d = pou.decl
         by_ref = _by_ref_names(d.body)
+        self.boxed = {v for v in by_ref if v.owner is pou and not T.unalias(v.type).is_aggregate}
         params = []
         prologue = []
         epilogue = []
+
+        def box(v, value):
+            return py.Assign([_name(v.pyname, py.Store())], py.List([value], py.Load()) if v in self.boxed else value)
+
+        def unbox(v):
+            return self.var_load(v)
+
         for p in pou.params():
             if p.section == "VAR_INPUT":
                 params.append(p.pyname)
+                if p in self.boxed:
+                    prologue.append(box(p, _name(p.pyname)))
             elif p.section == "VAR_IN_OUT":
                 if T.unalias(p.type).is_aggregate:
                     params.append(p.pyname)
                 else:
                     params.append("_r_" + p.pyname)
-                    prologue.append(py.Assign([_name(p.pyname, py.Store())], _call(_attr(_name("_r_" + p.pyname), "get"))))
-                    epilogue.append(py.Expr(_call(_attr(_name("_r_" + p.pyname), "set"), _name(p.pyname))))
+                    prologue.append(box(p, _call(_attr(_name("_r_" + p.pyname), "get"))))
+                    epilogue.append(py.Expr(_call(_attr(_name("_r_" + p.pyname), "set"), unbox(p))))
             else:
                 params.append("_r_" + p.pyname)
-                prologue.append(py.Assign([_name(p.pyname, py.Store())], InitGen(self.mod).initial(p.type, p.init)))
+                prologue.append(box(p, InitGen(self.mod).initial(p.type, p.init)))
                 epilogue.append(py.If(py.Compare(_name("_r_" + p.pyname), [py.IsNot()], [_const(None)]),
-                                      [py.Expr(_call(_attr(_name("_r_" + p.pyname), "set"), _name(p.pyname)))], []))
-        if by_ref:
-            for sym in by_ref:
-                if sym.owner is pou and sym.section in ("VAR", "VAR_TEMP", "VAR_INPUT", "VAR_OUTPUT"):
-                    raise Unsupported(d.span, f"passing the function variable '{sym.name}' by reference "
-                                      "(as an output or in-out argument) is not supported yet")
+                                      [py.Expr(_call(_attr(_name("_r_" + p.pyname), "set"), unbox(p)))], []))
         locals_init = []
         if pou.return_type is not None:
             locals_init.append(py.Assign([_name(self.result_name, py.Store())],
                                          InitGen(self.mod).initial(pou.return_type, None)))
         for v in pou.vars.values():
             if v.section in ("VAR", "VAR_TEMP"):
-                locals_init.append(_set_lines(py.Assign([_name(v.pyname, py.Store())],
-                                                        InitGen(self.mod).initial(v.type, v.init)), v.span.line))
+                locals_init.append(_set_lines(box(v, InitGen(self.mod).initial(v.type, v.init)), v.span.line))
         body = self.stmts(d.body)
         ret = py.Return(_name(self.result_name) if pou.return_type is not None else None)
         end_line = d.end_span.line if d.end_span else d.span.line
@@ -1213,12 +1224,12 @@ class BodyGen(StmtGen):
         d = pou.decl
         init = InitGen(self.mod)
         sfc = self.mod.p.sfc.get(pou.name.lower())
-        slots = [v.pyname for v in pou.vars.values() if v.section != "VAR_EXTERNAL"]
+        slots = [v.pyname for v in pou.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP")]
         edges = [v for v in pou.vars.values() if v.edge]
         slots += ["_e_" + v.pyname for v in edges]
         init_body = []
         for v in pou.vars.values():
-            if v.section == "VAR_EXTERNAL":
+            if v.section in ("VAR_EXTERNAL", "VAR_TEMP"):
                 continue
             init_body.append(_set_lines(py.Assign([_attr(_name("self"), v.pyname, py.Store())],
                                                   init.initial(v.type, v.init)), v.span.line))
@@ -1284,13 +1295,24 @@ class BodyGen(StmtGen):
                 used.add(e.sym)
         for v in edges:
             used.add(v)
+        temps = [v for v in pou.vars.values() if v.section == "VAR_TEMP"]
         if can_cache:
             self.cached = {v for v in used if v not in by_ref and not v.address_taken}
         else:
             self.cached = set()
+        # VAR_TEMP lives for one call: always a Python local (boxed if passed by reference)
+        self.boxed = {v for v in temps if v in by_ref or v.address_taken}
+        self.cached |= {v for v in temps if v not in self.boxed}
         code = self.stmts(body)
         prologue = []
+        init = InitGen(self.mod)
+        for v in temps:
+            val = init.initial(v.type, v.init)
+            prologue.append(py.Assign([_name(v.pyname, py.Store())],
+                                      py.List([val], py.Load()) if v in self.boxed else val))
         for v in sorted(self.cached, key=lambda s: s.pyname):
+            if v.section == "VAR_TEMP":
+                continue
             prologue.append(py.Assign([_name(v.pyname, py.Store())], _attr(_name("self"), v.pyname)))
         for v in edges:
             # an edge-declared input is TRUE only in the call that sees the edge
@@ -1305,7 +1327,7 @@ class BodyGen(StmtGen):
                                      py.Tuple([test, cur], py.Load()))
         writeback = []
         for v in sorted(self.cached & self.written_locals, key=lambda s: s.pyname):
-            if T.unalias(v.type).is_aggregate:
+            if T.unalias(v.type).is_aggregate or v.section == "VAR_TEMP":
                 continue
             writeback.append(py.Assign([_attr(_name("self"), v.pyname, py.Store())], _name(v.pyname)))
         main = prologue + (code or [])

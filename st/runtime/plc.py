@@ -281,7 +281,7 @@ class PLC:
             if kind == "name":
                 if isinstance(ut, T.POUType):
                     sym = ut.vars.get(val.lower())
-                    if sym is None or sym.section == "VAR_EXTERNAL":
+                    if sym is None or sym.section in ("VAR_EXTERNAL", "VAR_TEMP"):
                         if sym is not None and sym.global_ref is not None:
                             container, attr, t = self.ns, sym.global_ref.pyname, sym.global_ref.type
                             cur = _get(container, attr)
@@ -317,7 +317,7 @@ class PLC:
         out = {}
         for lname, (name, obj, pou) in self.instances.items():
             for sym in pou.vars.values():
-                if sym.section == "VAR_EXTERNAL":
+                if sym.section in ("VAR_EXTERNAL", "VAR_TEMP"):
                     continue
                 out[f"{name}.{sym.name}"] = to_json(getattr(obj, sym.pyname), sym.type)
         return out

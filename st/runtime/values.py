@@ -24,7 +24,7 @@ def to_python(v, t: T.Type):
         return {m.name: to_python(getattr(v, m.pyname), m.type) for m in t.members.values()}
     if isinstance(t, T.POUType):
         return {s.name: to_python(getattr(v, s.pyname), s.type) for s in t.vars.values()
-                if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT")}
+                if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP")}
     return v
 
 
@@ -56,7 +56,7 @@ def to_json(v, t: T.Type):
         return {m.name: to_json(getattr(v, m.pyname), m.type) for m in t.members.values()}
     if isinstance(t, T.POUType):
         return {s.name: to_json(getattr(v, s.pyname), s.type) for s in t.vars.values()
-                if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT")}
+                if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP")}
     if isinstance(t, T.RefType):
         return None
     return v
