@@ -212,3 +212,33 @@ def test_sfc_steps_transitions_and_qualifiers():
     got = trace(plc, ["main.lamp", "main.cnt", "main.done"], 5)
     # Work is active from t=10ms; at t=40ms its .T reaches 30ms and Idle takes over for one scan
     assert got == [(True, 1, True), (True, 1, True), (True, 1, True), (False, 1, True), (True, 2, True)]
+
+
+CONNECTED = """
+PROGRAM P
+VAR_INPUT go : BOOL; lim : INT; END_VAR
+VAR_OUTPUT lamp : BOOL; level : INT; END_VAR
+VAR speed : INT; alarm AT %QX1.* : BOOL; END_VAR
+lamp := go; level := lim * 2 + speed;
+END_PROGRAM
+CONFIGURATION C
+  VAR_GLOBAL g_level : INT; g_lim : INT := 21; END_VAR
+  RESOURCE R ON PLC
+    TASK t(INTERVAL := T#10ms, PRIORITY := 0);
+    PROGRAM inst WITH t : P (go := %IX0.1, lim := g_lim, lamp => %QX0.2, level => g_level);
+  END_RESOURCE
+  VAR_CONFIG
+    inst.speed : INT := 100;
+    inst.alarm AT %QX1.7 : BOOL;
+  END_VAR
+END_CONFIGURATION
+"""
+
+
+def test_program_connections_and_var_config():
+    plc = PLC.from_source(CONNECTED, use_cache=False)
+    plc["%IX0.1"] = True
+    plc.scan()
+    assert (plc["%QX0.2"], plc["g_level"], plc["inst.level"], plc["inst.speed"]) == (True, 142, 142, 100)
+    plc["inst.alarm"] = True
+    assert plc["%QX1.7"] is True

@@ -164,6 +164,11 @@ class ModuleGen:
             path = next(iter(self.p.globals.values())).span.file if self.p.globals else "<globals>"
             by_file.setdefault(path, [])
             by_file[path] = init_stmts + by_file[path]
+        for cfg in self.p.configs:
+            for im in cfg.instances:
+                if im.args:
+                    path = im.span.file if im.span else "<config>"
+                    by_file.setdefault(path, []).extend(self.connections(im))
         modules = {}
         for path, body in by_file.items():
             m = py.Module(body=body, type_ignores=[])
@@ -171,6 +176,31 @@ class ModuleGen:
                 _set_lines(node, getattr(node, "lineno", None) or 1)
             modules[path] = m
         return modules
+
+    def connections(self, im) -> list:
+        """A configuration's `PROGRAM inst WITH t : P (in := x, out => y)`: copy-in and copy-out functions."""
+        line = im.span.line if im.span else 1
+        g_in = StmtGen(self, None)
+        g_in.self_name = None
+        ins, outs = [], []
+        for p, value, is_out in im.args:
+            if not is_out:
+                v = g_in.coerce(g_in.expr(value), value, p.type)
+                ins.append(py.Assign([_attr(_name("inst"), p.pyname, py.Store())], v))
+        g_out = StmtGen(self, None)
+        g_out.self_name = None
+        for p, value, is_out in im.args:
+            if is_out:
+                outs.extend(g_out.assign(value, g_out.coerce(_attr(_name("inst"), p.pyname), _Typed(p.type),
+                                                             value.ty), None))
+        fns = []
+        for name, body, gen in (("_cfg_in_", ins, g_in), ("_cfg_out_", outs, g_out)):
+            if body:
+                if gen.globals_written:
+                    body.insert(0, py.Global(sorted(gen.globals_written)))
+                fn = py.FunctionDef(name + im.name.lower(), _args(["inst"]), body, [], None, None)
+                fns.append(_set_lines(fn, line))
+        return fns
 
     def struct_class(self, st: T.StructType) -> py.ClassDef:
         init = InitGen(self)

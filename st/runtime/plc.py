@@ -19,6 +19,7 @@ from ..compiler.driver import CompiledProgram
 from .faults import FaultInfo, PLCFault, fault_from_exception
 from .helpers import BASE_NAMESPACE
 from .sfc import SfcDesc, SfcState
+from .watchdog import Watchdog
 from .values import ValueError_, from_python, parse_duration_arg, to_json, to_python
 
 DEFAULT_CYCLE = 10_000_000
@@ -43,28 +44,7 @@ class Task:
     single: str = ""
     prev_single: bool = False
     runs: int = 0
-
-
-class _Watchdog:
-    """Ends an endless loop: generated loops call check() while the watchdog is armed."""
-
-    def __init__(self, ns: dict):
-        self.ns = ns
-        self.deadline = 0
-        self.count = 0
-
-    def arm(self, budget_ns: int) -> None:
-        self.deadline = _time.monotonic_ns() + budget_ns
-        self.count = 0
-        self.ns["_wd_armed"] = True
-
-    def disarm(self) -> None:
-        self.ns["_wd_armed"] = False
-
-    def check(self) -> None:
-        self.count += 1
-        if self.count & 1023 == 0 and _time.monotonic_ns() > self.deadline:
-            raise PLCFault("watchdog: the task did not finish in time (endless loop?)", "WATCHDOG")
+    calls: list = None          # [(name, object, copy-in fn, copy-out fn)]
 
 
 class PLC:
@@ -75,11 +55,9 @@ class PLC:
         self.project = compiled.project
         ns: dict = dict(BASE_NAMESPACE)
         ns.update(compiled.helpers)
-        ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True,
-                   "_wd_armed": False})
+        ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True})
         ns["_ns"] = ns
-        self._wd = _Watchdog(ns)
-        ns["_wd_check"] = self._wd.check
+        self._wd = Watchdog(ns)
         for path, code in compiled.modules:
             exec(code, ns)
         self.ns = ns
@@ -109,6 +87,9 @@ class PLC:
                     task = self.tasks[0]
                 task.instances.append((im.name, obj, im))
             self._apply_var_config(cfg)
+        for t in self.tasks:
+            t.calls = [(name, obj, ns.get("_cfg_in_" + name.lower()), ns.get("_cfg_out_" + name.lower()))
+                       for name, obj, im in t.instances]
         intervals = [t.interval for t in self.tasks if t.interval > 0]
         self.tick = math.gcd(*intervals) if intervals else (cyc or DEFAULT_CYCLE)
         if cyc is not None and cfg is not None and not cfg.implicit:
@@ -195,17 +176,21 @@ class PLC:
             if not due:
                 continue
             budget = self.watchdog or max(10 * task.interval, 1_000_000_000)
-            self._wd.arm(budget)
+            self._wd.start(budget)
             try:
-                for name, obj, im in task.instances:
+                for name, obj, cin, cout in task.calls:
+                    if cin is not None:
+                        cin(obj)
                     obj._body()
+                    if cout is not None:
+                        cout(obj)
             except Exception as exc:  # noqa: BLE001 - every fault of user code lands here
-                self._wd.disarm()
+                self._wd.stop()
                 info = fault_from_exception(exc, task.name)
                 self.state = "FAULT"
                 self.fault = info
                 raise PLCFaultError(info) from None
-            self._wd.disarm()
+            self._wd.stop()
             task.runs += 1
         self.scans += 1
         self._time = now + self.tick
