@@ -218,7 +218,7 @@ CONNECTED = """
 PROGRAM P
 VAR_INPUT go : BOOL; lim : INT; END_VAR
 VAR_OUTPUT lamp : BOOL; level : INT; END_VAR
-VAR speed : INT; alarm AT %QX1.* : BOOL; END_VAR
+VAR speed : INT; alarm AT %Q* : BOOL; END_VAR
 lamp := go; level := lim * 2 + speed;
 END_PROGRAM
 CONFIGURATION C
