@@ -845,7 +845,11 @@ class StmtGen(ExprGen):
             return [py.Assign([py.Subscript(self.expr(tgt.base), self.index_of(tgt), py.Store())], value)]
         if isinstance(tgt, A.Bit):
             if tgt.size != "X":
-                raise Unsupported(tgt.span, "writing a partial access (x.%B1) is not supported")
+                width = {"B": 8, "W": 16, "D": 32, "L": 64}[tgt.size]
+                bt = T.base_of(tgt.base.ty)
+                new = _call("_setbits", self.expr(tgt.base), _const(tgt.index * width), _const(width), value,
+                            _const(bt.bits), _const(bt.signed))
+                return self.assign(tgt.base, new, None)
             return self._bit_write(tgt.base, tgt.index, value)
         if isinstance(tgt, A.Deref):
             return [py.Expr(_call(_attr(self.expr(tgt.base), "set"), value))]

@@ -103,6 +103,16 @@ def _setbit(x, n, v, bits, signed):
     return x
 
 
+def _setbits(x, shift, width, v, bits, signed):
+    """Write a partial access (x.%B1 := v): `width` bits at `shift`."""
+    m = ((1 << width) - 1) << shift
+    x = (x & ~m) | ((v << shift) & m)
+    x &= (1 << bits) - 1
+    if signed and x >> (bits - 1):
+        x -= 1 << bits
+    return x
+
+
 def _for_dir(step):
     if step > 0:
         return 1
@@ -253,6 +263,7 @@ def _deref_null():
 BASE_NAMESPACE = {
     "_f32": _f32, "_idiv": _idiv, "_imod": _imod, "_umod": _umod, "_fdiv": _fdiv, "_pow": _pow,
     "_round": _round, "_trunc": _trunc, "_ix": _ix, "_subrange": _subrange, "_setbit": _setbit,
+    "_setbits": _setbits,
     "_for_dir": _for_dir, "_Struct": _Struct, "_FB": _FB, "_copy": _copy, "_assign": _assign,
     "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
     "_float": float, "_int": int, "_range": range, "_abs": abs, "_min": min, "_max": max, "_len": len,
