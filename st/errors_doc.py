@@ -32,6 +32,7 @@ EXPLANATIONS = {
     "E121": "An SFC error: unknown step or action, missing INITIAL_STEP, a bad qualifier.",
     "E122": "An output (=>) or VAR_IN_OUT argument must be a variable.",
     "E130": "A construct the code generator does not support yet.",
+    "E999": "An internal compiler error (a bug in st): please report it with the source file.",
     "W101": "A pragma { ... } is ignored.",
     "W201": "A variable is declared but never used.",
     "W202": "A string literal is longer than the variable and will be truncated.",

@@ -659,7 +659,12 @@ class Checker:
     # ---------------------------------------------------------------- statements
     def stmts(self, body: list, scope: Scope) -> None:
         for s in body:
-            self.stmt(s, scope)
+            try:
+                self.stmt(s, scope)
+            except Exception as exc:
+                if not hasattr(exc, "st_span"):
+                    exc.st_span = s.span      # where the internal error happened, for the report
+                raise
 
     def stmt(self, s: A.Stmt, scope: Scope) -> None:
         if isinstance(s, A.Assign):

@@ -766,7 +766,14 @@ class StmtGen(ExprGen):
     def stmts(self, body: list) -> list:
         out = []
         for s in body:
-            r = self.stmt(s)
+            try:
+                r = self.stmt(s)
+            except Unsupported:
+                raise
+            except Exception as exc:
+                if not hasattr(exc, "st_span"):
+                    exc.st_span = s.span      # where the internal error happened, for the report
+                raise
             for n in r:
                 _set_lines(n, s.span.line)
             out.extend(r)

@@ -151,18 +151,26 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
         if u is not None:
             units.append(u)
     checker = Checker(sink, libraries)
-    project = checker.run(units, lib_paths)
     modules = []
     pysrc = {}
-    if not sink.has_errors:
-        gen = ModuleGen(project, sink)
-        py_modules = gen.generate()
+    project = Project()
+    try:
+        project = checker.run(units, lib_paths)
         if not sink.has_errors:
-            for path, mod in py_modules.items():
-                if emit_python:
-                    import ast as pyast
-                    pysrc[path] = pyast.unparse(mod)
-                modules.append((path, compile(mod, path, "exec")))
+            gen = ModuleGen(project, sink)
+            py_modules = gen.generate()
+            if not sink.has_errors:
+                for path, mod in py_modules.items():
+                    if emit_python:
+                        import ast as pyast
+                        pysrc[path] = pyast.unparse(mod)
+                    modules.append((path, compile(mod, path, "exec")))
+    except Exception as exc:  # a compiler bug must still not show the user a traceback
+        first = sources[0].path if sources else "<input>"
+        sink.error("E999", getattr(exc, "st_span", None) or Span(first, 1, 1), f"internal compiler error: {type(exc).__name__}: {exc}",
+                   "please report this with the source file; set ST_DEBUG=1 to see the traceback")
+        if os.environ.get("ST_DEBUG"):
+            raise
     diags = sink.sorted()
     helpers = {}
     for lib in libraries:
