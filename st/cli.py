@@ -18,7 +18,8 @@ def _compile(files, emit_python=False, time_unit="ms", f_trig_first_scan=False, 
 
 def _report(result) -> bool:
     """Print diagnostics; True when there were errors."""
-    diags = [d for d in result.diagnostics if not d.span.file.endswith("standard_fbs.st")]
+    lib = {p for lib in result.project.libraries for p, _ in lib.sources}
+    diags = [d for d in result.diagnostics if d.span.file not in lib]
     if diags:
         click.echo(render_all(diags, result.sources), err=True)
     return any(d.is_error for d in diags)
@@ -76,7 +77,7 @@ def compile(files, emit, time_unit, f_trig_first_scan):
         sys.exit(1)
     if emit == "python":
         for path, text in result.python_source.items():
-            if path.endswith("standard_fbs.st"):
+            if path in {p for lib in result.project.libraries for p, _ in lib.sources}:
                 continue
             click.echo(f"# ---- generated from {path}")
             click.echo(text)

@@ -117,3 +117,18 @@ END_PROGRAM
     v = plc.variables()
     assert (v["main.s"], v["main.t"], v["main.n"], v["main.p"], v["main.w"]) == \
         ("Hello, wor", "abXYcdef|abef|abefbcd", 10, 3, "größe")
+
+
+def test_split_and_concat_date_time_functions():
+    plc = run("""
+PROGRAM main
+VAR y, mo, d, h, mi, s, ms : INT; y2, mo2, d2 : INT; dt1 : DT; dow : INT; END_VAR
+SPLIT_DT(DT#2024-02-29-23:59:58.250, y, mo, d, h, mi, s, ms);
+SPLIT_DATE(IN := D#1969-12-31, YEAR => y2, MONTH => mo2, DAY => d2);
+dt1 := CONCAT_DT(2000, 1, 2, 3, 4, 5, 6);
+dow := DAY_OF_WEEK(D#2026-11-22);
+END_PROGRAM
+""")
+    assert plc.variables() == {
+        "main.y": 2024, "main.mo": 2, "main.d": 29, "main.h": 23, "main.mi": 59, "main.s": 58, "main.ms": 250,
+        "main.y2": 1969, "main.mo2": 12, "main.d2": 31, "main.dt1": "DT#2000-01-02-03:04:05.006", "main.dow": 0}

@@ -16,6 +16,7 @@ from ..compiler.library import FuncSig, Library, Param
 from . import functions
 
 FBS_PATH = Path(__file__).with_name("standard_fbs.st")
+FUNCTIONS_PATH = Path(__file__).with_name("standard_functions.st")
 NS_PER_MS = 1_000_000
 
 
@@ -177,6 +178,7 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
     """The IEC standard library. `time_unit`: what TIME_TO_<int> counts (ms, or s as MatIEC)."""
     lib = Library("iec61131", version=f"1-{int(f_trig_first_scan)}-{time_unit}")
     lib.sources.append((str(FBS_PATH), standard_fbs_source(f_trig_first_scan)))
+    lib.sources.append((str(FUNCTIONS_PATH), FUNCTIONS_PATH.read_text()))
     lib.helpers.update(functions.NAMESPACE)
     add = lib.add
     # numeric
