@@ -300,6 +300,14 @@ class Checker:
                 pou.return_type = self.resolve_type(d.return_type, scope)
         for block in d.var_blocks:
             self._declare_block(block, pou.vars, scope, pou)
+        if d.kind in ("FUNCTION", "FUNCTION_BLOCK"):
+            # EN and ENO are implicit in every function and FB; declare them when the body uses them
+            mentioned = {n.name.lower() for n in _names_in(d.body)}
+            for key, section in (("en", "VAR_INPUT"), ("eno", "VAR_OUTPUT")):
+                if key in mentioned and key not in pou.vars:
+                    true = A.Literal(d.span, "bool", True, "", "TRUE")
+                    pou.vars[key] = T.VarSym(key.upper(), T.BOOL, section, d.span, true, pyname=key.upper(),
+                                             owner=pou, used=True)
         for act in d.actions:
             if act.name.lower() in pou.actions:
                 self.err("E102", act.span, f"action '{act.name}' is declared twice")
@@ -1334,6 +1342,8 @@ class Checker:
                 bind[p.name.lower()] = a
             elif key in ("en", "eno"):
                 extras[key] = a
+                if key == "eno" and "eno" in pou.vars:
+                    bind[key] = a       # the body sets ENO itself
             else:
                 p = pou.vars.get(key)
                 if p is None or p.section not in _SECTIONS_PARAM:
@@ -1594,6 +1604,29 @@ class Checker:
             for sym in pou.vars.values():
                 if sym.section in ("VAR", "VAR_TEMP") and not sym.used and not sym.location:
                     self.warn("W201", sym.span, f"variable '{sym.name}' is never used")
+
+
+def _names_in(body):
+    """Every Name node in a statement list."""
+    stack = list(body)
+    while stack:
+        x = stack.pop()
+        if isinstance(x, A.Name):
+            yield x
+            continue
+        if isinstance(x, list):
+            stack.extend(x)
+        elif isinstance(x, tuple):
+            stack.extend(x)
+        elif hasattr(x, "__dataclass_fields__"):
+            for f in x.__dataclass_fields__:
+                if f in ("span", "ty", "const", "sym"):
+                    continue
+                v = getattr(x, f, None)
+                if isinstance(v, CallTarget):
+                    continue
+                if isinstance(v, (list, tuple)) or hasattr(v, "__dataclass_fields__"):
+                    stack.append(v)
 
 
 class _NullType(T.Type):

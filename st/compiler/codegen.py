@@ -819,13 +819,14 @@ class StmtGen(ExprGen):
             return [py.Expr(_call("_assign", self.expr(tgt), self.expr(v)))]
         return self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
 
-    def _en_wrap(self, en, eno, body: list) -> list:
+    def _en_wrap(self, en, eno, body: list, eno_bound: bool = False) -> list:
+        """EN := FALSE skips the call and gives ENO FALSE; else ENO is TRUE (or what the callee set)."""
         if en is None:
             out = body
-            if eno is not None:
+            if eno is not None and not eno_bound:
                 out = out + self.assign(eno.value, _const(True), None)
             return out
-        yes = body + (self.assign(eno.value, _const(True), None) if eno is not None else [])
+        yes = body + (self.assign(eno.value, _const(True), None) if eno is not None and not eno_bound else [])
         no = self.assign(eno.value, _const(False), None) if eno is not None else []
         return [py.If(self.expr(en.value), yes, no or [py.Pass()])]
 
@@ -835,7 +836,7 @@ class StmtGen(ExprGen):
         bind["en"] = None
         body = self.assign(s.target, self.coerce(self.expr(v), v, s.target.ty), v)
         bind["en"] = en
-        return self._en_wrap(en, eno, body)
+        return self._en_wrap(en, eno, body, "eno" in bind["params"])
 
     def assign(self, tgt, value: py.expr, src_expr) -> list:
         if isinstance(tgt, A.Name):
@@ -885,7 +886,7 @@ class StmtGen(ExprGen):
             tgt.bind["en"] = None
             body = [py.Expr(self.function_call(c, tgt))]
             tgt.bind["en"] = en
-            return self._en_wrap(en, eno, body)
+            return self._en_wrap(en, eno, body, "eno" in tgt.bind["params"])
         if tgt.kind == "native":
             en, eno = tgt.en, tgt.eno
             tgt.en = None
@@ -932,7 +933,7 @@ class StmtGen(ExprGen):
                 out.append(py.Expr(_call("_assign", self.expr(a.value), val)))
             else:
                 out.extend(self.assign(a.value, self.coerce(val, _Typed(p.type), a.value.ty), None))
-        return self._en_wrap(tgt.bind.get("en"), tgt.bind.get("eno"), out)
+        return self._en_wrap(tgt.bind.get("en"), tgt.bind.get("eno"), out, "eno" in bind)
 
     def s_If(self, s: A.If) -> list:
         orelse = self.stmts(s.orelse) if s.orelse else []
