@@ -436,6 +436,8 @@ class Checker:
     # ================================================================ constants
     def const_value(self, e, scope: Optional[Scope]):
         """Evaluate a constant expression (literals, CONSTANT variables, enum values), or None."""
+        if isinstance(e, A.Field):
+            return e.const if isinstance(e.sym, T.EnumType) else None
         if isinstance(e, A.Literal):
             return e.value
         if isinstance(e, A.EnumLit):
@@ -1172,6 +1174,18 @@ class Checker:
         return t
 
     def _field(self, e: A.Field, scope: Scope):
+        if isinstance(e.base, A.Name) and self._lookup(e.base.name.lower(), scope) is None:
+            et = self._resolve_named_type(e.base.name.lower(), e.base.span)
+            if isinstance(T.unalias(et) if et is not None else None, T.EnumType):
+                # Color.Red: CODESYS's qualified enumeration value
+                et = T.unalias(et)
+                m = et.members.get(e.name.lower())
+                if m is None:
+                    self.err("E101", e.name_span, f"'{e.name}' is not a value of {et.name}")
+                    return et
+                e.const = m[1]
+                e.sym = et
+                return et
         bt = self.expr(e.base, scope)
         if bt is None:
             return None

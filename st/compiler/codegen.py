@@ -491,6 +491,8 @@ class ExprGen:
         raise Unsupported(e.span, f"unknown address {addr}")
 
     def x_Field(self, e: A.Field) -> py.expr:
+        if isinstance(e.sym, T.EnumType):
+            return _const(e.const)
         bt = T.unalias(e.base.ty) if e.base.ty is not None else None
         if bt is STEP:
             idx = e.base.const
