@@ -1517,7 +1517,16 @@ class Checker:
                 a.value.ty = gt
                 arg_types[i] = gt
         res = sig.result
-        if callable(res):
+        eb = T.base_of(expected) if expected is not None else None
+        if callable(res) and arg_types and all(isinstance(t, T.LiteralType) for t in arg_types) \
+                and isinstance(eb, T.ElemType) and eb.is_real:
+            # SQRT(2.0) in a REAL context computes in REAL
+            for a in args:
+                a.value.ty = eb
+            arg_types = [eb] * len(arg_types)
+        if getattr(sig, "result_from_context", False) and isinstance(eb, T.ElemType) and eb.is_int:
+            rt = eb             # TRUNC: ANY_REAL → the integer type the context wants
+        elif callable(res):
             rt = res(arg_types)
             if isinstance(rt, str):
                 self.err("E104", c.span, rt)

@@ -166,8 +166,10 @@ def _trunc_sig(name, dst):
     def emit(ctx, args, types, rt):
         node = _call("_trunc", args[0])
         return _emit_wrap(node, rt)
-    res = (lambda ts: T.DINT if T.base_of(ts[0]) is not T.LREAL else T.LINT) if dst is None else dst
-    return FuncSig(name, [_p("IN", "ANY_REAL")], res, emit=emit)
+    res = (lambda ts: T.DINT) if dst is None else dst
+    sig = FuncSig(name, [_p("IN", "ANY_REAL")], res, emit=emit)
+    sig.result_from_context = dst is None
+    return sig
 
 
 def _ref_emit(ctx, args, types, rt):
