@@ -1081,7 +1081,7 @@ class Checker:
             return self._bad_operands(e, lt, rt)
         if op in _CMP:
             if isinstance(a, T.EnumType) or isinstance(b, T.EnumType):
-                if a is b or (op in ("=", "<>") and False):
+                if a is b:
                     return T.BOOL
                 return self._bad_operands(e, lt, rt)
             if isinstance(a, T.StringType) and isinstance(b, T.StringType):
@@ -1138,8 +1138,6 @@ class Checker:
             return a
         if ka == "time" and kb in ("dt", "tod") and op == "+":
             return b
-        if ka == "date" and kb == "time" and op in ("+", "-"):
-            return T.DT if ka == "date" and op == "+" and False else None
         if ka == kb and ka in ("dt", "tod", "date") and op == "-":
             return T.LTIME if a.long else T.TIME
         return None
@@ -1399,7 +1397,7 @@ class Checker:
                 self.assignable(a.value, vt, p.type, a.value.span, "pass")
         if "en" in extras:
             et = self.expr(extras["en"].value, scope, T.BOOL)
-            if not T.base_of(et).is_bool if et is not None else False:
+            if et is not None and not T.base_of(et).is_bool:
                 self.err("E104", extras["en"].span, "EN must be BOOL")
         if "eno" in extras:
             a = extras["eno"]
@@ -1555,7 +1553,7 @@ class Checker:
                     if k == "INTERVAL":
                         tt = self.expr(v, scope, T.TIME)
                         c = self.const_value(v, scope)
-                        if not T.base_of(tt).is_time if tt is not None else True or not isinstance(c, int):
+                        if tt is None or not T.base_of(tt).is_time or not isinstance(c, int):
                             self.err("E104", v.span, "INTERVAL must be a TIME constant, e.g. T#20ms")
                         elif c <= 0:
                             self.err("E120", v.span, "INTERVAL must be positive")

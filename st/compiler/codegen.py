@@ -93,7 +93,9 @@ def default_value(t: T.Type):
     """The Python value of a scalar type's default, or None for aggregates."""
     t = T.unalias(t)
     if isinstance(t, T.SubrangeType):
-        return t.lo if t.lo > 0 else (0 if t.lo <= 0 <= t.hi else t.hi)
+        if t.lo <= 0 <= t.hi:
+            return 0
+        return t.lo if t.lo > 0 else t.hi      # the bound nearest to zero
     if isinstance(t, T.ElemType):
         if t.kind == "char":
             return "\0"
@@ -642,9 +644,6 @@ class ExprGen:
         sig = tgt.sig
         args = []
         # settle each argument to its parameter's type (group or concrete)
-        group_t = {}
-        for a, t in zip(tgt.args, tgt.arg_types):
-            pass
         for i, a in enumerate(tgt.args):
             p = sig.params[min(i, len(sig.params) - 1)]
             v = self.expr(a.value)

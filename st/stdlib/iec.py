@@ -358,7 +358,7 @@ def convert(node, s, d, src_bcd=False, dst_bcd=False, time_unit="ms", ctx=None):
             return py.BinOp(node, py.Mult(), _const(unit))
         return node
     if sk == "char":
-        node = _call("ord", node) if False else _call("_ord", node)
+        node = _call("_ord", node)
         sk = "int"
         s = T.UINT
     if dk == "char":
