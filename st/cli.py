@@ -16,6 +16,18 @@ def _compile(files, emit_python=False, time_unit="ms", f_trig_first_scan=False, 
                          f_trig_first_scan=f_trig_first_scan, use_cache=use_cache, raise_on_error=False)
 
 
+def _compile_or_exit(files, **kw):
+    """Compile; on errors print every diagnostic and exit 1. Warnings are printed too."""
+    try:
+        result = _compile(files, **kw)
+    except CompileError as e:
+        click.echo(e.render(), err=True)
+        sys.exit(1)
+    if _report(result):
+        sys.exit(1)
+    return result
+
+
 def _report(result) -> bool:
     """Print diagnostics; True when there were errors."""
     lib = {p for lib in result.project.libraries for p, _ in lib.sources}
@@ -50,13 +62,7 @@ def main():
 @dialect
 def check(files, time_unit, f_trig_first_scan):
     """Check ST files and report every error and warning."""
-    try:
-        result = _compile(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
-    except CompileError as e:
-        click.echo(e.render(), err=True)
-        sys.exit(1)
-    if _report(result):
-        sys.exit(1)
+    result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
     n = len(result.project.user_pous())
     click.echo(f"ok: {len(files)} file(s), {n} POU(s)")
 
@@ -67,14 +73,8 @@ def check(files, time_unit, f_trig_first_scan):
 @dialect
 def compile(files, emit, time_unit, f_trig_first_scan):
     """Compile ST files (to Python bytecode, cached)."""
-    try:
-        result = _compile(files, emit_python=emit == "python", time_unit=time_unit,
-                          f_trig_first_scan=f_trig_first_scan, use_cache=emit != "python")
-    except CompileError as e:
-        click.echo(e.render(), err=True)
-        sys.exit(1)
-    if _report(result):
-        sys.exit(1)
+    result = _compile_or_exit(files, emit_python=emit == "python", time_unit=time_unit,
+                              f_trig_first_scan=f_trig_first_scan, use_cache=emit != "python")
     if emit == "python":
         for path, text in result.python_source.items():
             if path in {p for lib in result.project.libraries for p, _ in lib.sources}:
@@ -98,13 +98,7 @@ def compile(files, emit, time_unit, f_trig_first_scan):
 def run(files, scans, duration, cycle, virtual, dump_json, time_unit, f_trig_first_scan):
     """Run a program: its CONFIGURATION's tasks, or its PROGRAM as one cyclic task."""
     from .runtime.plc import PLC, PLCFaultError
-    try:
-        result = _compile(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
-    except CompileError as e:
-        click.echo(e.render(), err=True)
-        sys.exit(1)
-    if _report(result):
-        sys.exit(1)
+    result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
     try:
         plc = PLC(result, cycle)
     except ValueError as e:

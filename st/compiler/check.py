@@ -548,23 +548,19 @@ class Checker:
             return
         if isinstance(init, A.StructInit):
             if isinstance(bt, T.StructType):
-                for name, sp, val in init.fields:
-                    m = bt.members.get(name.lower())
-                    if m is None:
-                        self.err("E114", sp, f"'{t}' has no field '{name}'")
-                        continue
-                    self.check_initializer(val, m.type, scope)
-                return
-            if isinstance(bt, T.POUType) and bt.pou_kind != "FUNCTION":
+                fields, what = bt.members, "field"
+            elif isinstance(bt, T.POUType) and bt.pou_kind != "FUNCTION":
                 self._resolve_interface(bt)
-                for name, sp, val in init.fields:
-                    m = bt.vars.get(name.lower())
-                    if m is None:
-                        self.err("E114", sp, f"'{t}' has no variable '{name}'")
-                        continue
-                    self.check_initializer(val, m.type, scope)
+                fields, what = bt.vars, "variable"
+            else:
+                self.err("E104", init.span, f"a structure initializer cannot initialize a {t}")
                 return
-            self.err("E104", init.span, f"a structure initializer cannot initialize a {t}")
+            for name, sp, val in init.fields:
+                m = fields.get(name.lower())
+                if m is None:
+                    self.err("E114", sp, f"'{t}' has no {what} '{name}'")
+                    continue
+                self.check_initializer(val, m.type, scope)
             return
         if isinstance(init, A.Expr):
             if isinstance(bt, T.ArrayType) and isinstance(init, A.Literal):

@@ -13,26 +13,29 @@ class ValueError_(ValueError):
     pass
 
 
-def to_python(v, t: T.Type):
-    """A runtime value as a plain Python value (API reads). TIME etc. stay ns integers."""
+def _convert(v, t: T.Type, leaf):
+    """Walk a value by its type: aggregates become lists/dicts, scalars go through `leaf`."""
     t = T.unalias(t)
     if isinstance(t, T.EnumType):
         return t.names_by_value.get(v, v)
     if isinstance(t, T.ArrayType):
-        return _nest([to_python(x, t.element) for x in v], t.dims)
+        return _nest([_convert(x, t.element, leaf) for x in v], t.dims)
     if isinstance(t, T.StructType):
-        return {m.name: to_python(getattr(v, m.pyname), m.type) for m in t.members.values()}
+        return {m.name: _convert(getattr(v, m.pyname), m.type, leaf) for m in t.members.values()}
     if isinstance(t, T.POUType):
-        return {s.name: to_python(getattr(v, s.pyname), s.type) for s in t.vars.values()
+        return {s.name: _convert(getattr(v, s.pyname), s.type, leaf) for s in t.vars.values()
                 if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP")}
-    return v
+    if isinstance(t, T.RefType):
+        return None
+    return leaf(v, t)
 
 
-def to_json(v, t: T.Type):
-    """A runtime value as JSON: times and dates as IEC literal text, enums by name."""
-    t = T.unalias(t)
-    if isinstance(t, T.SubrangeType):
-        return v
+def to_python(v, t: T.Type):
+    """A runtime value as a plain Python value (API reads). TIME etc. stay ns integers."""
+    return _convert(v, t, lambda v, t: v)
+
+
+def _json_leaf(v, t):
     if isinstance(t, T.ElemType):
         k = t.kind
         if k == "time":
@@ -43,23 +46,14 @@ def to_json(v, t: T.Type):
             return format_tod(v, "LTOD#" if t.long else "TOD#")
         if k == "dt":
             return format_dt(v, "LDT#" if t.long else "DT#")
-        if k == "real":
-            if v != v or v in (math.inf, -math.inf):
-                return str(v)
-            return v
-        return v
-    if isinstance(t, T.EnumType):
-        return t.names_by_value.get(v, v)
-    if isinstance(t, T.ArrayType):
-        return _nest([to_json(x, t.element) for x in v], t.dims)
-    if isinstance(t, T.StructType):
-        return {m.name: to_json(getattr(v, m.pyname), m.type) for m in t.members.values()}
-    if isinstance(t, T.POUType):
-        return {s.name: to_json(getattr(v, s.pyname), s.type) for s in t.vars.values()
-                if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP")}
-    if isinstance(t, T.RefType):
-        return None
+        if k == "real" and (v != v or v in (math.inf, -math.inf)):
+            return str(v)
     return v
+
+
+def to_json(v, t: T.Type):
+    """A runtime value as JSON: times and dates as IEC literal text, enums by name."""
+    return _convert(v, t, _json_leaf)
 
 
 def _nest(flat: list, dims: list) -> list:
