@@ -158,3 +158,12 @@ def test_no_traceback_for_garbage():
         e = diags(text)
         assert e.errors, text
         assert "Traceback" not in e.render()
+
+
+def test_recursion_and_self_containing_types_are_errors():
+    src = ("TYPE S : STRUCT a : INT; s : ARRAY[1..2] OF S; END_STRUCT; END_TYPE\n"
+           "FUNCTION_BLOCK FB\nVAR inner : FB; END_VAR\nEND_FUNCTION_BLOCK\n"
+           "FUNCTION F : INT\nVAR_INPUT n : INT; END_VAR\nF := G(n);\nEND_FUNCTION\n"
+           "FUNCTION G : INT\nVAR_INPUT n : INT; END_VAR\nG := F(n - 1);\nEND_FUNCTION\n")
+    e = diags(src)
+    assert sorted(codes(e)) == [("E103", 1, 6), ("E103", 2, 16), ("E123", 7, 6), ("E123", 11, 6)]

@@ -61,6 +61,7 @@ class Checker:
         self._pending_types: dict = {}
         self._raw_const_busy: set = set()
         self._deferred_inits: list = []
+        self._calls: dict = {}         # caller lower name → [(callee lower name, span)]
         self._configs: list = []
         self._global_blocks: list = []
 
@@ -77,6 +78,7 @@ class Checker:
         for pou in list(self.p.pous.values()):
             if pou.decl is not None:
                 self._check_body(pou)
+        self._check_cycles()
         for cfg_decl in self._configs:
             self._check_configuration(cfg_decl)
         if not self.p.configs:
@@ -1325,6 +1327,8 @@ class Checker:
         return None
 
     def _function_call(self, c: A.Call, pou: T.POUType, scope: Scope):
+        if scope.pou is not None:
+            self._calls.setdefault(scope.pou.name.lower(), []).append((pou.name.lower(), c.span))
         bind = self._bind_args(c, pou, scope, is_fb=False)
         c.target = CallTarget("function", pou=pou, bind=bind)
         return pou.return_type
@@ -1612,6 +1616,53 @@ class Checker:
         for p in progs:
             cm.instances.append(InstanceModel(p.name, p, "main", "", [], p.decl.span if p.decl else None))
         self.p.configs.append(cm)
+
+    # ================================================================ cycles
+    def _check_cycles(self) -> None:
+        """A type may not contain itself, and POUs may not call themselves (IEC forbids recursion)."""
+        def members(t):
+            t = T.unalias(t)
+            if isinstance(t, T.ArrayType):
+                return members(t.element)
+            if isinstance(t, T.StructType):
+                return [m.type for m in t.members.values()]
+            if isinstance(t, T.POUType) and t.pou_kind != "FUNCTION":
+                return [v.type for v in t.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_IN_OUT")]
+            return []
+
+        def leaf(t):
+            t = T.unalias(t)
+            while isinstance(t, T.ArrayType):
+                t = T.unalias(t.element)
+            return t if isinstance(t, (T.StructType, T.POUType)) else None
+
+        for t in list(self.p.types.values()) + list(self.p.pous.values()):
+            start = leaf(t)
+            if start is None:
+                continue
+            seen, stack = set(), [leaf(m) for m in members(start)]
+            while stack:
+                x = stack.pop()
+                if x is None or id(x) in seen:
+                    continue
+                if x is start:
+                    span = self._decl_span.get(start.name.lower())
+                    self.err("E103", span or Span("<types>", 0, 0), f"'{start.name}' contains itself")
+                    break
+                seen.add(id(x))
+                stack.extend(leaf(m) for m in members(x))
+        # calls
+        for pou in self.p.pous.values():
+            seen, stack = set(), list(self._calls.get(pou.name.lower(), ()))
+            while stack:
+                name, span = stack.pop()
+                if name == pou.name.lower():
+                    self.err("E123", span, f"{pou.name} calls itself (recursion is not allowed in IEC 61131-3)")
+                    break
+                if name in seen:
+                    continue
+                seen.add(name)
+                stack.extend(self._calls.get(name, ()))
 
     # ================================================================ warnings
     def _warn_unused(self) -> None:
