@@ -40,3 +40,17 @@ EXPLANATIONS = {
     "W203": "A user POU replaces a standard library POU of the same name.",
     "W204": "Negating an unsigned value wraps around.",
 }
+
+
+def markdown() -> str:
+    """docs/diagnostics.md (regenerate with `python -m st.errors_doc > docs/diagnostics.md`)."""
+    lines = ["# Diagnostic codes", "",
+             "Every diagnostic is printed as `file:line:col: severity[CODE]: message`, then the source",
+             "line with a caret under the spot and, for the usual slips, a `hint`. `st explain CODE` prints",
+             "the explanation below. Codes are stable.", "", "| code | meaning |", "|---|---|"]
+    lines += [f"| {k} | {EXPLANATIONS[k]} |" for k in sorted(EXPLANATIONS)]
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    print(markdown(), end="")

@@ -74,3 +74,8 @@ def test_explain():
     r = st("explain", "E118")
     assert r.returncode == 0
     assert r.stdout.startswith("E118: An implicit narrowing conversion")
+
+
+def test_diagnostics_doc_is_current():
+    from st.errors_doc import markdown
+    assert (ROOT / "docs" / "diagnostics.md").read_text() == markdown()
