@@ -26,10 +26,9 @@ def test_comments_nest_and_keep_positions():
     assert len(out) == len(text)
 
 
-def test_comment_opener_inside_a_comment_falls_back_to_first_close():
+def test_comments_nest_so_an_inner_opener_needs_its_own_close():
     out, _, errors = strip_comments("x (* see (*note *) y")
-    assert out == "x" + " " * 17 + " y"
-    assert errors == []
+    assert [(e.offset, e.message.split(" (")[0]) for e in errors] == [(2, "unterminated comment '(*'")]
 
 
 def test_strings_protect_comment_markers():

@@ -16,6 +16,18 @@ from .literals import (LiteralError, parse_date_literal, parse_dt_literal, parse
 _PREC = {"OR": 1, "OR_ELSE": 1, "XOR": 2, "AND": 3, "&": 3, "AND_THEN": 3, "=": 4, "<>": 4,
          "<": 5, ">": 5, "<=": 5, ">=": 5, "+": 6, "-": 6, "*": 7, "/": 7, "MOD": 7, "**": 8}
 _OPNAME = {"&": "AND"}
+# Words that may never be declared as a name (contextual lexing would otherwise let 'THEN' be an
+# identifier where no keyword is expected). Soft keywords (ON, STEP, BY, ...) and type names (DT is
+# a common name for a time step) are not here: the grammar tells them apart by context.
+RESERVED = frozenset("""
+TYPE END_TYPE STRUCT END_STRUCT ARRAY OF STRING WSTRING REF_TO POINTER REFERENCE TO END_VAR CONSTANT RETAIN
+NON_RETAIN PERSISTENT R_EDGE F_EDGE AT FUNCTION END_FUNCTION FUNCTION_BLOCK END_FUNCTION_BLOCK PROGRAM
+END_PROGRAM EXTENDS IMPLEMENTS INITIAL_STEP END_STEP END_TRANSITION END_ACTION CONFIGURATION
+END_CONFIGURATION RESOURCE END_RESOURCE IF THEN ELSIF ELSE END_IF CASE END_CASE FOR DO END_FOR WHILE
+END_WHILE REPEAT UNTIL END_REPEAT EXIT CONTINUE RETURN OR XOR AND NOT MOD TRUE FALSE VAR VAR_INPUT
+VAR_OUTPUT VAR_IN_OUT VAR_TEMP VAR_GLOBAL VAR_EXTERNAL VAR_CONFIG VAR_ACCESS END_TEST END_SETUP
+END_TEARDOWN PUBLIC PRIVATE PROTECTED INTERNAL ABSTRACT FINAL
+""".split())
 _QUALIFIERS = frozenset(("CONSTANT", "RETAIN", "NON_RETAIN", "PERSISTENT"))
 
 
@@ -61,12 +73,19 @@ class AstBuilder(Transformer):
     def name(self, c):
         return c[0]
 
+    def _not_reserved(self, tok):
+        if isinstance(tok, Token) and tok.type == "IDENT" and tok.upper() in RESERVED:
+            self.errors.append(BuildError(self.sp(tok), f"'{tok}' is a reserved keyword and cannot be a name",
+                                          "E001"))
+        return tok
+
     # ---------------------------------------------------------------- types
     def type_decl(self, c):
         return A.TypeBlock(self.sp(c[0]), [x for x in c if isinstance(x, A.TypeDecl)])
 
     def type_item(self, c):
         name, (spec, init) = c
+        self._not_reserved(name)
         return A.TypeDecl(self.sp(name), str(name), spec, init)
 
     def alias_type(self, c):
@@ -89,6 +108,7 @@ class AstBuilder(Transformer):
         return (A.StructType(self.sp(c[0]), [x for x in c if isinstance(x, A.VarDecl)]), None)
 
     def enum_value(self, c):
+        self._not_reserved(c[0])
         return A.EnumValue(self.sp(c[0]), str(c[0]), c[1] if len(c) > 1 else None)
 
     def struct_member(self, c):
@@ -172,6 +192,8 @@ class AstBuilder(Transformer):
         return list(c)
 
     def name_list(self, c):
+        for t in c:
+            self._not_reserved(t)
         return list(c)
 
     def location(self, c):
@@ -191,6 +213,7 @@ class AstBuilder(Transformer):
 
     # ---------------------------------------------------------------- POUs
     def _pou(self, kind, kw, name, parts, end):
+        self._not_reserved(name)
         pou = A.POU(self.sp(name), kind, str(name))
         pou.end_span = self.sp(end)
         for p in parts:
@@ -422,6 +445,20 @@ class AstBuilder(Transformer):
         tok = c[-1]
         v = self._lit(parse_int, tok)
         return A.Literal(self.sp(c[0]), "int", -v if neg else v, "", ("-" if neg else "") + str(tok))
+
+    def case_real(self, c):
+        neg = len(c) == 2
+        v = self._lit(parse_real, c[-1])
+        return A.Literal(self.sp(c[0]), "real", -v if neg else v, "", str(c[-1]))
+
+    def case_other(self, c):
+        t = c[0]
+        if t.type == "TIME_LIT":
+            return self._prefixed("time", parse_time_literal, t)
+        if t.type in ("TRUE", "FALSE"):
+            return A.Literal(self.sp(t), "bool", t.type == "TRUE", "", str(t))
+        wide = t.type == "WSTRING_LIT"
+        return A.Literal(self.sp(t), "wstring" if wide else "string", self._lit(parse_string, t, wide), "", str(t))
 
     def for_stmt(self, c):
         var, start, end = c[1], c[3], c[5]

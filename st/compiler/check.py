@@ -759,14 +759,16 @@ class Checker:
                     if v is None:
                         self.err("E120", e.span, "a CASE label must be a constant")
                     vals.append(v)
-                if len(vals) == 2 and None not in vals:
+                if not all(isinstance(v, int) for v in vals):
+                    continue        # a wrong label type was reported above
+                if len(vals) == 2:
                     a, b = vals
                     for (c, d, sp) in seen:
                         if a <= d and c <= b:
                             self.err("E110", lo.span, f"CASE label {a}..{b} overlaps an earlier label")
                             break
                     seen.append((a, b, lo.span))
-                elif len(vals) == 1 and vals[0] is not None:
+                elif len(vals) == 1:
                     a = vals[0]
                     for (c, d, sp) in seen:
                         if c <= a <= d:
@@ -826,8 +828,9 @@ class Checker:
                 return True
         if s is _NULL and isinstance(d, T.RefType):
             return True
-        if isinstance(s, T.ElemType) and isinstance(d, T.ElemType) and s.kind in ("int", "real", "bit") \
-                and d.kind in ("int", "real", "bit"):
+        if isinstance(s, T.ElemType) and isinstance(d, T.ElemType) and (
+                s.kind in ("int", "real", "bit") and d.kind in ("int", "real", "bit")
+                or s.kind == d.kind and s.kind in ("time", "date", "tod", "dt") and s.long and not d.long):
             conv = f"{s.name}_TO_{d.name}"
             self.err("E118", span, f"implicit conversion from {src} to {dst} may lose data",
                      f"convert explicitly with {conv}(...)")
@@ -1406,6 +1409,13 @@ class Checker:
             else:
                 self.lvalue(a.value, scope)
         if not is_fb:
+            if npos and not any(a.name and a.name.lower() not in ("en", "eno") for a in c.args):
+                # a non-formal call gives every input and in-out, in order (IEC 61131-3 6.6.1.4.2)
+                needed = [p for p in params if p.section != "VAR_OUTPUT"]
+                if npos < len(needed):
+                    self.err("E108", c.span, f"{pou.name} takes {len(needed)} argument(s), not {npos}",
+                             "name the arguments (x := ...) to leave some out")
+                    return {"params": bind, "en": extras.get("en"), "eno": extras.get("eno")}
             for p in pou.in_outs():
                 if p.name.lower() not in bind:
                     self.err("E108", c.span, f"VAR_IN_OUT '{p.name}' of {pou.name} must be given")
@@ -1529,6 +1539,12 @@ class Checker:
             if isinstance(rt, str):
                 self.err("E104", c.span, rt)
                 return None
+            if isinstance(rt, T.LiteralType):
+                # all-literal arguments: the type the context expects
+                if isinstance(eb, T.ElemType) and (eb.is_real or (eb.is_intlike and rt is T.LIT_INT)):
+                    rt = eb
+                else:
+                    rt = T.default_type_for_literal(rt)
         elif res in groups:
             rt = groups[res]
         elif res is None:

@@ -88,14 +88,9 @@ def strip_comments(text: str) -> tuple[str, list[Pragma], list[CommentError]]:
                     depth -= 1
                     i = c + 2
             if depth:
-                # An opener inside a comment that never closes: read it as
-                # a non-nesting (2nd edition) comment, as MatIEC does.
-                close = text.find("*)", start + 2)
-                if close < 0:
-                    errors.append(CommentError(start, "unterminated comment '(*'"))
-                    end = n
-                else:
-                    end = close + 2
+                errors.append(CommentError(start, "unterminated comment '(*' (comments nest: every '(*' "
+                                                  "inside it needs its own '*)')"))
+                end = n
             else:
                 end = i
         elif tok == "{":

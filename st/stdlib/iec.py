@@ -75,6 +75,9 @@ def _shift(name, helper):
 
 def _arith(name, op, extensible):
     def emit(ctx, args, types, rt):
+        if T.base_of(rt).is_time and op in ("*", "/"):
+            # MUL(TIME, ANY_NUM), DIV(TIME, ANY_NUM): the time functions' overloads
+            return _time_fn(name, "TIME", "ANY_NUM", "TIME", op).emit(ctx, args, types, rt)
         node = args[0]
         for a in args[1:]:
             if op == "/":
@@ -85,11 +88,28 @@ def _arith(name, op, extensible):
             else:
                 node = py.BinOp(node, {"+": py.Add(), "-": py.Sub(), "*": py.Mult()}[op], a)
         return node
-    params = [_p("IN1", "ANY_MAGNITUDE" if op in "+-" else "ANY_NUM", "T"),
-              _p("IN2", "ANY_MAGNITUDE" if op in "+-" else "ANY_NUM", "T")]
+    params = [_p("IN1", "ANY_MAGNITUDE", "T"), _p("IN2", "ANY_MAGNITUDE", "T")]
+    result = "T"
+    if op in ("*", "/"):
+        # ANY_NUM × ANY_NUM, or TIME × ANY_NUM → TIME
+        params = [_p("IN1", "ANY_MAGNITUDE"), _p("IN2", "ANY_NUM")]
+
+        def result(types, op=op):
+            a, b = T.base_of(types[0]), T.base_of(types[1])
+            if a.is_time:
+                return a
+            if any(T.base_of(t).is_time for t in types[1:]):
+                return f"{name}: only the first argument may be a TIME"
+            out = types[0]
+            for t in types[1:]:
+                c = T.common_type(out, t)
+                if c is None:
+                    return f"{name}: incompatible argument types {out} and {t}"
+                out = c
+            return out
     if op == "MOD":
         params = [_p("IN1", "ANY_INT", "T"), _p("IN2", "ANY_INT", "T")]
-    return FuncSig(name, params, "T", extensible=extensible, emit=emit, min_args=2)
+    return FuncSig(name, params, result, extensible=extensible, emit=emit, min_args=2)
 
 
 def _cmp(name, helper):
