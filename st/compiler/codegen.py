@@ -93,9 +93,7 @@ def default_value(t: T.Type):
     """The Python value of a scalar type's default, or None for aggregates."""
     t = T.unalias(t)
     if isinstance(t, T.SubrangeType):
-        if t.lo <= 0 <= t.hi:
-            return 0
-        return t.lo if t.lo > 0 else t.hi      # the bound nearest to zero
+        return t.lo                             # IEC: a subrange starts at its lower limit
     if isinstance(t, T.ElemType):
         if t.kind == "char":
             return "\0"
