@@ -134,7 +134,7 @@ def run(files, scans, duration, cycle, virtual, dump_json, time_unit, f_trig_fir
 @main.command()
 @click.argument("code")
 def explain(code):
-    """Explain a diagnostic code, e.g. `st explain E104`."""
+    """Explain a diagnostic code, e.g. `st explain E013`."""
     text = EXPLANATIONS.get(code.upper())
     if text is None:
         click.echo(f"unknown code {code}; codes: {', '.join(sorted(EXPLANATIONS))}", err=True)

@@ -35,7 +35,7 @@ def test_check_reports_errors_with_location_and_exit_code(tmp_path):
     f.write_text("PROGRAM p\nVAR a : INT; END_VAR\na := b;\nEND_PROGRAM\n")
     r = st("check", str(f))
     assert r.returncode == 1
-    assert f"{f}:3:6: error[E101]: undeclared identifier 'b'" in r.stderr
+    assert f"{f}:3:6: error[E010]: undeclared identifier 'b'" in r.stderr
     assert "Traceback" not in r.stderr
 
 
@@ -71,9 +71,9 @@ def test_runtime_fault_exit_code_and_message(tmp_path):
 
 
 def test_explain():
-    r = st("explain", "E118")
+    r = st("explain", "E027")
     assert r.returncode == 0
-    assert r.stdout.startswith("E118: An implicit narrowing conversion")
+    assert r.stdout.startswith("E027: An implicit narrowing conversion")
 
 
 def test_diagnostics_doc_is_current():

@@ -19,18 +19,18 @@ def codes(err: CompileError):
 
 def test_undeclared_identifier_has_location_and_suggestion():
     e = diags("PROGRAM p\nVAR counter : INT; END_VAR\ncounter := countr + 1;\nEND_PROGRAM\n")
-    assert codes(e) == [("E101", 3, 12)]
+    assert codes(e) == [("E010", 3, 12)]
     d = e.errors[0]
     assert d.hint == "did you mean 'counter'?"
     text = e.render()
-    assert text.splitlines()[0] == "t.st:3:12: error[E101]: undeclared identifier 'countr'"
+    assert text.splitlines()[0] == "t.st:3:12: error[E010]: undeclared identifier 'countr'"
     assert "    3 | counter := countr + 1;" in text
     assert "|            ^^^^^^" in text
 
 
 def test_all_errors_of_a_run_are_reported_together():
     e = diags("PROGRAM p\nVAR a : INT; b : BOOL; END_VAR\na := TRUE;\nb := 5;\nc := 1;\nEND_PROGRAM\n")
-    assert codes(e) == [("E104", 3, 6), ("E104", 4, 6), ("E101", 5, 1)]
+    assert codes(e) == [("E013", 3, 6), ("E013", 4, 6), ("E010", 5, 1)]
 
 
 def test_missing_semicolon_is_repaired_and_later_errors_reported():
@@ -39,7 +39,7 @@ def test_missing_semicolon_is_repaired_and_later_errors_reported():
     assert got[0] == ("E001", 3, 7)
     assert got[1] == ("E001", 4, 7)
     assert e.errors[0].hint == "a ';' is missing at the end of line 3"
-    assert ("E101", 5, 1) in got
+    assert ("E010", 5, 1) in got
 
 
 def test_equals_instead_of_assign_hint():
@@ -66,27 +66,27 @@ def test_missing_end_at_end_of_file():
 def test_narrowing_needs_explicit_conversion():
     e = diags("PROGRAM p\nVAR i : INT; d : DINT; r : REAL; l : LREAL; END_VAR\ni := d;\nr := l;\ni := r;\n"
               "d := i; l := r;\nEND_PROGRAM\n")
-    assert codes(e) == [("E118", 3, 6), ("E118", 4, 6), ("E118", 5, 6)]
+    assert codes(e) == [("E027", 3, 6), ("E027", 4, 6), ("E027", 5, 6)]
     assert e.errors[0].hint == "convert explicitly with DINT_TO_INT(...)"
 
 
 def test_literal_out_of_range():
     e = diags("PROGRAM p\nVAR s : SINT := 300; b : BYTE; END_VAR\nb := 256;\nb := 255;\nEND_PROGRAM\n")
-    assert codes(e) == [("E112", 2, 17), ("E112", 3, 6)]
+    assert codes(e) == [("E021", 2, 17), ("E021", 3, 6)]
 
 
 def test_writes_to_inputs_and_constants():
     src = ("FUNCTION_BLOCK F\nVAR_INPUT i : INT; END_VAR\nVAR CONSTANT k : INT := 3; END_VAR\n"
            "i := 1;\nk := 2;\nEND_FUNCTION_BLOCK\n")
     e = diags(src)
-    assert codes(e) == [("E109", 4, 1), ("E109", 5, 1)]
+    assert codes(e) == [("E018", 4, 1), ("E018", 5, 1)]
 
 
 def test_non_bool_conditions():
     src = ("PROGRAM p\nVAR i : INT; END_VAR\nIF i THEN i := 1; END_IF;\nWHILE i + 1 DO i := 0; END_WHILE;\n"
            "REPEAT i := 1; UNTIL 5 END_REPEAT;\nEND_PROGRAM\n")
     e = diags(src)
-    assert codes(e) == [("E106", 3, 4), ("E106", 4, 7), ("E106", 5, 22)]
+    assert codes(e) == [("E015", 3, 4), ("E015", 4, 7), ("E015", 5, 22)]
 
 
 def test_wrong_argument_names_and_counts():
@@ -94,7 +94,7 @@ def test_wrong_argument_names_and_counts():
            "PROGRAM p\nVAR x : INT; t : TON; END_VAR\nx := F(b := 1);\nx := F(1, 2);\nt(IN := TRUE, PX := T#1s);\n"
            "x := LIMIT(1, 2);\nEND_PROGRAM\n")
     e = diags(src)
-    assert codes(e) == [("E107", 7, 8), ("E108", 8, 11), ("E107", 9, 15), ("E108", 10, 6)]
+    assert codes(e) == [("E016", 7, 8), ("E017", 8, 11), ("E016", 9, 15), ("E017", 10, 6)]
     assert "parameters: a" in e.errors[0].message
 
 
@@ -103,32 +103,32 @@ def test_case_label_checks():
            "CASE i OF 1: i := 0; 1: i := 2; 3..5: i := 1; 4: i := 3; END_CASE;\n"
            "CASE c OF Red: i := 0; 2: i := 1; END_CASE;\nEND_PROGRAM\n")
     e = diags(src)
-    assert [c for c, _, _ in codes(e)] == ["E110", "E110", "E110"]
+    assert [c for c, _, _ in codes(e)] == ["E019", "E019", "E019"]
     assert [l for _, l, _ in codes(e)] == [4, 4, 5]
 
 
 def test_duplicates_and_unknown_types():
     src = "PROGRAM p\nVAR a : INT; a : BOOL; b : Nope; END_VAR\na := 1;\nEND_PROGRAM\n"
     e = diags(src)
-    assert codes(e) == [("E102", 2, 14), ("E103", 2, 28)]
+    assert codes(e) == [("E011", 2, 14), ("E012", 2, 28)]
 
 
 def test_exit_outside_loop():
     e = diags("PROGRAM p\nVAR i : INT; END_VAR\nEXIT;\nEND_PROGRAM\n")
-    assert codes(e) == [("E115", 3, 1)]
+    assert codes(e) == [("E024", 3, 1)]
 
 
 def test_unused_variable_and_truncation_warnings():
     r = compile_text("PROGRAM p\nVAR s : STRING[3]; u : INT; END_VAR\ns := 'abcdef';\nEND_PROGRAM\n",
                      "w.st", use_cache=False)
     got = [(d.code, d.span.line, d.span.col) for d in r.diagnostics]
-    assert got == [("W201", 2, 20), ("W202", 3, 6)]
+    assert got == [("W002", 2, 20), ("W003", 3, 6)]
 
 
 def test_pragma_is_accepted_with_a_warning():
     r = compile_text("PROGRAM p\n{attribute 'hide'}\nVAR a : INT; END_VAR\na := 1;\nEND_PROGRAM\n", "w.st",
                      use_cache=False)
-    assert [(d.code, d.span.line) for d in r.diagnostics] == [("W101", 2)]
+    assert [(d.code, d.span.line) for d in r.diagnostics] == [("W001", 2)]
 
 
 def test_unterminated_comment():
@@ -143,13 +143,13 @@ def test_bad_literals():
 
 def test_fb_type_called_instead_of_instance():
     e = diags("PROGRAM p\nVAR q : BOOL; END_VAR\nTON(IN := q);\nEND_PROGRAM\n")
-    assert codes(e) == [("E111", 3, 1)]
+    assert codes(e) == [("E020", 3, 1)]
     assert "instance" in e.errors[0].message
 
 
 def test_output_argument_must_be_a_variable():
     e = diags("PROGRAM p\nVAR t : TON; END_VAR\nt(IN := TRUE, Q => 5);\nEND_PROGRAM\n")
-    assert codes(e) == [("E122", 3, 20)]
+    assert codes(e) == [("E031", 3, 20)]
 
 
 def test_no_traceback_for_garbage():
@@ -166,4 +166,4 @@ def test_recursion_and_self_containing_types_are_errors():
            "FUNCTION F : INT\nVAR_INPUT n : INT; END_VAR\nF := G(n);\nEND_FUNCTION\n"
            "FUNCTION G : INT\nVAR_INPUT n : INT; END_VAR\nG := F(n - 1);\nEND_FUNCTION\n")
     e = diags(src)
-    assert sorted(codes(e)) == [("E103", 1, 6), ("E103", 2, 16), ("E123", 7, 6), ("E123", 11, 6)]
+    assert sorted(codes(e)) == [("E012", 1, 6), ("E012", 2, 16), ("E032", 7, 6), ("E032", 11, 6)]

@@ -2,7 +2,7 @@
 
 tests/fixtures/run/**.st   header comments:  (* @scans N *)  (* @cycle T#10ms *)
                            (* @expect path = JSON *)   one per expectation
-tests/fixtures/errors/*.st  a line that must report an error ends with (* @error E104 *)
+tests/fixtures/errors/*.st  a line that must report an error ends with (* @error E013 *)
 """
 from __future__ import annotations
 

@@ -108,7 +108,7 @@ class Checker:
                         self._dup(td.name, td.span)
                         continue
                     if key in T.ELEMENTARY:
-                        self.err("E102", td.span, f"'{td.name}' is an elementary type and cannot be redefined")
+                        self.err("E011", td.span, f"'{td.name}' is an elementary type and cannot be redefined")
                         continue
                     self._pending_types[key] = (td, self._lib_of(td.span))
                     self._decl_span[key] = td.span
@@ -118,7 +118,7 @@ class Checker:
                     old = self.p.pous.get(key)
                     if old is not None and old.library and not self._lib_of(item.span):
                         # a user POU replaces a library POU of the same name
-                        self.warn("W203", item.span, f"'{item.name}' replaces the standard library's {item.name}")
+                        self.warn("W004", item.span, f"'{item.name}' replaces the standard library's {item.name}")
                     else:
                         self._dup(item.name, item.span)
                         continue
@@ -140,7 +140,7 @@ class Checker:
     def _dup(self, name: str, span: Span) -> None:
         prev = self._decl_span.get(name.lower())
         where = f" (first declared at {prev.file}:{prev.line})" if prev else ""
-        self.err("E102", span, f"'{name}' is declared twice{where}")
+        self.err("E011", span, f"'{name}' is declared twice{where}")
 
     # ================================================================ types
     def _resolve_named_type(self, key: str, span: Span) -> Optional[T.Type]:
@@ -149,7 +149,7 @@ class Checker:
         if key not in self._pending_types:
             return None
         if key in self._resolving:
-            self.err("E103", span, f"type '{key}' is defined in terms of itself")
+            self.err("E012", span, f"type '{key}' is defined in terms of itself")
             return None
         td, lib = self._pending_types[key]
         self._resolving.add(key)
@@ -166,7 +166,7 @@ class Checker:
             if isinstance(td.init, A.Name) and not spec.default:
                 spec.default = td.init.name       # TYPE E : (A, B) := B;
             elif td.init is not None and not spec.default:
-                self.err("E104", td.init.span, "an enumeration's default must be one of its values")
+                self.err("E013", td.init.span, "an enumeration's default must be one of its values")
             return self._enum(td.name, spec)
         if isinstance(spec, A.StructType):
             st = T.StructType(td.name, pyname="_st_" + mangle(td.name))
@@ -175,7 +175,7 @@ class Checker:
                 mt = self.resolve_type(d.type, None)
                 for n, sp in d.names:
                     if n.lower() in st.members:
-                        self.err("E102", sp, f"field '{n}' is declared twice in {td.name}")
+                        self.err("E011", sp, f"field '{n}' is declared twice in {td.name}")
                         continue
                     st.members[n.lower()] = T.Member(n, mt, d.init, sp, mangle(n))
                     if d.init is not None:
@@ -200,7 +200,7 @@ class Checker:
         if spec.base:
             b = T.ELEMENTARY.get(spec.base.upper())
             if b is None or not b.is_intlike:
-                self.err("E103", spec.span, f"an enumeration's base type must be an integer type, not '{spec.base}'")
+                self.err("E012", spec.span, f"an enumeration's base type must be an integer type, not '{spec.base}'")
             else:
                 base = b
         et = T.EnumType(name or "enum", base=base)
@@ -209,11 +209,11 @@ class Checker:
             if v.value is not None:
                 c = self.const_value(v.value, None)
                 if not isinstance(c, int):
-                    self.err("E120", v.span, f"the value of '{v.name}' must be an integer constant")
+                    self.err("E029", v.span, f"the value of '{v.name}' must be an integer constant")
                     c = nxt
                 nxt = c
             if v.name.lower() in et.members:
-                self.err("E102", v.span, f"'{v.name}' appears twice in the enumeration")
+                self.err("E011", v.span, f"'{v.name}' appears twice in the enumeration")
                 continue
             et.members[v.name.lower()] = (v.name, nxt)
             et.names_by_value.setdefault(nxt, v.name)
@@ -224,7 +224,7 @@ class Checker:
         if spec.default:
             m = et.members.get(spec.default.lower())
             if m is None:
-                self.err("E101", spec.span, f"'{spec.default}' is not a value of this enumeration")
+                self.err("E010", spec.span, f"'{spec.default}' is not a value of this enumeration")
             else:
                 et.default_value = m[1]
         return et
@@ -241,17 +241,17 @@ class Checker:
             pou = self.p.pous.get(key)
             if pou is not None:
                 if pou.pou_kind == "FUNCTION":
-                    self.err("E103", spec.span, f"'{spec.name}' is a FUNCTION, not a type")
+                    self.err("E012", spec.span, f"'{spec.name}' is a FUNCTION, not a type")
                     return T.INT
                 return pou
-            self.err("E103", spec.span, f"unknown type '{spec.name}'")
+            self.err("E012", spec.span, f"unknown type '{spec.name}'")
             return T.INT
         if isinstance(spec, A.StringType):
             n = 80
             if spec.length is not None:
                 c = self.const_value(spec.length, scope)
                 if not isinstance(c, int) or c < 1:
-                    self.err("E120", spec.span, "a string length must be a positive integer constant")
+                    self.err("E029", spec.span, "a string length must be a positive integer constant")
                 else:
                     n = c
             return T.StringType(n, spec.wide)
@@ -263,10 +263,10 @@ class Checker:
                     continue
                 lo, hi = self.const_value(r[0], scope), self.const_value(r[1], scope)
                 if not isinstance(lo, int) or not isinstance(hi, int):
-                    self.err("E120", spec.span, "array bounds must be integer constants")
+                    self.err("E029", spec.span, "array bounds must be integer constants")
                     lo, hi = 0, 0
                 elif hi < lo:
-                    self.err("E120", spec.span, f"empty array range {lo}..{hi}")
+                    self.err("E029", spec.span, f"empty array range {lo}..{hi}")
                     hi = lo
                 dims.append((lo, hi))
             elem = self.resolve_type(spec.element, scope)
@@ -276,17 +276,17 @@ class Checker:
         if isinstance(spec, A.SubrangeType):
             base = T.ELEMENTARY.get(spec.base.upper())
             if base is None or not base.is_intlike:
-                self.err("E103", spec.span, f"a subrange needs an integer base type, not '{spec.base}'")
+                self.err("E012", spec.span, f"a subrange needs an integer base type, not '{spec.base}'")
                 base = T.INT
             lo, hi = self.const_value(spec.lo, scope), self.const_value(spec.hi, scope)
             if not isinstance(lo, int) or not isinstance(hi, int):
-                self.err("E120", spec.span, "subrange bounds must be integer constants")
+                self.err("E029", spec.span, "subrange bounds must be integer constants")
                 lo, hi = base.lo, base.hi
             return T.SubrangeType(f"{base.name}({lo}..{hi})", base, lo, hi)
         if isinstance(spec, A.EnumType):
             return self._enum("", spec)
         if isinstance(spec, A.StructType):
-            self.err("E103", spec.span, "STRUCT is only allowed in a TYPE declaration")
+            self.err("E012", spec.span, "STRUCT is only allowed in a TYPE declaration")
             return T.INT
         raise AssertionError(spec)
 
@@ -312,7 +312,7 @@ class Checker:
                                              owner=pou, used=True)
         for act in d.actions:
             if act.name.lower() in pou.actions:
-                self.err("E102", act.span, f"action '{act.name}' is declared twice")
+                self.err("E011", act.span, f"action '{act.name}' is declared twice")
             pou.actions[act.name.lower()] = act
 
     def _declare_block(self, block: A.VarBlock, table: dict, scope: Optional[Scope], owner) -> None:
@@ -335,14 +335,14 @@ class Checker:
         for decl in block.decls:
             t = self.resolve_type(decl.type, scope)
             if isinstance(t, T.POUType) and t.pou_kind == "PROGRAM" and owner is not None:
-                self.err("E103", decl.type.span, f"a PROGRAM ('{t.name}') cannot be instantiated inside a POU")
+                self.err("E012", decl.type.span, f"a PROGRAM ('{t.name}') cannot be instantiated inside a POU")
             for n, sp in decl.names:
                 key = n.lower()
                 if key in table:
-                    self.err("E102", sp, f"'{n}' is declared twice")
+                    self.err("E011", sp, f"'{n}' is declared twice")
                     continue
                 if owner is not None and owner.pou_kind == "FUNCTION" and key == owner.name.lower():
-                    self.err("E102", sp, f"'{n}' is the function's own name (its return value)")
+                    self.err("E011", sp, f"'{n}' is the function's own name (its return value)")
                     continue
                 sym = T.VarSym(n, t, kind, sp, decl.init, decl.location,
                                constant="CONSTANT" in quals, retain="RETAIN" in quals,
@@ -375,7 +375,7 @@ class Checker:
         want = _DIRECT_TYPES[size]
         bt = T.base_of(t)
         if isinstance(bt, T.ElemType) and bt.bits != want.bits and not (size in ("", "X") and bt.is_bool):
-            self.err("E104", span, f"'{loc}' is {want.bits} bit(s) wide; it cannot hold a {t}")
+            self.err("E013", span, f"'{loc}' is {want.bits} bit(s) wide; it cannot hold a {t}")
 
     def _resolve_globals(self) -> None:
         for cfg in self._configs:
@@ -397,7 +397,7 @@ class Checker:
                 uniq = sym.pyname
                 if uniq in self.p.globals:
                     other = self.p.globals[uniq]
-                    self.err("E102", sym.span, f"global '{sym.name}' is declared twice "
+                    self.err("E011", sym.span, f"global '{sym.name}' is declared twice "
                              f"(first at {other.span.file}:{other.span.line})")
                     continue
                 self.p.globals[uniq] = sym
@@ -412,13 +412,13 @@ class Checker:
                 if sym.section == "VAR_EXTERNAL":
                     cands = self.p.global_names.get(sym.name.lower())
                     if not cands:
-                        self.err("E101", sym.span, f"VAR_EXTERNAL '{sym.name}' has no matching VAR_GLOBAL")
+                        self.err("E010", sym.span, f"VAR_EXTERNAL '{sym.name}' has no matching VAR_GLOBAL")
                         continue
                     g = cands[0]
                     sym.global_ref = g
                     sym.pyname = g.pyname
                     if not self._same_type(g.type, sym.type):
-                        self.err("E104", sym.span, f"VAR_EXTERNAL '{sym.name}' is declared {sym.type} "
+                        self.err("E013", sym.span, f"VAR_EXTERNAL '{sym.name}' is declared {sym.type} "
                                  f"but the VAR_GLOBAL is {g.type}")
 
     def _same_type(self, a: T.Type, b: T.Type) -> bool:
@@ -534,7 +534,7 @@ class Checker:
         bt = T.unalias(t)
         if isinstance(init, A.ArrayInit):
             if not isinstance(bt, T.ArrayType):
-                self.err("E104", init.span, f"an array initializer cannot initialize a {t}")
+                self.err("E013", init.span, f"an array initializer cannot initialize a {t}")
                 return
             count = 0
             for item in init.items:
@@ -546,7 +546,7 @@ class Checker:
                     self.check_initializer(item, bt.element, scope)
                     count += 1
             if count > bt.size:
-                self.err("E113", init.span, f"{count} initial values for an array of {bt.size} elements")
+                self.err("E022", init.span, f"{count} initial values for an array of {bt.size} elements")
             return
         if isinstance(init, A.StructInit):
             if isinstance(bt, T.StructType):
@@ -555,19 +555,19 @@ class Checker:
                 self._resolve_interface(bt)
                 fields, what = bt.vars, "variable"
             else:
-                self.err("E104", init.span, f"a structure initializer cannot initialize a {t}")
+                self.err("E013", init.span, f"a structure initializer cannot initialize a {t}")
                 return
             for name, sp, val in init.fields:
                 m = fields.get(name.lower())
                 if m is None:
-                    self.err("E114", sp, f"'{t}' has no {what} '{name}'")
+                    self.err("E023", sp, f"'{t}' has no {what} '{name}'")
                     continue
                 self.check_initializer(val, m.type, scope)
             return
         if isinstance(init, A.Expr):
             if isinstance(bt, T.ArrayType) and isinstance(init, A.Literal):
                 # CODESYS-style: a single value initializes... no; IEC needs [..]
-                self.err("E104", init.span, f"an array needs an initializer in brackets, e.g. [{init.text}]")
+                self.err("E013", init.span, f"an array needs an initializer in brackets, e.g. [{init.text}]")
                 return
             st = self.expr(init, scope or Scope(None, {}), t)
             self.assignable(init, st, t, init.span)
@@ -584,7 +584,7 @@ class Checker:
         for act in d.actions:
             self.stmts(act.body, scope)
         if pou.pou_kind == "FUNCTION" and pou.return_type is None and self._assigns_name(d.body, pou.name):
-            self.err("E104", d.span, f"FUNCTION {pou.name} has no return type but assigns a result")
+            self.err("E013", d.span, f"FUNCTION {pou.name} has no return type but assigns a result")
 
     def _assigns_name(self, body, name) -> bool:
         key = name.lower()
@@ -601,15 +601,15 @@ class Checker:
         for s in d.steps:
             key = s.name.lower()
             if key in index:
-                self.err("E102", s.span, f"step '{s.name}' is declared twice")
+                self.err("E011", s.span, f"step '{s.name}' is declared twice")
                 continue
             if key in pou.vars:
-                self.err("E102", s.span, f"step '{s.name}' has the name of a variable")
+                self.err("E011", s.span, f"step '{s.name}' has the name of a variable")
             index[key] = len(steps)
             steps.append(StepModel(s.name, len(steps), s.initial, [], s.span))
         initial = [s for s in steps if s.initial]
         if len(initial) != 1:
-            self.err("E121", d.span, f"an SFC needs exactly one INITIAL_STEP (found {len(initial)})")
+            self.err("E030", d.span, f"an SFC needs exactly one INITIAL_STEP (found {len(initial)})")
         scope.steps = index
         actions: dict = {}
         for act in d.actions:
@@ -622,20 +622,20 @@ class Checker:
                 if key not in actions:
                     sym = pou.vars.get(key)
                     if sym is None or not T.base_of(sym.type).is_bool:
-                        self.err("E121", aa.span, f"'{aa.action}' is neither an ACTION of {pou.name} nor a BOOL variable")
+                        self.err("E030", aa.span, f"'{aa.action}' is neither an ACTION of {pou.name} nor a BOOL variable")
                         continue
                     sym.used = sym.written = True
                 q = aa.qualifier
                 if q not in ("N", "R", "S", "P", "L", "D", "SD", "DS", "SL", "P0", "P1"):
-                    self.err("E121", aa.span, f"unknown action qualifier '{q}'")
+                    self.err("E030", aa.span, f"unknown action qualifier '{q}'")
                     continue
                 if q in ("L", "D", "SD", "DS", "SL"):
                     if aa.time is None:
-                        self.err("E121", aa.span, f"qualifier {q} needs a time, e.g. {aa.action}({q}, T#1s)")
+                        self.err("E030", aa.span, f"qualifier {q} needs a time, e.g. {aa.action}({q}, T#1s)")
                         continue
                     tt = self.expr(aa.time, scope, T.TIME)
                     if not T.base_of(tt).is_time:
-                        self.err("E104", aa.time.span, f"the time of qualifier {q} must be a TIME, not {tt}")
+                        self.err("E013", aa.time.span, f"the time of qualifier {q} must be a TIME, not {tt}")
                 if key not in action_index:
                     action_index[key] = len(action_names)
                     action_names.append(key)
@@ -646,7 +646,7 @@ class Checker:
             for names, out in ((t.sources, srcs), (t.targets, dsts)):
                 for n, sp in names:
                     if n.lower() not in index:
-                        self.err("E121", sp, f"unknown step '{n}'")
+                        self.err("E030", sp, f"unknown step '{n}'")
                     else:
                         out.append(index[n.lower()])
             prio = 0
@@ -656,7 +656,7 @@ class Checker:
             if t.cond is not None:
                 ct = self.expr(t.cond, scope, T.BOOL)
                 if not T.base_of(ct).is_bool:
-                    self.err("E106", t.cond.span, f"a transition condition must be BOOL, not {ct}")
+                    self.err("E015", t.cond.span, f"a transition condition must be BOOL, not {ct}")
                 cond = t.cond
             else:
                 cond = None
@@ -680,7 +680,7 @@ class Checker:
             if s.kind in ("S=", "R="):
                 vt = self.expr(s.value, scope, T.BOOL)
                 if not T.base_of(tt).is_bool or not T.base_of(vt).is_bool:
-                    self.err("E104", s.span, f"'{s.kind}' needs BOOL operands")
+                    self.err("E013", s.span, f"'{s.kind}' needs BOOL operands")
                 return
             vt = self.expr(s.value, scope, tt)
             if tt is not None:
@@ -698,7 +698,7 @@ class Checker:
         elif isinstance(s, A.For):
             vt = self.lvalue(s.var, scope)
             if vt is not None and not T.base_of(vt).is_intlike:
-                self.err("E116", s.var.span, f"a FOR variable must be an integer, not {vt}")
+                self.err("E025", s.var.span, f"a FOR variable must be an integer, not {vt}")
             for e in (s.start, s.end, s.step):
                 if e is not None:
                     et = self.expr(e, scope, vt)
@@ -707,7 +707,7 @@ class Checker:
             if isinstance(s.step, A.Expr):
                 c = self.const_value(s.step, scope)
                 if c == 0:
-                    self.err("E120", s.step.span, "a FOR step of 0 never ends")
+                    self.err("E029", s.step.span, "a FOR step of 0 never ends")
             scope.loop_depth += 1
             self.stmts(s.body, scope)
             scope.loop_depth -= 1
@@ -723,7 +723,7 @@ class Checker:
             self.condition(s.cond, scope, "UNTIL")
         elif isinstance(s, (A.Exit, A.Continue)):
             if scope.loop_depth == 0:
-                self.err("E115", s.span, f"{'EXIT' if isinstance(s, A.Exit) else 'CONTINUE'} outside a loop")
+                self.err("E024", s.span, f"{'EXIT' if isinstance(s, A.Exit) else 'CONTINUE'} outside a loop")
         elif isinstance(s, (A.Return, A.Empty)):
             pass
         else:  # pragma: no cover
@@ -732,14 +732,14 @@ class Checker:
     def condition(self, e: A.Expr, scope: Scope, what: str) -> None:
         t = self.expr(e, scope, T.BOOL)
         if t is not None and not T.base_of(t).is_bool:
-            self.err("E106", e.span, f"the {what} condition must be BOOL, not {t}",
+            self.err("E015", e.span, f"the {what} condition must be BOOL, not {t}",
                      "compare explicitly, e.g. x <> 0" if T.base_of(t).is_num else "")
 
     def _case(self, s: A.Case, scope: Scope) -> None:
         st = self.expr(s.selector, scope)
         bst = T.base_of(st) if st is not None else None
         if bst is not None and not (bst.is_intlike or isinstance(bst, T.EnumType)):
-            self.err("E110", s.selector.span, f"a CASE selector must be an integer or enumeration, not {st}")
+            self.err("E019", s.selector.span, f"a CASE selector must be an integer or enumeration, not {st}")
             bst = None
         seen: list = []
         for br in s.branches:
@@ -752,12 +752,12 @@ class Checker:
                     if bst is not None:
                         if isinstance(bst, T.EnumType):
                             if T.base_of(et) is not bst:
-                                self.err("E110", e.span, f"CASE label of type {et} for a selector of type {st}")
+                                self.err("E019", e.span, f"CASE label of type {et} for a selector of type {st}")
                         elif not (T.base_of(et).is_intlike or et is T.LIT_INT):
-                            self.err("E110", e.span, f"CASE label of type {et} for a selector of type {st}")
+                            self.err("E019", e.span, f"CASE label of type {et} for a selector of type {st}")
                     v = self.const_value(e, scope)
                     if v is None:
-                        self.err("E120", e.span, "a CASE label must be a constant")
+                        self.err("E029", e.span, "a CASE label must be a constant")
                     vals.append(v)
                 if not all(isinstance(v, int) for v in vals):
                     continue        # a wrong label type was reported above
@@ -765,14 +765,14 @@ class Checker:
                     a, b = vals
                     for (c, d, sp) in seen:
                         if a <= d and c <= b:
-                            self.err("E110", lo.span, f"CASE label {a}..{b} overlaps an earlier label")
+                            self.err("E019", lo.span, f"CASE label {a}..{b} overlaps an earlier label")
                             break
                     seen.append((a, b, lo.span))
                 elif len(vals) == 1:
                     a = vals[0]
                     for (c, d, sp) in seen:
                         if c <= a <= d:
-                            self.err("E110", lo.span, f"duplicate CASE label {a}")
+                            self.err("E019", lo.span, f"duplicate CASE label {a}")
                             break
                     seen.append((a, a, lo.span))
             self.stmts(br.body, scope)
@@ -789,7 +789,7 @@ class Checker:
                 c = self.const_value(e, None) if isinstance(e, (A.Literal, A.Unary)) else None
                 sub = T.unalias(dst)
                 if isinstance(c, int) and not (sub.lo <= c <= sub.hi):
-                    self.err("E112", span, f"{c} is outside the range {sub.lo}..{sub.hi} of {dst}")
+                    self.err("E021", span, f"{c} is outside the range {sub.lo}..{sub.hi} of {dst}")
                     return False
             return True
         what = what or "assign"
@@ -797,7 +797,7 @@ class Checker:
             if d.is_intlike or isinstance(T.unalias(dst), T.SubrangeType):
                 v = self.const_value(e, None) if isinstance(e, A.Expr) else None
                 if isinstance(v, int) and not T.literal_fits(v, dst):
-                    self.err("E112", span, f"{v} does not fit in {dst} ({T.base_of(dst).lo}..{T.base_of(dst).hi})")
+                    self.err("E021", span, f"{v} does not fit in {dst} ({T.base_of(dst).lo}..{T.base_of(dst).hi})")
                     return False
                 return True
             if d.is_real:
@@ -806,16 +806,16 @@ class Checker:
             return True
         if isinstance(s, T.StringType) and isinstance(d, T.StringType):
             if s.wide != d.wide:
-                self.err("E104", span, f"cannot {what} {src} to {dst}", "use STRING_TO_WSTRING / WSTRING_TO_STRING")
+                self.err("E013", span, f"cannot {what} {src} to {dst}", "use STRING_TO_WSTRING / WSTRING_TO_STRING")
                 return False
             if isinstance(e, A.Literal) and isinstance(e.value, str) and len(e.value) > d.length:
-                self.warn("W202", span, f"the string ({len(e.value)} characters) is truncated to {d.length}")
+                self.warn("W003", span, f"the string ({len(e.value)} characters) is truncated to {d.length}")
             return True
         if isinstance(s, T.ElemType) and s.kind == "char" and isinstance(d, T.StringType):
             return True
         if isinstance(d, T.ElemType) and d.kind == "char" and isinstance(e, A.Literal) and isinstance(e.value, str):
             if len(e.value) != 1:
-                self.err("E104", span, f"a {d} literal holds exactly one character")
+                self.err("E013", span, f"a {d} literal holds exactly one character")
                 return False
             return True
         if T.widens_to(s, d):
@@ -832,10 +832,10 @@ class Checker:
                 s.kind in ("int", "real", "bit") and d.kind in ("int", "real", "bit")
                 or s.kind == d.kind and s.kind in ("time", "date", "tod", "dt") and s.long and not d.long):
             conv = f"{s.name}_TO_{d.name}"
-            self.err("E118", span, f"implicit conversion from {src} to {dst} may lose data",
+            self.err("E027", span, f"implicit conversion from {src} to {dst} may lose data",
                      f"convert explicitly with {conv}(...)")
             return False
-        self.err("E104", span, f"type mismatch: cannot {what} {src} to {dst}")
+        self.err("E013", span, f"type mismatch: cannot {what} {src} to {dst}")
         return False
 
     # ---------------------------------------------------------------- lvalues
@@ -850,17 +850,17 @@ class Checker:
             sym.written = True
             g = sym.global_ref or sym
             if g.constant or sym.constant:
-                self.err("E109", e.span, f"'{sym.name}' is a CONSTANT")
+                self.err("E018", e.span, f"'{sym.name}' is a CONSTANT")
                 return t
             if sym.section == "VAR_INPUT" and scope.pou is not None and sym.owner is scope.pou \
                     and not isinstance(T.unalias(sym.type), (T.POUType,)) and isinstance(e, A.Name):
-                self.err("E109", e.span, f"'{sym.name}' is an input of {scope.pou.name} and cannot be written here",
+                self.err("E018", e.span, f"'{sym.name}' is an input of {scope.pou.name} and cannot be written here",
                          "copy it into a local variable first")
                 return t
         elif isinstance(e, (A.Literal, A.Call, A.Binary, A.Unary, A.EnumLit)):
-            self.err("E104", e.span, "this expression cannot be assigned to")
+            self.err("E013", e.span, "this expression cannot be assigned to")
         elif isinstance(e, A.Name) and e.sym is STEP:
-            self.err("E104", e.span, "a step cannot be assigned to")
+            self.err("E013", e.span, "a step cannot be assigned to")
         return t
 
     # ---------------------------------------------------------------- expressions
@@ -894,27 +894,27 @@ class Checker:
             rt = {"X": T.BOOL, "B": T.BYTE, "W": T.WORD, "D": T.DWORD, "L": T.LWORD}[size]
             width = 1 if size == "X" else rt.bits
             if not b.is_intlike:
-                self.err("E114", e.span, f"bit access needs an integer or bit-string variable, not {bt}")
+                self.err("E023", e.span, f"bit access needs an integer or bit-string variable, not {bt}")
                 return rt
             if (e.index + 1) * width > b.bits:
-                self.err("E113", e.span, f"{bt} has no {'bit' if size == 'X' else size} {e.index}")
+                self.err("E022", e.span, f"{bt} has no {'bit' if size == 'X' else size} {e.index}")
             return rt
         if isinstance(e, A.Deref):
             bt = self.expr(e.base, scope)
             b = T.unalias(bt) if bt is not None else None
             if not isinstance(b, T.RefType):
-                self.err("E114", e.span, f"'^' needs a reference, not {bt}")
+                self.err("E023", e.span, f"'^' needs a reference, not {bt}")
                 return None
             return b.target
         if isinstance(e, A.EnumLit):
             et = self._resolve_named_type(e.type_name.lower(), e.span)
             et = T.unalias(et) if et is not None else None
             if not isinstance(et, T.EnumType):
-                self.err("E103", e.span, f"'{e.type_name}' is not an enumeration type")
+                self.err("E012", e.span, f"'{e.type_name}' is not an enumeration type")
                 return None
             m = et.members.get(e.member.lower())
             if m is None:
-                self.err("E101", e.span, f"'{e.member}' is not a value of {e.type_name}")
+                self.err("E010", e.span, f"'{e.member}' is not a value of {e.type_name}")
                 return et
             e.const = m[1]
             return et
@@ -946,27 +946,27 @@ class Checker:
                 if at is not None and T.base_of(at).is_elementary:
                     t = at
             if t is None:
-                self.err("E103", e.span, f"unknown type '{tn}' in literal {e.text}")
+                self.err("E012", e.span, f"unknown type '{tn}' in literal {e.text}")
                 return None
             b = T.base_of(t)
             if k == "int":
                 if b.is_bool:
                     if e.value not in (0, 1):
-                        self.err("E112", e.span, f"{e.text} is not a BOOL value")
+                        self.err("E021", e.span, f"{e.text} is not a BOOL value")
                     e.value = bool(e.value)
                 elif b.is_real:
                     e.value = float(e.value)
                 elif b.is_intlike:
                     if not T.literal_fits(e.value, t):
-                        self.err("E112", e.span, f"{e.text} does not fit in {t}")
+                        self.err("E021", e.span, f"{e.text} does not fit in {t}")
                 else:
-                    self.err("E104", e.span, f"{e.text}: an integer is not a {t}")
+                    self.err("E013", e.span, f"{e.text}: an integer is not a {t}")
             elif k == "real" and not b.is_real:
-                self.err("E104", e.span, f"{e.text}: a real number is not a {t}")
+                self.err("E013", e.span, f"{e.text}: a real number is not a {t}")
             elif k == "bool" and not (b.is_bool or b.is_intlike):
-                self.err("E104", e.span, f"{e.text}: a BOOL is not a {t}")
+                self.err("E013", e.span, f"{e.text}: a BOOL is not a {t}")
             elif k in ("string", "wstring") and not (b.is_string or b.kind == "char"):
-                self.err("E104", e.span, f"{e.text}: a string is not a {t}")
+                self.err("E013", e.span, f"{e.text}: a string is not a {t}")
             if k == "bool" and b.is_intlike:
                 e.value = int(e.value)
             return t
@@ -1030,16 +1030,16 @@ class Checker:
                         pick = m
             if pick is None:
                 if len(mems) > 1:
-                    self.err("E101", e.span, f"'{e.name}' is a value of several enumerations",
+                    self.err("E010", e.span, f"'{e.name}' is a value of several enumerations",
                              f"qualify it, e.g. {mems[0][0].name}#{e.name}")
                 pick = mems[0]
             e.sym = pick[0]
             e.const = pick[2]
             return pick[0]
         if key in self.p.pous or self._native(key) is not None:
-            self.err("E117", e.span, f"'{e.name}' is a POU, not a value")
+            self.err("E026", e.span, f"'{e.name}' is a POU, not a value")
             return None
-        self.err("E101", e.span, f"undeclared identifier '{e.name}'", self._suggest(key, scope))
+        self.err("E010", e.span, f"undeclared identifier '{e.name}'", self._suggest(key, scope))
         return None
 
     def _suggest(self, key: str, scope: Scope) -> str:
@@ -1144,7 +1144,7 @@ class Checker:
         return None
 
     def _bad_operands(self, e: A.Binary, lt, rt):
-        self.err("E105", e.span, f"operator {e.op} cannot combine {lt} and {rt}",
+        self.err("E014", e.span, f"operator {e.op} cannot combine {lt} and {rt}",
                  self._conv_hint(lt, rt))
         return T.BOOL if e.op in _CMP else lt
 
@@ -1167,9 +1167,9 @@ class Checker:
         else:
             if b.is_num or isinstance(b, T.LiteralType) or b.is_time:
                 if e.op == "-" and b.is_int and not b.signed:
-                    self.warn("W204", e.span, f"negating an unsigned {t} wraps around")
+                    self.warn("W005", e.span, f"negating an unsigned {t} wraps around")
                 return t
-        self.err("E105", e.span, f"operator {e.op} cannot be applied to {t}")
+        self.err("E014", e.span, f"operator {e.op} cannot be applied to {t}")
         return t
 
     def _field(self, e: A.Field, scope: Scope):
@@ -1180,7 +1180,7 @@ class Checker:
                 et = T.unalias(et)
                 m = et.members.get(e.name.lower())
                 if m is None:
-                    self.err("E101", e.name_span, f"'{e.name}' is not a value of {et.name}")
+                    self.err("E010", e.name_span, f"'{e.name}' is not a value of {et.name}")
                     return et
                 e.const = m[1]
                 e.sym = et
@@ -1196,12 +1196,12 @@ class Checker:
                 return T.BOOL
             if up == "T":
                 return T.TIME
-            self.err("E114", e.name_span, f"a step has only the flags .X and .T, not .{e.name}")
+            self.err("E023", e.name_span, f"a step has only the flags .X and .T, not .{e.name}")
             return None
         if isinstance(b, T.StructType):
             m = b.members.get(key)
             if m is None:
-                self.err("E114", e.name_span, f"'{bt}' has no field '{e.name}'")
+                self.err("E023", e.name_span, f"'{bt}' has no field '{e.name}'")
                 return None
             e.sym = m
             return m.type
@@ -1210,9 +1210,9 @@ class Checker:
             v = b.vars.get(key)
             if v is None:
                 if key in b.actions:
-                    self.err("E117", e.name_span, f"'{e.name}' is an action; call it: {e.name}()")
+                    self.err("E026", e.name_span, f"'{e.name}' is an action; call it: {e.name}()")
                     return None
-                self.err("E114", e.name_span, f"{b.name} has no variable '{e.name}'")
+                self.err("E023", e.name_span, f"{b.name} has no variable '{e.name}'")
                 return None
             if v.section in ("VAR", "VAR_TEMP") and b.pou_kind == "FUNCTION_BLOCK" and not b.library and \
                     scope.pou is not b:
@@ -1223,7 +1223,7 @@ class Checker:
             return v.type
         if isinstance(b, T.ElemType) and b.is_intlike and e.name.isdigit():
             return T.BOOL
-        self.err("E114", e.span, f"'{bt}' is not a structure or function block instance, it has no field '{e.name}'")
+        self.err("E023", e.span, f"'{bt}' is not a structure or function block instance, it has no field '{e.name}'")
         return None
 
     def _index(self, e: A.Index, scope: Scope):
@@ -1231,24 +1231,24 @@ class Checker:
         for i in e.indices:
             it = self.expr(i, scope, T.DINT)
             if it is not None and not (T.base_of(it).is_intlike or it is T.LIT_INT or isinstance(T.base_of(it), T.EnumType)):
-                self.err("E104", i.span, f"an array index must be an integer, not {it}")
+                self.err("E013", i.span, f"an array index must be an integer, not {it}")
         if bt is None:
             return None
         b = T.unalias(bt)
         if isinstance(b, T.StringType):
-            self.err("E114", e.span, "strings cannot be indexed; use MID()")
+            self.err("E023", e.span, "strings cannot be indexed; use MID()")
             return None
         if not isinstance(b, T.ArrayType):
-            self.err("E114", e.span, f"'{bt}' is not an array")
+            self.err("E023", e.span, f"'{bt}' is not an array")
             return None
         if len(e.indices) != len(b.dims):
             # ARRAY OF ARRAY written a[i, j] is not allowed; a[i][j] is
-            self.err("E114", e.span, f"this array has {len(b.dims)} dimension(s), not {len(e.indices)}")
+            self.err("E023", e.span, f"this array has {len(b.dims)} dimension(s), not {len(e.indices)}")
             return b.element
         for i, (lo, hi) in zip(e.indices, b.dims):
             c = self.const_value(i, scope)
             if isinstance(c, int) and hi >= lo and not (lo <= c <= hi):
-                self.err("E113", i.span, f"index {c} is outside the bounds {lo}..{hi}")
+                self.err("E022", i.span, f"index {c} is outside the bounds {lo}..{hi}")
         return b.element
 
     # ---------------------------------------------------------------- calls
@@ -1269,13 +1269,13 @@ class Checker:
                 return self._ref_call(c, scope)
             if key in scope.actions or (scope.pou is not None and key in scope.pou.actions):
                 if c.args:
-                    self.err("E108", c.span, "an action takes no arguments")
+                    self.err("E017", c.span, "an action takes no arguments")
                 c.target = CallTarget("action", name=key)
                 return None
             pou = self.p.pous.get(key)
             if pou is not None:
                 if pou.pou_kind != "FUNCTION":
-                    self.err("E111", c.span, f"'{callee.name}' is a {pou.pou_kind.replace('_', ' ')} type; "
+                    self.err("E020", c.span, f"'{callee.name}' is a {pou.pou_kind.replace('_', ' ')} type; "
                              f"declare an instance and call that",
                              f"VAR inst : {pou.name}; END_VAR ... inst(...);")
                     return None
@@ -1285,9 +1285,9 @@ class Checker:
             if sig is not None:
                 return self._native_call(c, sig, scope, expected)
             if self.p.enum_members.get(key) or sym is not None:
-                self.err("E111", c.span, f"'{callee.name}' is not callable")
+                self.err("E020", c.span, f"'{callee.name}' is not callable")
                 return None
-            self.err("E101", c.span, f"undeclared function or function block '{callee.name}'")
+            self.err("E010", c.span, f"undeclared function or function block '{callee.name}'")
             for a in c.args:
                 if not a.output:
                     self.expr(a.value, scope)
@@ -1301,11 +1301,11 @@ class Checker:
     def _ref_call(self, c: A.Call, scope: Scope):
         """REF(x): a reference to a variable (IEC 61131-3 3rd edition)."""
         if len(c.args) != 1 or c.args[0].name:
-            self.err("E108", c.span, "REF takes exactly one variable")
+            self.err("E017", c.span, "REF takes exactly one variable")
             return None
         arg = c.args[0].value
         if not isinstance(arg, (A.Name, A.Field, A.Index)):
-            self.err("E122", arg.span, "REF needs a variable")
+            self.err("E031", arg.span, "REF needs a variable")
             return None
         t = self.lvalue(arg, scope)
         root = arg
@@ -1319,11 +1319,11 @@ class Checker:
     def _fb_call(self, c: A.Call, t: T.Type, scope: Scope, statement: bool):
         fb = T.unalias(t)
         if not isinstance(fb, T.POUType) or fb.pou_kind == "FUNCTION":
-            self.err("E111", c.span, f"a {t} is not callable")
+            self.err("E020", c.span, f"a {t} is not callable")
             return None
         self._resolve_interface(fb)
         if not statement:
-            self.err("E111", c.span, f"a function block call is a statement; it has no value",
+            self.err("E020", c.span, f"a function block call is a statement; it has no value",
                      f"call it, then read its outputs, e.g. inst(...); x := inst.Q;")
         bind = self._bind_args(c, fb, scope, is_fb=True)
         c.target = CallTarget("fb", pou=fb, bind=bind)
@@ -1347,7 +1347,7 @@ class Checker:
             key = a.name.lower()
             if not a.name:
                 if npos >= len(pos_params):
-                    self.err("E108", a.span, f"too many arguments for {pou.name} (it has {len(pos_params)} parameters)")
+                    self.err("E017", a.span, f"too many arguments for {pou.name} (it has {len(pos_params)} parameters)")
                     self.expr(a.value, scope)
                     continue
                 p = pos_params[npos]
@@ -1363,24 +1363,24 @@ class Checker:
                 p = pou.vars.get(key)
                 if p is None or p.section not in _SECTIONS_PARAM:
                     names = ", ".join(x.name for x in params) or "none"
-                    self.err("E107", a.span, f"{pou.name} has no parameter '{a.name}' (parameters: {names})")
+                    self.err("E016", a.span, f"{pou.name} has no parameter '{a.name}' (parameters: {names})")
                     if not a.output:
                         self.expr(a.value, scope)
                     continue
                 if key in bind:
-                    self.err("E102", a.span, f"parameter '{a.name}' is given twice")
+                    self.err("E011", a.span, f"parameter '{a.name}' is given twice")
                     continue
                 if a.output and p.section != "VAR_OUTPUT":
-                    self.err("E107", a.span, f"'{a.name}' is not an output; use ':=' to pass it")
+                    self.err("E016", a.span, f"'{a.name}' is not an output; use ':=' to pass it")
                 elif not a.output and p.section == "VAR_OUTPUT":
-                    self.err("E107", a.span, f"'{a.name}' is an output; use '=>' to read it")
+                    self.err("E016", a.span, f"'{a.name}' is an output; use '=>' to read it")
                     a.output = True
                 bind[key] = a
         for key, a in bind.items():
             p = pou.vars[key]
             if a.output:
                 if not isinstance(a.value, (A.Name, A.Field, A.Index, A.Bit, A.Deref, A.Direct)):
-                    self.err("E122", a.value.span, "an output argument must be a variable")
+                    self.err("E031", a.value.span, "an output argument must be a variable")
                     continue
                 vt = self.lvalue(a.value, scope)
                 pt = p.type
@@ -1388,24 +1388,24 @@ class Checker:
                     self.assignable(None, pt, vt, a.value.span, "assign output")
             elif p.section == "VAR_IN_OUT":
                 if not isinstance(a.value, (A.Name, A.Field, A.Index, A.Bit, A.Deref, A.Direct)):
-                    self.err("E122", a.value.span, f"VAR_IN_OUT '{p.name}' needs a variable, not an expression")
+                    self.err("E031", a.value.span, f"VAR_IN_OUT '{p.name}' needs a variable, not an expression")
                     continue
                 vt = self.lvalue(a.value, scope)
                 if vt is not None and not self._same_type(vt, p.type) and not (
                         isinstance(T.unalias(p.type), T.ArrayType) and T.unalias(p.type).dims[0] == (0, -1)):
                     if not (isinstance(T.base_of(vt), T.StringType) and isinstance(T.base_of(p.type), T.StringType)):
-                        self.err("E104", a.value.span, f"VAR_IN_OUT '{p.name}' is {p.type}; {vt} cannot be passed")
+                        self.err("E013", a.value.span, f"VAR_IN_OUT '{p.name}' is {p.type}; {vt} cannot be passed")
             else:
                 vt = self.expr(a.value, scope, p.type)
                 self.assignable(a.value, vt, p.type, a.value.span, "pass")
         if "en" in extras:
             et = self.expr(extras["en"].value, scope, T.BOOL)
             if et is not None and not T.base_of(et).is_bool:
-                self.err("E104", extras["en"].span, "EN must be BOOL")
+                self.err("E013", extras["en"].span, "EN must be BOOL")
         if "eno" in extras:
             a = extras["eno"]
             if not a.output:
-                self.err("E107", a.span, "ENO is an output; use 'ENO => var'")
+                self.err("E016", a.span, "ENO is an output; use 'ENO => var'")
             else:
                 self.lvalue(a.value, scope)
         if not is_fb:
@@ -1413,12 +1413,12 @@ class Checker:
                 # a non-formal call gives every input and in-out, in order (IEC 61131-3 6.6.1.4.2)
                 needed = [p for p in params if p.section != "VAR_OUTPUT"]
                 if npos < len(needed):
-                    self.err("E108", c.span, f"{pou.name} takes {len(needed)} argument(s), not {npos}",
+                    self.err("E017", c.span, f"{pou.name} takes {len(needed)} argument(s), not {npos}",
                              "name the arguments (x := ...) to leave some out")
                     return {"params": bind, "en": extras.get("en"), "eno": extras.get("eno")}
             for p in pou.in_outs():
                 if p.name.lower() not in bind:
-                    self.err("E108", c.span, f"VAR_IN_OUT '{p.name}' of {pou.name} must be given")
+                    self.err("E017", c.span, f"VAR_IN_OUT '{p.name}' of {pou.name} must be given")
         return {"params": bind, "en": extras.get("en"), "eno": extras.get("eno")}
 
     def _native_call(self, c: A.Call, sig: FuncSig, scope: Scope, expected=None):
@@ -1433,7 +1433,7 @@ class Checker:
                 eno = a
                 continue
             if a.output:
-                self.err("E107", a.span, f"{sig.name} has no output '{a.name}'")
+                self.err("E016", a.span, f"{sig.name} has no output '{a.name}'")
                 continue
             if a.name:
                 named[a.name.lower()] = a
@@ -1449,7 +1449,7 @@ class Checker:
                         m = re.fullmatch(r"in(\d+)", key)
                         if sig.extensible and m:
                             continue
-                        self.err("E107", a.span, f"{sig.name} has no parameter '{a.name}' "
+                        self.err("E016", a.span, f"{sig.name} has no parameter '{a.name}' "
                                  f"(parameters: {', '.join(p.name for p in sig.params)})")
                         return None
             pos = [a for a in args if not a.name]
@@ -1469,7 +1469,7 @@ class Checker:
         nmin = sig.min_args or len(sig.params)
         if n < nmin or (not sig.extensible and n > len(sig.params)):
             want = f"at least {nmin}" if sig.extensible else str(len(sig.params))
-            self.err("E108", c.span, f"{sig.name} takes {want} argument(s), not {n}")
+            self.err("E017", c.span, f"{sig.name} takes {want} argument(s), not {n}")
             for a in args:
                 self.expr(a.value, scope)
             return None
@@ -1484,7 +1484,7 @@ class Checker:
             if t is None:
                 continue
             if not _satisfies(t, p.constraint):
-                self.err("E104", a.value.span, f"argument {i + 1} of {sig.name} must be {p.constraint}, not {t}")
+                self.err("E013", a.value.span, f"argument {i + 1} of {sig.name} must be {p.constraint}, not {t}")
                 arg_types[-1] = None
                 continue
             if p.group:
@@ -1498,7 +1498,7 @@ class Checker:
                     if ct is None and isinstance(T.base_of(prev), T.EnumType) and T.base_of(prev) is T.base_of(t):
                         ct = prev
                     if ct is None:
-                        self.err("E104", a.value.span, f"arguments of {sig.name} have incompatible types {prev} and {t}")
+                        self.err("E013", a.value.span, f"arguments of {sig.name} have incompatible types {prev} and {t}")
                     else:
                         groups[p.group] = ct
             elif want is not None:
@@ -1521,7 +1521,7 @@ class Checker:
                 gt = groups[p.group]
                 if isinstance(a.value, A.Literal) and isinstance(a.value.value, int) and T.base_of(gt).is_intlike:
                     if not T.literal_fits(a.value.value, gt):
-                        self.err("E112", a.value.span, f"{a.value.value} does not fit in {gt}")
+                        self.err("E021", a.value.span, f"{a.value.value} does not fit in {gt}")
                 a.value.ty = gt
                 arg_types[i] = gt
         res = sig.result
@@ -1537,7 +1537,7 @@ class Checker:
         elif callable(res):
             rt = res(arg_types)
             if isinstance(rt, str):
-                self.err("E104", c.span, rt)
+                self.err("E013", c.span, rt)
                 return None
             if isinstance(rt, T.LiteralType):
                 # all-literal arguments: the type the context expects
@@ -1570,47 +1570,47 @@ class Checker:
                         tt = self.expr(v, scope, T.TIME)
                         c = self.const_value(v, scope)
                         if tt is None or not T.base_of(tt).is_time or not isinstance(c, int):
-                            self.err("E104", v.span, "INTERVAL must be a TIME constant, e.g. T#20ms")
+                            self.err("E013", v.span, "INTERVAL must be a TIME constant, e.g. T#20ms")
                         elif c <= 0:
-                            self.err("E120", v.span, "INTERVAL must be positive")
+                            self.err("E029", v.span, "INTERVAL must be positive")
                         else:
                             tm.interval = c
                     elif k == "PRIORITY":
                         c = self.const_value(v, scope)
                         if not isinstance(c, int):
-                            self.err("E120", v.span, "PRIORITY must be an integer constant")
+                            self.err("E029", v.span, "PRIORITY must be an integer constant")
                         else:
                             tm.priority = c
                     elif k == "SINGLE":
                         if isinstance(v, A.Name):
                             gs = self.p.global_names.get(v.name.lower())
                             if not gs:
-                                self.err("E101", v.span, f"SINGLE refers to unknown variable '{v.name}'")
+                                self.err("E010", v.span, f"SINGLE refers to unknown variable '{v.name}'")
                             else:
                                 tm.single = gs[0].pyname
                         else:
-                            self.err("E104", v.span, "SINGLE must name a BOOL variable")
+                            self.err("E013", v.span, "SINGLE must name a BOOL variable")
                     else:
-                        self.err("E107", v.span, f"unknown task parameter '{k}' (INTERVAL, SINGLE, PRIORITY)")
+                        self.err("E016", v.span, f"unknown task parameter '{k}' (INTERVAL, SINGLE, PRIORITY)")
                 if any(t.name.lower() == td.name.lower() for t in cm.tasks):
-                    self.err("E102", td.span, f"task '{td.name}' is declared twice")
+                    self.err("E011", td.span, f"task '{td.name}' is declared twice")
                 cm.tasks.append(tm)
             for pc in res.programs:
                 pou = self.p.pous.get(pc.type_name.lower())
                 if pou is None or pou.pou_kind != "PROGRAM":
-                    self.err("E119", pc.span, f"'{pc.type_name}' is not a PROGRAM")
+                    self.err("E028", pc.span, f"'{pc.type_name}' is not a PROGRAM")
                     continue
                 if pc.task and not any(t.name.lower() == pc.task.lower() for t in cm.tasks):
-                    self.err("E119", pc.span, f"unknown task '{pc.task}'")
+                    self.err("E028", pc.span, f"unknown task '{pc.task}'")
                     continue
                 if any(i.name.lower() == pc.instance.lower() for i in cm.instances):
-                    self.err("E102", pc.span, f"program instance '{pc.instance}' is declared twice")
+                    self.err("E011", pc.span, f"program instance '{pc.instance}' is declared twice")
                     continue
                 im = InstanceModel(pc.instance, pou, pc.task, res.name, [], pc.span)
                 for a in pc.args:
                     p = pou.vars.get(a.name.lower())
                     if p is None or p.section not in _SECTIONS_PARAM:
-                        self.err("E107", a.span, f"{pou.name} has no parameter '{a.name}'")
+                        self.err("E016", a.span, f"{pou.name} has no parameter '{a.name}'")
                         continue
                     if a.output:
                         self.expr(a.value, scope)
@@ -1663,7 +1663,7 @@ class Checker:
                     continue
                 if x is start:
                     span = self._decl_span.get(start.name.lower())
-                    self.err("E103", span or Span("<types>", 0, 0), f"'{start.name}' contains itself")
+                    self.err("E012", span or Span("<types>", 0, 0), f"'{start.name}' contains itself")
                     break
                 seen.add(id(x))
                 stack.extend(leaf(m) for m in members(x))
@@ -1673,7 +1673,7 @@ class Checker:
             while stack:
                 name, span = stack.pop()
                 if name == pou.name.lower():
-                    self.err("E123", span, f"{pou.name} calls itself (recursion is not allowed in IEC 61131-3)")
+                    self.err("E032", span, f"{pou.name} calls itself (recursion is not allowed in IEC 61131-3)")
                     break
                 if name in seen:
                     continue
@@ -1687,7 +1687,7 @@ class Checker:
                 continue
             for sym in pou.vars.values():
                 if sym.section in ("VAR", "VAR_TEMP") and not sym.used and not sym.location:
-                    self.warn("W201", sym.span, f"variable '{sym.name}' is never used")
+                    self.warn("W002", sym.span, f"variable '{sym.name}' is never used")
 
 
 def _names_in(body):

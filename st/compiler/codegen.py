@@ -144,7 +144,7 @@ class ModuleGen:
                 else:
                     node = BodyGen(self, pou).klass()
             except Unsupported as u:
-                self.sink.error("E130", u.span, u.msg)
+                self.sink.error("E040", u.span, u.msg)
                 continue
             if isinstance(node, list):
                 for n in node:

@@ -167,7 +167,7 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
                     modules.append((path, compile(mod, path, "exec")))
     except Exception as exc:  # a compiler bug must still not show the user a traceback
         first = sources[0].path if sources else "<input>"
-        sink.error("E999", getattr(exc, "st_span", None) or Span(first, 1, 1), f"internal compiler error: {type(exc).__name__}: {exc}",
+        sink.error("E099", getattr(exc, "st_span", None) or Span(first, 1, 1), f"internal compiler error: {type(exc).__name__}: {exc}",
                    "please report this with the source file; set ST_DEBUG=1 to see the traceback")
         if os.environ.get("ST_DEBUG"):
             raise

@@ -123,7 +123,7 @@ class StParser:
         for p in pragmas:
             if p.text not in seen_pragmas:
                 seen_pragmas.add(p.text)
-                diags.append(Diagnostic("W101", Severity.WARNING, src.span_at(p.offset),
+                diags.append(Diagnostic("W001", Severity.WARNING, src.span_at(p.offset),
                                         f"pragma {p.text[:60]!r} is ignored"))
         last_tokens: list[Token | None] = [None]
 
