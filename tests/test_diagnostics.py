@@ -167,3 +167,8 @@ def test_recursion_and_self_containing_types_are_errors():
            "FUNCTION G : INT\nVAR_INPUT n : INT; END_VAR\nG := F(n - 1);\nEND_FUNCTION\n")
     e = diags(src)
     assert sorted(codes(e)) == [("E012", 1, 6), ("E012", 2, 16), ("E032", 7, 6), ("E032", 11, 6)]
+
+
+def test_initial_values_must_be_constants():
+    e = diags("PROGRAM p\nVAR a : INT := 1; b : INT := a; END_VAR\nb := a;\nEND_PROGRAM\n")
+    assert codes(e) == [("E029", 2, 30)]

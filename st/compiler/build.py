@@ -64,7 +64,7 @@ class AstBuilder(Transformer):
             return fn(str(tok), *args)
         except (LiteralError, ValueError) as e:
             self.errors.append(BuildError(self.sp(tok), f"invalid literal {str(tok)!r}: {e}", "E004"))
-            return 0
+            return "" if fn is parse_string else 0
 
     # ---------------------------------------------------------------- file
     def start(self, items):

@@ -570,6 +570,11 @@ class Checker:
                 self.err("E013", init.span, f"an array needs an initializer in brackets, e.g. [{init.text}]")
                 return
             st = self.expr(init, scope or Scope(None, {}), t)
+            for n in _names_in([init]):
+                if isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
+                    self.err("E029", n.span, f"an initial value must be a constant; '{n.name}' is a variable",
+                             "assign it in the code instead, or declare it CONSTANT")
+                    return
             self.assignable(init, st, t, init.span)
 
     # ================================================================ bodies
@@ -634,7 +639,7 @@ class Checker:
                         self.err("E030", aa.span, f"qualifier {q} needs a time, e.g. {aa.action}({q}, T#1s)")
                         continue
                     tt = self.expr(aa.time, scope, T.TIME)
-                    if not T.base_of(tt).is_time:
+                    if tt is not None and not T.base_of(tt).is_time:
                         self.err("E013", aa.time.span, f"the time of qualifier {q} must be a TIME, not {tt}")
                 if key not in action_index:
                     action_index[key] = len(action_names)
@@ -749,7 +754,7 @@ class Checker:
                     if e is None:
                         continue
                     et = self.expr(e, scope, st)
-                    if bst is not None:
+                    if bst is not None and et is not None:
                         if isinstance(bst, T.EnumType):
                             if T.base_of(et) is not bst:
                                 self.err("E019", e.span, f"CASE label of type {et} for a selector of type {st}")
