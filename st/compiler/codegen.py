@@ -408,39 +408,78 @@ class ExprGen:
         return False
 
     def in_range(self, e, d: T.ElemType) -> bool:
-        """Can this integer expression's value never leave d's range?"""
+        """Can this integer expression's value never leave d's range? (Then its store needs no wrap.)"""
+        r = self.value_range(e)
+        return r is not None and d.lo <= r[0] and r[1] <= d.hi
+
+    def value_range(self, e):
+        """The (lo, hi) interval an integer expression's value lies in, or None if unknown."""
         if e is None:
-            return False
-        t = T.base_of(e.ty) if e.ty is not None else None
+            return None
         if isinstance(e, A.Literal):
-            return isinstance(e.value, int) and d.lo <= e.value <= d.hi
-        if e.const is not None and isinstance(e.const, int):
-            return d.lo <= e.const <= d.hi
+            return (int(e.value), int(e.value)) if isinstance(e.value, (int, bool)) else None
+        if isinstance(e.const, int):
+            return (e.const, e.const)
+        t = T.base_of(e.ty) if e.ty is not None else None
         if t is None:
-            return False
+            return None
+        if t.is_bool:
+            return (0, 1)
         if isinstance(t, T.EnumType):
-            return all(d.lo <= v <= d.hi for _, v in t.members.values())
+            vals = [v for _, v in t.members.values()] or [0]
+            return (min(vals), max(vals))
+        sub = T.unalias(e.ty)
+        declared = (sub.lo, sub.hi) if isinstance(sub, T.SubrangeType) else (
+            (t.lo, t.hi) if t.is_intlike else None)
         if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit)) or (
                 isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "function"):
-            return t.is_bool or (t.is_intlike and d.lo <= t.lo and t.hi <= d.hi)
+            return declared
         if isinstance(e, A.Binary):
-            if e.op in ("=", "<>", "<", ">", "<=", ">="):
-                return True
-            if e.op in ("AND", "OR", "XOR") and t.is_intlike and d.lo <= t.lo and t.hi <= d.hi:
-                return self.in_range(e.left, t) and self.in_range(e.right, t)
-            if e.op == "MOD" and t.is_intlike and d.lo <= t.lo and t.hi <= d.hi:
-                return self.in_range(e.left, t)
-            return False
-        if isinstance(e, A.Unary) and e.op == "NOT":
-            return t.is_bool or (t.signed and d.lo <= t.lo and t.hi <= d.hi and self.in_range(e.operand, t)) \
-                or (t.is_intlike and not t.signed and d.lo <= t.lo and t.hi <= d.hi)
+            op = e.op
+            if op in ("=", "<>", "<", ">", "<=", ">="):
+                return (0, 1)
+            l, r = self.value_range(e.left), self.value_range(e.right)
+            if l is None or r is None:
+                return None
+            if op == "+":
+                return (l[0] + r[0], l[1] + r[1])
+            if op == "-":
+                return (l[0] - r[1], l[1] - r[0])
+            if op == "*":
+                ps = [x * y for x in l for y in r]
+                return (min(ps), max(ps))
+            if op == "/":
+                m = max(abs(l[0]), abs(l[1]))
+                return (-m, m) if l[0] < 0 or r[0] < 0 else (0, m)
+            if op == "MOD":
+                m = max(abs(r[0]), abs(r[1]))
+                return (-(m - 1) if l[0] < 0 else 0, max(m - 1, 0))
+            if op in ("AND", "OR", "XOR") and declared is not None:
+                # bitwise results of in-range operands stay in the operands' (common) type
+                if declared[0] <= l[0] and l[1] <= declared[1] and declared[0] <= r[0] and r[1] <= declared[1]:
+                    return declared
+            return None
+        if isinstance(e, A.Unary):
+            v = self.value_range(e.operand)
+            if v is None:
+                return None
+            if e.op == "-":
+                return (-v[1], -v[0])
+            if e.op == "+":
+                return v
+            if e.op == "NOT":
+                # ~x on a signed value stays in its type; unsigned NOT is masked
+                return declared if declared is not None and declared[0] <= v[0] and v[1] <= declared[1] else None
         if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "native":
             sig = e.target.sig
             if getattr(sig, "exact", False):
-                return t.is_intlike and d.lo <= t.lo and t.hi <= d.hi
+                return declared
             if sig.name in ("SEL", "MAX", "MIN", "LIMIT", "MUX", "MOVE"):
-                return all(self.in_range(a.value, d) for a in e.target.args[1 if sig.name in ("SEL", "MUX") else 0:])
-        return False
+                skip = 1 if sig.name in ("SEL", "MUX") else 0
+                rs = [self.value_range(a.value) for a in e.target.args[skip:]]
+                if rs and None not in rs:
+                    return (min(r[0] for r in rs), max(r[1] for r in rs))
+        return None
 
     # ------------------------------------------------------------------ expressions
     def expr(self, e) -> py.expr:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import struct
+from array import array
 
 from .faults import PLCFault
 
@@ -24,6 +25,16 @@ def _f32(v):
         return math.inf if v > 0 else -math.inf
     except struct.error:
         return math.nan
+
+
+def make_f32():
+    """A faster REAL rounding for one PLC's generated code (its own buffer: no sharing between PLCs)."""
+    buf = array("f", [0.0])
+
+    def _f32(v):
+        buf[0] = v          # C float conversion: overflow gives ±inf, NaN stays NaN
+        return buf[0]
+    return _f32
 
 
 def _idiv(a, b):

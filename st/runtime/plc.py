@@ -17,7 +17,7 @@ from typing import Any, Iterable, Optional
 from ..compiler import types as T
 from ..compiler.driver import CompiledProgram
 from .faults import FaultInfo, PLCFault, fault_from_exception
-from .helpers import BASE_NAMESPACE
+from .helpers import BASE_NAMESPACE, make_f32
 from .sfc import SfcDesc, SfcState
 from .watchdog import Watchdog
 from .values import ValueError_, from_python, parse_duration_arg, to_json, to_python
@@ -55,7 +55,8 @@ class PLC:
         self.project = compiled.project
         ns: dict = dict(BASE_NAMESPACE)
         ns.update(compiled.helpers)
-        ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True})
+        ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True,
+                   "_f32": make_f32()})
         ns["_ns"] = ns
         self._wd = Watchdog(ns)
         for path, code in compiled.modules:
