@@ -172,3 +172,12 @@ def test_recursion_and_self_containing_types_are_errors():
 def test_initial_values_must_be_constants():
     e = diags("PROGRAM p\nVAR a : INT := 1; b : INT := a; END_VAR\nb := a;\nEND_PROGRAM\n")
     assert codes(e) == [("E029", 2, 30)]
+
+
+def test_configuration_errors():
+    src = ("PROGRAM P\nVAR x : INT; END_VAR\nx := 1;\nEND_PROGRAM\n"
+           "CONFIGURATION C\n RESOURCE R ON PLC\n  TASK t(INTERVAL := 10, PRIORITY := 0);\n"
+           "  PROGRAM a WITH nope : P;\n  PROGRAM b WITH t : Q;\n END_RESOURCE\n"
+           " VAR_CONFIG\n  a.x : INT := 1;\n  c.x : INT := 2;\n END_VAR\nEND_CONFIGURATION\n")
+    e = diags(src)
+    assert [(c, l) for c, l, _ in codes(e)] == [("E013", 7), ("E028", 8), ("E028", 9), ("E010", 12), ("E010", 13)]

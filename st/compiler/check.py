@@ -1627,8 +1627,34 @@ class Checker:
         for b in cfg.var_blocks:
             if b.kind == "VAR_CONFIG":
                 for d in b.decls:
-                    cm.var_config.append((d.path or [], d.location, d.init, d.type, d.span))
+                    if self._config_path_type(cm, d) is not None:
+                        cm.var_config.append((d.path or [], d.location, d.init, d.type, d.span))
         self.p.configs.append(cm)
+
+    def _config_path_type(self, cm: ConfigModel, d: A.VarDecl):
+        """Check a VAR_CONFIG entry `inst.fb.var AT %QX0.0 : T := v;`; its variable's type or None."""
+        path = d.path or []
+        inst = next((i for i in cm.instances if path and i.name.lower() == path[0].lower()), None)
+        if inst is None:
+            self.err("E010", d.span, f"VAR_CONFIG: no program instance named '{path[0] if path else ''}'")
+            return None
+        t: T.Type = inst.type
+        for name in path[1:]:
+            ut = T.unalias(t)
+            sym = ut.vars.get(name.lower()) if isinstance(ut, T.POUType) else None
+            if sym is None:
+                self.err("E010", d.span, f"VAR_CONFIG: {'.'.join(path)}: '{name}' is not a variable of {ut}")
+                return None
+            t = sym.type
+        want = self.resolve_type(d.type, None)
+        if not self._same_type(want, t):
+            self.err("E013", d.type.span, f"VAR_CONFIG: {'.'.join(path)} is {t}, not {want}")
+            return None
+        if d.location:
+            self._check_location(d.location, t, d.span)
+        if d.init is not None:
+            self.check_initializer(d.init, t, None)
+        return t
 
     def _implicit_configuration(self) -> None:
         progs = [p for p in self.p.pous.values() if p.pou_kind == "PROGRAM" and not p.library]

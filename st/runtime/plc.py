@@ -93,8 +93,6 @@ class PLC:
                        for name, obj, im in t.instances]
         intervals = [t.interval for t in self.tasks if t.interval > 0]
         self.tick = math.gcd(*intervals) if intervals else (cyc or DEFAULT_CYCLE)
-        if cyc is not None and cfg is not None and not cfg.implicit:
-            self.tick = math.gcd(self.tick, cyc) if intervals else cyc
         self.watchdog = parse_duration_arg(watchdog) if watchdog is not None else None
         self._located = self._collect_located()
 
@@ -110,15 +108,14 @@ class PLC:
         return cls(compile_paths(list(paths), **_compile_kw(kw)), cycle, **kw)
 
     def _apply_var_config(self, cfg) -> None:
+        """VAR_CONFIG initial values (literals) for variables inside program instances."""
         for path, location, init, ty, span in cfg.var_config:
-            if init is None or not path:
+            if init is None or not path or not hasattr(init, "value"):
                 continue
-            from ..compiler.check import Checker  # noqa: F401  (only constants are supported here)
-            if hasattr(init, "value"):
-                try:
-                    self[".".join(path)] = init.value
-                except (KeyError, ValueError_):
-                    pass
+            try:
+                self[".".join(path)] = init.value
+            except (KeyError, ValueError_) as e:
+                raise ValueError(f"{span.file}:{span.line}: VAR_CONFIG {'.'.join(path)}: {e}") from None
 
     def _collect_located(self) -> dict:
         """address → [(container, attribute, type)] for every located variable of every instance."""
