@@ -132,3 +132,15 @@ END_PROGRAM
     assert plc.variables() == {
         "main.y": 2024, "main.mo": 2, "main.d": 29, "main.h": 23, "main.mi": 59, "main.s": 58, "main.ms": 250,
         "main.y2": 1969, "main.mo2": 12, "main.d2": 31, "main.dt1": "DT#2000-01-02-03:04:05.006", "main.dow": 0}
+
+
+def test_openplc_editor_ld_export_with_function_form_operators():
+    """What the OpenPLC Editor emits for LD/FBD: AND(...), ADD(EN := ..., ENO => ...), GT(...)."""
+    from pathlib import Path
+    plc = PLC.from_files(str(Path(__file__).parent / "fixtures" / "openplc_ld_export.st"), use_cache=False)
+    plc["%IX0.0"] = True
+    plc.advance("3s")
+    # the motor latches at once; 2 s later the timer enables the counter, which then counts every 20 ms scan
+    assert (plc["%QX0.0"], plc["%MW0"], plc["instance0._TMP_GT7_OUT"], plc["instance0._TMP_OR2_OUT"]) == \
+        (True, 50, True, 255)
+    assert plc["instance0.CTU0.CV"] == 1

@@ -231,6 +231,29 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
     add(_shift("SHR", "_std_shr"))
     add(_shift("ROL", "_std_rol"))
     add(_shift("ROR", "_std_ror"))
+    # AND/OR/XOR/NOT in function form, as the OpenPLC Editor writes them for FBD/LD blocks
+    def _bitwise(name, pyop):
+        def emit(ctx, args, types, rt):
+            node = args[0]
+            for a in args[1:]:
+                node = py.BinOp(node, pyop(), a)
+            return node
+        sig = FuncSig(name, [_p("IN1", "ANY_BIT", "T"), _p("IN2", "ANY_BIT", "T")], "T", extensible=True,
+                      emit=emit, min_args=2)
+        sig.exact = True
+        return sig
+    add(_bitwise("AND", py.BitAnd))
+    add(_bitwise("OR", py.BitOr))
+    add(_bitwise("XOR", py.BitXor))
+
+    def not_emit(ctx, args, types, rt):
+        b = T.base_of(rt)
+        if b.is_bool:
+            return py.UnaryOp(py.Not(), args[0])
+        if b.is_intlike and not b.signed:
+            return py.BinOp(py.UnaryOp(py.Invert(), args[0]), py.BitAnd(), _const(b.hi))
+        return py.UnaryOp(py.Invert(), args[0])
+    add(FuncSig("NOT", [_p("IN", "ANY_BIT", "T")], "T", emit=not_emit))
     # selection
     add(FuncSig("SEL", [_p("G", "BOOL"), _p("IN0", "ANY", "T"), _p("IN1", "ANY", "T")], "T", helper="_std_sel"))
     add(_minmax("MAX", "_max"))
