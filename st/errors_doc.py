@@ -33,6 +33,7 @@ EXPLANATIONS = {
     "E031": "An output (=>) or VAR_IN_OUT argument must be a variable.",
     "E032": "A POU calls itself, directly or through others: IEC 61131-3 does not allow recursion.",
     "E040": "A construct the code generator does not support yet.",
+    "E041": "A statement is nested too deeply to compile (e.g. an expression of tens of thousands of terms).",
     "E099": "An internal compiler error (a bug in st): please report it with the source file.",
     "W001": "A pragma { ... } is ignored.",
     "W002": "A variable is declared but never used.",

@@ -119,10 +119,14 @@ def compile_sources(sources: list[SourceFile], libraries: list[Library], *, emit
     # the cyclic GC would rescan them again and again (a third of the time on 20k lines).
     enabled = gc.isenabled()
     gc.disable()
+    # long operator chains (a + b + ... thousands of terms) nest deeply in the AST
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(limit, 20000))
     try:
         return _compile_sources(sources, libraries, emit_python=emit_python, use_cache=use_cache,
                                 raise_on_error=raise_on_error)
     finally:
+        sys.setrecursionlimit(limit)
         if enabled:
             gc.enable()
 
@@ -165,6 +169,10 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
                         import ast as pyast
                         pysrc[path] = pyast.unparse(mod)
                     modules.append((path, compile(mod, path, "exec")))
+    except RecursionError as exc:
+        first = sources[0].path if sources else "<input>"
+        sink.error("E041", getattr(exc, "st_span", None) or Span(first, 1, 1),
+                   "this statement is nested too deeply to compile", "split the expression into several assignments")
     except Exception as exc:  # a compiler bug must still not show the user a traceback
         first = sources[0].path if sources else "<input>"
         sink.error("E099", getattr(exc, "st_span", None) or Span(first, 1, 1), f"internal compiler error: {type(exc).__name__}: {exc}",
