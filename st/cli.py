@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from .diagnostics import CompileError, Severity, render_all
+from .diagnostics import CompileError, render_all
 from .errors_doc import EXPLANATIONS
 
 

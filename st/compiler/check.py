@@ -7,7 +7,7 @@ their type in `.ty`; names get their symbol in `.sym`; calls get `.target`.
 from __future__ import annotations
 
 import re
-from typing import Any, Optional
+from typing import Optional
 
 from ..diagnostics import DiagnosticSink
 from ..source import Span
@@ -1328,8 +1328,8 @@ class Checker:
             return None
         self._resolve_interface(fb)
         if not statement:
-            self.err("E020", c.span, f"a function block call is a statement; it has no value",
-                     f"call it, then read its outputs, e.g. inst(...); x := inst.Q;")
+            self.err("E020", c.span, "a function block call is a statement; it has no value",
+                     "call it, then read its outputs, e.g. inst(...); x := inst.Q;")
         bind = self._bind_args(c, fb, scope, is_fb=True)
         c.target = CallTarget("fb", pou=fb, bind=bind)
         return None

@@ -2,9 +2,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any
 
-from .types import POUType, Type, VarSym
+from .types import POUType
 
 
 @dataclass(eq=False)

@@ -125,8 +125,6 @@ class StParser:
                 seen_pragmas.add(p.text)
                 diags.append(Diagnostic("W001", Severity.WARNING, src.span_at(p.offset),
                                         f"pragma {p.text[:60]!r} is ignored"))
-        last_tokens: list[Token | None] = [None]
-
         def on_error(e: UnexpectedInput) -> bool:
             if isinstance(e, UnexpectedCharacters):
                 ch = text[e.pos_in_stream] if e.pos_in_stream < len(text) else "?"

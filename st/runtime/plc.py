@@ -12,11 +12,11 @@ import math
 import re
 import time as _time
 from dataclasses import dataclass
-from typing import Any, Iterable, Optional
+from typing import Optional
 
 from ..compiler import types as T
 from ..compiler.driver import CompiledProgram
-from .faults import FaultInfo, PLCFault, fault_from_exception
+from .faults import FaultInfo, fault_from_exception
 from .helpers import BASE_NAMESPACE, make_f32
 from .sfc import SfcDesc, SfcState
 from .watchdog import Watchdog

@@ -11,7 +11,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from ..compiler import types as T
-from ..compiler.codegen import _call, _const, f32, wrap
+from ..compiler.codegen import _call, _const, wrap
 from ..compiler.library import FuncSig, Library, Param
 from . import functions
 
@@ -93,23 +93,27 @@ def _arith(name, op, extensible):
     if op in ("*", "/"):
         # ANY_NUM × ANY_NUM, or TIME × ANY_NUM → TIME
         params = [_p("IN1", "ANY_MAGNITUDE"), _p("IN2", "ANY_NUM")]
-
-        def result(types, op=op):
-            a, b = T.base_of(types[0]), T.base_of(types[1])
-            if a.is_time:
-                return a
-            if any(T.base_of(t).is_time for t in types[1:]):
-                return f"{name}: only the first argument may be a TIME"
-            out = types[0]
-            for t in types[1:]:
-                c = T.common_type(out, t)
-                if c is None:
-                    return f"{name}: incompatible argument types {out} and {t}"
-                out = c
-            return out
+        result = _mul_div_result(name)
     if op == "MOD":
         params = [_p("IN1", "ANY_INT", "T"), _p("IN2", "ANY_INT", "T")]
     return FuncSig(name, params, result, extensible=extensible, emit=emit, min_args=2)
+
+
+def _mul_div_result(name):
+    def result(types):
+        a = T.base_of(types[0])
+        if a.is_time:
+            return a
+        if any(T.base_of(t).is_time for t in types[1:]):
+            return f"{name}: only the first argument may be a TIME"
+        out = types[0]
+        for t in types[1:]:
+            c = T.common_type(out, t)
+            if c is None:
+                return f"{name}: incompatible argument types {out} and {t}"
+            out = c
+        return out
+    return result
 
 
 def _cmp(name, helper):

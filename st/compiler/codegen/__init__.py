@@ -1,0 +1,20 @@
+"""Code generation: checked AST → Python `ast` → code objects.
+
+One Python module per ST source file, all executed into one namespace per PLC.
+Every generated statement carries its ST line, and each module is compiled
+with the ST file name, so tracebacks, profilers and coverage speak ST.
+
+Shapes (see docs/ARCHITECTURE.md): a FUNCTION becomes a Python function
+(`_fn_Name`), a FUNCTION_BLOCK or PROGRAM a slotted class (`_fb_Name`,
+`_prg_Name`) whose `_body()` runs one call, a STRUCT a slotted class
+(`_st_Name`). Inside `_body()` the instance's variables are read into Python
+locals once and written back on exit (locals are the fastest thing CPython
+has); variables that something else may reach while the body runs (through a
+reference, an action or an SFC) stay attributes.
+"""
+
+from .module import ModuleGen
+from .pyast import _call, _const, f32
+from .expressions import wrap
+
+__all__ = ["ModuleGen", "f32", "wrap", "_call", "_const"]

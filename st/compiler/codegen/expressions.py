@@ -1,0 +1,586 @@
+"""Expressions and initial values: typed ST expressions → Python expressions."""
+from __future__ import annotations
+
+import ast as py
+from typing import TYPE_CHECKING, Optional
+
+from .. import ast as A
+from .. import types as T
+from ..check import STEP, CallTarget
+
+if TYPE_CHECKING:
+    from .module import ModuleGen
+from .pyast import DAY_NS, Unsupported, _attr, _call, _const, _name, default_value, f32
+
+
+class InitGen:
+    """Initial values: for declarations (constant initializers and defaults)."""
+
+    def __init__(self, mod: ModuleGen):
+        self.mod = mod
+
+    def initial(self, t: T.Type, init) -> py.expr:
+        ut = T.unalias(t)
+        if init is None and isinstance(t, T.AliasType):
+            # the alias's own initializer, else its target's
+            a = t
+            while isinstance(a, T.AliasType):
+                if a.init is not None:
+                    return self.initial(a.target, a.init)
+                a = a.target
+        if isinstance(ut, T.ArrayType):
+            return self.array(ut, init)
+        if isinstance(ut, T.StructType):
+            obj = _call(ut.pyname)
+            if isinstance(init, A.StructInit):
+                return self._with_fields(obj, init, lambda n: ut.members.get(n.lower()))
+            return obj
+        if isinstance(ut, T.POUType):
+            obj = _call(ut.pyname)
+            if isinstance(init, A.StructInit):
+                return self._with_fields(obj, init, lambda n: _member_of_pou(ut, n))
+            return obj
+        if init is None:
+            return _const(default_value(t))
+        return ExprGen.constant_expr(self.mod, init, t)
+
+    def _with_fields(self, obj: py.expr, init: A.StructInit, lookup) -> py.expr:
+        # _init_fields(obj, (('name', value), ...)) returns obj
+        pairs = []
+        for name, sp, val in init.fields:
+            m = lookup(name)
+            if m is None:
+                continue
+            mt = m.type
+            pairs.append(py.Tuple([_const(m.pyname), self.initial(mt, val)], py.Load()))
+        return _call("_init_fields", obj, py.Tuple(pairs, py.Load()))
+
+    def array(self, at: T.ArrayType, init) -> py.expr:
+        n = at.size
+        elem = at.element
+        ue = T.unalias(elem)
+        values: list = []
+        if isinstance(init, A.ArrayInit):
+            for item in init.items:
+                if isinstance(item, A.RepeatInit):
+                    sub = item.items or [None]
+                    for _ in range(item.count):
+                        values.extend(sub)
+                else:
+                    values.append(item)
+        values = values[:n]
+        if ue.is_aggregate:
+            elts = [self.initial(elem, v) for v in values]
+            rest = n - len(values)
+            if rest:
+                proto = self.initial(elem, None)
+                comp = py.ListComp(proto, [py.comprehension(_name("_", py.Store()), _call("_range", _const(rest)), [], 0)])
+                if elts:
+                    return py.BinOp(py.List(elts, py.Load()), py.Add(), comp)
+                return comp
+            return py.List(elts, py.Load())
+        d = default_value(elem)
+        if not values:
+            return py.BinOp(py.List([_const(d)], py.Load()), py.Mult(), _const(n))
+        elts = [self.initial(elem, v) for v in values]
+        rest = n - len(values)
+        lst = py.List(elts, py.Load())
+        if rest:
+            return py.BinOp(lst, py.Add(), py.BinOp(py.List([_const(d)], py.Load()), py.Mult(), _const(rest)))
+        return lst
+
+
+def _member_of_pou(pou: T.POUType, name: str):
+    return pou.vars.get(name.lower())
+
+
+class ExprGen:
+    """Expression and statement generation shared by functions and FB bodies."""
+
+    def __init__(self, mod: ModuleGen, pou: Optional[T.POUType]):
+        self.mod = mod
+        self.pou = pou
+        self.cached: set = set()        # VarSyms held in Python locals
+        self.boxed: set = set()         # VarSyms held in one-element lists (passed by reference)
+        self.self_name = "self"
+        self.globals_written: set = set()
+        self.loop_vars: list = []
+        self.written_locals: set = set()
+        self.result_name = ""
+
+    @classmethod
+    def constant_expr(cls, mod, e, t: T.Type) -> py.expr:
+        g = cls(mod, None)
+        g.self_name = "_NO_SELF"
+        return g.coerce(g.expr(e), e, t)
+
+    def new_tmp(self) -> str:
+        self.mod.tmp += 1
+        return f"_t{self.mod.tmp}"
+
+    # ------------------------------------------------------------------ variables
+    def var_load(self, sym: T.VarSym) -> py.expr:
+        if sym.is_global or sym.section == "VAR_EXTERNAL":
+            return _name(sym.global_ref.pyname if sym.global_ref else sym.pyname)
+        if sym in self.boxed:
+            return py.Subscript(_name(sym.pyname), _const(0), py.Load())
+        if sym in self.cached or self.self_name is None:
+            return _name(sym.pyname)
+        return _attr(_name(self.self_name), sym.pyname)
+
+    def var_store(self, sym: T.VarSym) -> py.expr:
+        if sym.is_global or sym.section == "VAR_EXTERNAL":
+            name = sym.global_ref.pyname if sym.global_ref else sym.pyname
+            self.globals_written.add(name)
+            return _name(name, py.Store())
+        if sym in self.boxed:
+            return py.Subscript(_name(sym.pyname), _const(0), py.Store())
+        if sym in self.cached or self.self_name is None:
+            self.written_locals.add(sym)
+            return _name(sym.pyname, py.Store())
+        return _attr(_name(self.self_name), sym.pyname, py.Store())
+
+    # ------------------------------------------------------------------ conversions
+    def coerce(self, node: py.expr, e, dst: Optional[T.Type]) -> py.expr:
+        """Make a value of `e`'s type fit `dst`: widen, wrap, round, truncate, check."""
+        if dst is None:
+            return node
+        src = getattr(e, "ty", None) if e is not None else None
+        d = T.base_of(dst)
+        s = T.base_of(src) if src is not None else None
+        if isinstance(node, py.Constant) and node.value is not None and not isinstance(node.value, str):
+            v = node.value
+            if d.is_real:
+                v = float(v)
+                return _const(f32(v) if d is T.REAL else v)
+            if d.is_intlike and isinstance(v, (int, bool)) and not isinstance(v, bool):
+                return _const(_wrap_value(v, d))
+            if d.is_bool:
+                return _const(bool(v))
+        if d.is_real:
+            if s is not None and (s.is_intlike or s is T.LIT_INT):
+                node = _call("_float", node)
+                if d is T.REAL and not (s.is_intlike and s.bits <= 16):
+                    node = _call("_f32", node)
+                return node
+            if d is T.REAL and not self.is_f32(e):
+                return _call("_f32", node)
+            return node
+        if d.is_intlike:
+            sub = T.unalias(dst)
+            if isinstance(sub, T.SubrangeType):
+                return _call("_subrange", node, _const(sub.lo), _const(sub.hi))
+            if s is not None and s.is_bool:
+                node = _call("_int", node)
+            if not self.in_range(e, d):
+                return wrap(node, d)
+            return node
+        if isinstance(d, T.StringType):
+            if s is not None and isinstance(s, T.StringType) and s.length <= d.length:
+                return node
+            if isinstance(e, A.Literal) and isinstance(e.value, str) and len(e.value) <= d.length:
+                return node
+            return py.Subscript(node, py.Slice(None, _const(d.length), None), py.Load())
+        if d.kind == "tod" and s is not None and s.kind == "tod":
+            return node
+        return node
+
+    def is_f32(self, e) -> bool:
+        """Is this REAL-typed expression already exactly a float32 value?"""
+        if e is None:
+            return False
+        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref)):
+            return T.base_of(e.ty) is T.REAL if e.ty is not None else False
+        if isinstance(e, A.Literal):
+            return True
+        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "function":
+            return T.base_of(e.ty) is T.REAL if e.ty is not None else False
+        return False
+
+    def in_range(self, e, d: T.ElemType) -> bool:
+        """Can this integer expression's value never leave d's range? (Then its store needs no wrap.)"""
+        r = self.value_range(e)
+        return r is not None and d.lo <= r[0] and r[1] <= d.hi
+
+    def value_range(self, e):
+        """The (lo, hi) interval an integer expression's value lies in, or None if unknown."""
+        if e is None:
+            return None
+        if isinstance(e, A.Literal):
+            return (int(e.value), int(e.value)) if isinstance(e.value, (int, bool)) else None
+        if isinstance(e.const, int):
+            return (e.const, e.const)
+        t = T.base_of(e.ty) if e.ty is not None else None
+        if t is None:
+            return None
+        if t.is_bool:
+            return (0, 1)
+        if isinstance(t, T.EnumType):
+            vals = [v for _, v in t.members.values()] or [0]
+            return (min(vals), max(vals))
+        sub = T.unalias(e.ty)
+        declared = (sub.lo, sub.hi) if isinstance(sub, T.SubrangeType) else (
+            (t.lo, t.hi) if t.is_intlike else None)
+        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit)) or (
+                isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "function"):
+            return declared
+        if isinstance(e, A.Binary):
+            op = e.op
+            if op in ("=", "<>", "<", ">", "<=", ">="):
+                return (0, 1)
+            l, r = self.value_range(e.left), self.value_range(e.right)
+            if l is None or r is None:
+                return None
+            if op == "+":
+                return (l[0] + r[0], l[1] + r[1])
+            if op == "-":
+                return (l[0] - r[1], l[1] - r[0])
+            if op == "*":
+                ps = [x * y for x in l for y in r]
+                return (min(ps), max(ps))
+            if op == "/":
+                m = max(abs(l[0]), abs(l[1]))
+                return (-m, m) if l[0] < 0 or r[0] < 0 else (0, m)
+            if op == "MOD":
+                m = max(abs(r[0]), abs(r[1]))
+                return (-(m - 1) if l[0] < 0 else 0, max(m - 1, 0))
+            if op in ("AND", "OR", "XOR") and declared is not None:
+                # bitwise results of in-range operands stay in the operands' (common) type
+                if declared[0] <= l[0] and l[1] <= declared[1] and declared[0] <= r[0] and r[1] <= declared[1]:
+                    return declared
+            return None
+        if isinstance(e, A.Unary):
+            v = self.value_range(e.operand)
+            if v is None:
+                return None
+            if e.op == "-":
+                return (-v[1], -v[0])
+            if e.op == "+":
+                return v
+            if e.op == "NOT":
+                # ~x on a signed value stays in its type; unsigned NOT is masked
+                return declared if declared is not None and declared[0] <= v[0] and v[1] <= declared[1] else None
+        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "native":
+            sig = e.target.sig
+            if getattr(sig, "exact", False):
+                return declared
+            if sig.name in ("SEL", "MAX", "MIN", "LIMIT", "MUX", "MOVE"):
+                skip = 1 if sig.name in ("SEL", "MUX") else 0
+                rs = [self.value_range(a.value) for a in e.target.args[skip:]]
+                if rs and None not in rs:
+                    return (min(r[0] for r in rs), max(r[1] for r in rs))
+        return None
+
+    # ------------------------------------------------------------------ expressions
+    def expr(self, e) -> py.expr:
+        m = getattr(self, "x_" + type(e).__name__)
+        return m(e)
+
+    def x_Literal(self, e: A.Literal) -> py.expr:
+        v = e.value
+        t = T.base_of(e.ty) if e.ty is not None else None
+        if t is not None and t.is_real:
+            v = float(v)
+            if t is T.REAL:
+                v = f32(v)
+        elif e.kind == "bool":
+            v = bool(v) if not (t is not None and t.is_intlike) else int(v)
+        return _const(v)
+
+    def x_EnumLit(self, e: A.EnumLit) -> py.expr:
+        return _const(e.const if e.const is not None else 0)
+
+    def x_Name(self, e: A.Name) -> py.expr:
+        sym = e.sym
+        if isinstance(sym, T.VarSym):
+            if sym.constant and sym.const_value is not None and not isinstance(sym.const_value, (list, dict)):
+                v = sym.const_value
+                t = T.base_of(sym.type)
+                if t.is_real:
+                    v = float(v)
+                    if t is T.REAL:
+                        v = f32(v)
+                return _const(v)
+            return self.var_load(sym)
+        if isinstance(sym, T.POUType):      # a function's own result variable
+            return _name(self.result_name)
+        if sym is STEP:
+            return _const(e.const)
+        if isinstance(sym, T.EnumType):
+            return _const(e.const)
+        if getattr(sym, "kind", "") == "null":
+            return _const(None)
+        raise Unsupported(e.span, f"cannot use '{e.name}' here")
+
+    def x_Direct(self, e: A.Direct) -> py.expr:
+        addr = e.address
+        for key, (pyname, t) in self.mod.p.direct_vars.items():
+            if key == addr or key == addr[:2] + "X" + addr[2:]:
+                return _name(pyname)
+        raise Unsupported(e.span, f"unknown address {addr}")
+
+    def x_Field(self, e: A.Field) -> py.expr:
+        if isinstance(e.sym, T.EnumType):
+            return _const(e.const)
+        bt = T.unalias(e.base.ty) if e.base.ty is not None else None
+        if bt is STEP:
+            idx = e.base.const
+            if e.name.upper() == "X":
+                return py.Subscript(_attr(_name(self.self_name), "_sfc_x"), _const(idx), py.Load())
+            return _call(_attr(_attr(_name(self.self_name), "_sfc"), "elapsed"), _const(idx))
+        base = self.expr(e.base)
+        if isinstance(bt, T.ElemType) and bt.is_intlike:
+            return self._bit_read(base, int(e.name), bt)
+        sym = e.sym
+        return _attr(base, sym.pyname)
+
+    def _bit_read(self, base: py.expr, n: int, t) -> py.expr:
+        return py.Compare(py.BinOp(base, py.BitAnd(), _const(1 << n)), [py.NotEq()], [_const(0)])
+
+    def x_Bit(self, e: A.Bit) -> py.expr:
+        base = self.expr(e.base)
+        bt = T.base_of(e.base.ty)
+        if e.size == "X":
+            return self._bit_read(base, e.index, bt)
+        width = {"B": 8, "W": 16, "D": 32, "L": 64}[e.size]
+        return py.BinOp(py.BinOp(base, py.RShift(), _const(e.index * width)), py.BitAnd(), _const((1 << width) - 1))
+
+    def x_Index(self, e: A.Index) -> py.expr:
+        return py.Subscript(self.expr(e.base), self.index_of(e), py.Load())
+
+    def index_of(self, e: A.Index) -> py.expr:
+        at = T.unalias(e.base.ty)
+        dims = at.dims
+        flat: Optional[py.expr] = None
+        parts = []
+        for i, (lo, hi) in zip(e.indices, dims):
+            parts.append((i, lo, hi))
+        # row-major: last index varies fastest
+        strides = []
+        s = 1
+        for lo, hi in reversed(dims):
+            strides.append(s)
+            s *= hi - lo + 1
+        strides.reverse()
+        for (i, lo, hi), st in zip(parts, strides):
+            c = i.const if i.const is not None else (i.value if isinstance(i, A.Literal) else None)
+            if isinstance(c, int):
+                term: py.expr = _const((c - lo) * st)
+            else:
+                iv = self.expr(i)
+                if hi < lo:          # ARRAY[*]: bounds known only at run time
+                    term = iv
+                else:
+                    term = _call("_ix", iv, _const(lo), _const(hi)) if not self._index_safe(i, lo, hi) else (
+                        py.BinOp(iv, py.Sub(), _const(lo)) if lo else iv)
+                if st != 1:
+                    term = py.BinOp(term, py.Mult(), _const(st))
+            flat = term if flat is None else py.BinOp(flat, py.Add(), term)
+        return flat
+
+    def _index_safe(self, i, lo, hi) -> bool:
+        t = T.base_of(i.ty) if i.ty is not None else None
+        if isinstance(t, T.SubrangeType):
+            return lo <= t.lo and t.hi <= hi
+        if isinstance(t, T.ElemType) and t.is_intlike:
+            return lo <= t.lo and t.hi <= hi
+        return False
+
+    def x_Deref(self, e: A.Deref) -> py.expr:
+        return _call(_attr(self.expr(e.base), "get"))
+
+    def x_Unary(self, e: A.Unary) -> py.expr:
+        v = self.expr(e.operand)
+        t = T.base_of(e.ty) if e.ty is not None else None
+        if e.op == "NOT":
+            if t is not None and t.is_bool:
+                return py.UnaryOp(py.Not(), v)
+            if t is not None and t.is_intlike and not t.signed:
+                return py.BinOp(py.UnaryOp(py.Invert(), v), py.BitAnd(), _const(t.hi))
+            return py.UnaryOp(py.Invert(), v)
+        if e.op == "-":
+            return py.UnaryOp(py.USub(), v)
+        return v
+
+    def x_Binary(self, e: A.Binary) -> py.expr:
+        op = e.op
+        lt = T.base_of(e.left.ty) if e.left.ty is not None else None
+        rt = T.base_of(e.right.ty) if e.right.ty is not None else None
+        res = T.base_of(e.ty) if e.ty is not None else None
+        l, r = self.expr(e.left), self.expr(e.right)
+        if op in ("=", "<>", "<", ">", "<=", ">="):
+            pyop = {"=": py.Eq(), "<>": py.NotEq(), "<": py.Lt(), ">": py.Gt(), "<=": py.LtE(), ">=": py.GtE()}[op]
+            return py.Compare(l, [pyop], [r])
+        if op == "AND_THEN":
+            return py.BoolOp(py.And(), [l, r])
+        if op == "OR_ELSE":
+            return py.BoolOp(py.Or(), [l, r])
+        if op in ("AND", "OR", "XOR"):
+            pyop = {"AND": py.BitAnd(), "OR": py.BitOr(), "XOR": py.BitXor()}[op]
+            return py.BinOp(l, pyop, r)
+        if res is not None and res.kind == "tod" and op in ("+", "-"):
+            return py.BinOp(py.BinOp(l, py.Add() if op == "+" else py.Sub(), r), py.Mod(), _const(DAY_NS))
+        if res is not None and res.is_time and op in ("*", "/") and lt is not None and lt.is_time:
+            other = rt
+            if op == "*":
+                if other is not None and (other.is_real or other is T.LIT_REAL):
+                    return _call("_round", py.BinOp(l, py.Mult(), r))
+                return py.BinOp(l, py.Mult(), r)
+            if other is not None and (other.is_real or other is T.LIT_REAL):
+                return _call("_round", _call("_fdiv", l, r))
+            return _call("_idiv", l, r)
+        if res is not None and res.is_time and op == "*" and rt is not None and rt.is_time:
+            if lt is not None and (lt.is_real or lt is T.LIT_REAL):
+                return _call("_round", py.BinOp(l, py.Mult(), r))
+            return py.BinOp(l, py.Mult(), r)
+        if op == "+":
+            return py.BinOp(l, py.Add(), r)
+        if op == "-":
+            return py.BinOp(l, py.Sub(), r)
+        if op == "*":
+            return py.BinOp(l, py.Mult(), r)
+        if op == "/":
+            if res is not None and (res.is_real or res is T.LIT_REAL):
+                return _call("_fdiv", l, r)
+            if lt is not None and rt is not None and lt.is_intlike and rt.is_intlike and not lt.signed and not rt.signed:
+                return py.BinOp(l, py.FloorDiv(), r)
+            return _call("_idiv", l, r)
+        if op == "MOD":
+            if lt is not None and rt is not None and lt.is_intlike and not lt.signed and not rt.signed:
+                return _call("_umod", l, r)
+            return _call("_imod", l, r)
+        if op == "**":
+            return _call("_pow", l, r)
+        raise Unsupported(e.span, f"operator {op}")
+
+    # ------------------------------------------------------------------ calls
+    def x_Call(self, e: A.Call) -> py.expr:
+        tgt = e.target
+        if not isinstance(tgt, CallTarget):
+            raise Unsupported(e.span, "unresolved call")
+        if tgt.kind == "function":
+            return self.function_call(e, tgt)
+        if tgt.kind == "native":
+            return self.native_call(e, tgt)
+        if tgt.kind == "ref":
+            return self.ref_to(tgt.arg)
+        raise Unsupported(e.span, "a function block call has no value")
+
+    def native_call(self, e: A.Call, tgt) -> py.expr:
+        sig = tgt.sig
+        args = []
+        # settle each argument to its parameter's type (group or concrete)
+        for i, a in enumerate(tgt.args):
+            p = sig.params[min(i, len(sig.params) - 1)]
+            v = self.expr(a.value)
+            want = None
+            if p.group:
+                want = _group_type(tgt, sig, p.group)
+            else:
+                want = T.ELEMENTARY.get(p.constraint)
+            if want is not None and (T.base_of(want).is_num) and a.value.ty is not None and \
+                    T.base_of(a.value.ty) is not T.base_of(want):
+                v = self.coerce(v, a.value, want)
+            args.append(v)
+        if sig.emit is not None:
+            node = sig.emit(self, args, tgt.arg_types, e.ty)
+        else:
+            extra = sig.extra(tgt.arg_types, e.ty) if sig.extra else ()
+            node = _call(sig.helper, *args, *[_const(x) for x in extra])
+        if tgt.en is not None:
+            node = py.IfExp(self.expr(tgt.en.value), node, _const(default_value(e.ty) if e.ty is not None else None))
+        return node
+
+    def function_call(self, e: A.Call, tgt) -> py.expr:
+        pou: T.POUType = tgt.pou
+        bind = tgt.bind["params"]
+        args = []
+        for p in pou.params():
+            a = bind.get(p.name.lower())
+            if p.section == "VAR_INPUT":
+                if a is None:
+                    args.append(InitGen(self.mod).initial(p.type, p.init))
+                else:
+                    v = self.expr(a.value)
+                    ut = T.unalias(p.type)
+                    if ut.is_aggregate and p.written:
+                        v = _call("_copy", v)
+                    args.append(self.coerce(v, a.value, p.type))
+            elif p.section == "VAR_IN_OUT":
+                args.append(self.ref_to(a.value) if not T.unalias(p.type).is_aggregate else self.expr(a.value))
+            else:  # VAR_OUTPUT
+                if a is None:
+                    args.append(_const(None))
+                else:
+                    args.append(self.ref_to(a.value, negated=a.negated))
+        node = _call(pou.pyname, *args)
+        en = tgt.bind.get("en")
+        if en is not None:
+            rt = pou.return_type
+            node = py.IfExp(self.expr(en.value), node, _const(default_value(rt) if rt is not None else None))
+        return node
+
+    def ref_to(self, e, negated: bool = False) -> py.expr:
+        """A reference object for an output or in-out argument, or REF(x) (runtime.helpers)."""
+        if negated:
+            return _call("_NegRef", self.ref_to(e))
+        if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym):
+            sym = e.sym
+            t = sym.type
+            if sym.is_global or sym.section == "VAR_EXTERNAL":
+                name = sym.global_ref.pyname if sym.global_ref else sym.pyname
+                return _call("_ItemRef", _name("_ns"), _const(name), _const(_wrap_spec(t)))
+            if sym in self.boxed:
+                return _call("_ItemRef", _name(sym.pyname), _const(0), _const(_wrap_spec(t)))
+            if sym in self.cached or self.self_name is None:
+                raise Unsupported(e.span, f"internal: '{sym.name}' is held in a local but passed by reference")
+            return _call("_AttrRef", _name(self.self_name), _const(sym.pyname), _const(_wrap_spec(t)))
+        if isinstance(e, A.Field):
+            return _call("_AttrRef", self.expr(e.base), _const(e.sym.pyname), _const(_wrap_spec(e.ty)))
+        if isinstance(e, A.Index):
+            return _call("_ItemRef", self.expr(e.base), self.index_of(e), _const(_wrap_spec(e.ty)))
+        if isinstance(e, A.Deref):
+            return self.expr(e.base)
+        if isinstance(e, A.Direct):
+            return _call("_ItemRef", _name("_ns"), _const(self.x_Direct(e).id), _const(None))
+        if isinstance(e, A.Bit) or isinstance(e, A.Field):
+            raise Unsupported(e.span, "a bit cannot be passed as an output or in-out argument")
+        raise Unsupported(e.span, "this argument needs a variable")
+
+
+def _wrap_spec(t):
+    """(lo, hi, signed bits) for integer refs so that stores through them wrap, else None."""
+    b = T.base_of(t) if t is not None else None
+    if b is not None and b.is_intlike:
+        return (b.bits, b.signed)
+    if b is T.REAL:
+        return "f32"
+    if isinstance(b, T.StringType):
+        return ("str", b.length)
+    return None
+
+
+def _group_type(tgt, sig, group):
+    ts = [t for t, i in zip(tgt.arg_types, range(len(tgt.arg_types)))
+          if sig.params[min(i, len(sig.params) - 1)].group == group]
+    out = None
+    for t in ts:
+        out = t if out is None else (T.common_type(out, t) or out)
+    return out
+
+
+def _wrap_value(v: int, d) -> int:
+    bits = d.bits
+    if d.signed:
+        h = 1 << (bits - 1)
+        return ((v + h) & ((1 << bits) - 1)) - h
+    return v & ((1 << bits) - 1)
+
+
+def wrap(node: py.expr, d) -> py.expr:
+    """Two's-complement wrap of an int expression to d's width."""
+    mask = (1 << d.bits) - 1
+    if d.signed:
+        h = 1 << (d.bits - 1)
+        return py.BinOp(py.BinOp(py.BinOp(node, py.Add(), _const(h)), py.BitAnd(), _const(mask)), py.Sub(), _const(h))
+    return py.BinOp(node, py.BitAnd(), _const(mask))

@@ -1,0 +1,114 @@
+"""The whole program: one Python module per ST file, globals, structs, configuration glue."""
+from __future__ import annotations
+
+import ast as py
+
+from .. import types as T
+from ..model import Project
+from .expressions import InitGen
+from .pous import BodyGen, FuncGen
+from .pyast import Unsupported, _args, _attr, _const, _name, _set_lines, default_value
+from .statements import StmtGen, _Typed
+
+
+class ModuleGen:
+    """Generates the Python modules for a checked project."""
+
+    def __init__(self, project: Project, sink):
+        self.p = project
+        self.sink = sink
+        self.tmp = 0
+
+    # ------------------------------------------------------------------ modules
+    def generate(self) -> dict[str, py.Module]:
+        """Returns {st file path: Python module AST}."""
+        by_file: dict[str, list] = {}
+
+        def add(path, node):
+            by_file.setdefault(path, []).append(node)
+
+        for key, t in self.p.types.items():
+            if isinstance(t, T.StructType):
+                span = t.members and next(iter(t.members.values())).span
+                path = span.file if span else "<types>"
+                add(path, self.struct_class(t))
+        for pou in self.p.pous.values():
+            d = pou.decl
+            if d is None:
+                continue
+            try:
+                if pou.pou_kind == "FUNCTION":
+                    node = FuncGen(self, pou).function()
+                else:
+                    node = BodyGen(self, pou).klass()
+            except Unsupported as u:
+                self.sink.error("E040", u.span, u.msg)
+                continue
+            if isinstance(node, list):
+                for n in node:
+                    add(d.span.file, n)
+            else:
+                add(d.span.file, node)
+        # module-level globals: VAR_GLOBAL and directly addressed variables
+        init_stmts = []
+        for g in self.p.globals.values():
+            gen = InitGen(self)
+            val = gen.initial(g.type, g.init)
+            init_stmts.append(_set_lines(py.Assign([_name(g.pyname, py.Store())], val), g.span.line if g.span else 1))
+        for addr, (pyname, t) in self.p.direct_vars.items():
+            init_stmts.append(_set_lines(py.Assign([_name(pyname, py.Store())], _const(default_value(t))), 1))
+        if init_stmts:
+            # globals go first so that POU code executed later finds them
+            path = next(iter(self.p.globals.values())).span.file if self.p.globals else "<globals>"
+            by_file.setdefault(path, [])
+            by_file[path] = init_stmts + by_file[path]
+        for cfg in self.p.configs:
+            for im in cfg.instances:
+                if im.args:
+                    path = im.span.file if im.span else "<config>"
+                    by_file.setdefault(path, []).extend(self.connections(im))
+        modules = {}
+        for path, body in by_file.items():
+            m = py.Module(body=body, type_ignores=[])
+            for node in body:
+                _set_lines(node, getattr(node, "lineno", None) or 1)
+            modules[path] = m
+        return modules
+
+    def connections(self, im) -> list:
+        """A configuration's `PROGRAM inst WITH t : P (in := x, out => y)`: copy-in and copy-out functions."""
+        line = im.span.line if im.span else 1
+        g_in = StmtGen(self, None)
+        g_in.self_name = None
+        ins, outs = [], []
+        for p, value, is_out in im.args:
+            if not is_out:
+                v = g_in.coerce(g_in.expr(value), value, p.type)
+                ins.append(py.Assign([_attr(_name("inst"), p.pyname, py.Store())], v))
+        g_out = StmtGen(self, None)
+        g_out.self_name = None
+        for p, value, is_out in im.args:
+            if is_out:
+                outs.extend(g_out.assign(value, g_out.coerce(_attr(_name("inst"), p.pyname), _Typed(p.type),
+                                                             value.ty), None))
+        fns = []
+        for name, body, gen in (("_cfg_in_", ins, g_in), ("_cfg_out_", outs, g_out)):
+            if body:
+                if gen.globals_written:
+                    body.insert(0, py.Global(sorted(gen.globals_written)))
+                fn = py.FunctionDef(name + im.name.lower(), _args(["inst"]), body, [], None, None)
+                fns.append(_set_lines(fn, line))
+        return fns
+
+    def struct_class(self, st: T.StructType) -> py.ClassDef:
+        init = InitGen(self)
+        body = []
+        for m in st.members.values():
+            body.append(_set_lines(py.Assign([_attr(_name("self"), m.pyname, py.Store())],
+                                              init.initial(m.type, m.init)), m.span.line if m.span else 1))
+        fn = py.FunctionDef("__init__", _args(["self"]), body or [py.Pass()], [], None, None)
+        slots = py.Assign([_name("__slots__", py.Store())],
+                          py.Tuple([_const(m.pyname) for m in st.members.values()], py.Load()))
+        line = next(iter(st.members.values())).span.line if st.members else 1
+        cls = py.ClassDef(st.pyname, [_name("_Struct")], [], [slots, fn], [])
+        return _set_lines(cls, line)

@@ -1,0 +1,235 @@
+"""POUs: FUNCTIONs → Python functions; FUNCTION_BLOCKs and PROGRAMs → slotted classes."""
+from __future__ import annotations
+
+import ast as py
+from typing import TYPE_CHECKING
+
+from .. import ast as A
+from .. import types as T
+from ..names import mangle
+from .expressions import InitGen
+from .pyast import _args, _attr, _call, _const, _name, _set_lines, _store
+from .statements import StmtGen, _by_ref_names, _walk_exprs_in
+
+if TYPE_CHECKING:
+    from .module import ModuleGen
+
+
+class FuncGen(StmtGen):
+    def __init__(self, mod: ModuleGen, pou: T.POUType):
+        super().__init__(mod, pou)
+        self.self_name = None
+        self.result_name = mangle_result(pou)
+
+    def function(self) -> py.FunctionDef:
+        pou = self.pou
+        d = pou.decl
+        by_ref = _by_ref_names(d.body)
+        self.boxed = {v for v in by_ref if v.owner is pou and not T.unalias(v.type).is_aggregate}
+        params = []
+        prologue = []
+        epilogue = []
+
+        def box(v, value):
+            return py.Assign([_name(v.pyname, py.Store())], py.List([value], py.Load()) if v in self.boxed else value)
+
+        def unbox(v):
+            return self.var_load(v)
+
+        for p in pou.params():
+            if p.section == "VAR_INPUT":
+                params.append(p.pyname)
+                if p in self.boxed:
+                    prologue.append(box(p, _name(p.pyname)))
+            elif p.section == "VAR_IN_OUT":
+                if T.unalias(p.type).is_aggregate:
+                    params.append(p.pyname)
+                else:
+                    params.append("_r_" + p.pyname)
+                    prologue.append(box(p, _call(_attr(_name("_r_" + p.pyname), "get"))))
+                    epilogue.append(py.Expr(_call(_attr(_name("_r_" + p.pyname), "set"), unbox(p))))
+            else:
+                params.append("_r_" + p.pyname)
+                prologue.append(box(p, InitGen(self.mod).initial(p.type, p.init)))
+                epilogue.append(py.If(py.Compare(_name("_r_" + p.pyname), [py.IsNot()], [_const(None)]),
+                                      [py.Expr(_call(_attr(_name("_r_" + p.pyname), "set"), unbox(p)))], []))
+        locals_init = []
+        if pou.return_type is not None:
+            locals_init.append(py.Assign([_name(self.result_name, py.Store())],
+                                         InitGen(self.mod).initial(pou.return_type, None)))
+        for v in pou.vars.values():
+            if v.section in ("VAR", "VAR_TEMP"):
+                locals_init.append(_set_lines(box(v, InitGen(self.mod).initial(v.type, v.init)), v.span.line))
+        body = self.stmts(d.body)
+        ret = py.Return(_name(self.result_name) if pou.return_type is not None else None)
+        end_line = d.end_span.line if d.end_span else d.span.line
+        _set_lines(ret, end_line)
+        main = prologue + locals_init + body + [ret]
+        if epilogue:
+            main = [py.Try(prologue + locals_init + body + [ret], [], [], _lines(epilogue, end_line))]
+        gl = sorted(self.globals_written)
+        if gl:
+            main.insert(0, py.Global(gl))
+        fn = py.FunctionDef(pou.pyname, _args(params), main, [], None, None)
+        return _set_lines(fn, d.span.line)
+
+
+def _lines(nodes, line):
+    for n in nodes:
+        _set_lines(n, line)
+    return nodes
+
+
+def mangle_result(pou: T.POUType) -> str:
+    return mangle(pou.name)
+
+
+# ====================================================================== FB / program classes
+
+
+class BodyGen(StmtGen):
+    def __init__(self, mod: ModuleGen, pou: T.POUType):
+        super().__init__(mod, pou)
+
+    def klass(self) -> py.ClassDef:
+        pou = self.pou
+        d = pou.decl
+        init = InitGen(self.mod)
+        sfc = self.mod.p.sfc.get(pou.name.lower())
+        slots = [v.pyname for v in pou.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP")]
+        edges = [v for v in pou.vars.values() if v.edge]
+        slots += ["_e_" + v.pyname for v in edges]
+        init_body = []
+        for v in pou.vars.values():
+            if v.section in ("VAR_EXTERNAL", "VAR_TEMP"):
+                continue
+            init_body.append(_set_lines(py.Assign([_attr(_name("self"), v.pyname, py.Store())],
+                                                  init.initial(v.type, v.init)), v.span.line))
+        for v in edges:
+            init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_e_" + v.pyname, py.Store())],
+                                                  _const(v.edge == "F_EDGE")), v.span.line))
+        if sfc is not None:
+            slots += ["_sfc", "_sfc_x"]
+            init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_sfc", py.Store())],
+                                                  _call("_SfcState", _name("_sfc_" + pou.pyname))), d.span.line))
+            init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_sfc_x", py.Store())],
+                                                  _attr(_attr(_name("self"), "_sfc"), "x")), d.span.line))
+        members = [py.Assign([_name("__slots__", py.Store())], py.Tuple([_const(s) for s in slots], py.Load())),
+                   py.FunctionDef("__init__", _args(["self"]), init_body or [py.Pass()], [], None, None)]
+        # caching policy: with actions or SFC other methods touch the variables: keep attributes
+        can_cache = not d.actions and sfc is None
+        if sfc is not None:
+            run = py.Expr(_call(_attr(_attr(_name("self"), "_sfc"), "run"), _name("self"), _name("_now")))
+            members.append(_set_lines(py.FunctionDef("_body", _args(["self"]), [run], [], None, None),
+                                      d.span.line))
+        else:
+            members.append(self.method("_body", d.body, can_cache, edges, d.span.line,
+                                       d.end_span.line if d.end_span else d.span.line))
+        for act in d.actions:
+            g = BodyGen(self.mod, pou)
+            members.append(g.method("_act_" + act.name.lower(), act.body, False, [], act.span.line, act.span.line))
+        if sfc is not None:
+            members.extend(self.sfc_methods(sfc))
+        cls = py.ClassDef(pou.pyname, [_name("_FB")], [], members, [])
+        _set_lines(cls, d.span.line)
+        if sfc is not None:
+            return [self.sfc_desc(sfc), cls]
+        return cls
+
+    def sfc_desc(self, sfc) -> py.stmt:
+        pou = self.pou
+        initial = next((s.index for s in sfc.steps if s.initial), 0)
+        trans = tuple((tuple(t.sources), tuple(t.targets), f"_tr_{t.index}") for t in sfc.transitions)
+        steps = []
+        for s in sfc.steps:
+            assoc = []
+            for i, (act, q, texpr) in enumerate(s.actions):
+                assoc.append((sfc.action_index[act], q, f"_at_{s.index}_{i}" if texpr is not None else ""))
+            steps.append(tuple(assoc))
+        actions = []
+        for name in sfc.actions:
+            if name in pou.actions:
+                actions.append(("act", "_act_" + name))
+            else:
+                actions.append(("var", pou.vars[name].pyname))
+        desc = _call("_SfcDesc", _const(len(sfc.steps)), _const(initial), _const(trans), _const(tuple(steps)),
+                     _const(tuple(actions)))
+        return _set_lines(py.Assign([_name("_sfc_" + pou.pyname, py.Store())], desc), pou.decl.span.line)
+
+    def method(self, name, body, can_cache, edges, line, end_line) -> py.FunctionDef:
+        pou = self.pou
+        by_ref = _by_ref_names(body)
+        used = set()
+        for e in _walk_exprs_in(body):
+            if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym) and e.sym.owner is pou \
+                    and e.sym.section != "VAR_EXTERNAL" and not e.sym.is_global:
+                used.add(e.sym)
+        for v in edges:
+            used.add(v)
+        temps = [v for v in pou.vars.values() if v.section == "VAR_TEMP"]
+        if can_cache:
+            self.cached = {v for v in used if v not in by_ref and not v.address_taken}
+        else:
+            self.cached = set()
+        # VAR_TEMP lives for one call: always a Python local (boxed if passed by reference)
+        self.boxed = {v for v in temps if v in by_ref or v.address_taken}
+        self.cached |= {v for v in temps if v not in self.boxed}
+        code = self.stmts(body)
+        prologue = []
+        init = InitGen(self.mod)
+        for v in temps:
+            val = init.initial(v.type, v.init)
+            prologue.append(py.Assign([_name(v.pyname, py.Store())],
+                                      py.List([val], py.Load()) if v in self.boxed else val))
+        for v in sorted(self.cached, key=lambda s: s.pyname):
+            if v.section == "VAR_TEMP":
+                continue
+            prologue.append(py.Assign([_name(v.pyname, py.Store())], _attr(_name("self"), v.pyname)))
+        for v in edges:
+            # an edge-declared input is TRUE only in the call that sees the edge
+            prev = _attr(_name("self"), "_e_" + v.pyname)
+            cur = _name(v.pyname) if v in self.cached else _attr(_name("self"), v.pyname)
+            if v.edge == "R_EDGE":
+                test = py.BoolOp(py.And(), [cur, py.UnaryOp(py.Not(), prev)])
+            else:
+                test = py.BoolOp(py.And(), [py.UnaryOp(py.Not(), cur), prev])
+            prologue.append(py.Assign([prev], cur))
+            prologue[-1] = py.Assign([py.Tuple([_store(cur), _store(prev)], py.Store())],
+                                     py.Tuple([test, cur], py.Load()))
+        writeback = []
+        for v in sorted(self.cached & self.written_locals, key=lambda s: s.pyname):
+            if T.unalias(v.type).is_aggregate or v.section == "VAR_TEMP":
+                continue
+            writeback.append(py.Assign([_attr(_name("self"), v.pyname, py.Store())], _name(v.pyname)))
+        main = prologue + (code or [])
+        if writeback:
+            main = prologue + [py.Try(code or [py.Pass()], [], [], _lines(writeback, end_line))]
+        gl = sorted(self.globals_written)
+        if gl:
+            main.insert(0, py.Global(gl))
+        fn = py.FunctionDef(name, _args(["self"]), main or [py.Pass()], [], None, None)
+        _set_lines(fn, line)
+        return fn
+
+    def sfc_methods(self, sfc) -> list:
+        """Transition conditions and the SFC description for the runtime engine."""
+        out = []
+        for t in sfc.transitions:
+            g = BodyGen(self.mod, self.pou)
+            g.cached = set()
+            if t.cond is not None:
+                body = [py.Return(g.expr(t.cond))]
+            else:
+                body = [py.Return(_const(False))]
+            fn = py.FunctionDef(f"_tr_{t.index}", _args(["self"]), body, [], None, None)
+            _set_lines(fn, t.span.line)
+            out.append(fn)
+        # timed qualifiers' durations are constant expressions or variables: a method returns them
+        for s in sfc.steps:
+            for i, (act, q, texpr) in enumerate(s.actions):
+                if texpr is not None:
+                    g = BodyGen(self.mod, self.pou)
+                    fn = py.FunctionDef(f"_at_{s.index}_{i}", _args(["self"]), [py.Return(g.expr(texpr))], [], None, None)
+                    _set_lines(fn, texpr.span.line)
+                    out.append(fn)
+        return out

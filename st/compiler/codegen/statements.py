@@ -1,0 +1,429 @@
+"""Statements: typed ST statements → Python statements (loops, calls, assignments)."""
+from __future__ import annotations
+
+import ast as py
+
+from .. import ast as A
+from .. import types as T
+from ..check import CallTarget
+from .expressions import ExprGen, wrap
+from .pyast import (Unsupported, _attr, _call, _const, _name, _set_lines)
+
+
+class StmtGen(ExprGen):
+    def stmts(self, body: list) -> list:
+        out = []
+        for s in body:
+            try:
+                r = self.stmt(s)
+            except Unsupported:
+                raise
+            except Exception as exc:
+                if not hasattr(exc, "st_span"):
+                    exc.st_span = s.span      # where the internal error happened, for the report
+                raise
+            for n in r:
+                _set_lines(n, s.span.line)
+            out.extend(r)
+        return out
+
+    def block(self, body) -> list:
+        b = self.stmts(body)
+        return b or [py.Pass()]
+
+    def stmt(self, s) -> list:
+        return getattr(self, "s_" + type(s).__name__)(s)
+
+    def s_Empty(self, s):
+        return []
+
+    def s_Exit(self, s):
+        return [py.Break()]
+
+    def s_Continue(self, s):
+        return [py.Continue()]
+
+    def s_Return(self, s):
+        return [py.Return(_name(self.result_name) if self.result_name else None)]
+
+    def s_Assign(self, s: A.Assign) -> list:
+        tgt = s.target
+        tt = tgt.ty
+        if s.kind in ("S=", "R="):
+            return [py.If(self.expr(s.value), self.assign(tgt, _const(s.kind == "S="), None), [])]
+        # a call with EN: assign only when enabled
+        v = s.value
+        if isinstance(v, A.Call) and isinstance(v.target, CallTarget) and v.target.kind == "function" \
+                and (v.target.bind.get("en") is not None or v.target.bind.get("eno") is not None):
+            return self._en_call_assign(s, v)
+        if isinstance(v, A.Call) and isinstance(v.target, CallTarget) and v.target.kind == "native" \
+                and (v.target.en is not None or v.target.eno is not None):
+            en, eno = v.target.en, v.target.eno
+            v.target.en = None
+            body = self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
+            return self._en_wrap(en, eno, body)
+        ut = T.unalias(tt) if tt is not None else None
+        if ut is not None and ut.is_aggregate:
+            return [py.Expr(_call("_assign", self.expr(tgt), self.expr(v)))]
+        return self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
+
+    def _en_wrap(self, en, eno, body: list, eno_bound: bool = False) -> list:
+        """EN := FALSE skips the call and gives ENO FALSE; else ENO is TRUE (or what the callee set)."""
+        if en is None:
+            out = body
+            if eno is not None and not eno_bound:
+                out = out + self.assign(eno.value, _const(True), None)
+            return out
+        yes = body + (self.assign(eno.value, _const(True), None) if eno is not None and not eno_bound else [])
+        no = self.assign(eno.value, _const(False), None) if eno is not None else []
+        return [py.If(self.expr(en.value), yes, no or [py.Pass()])]
+
+    def _en_call_assign(self, s, v):
+        bind = v.target.bind
+        en, eno = bind.get("en"), bind.get("eno")
+        bind["en"] = None
+        body = self.assign(s.target, self.coerce(self.expr(v), v, s.target.ty), v)
+        bind["en"] = en
+        return self._en_wrap(en, eno, body, "eno" in bind["params"])
+
+    def assign(self, tgt, value: py.expr, src_expr) -> list:
+        if isinstance(tgt, A.Name):
+            sym = tgt.sym
+            if isinstance(sym, T.POUType):
+                return [py.Assign([_name(self.result_name, py.Store())], value)]
+            return [py.Assign([self.var_store(sym)], value)]
+        if isinstance(tgt, A.Field):
+            bt = T.unalias(tgt.base.ty)
+            if isinstance(bt, T.ElemType) and bt.is_intlike:
+                return self._bit_write(tgt.base, int(tgt.name), value)
+            return [py.Assign([_attr(self.expr(tgt.base), tgt.sym.pyname, py.Store())], value)]
+        if isinstance(tgt, A.Index):
+            return [py.Assign([py.Subscript(self.expr(tgt.base), self.index_of(tgt), py.Store())], value)]
+        if isinstance(tgt, A.Bit):
+            if tgt.size != "X":
+                width = {"B": 8, "W": 16, "D": 32, "L": 64}[tgt.size]
+                bt = T.base_of(tgt.base.ty)
+                new = _call("_setbits", self.expr(tgt.base), _const(tgt.index * width), _const(width), value,
+                            _const(bt.bits), _const(bt.signed))
+                return self.assign(tgt.base, new, None)
+            return self._bit_write(tgt.base, tgt.index, value)
+        if isinstance(tgt, A.Deref):
+            return [py.Expr(_call(_attr(self.expr(tgt.base), "set"), value))]
+        if isinstance(tgt, A.Direct):
+            name = self.x_Direct(tgt).id
+            self.globals_written.add(name)
+            return [py.Assign([_name(name, py.Store())], value)]
+        raise Unsupported(tgt.span, "cannot assign to this")
+
+    def _bit_write(self, base_e, n: int, value: py.expr) -> list:
+        bt = T.base_of(base_e.ty)
+        new = _call("_setbit", self.expr(base_e), _const(n), value, _const(bt.bits), _const(bt.signed))
+        return self.assign(base_e, new, None)
+
+    def s_CallStmt(self, s: A.CallStmt) -> list:
+        c = s.call
+        tgt = c.target
+        if not isinstance(tgt, CallTarget):
+            raise Unsupported(s.span, "unresolved call")
+        if tgt.kind == "fb":
+            return self.fb_call(c, tgt)
+        if tgt.kind == "action":
+            return [py.Expr(_call(_attr(_name(self.self_name), "_act_" + tgt.name)))]
+        if tgt.kind == "function":
+            en, eno = tgt.bind.get("en"), tgt.bind.get("eno")
+            tgt.bind["en"] = None
+            body = [py.Expr(self.function_call(c, tgt))]
+            tgt.bind["en"] = en
+            return self._en_wrap(en, eno, body, "eno" in tgt.bind["params"])
+        if tgt.kind == "native":
+            en, eno = tgt.en, tgt.eno
+            tgt.en = None
+            body = [py.Expr(self.native_call(c, tgt))]
+            tgt.en = en
+            return self._en_wrap(en, eno, body)
+        raise Unsupported(s.span, "cannot call this")
+
+    def fb_call(self, c: A.Call, tgt) -> list:
+        fb: T.POUType = tgt.pou
+        bind = tgt.bind["params"]
+        out = []
+        inst = self.expr(c.callee)
+        if not isinstance(inst, py.Name):
+            tmp = self.new_tmp()
+            out.append(py.Assign([_name(tmp, py.Store())], inst))
+            inst = _name(tmp)
+        after = []
+        for key, a in bind.items():
+            p = fb.vars[key]
+            if a.output:
+                continue
+            ut = T.unalias(p.type)
+            if p.section == "VAR_IN_OUT":
+                if ut.is_aggregate:
+                    out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.expr(a.value)))
+                else:
+                    out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.expr(a.value)))
+                    after.extend(self.assign(a.value, self.coerce(_attr(inst, p.pyname), _Typed(p.type), a.value.ty), None))
+            elif ut.is_aggregate:
+                out.append(py.Expr(_call("_assign", _attr(inst, p.pyname), self.expr(a.value))))
+            else:
+                out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.coerce(self.expr(a.value), a.value, p.type)))
+        out.append(py.Expr(_call(_attr(inst, "_body"))))
+        out.extend(after)
+        for key, a in bind.items():
+            p = fb.vars[key]
+            if not a.output:
+                continue
+            val: py.expr = _attr(inst, p.pyname)
+            if a.negated:
+                val = py.UnaryOp(py.Not(), val)
+            if T.unalias(p.type).is_aggregate:
+                out.append(py.Expr(_call("_assign", self.expr(a.value), val)))
+            else:
+                out.extend(self.assign(a.value, self.coerce(val, _Typed(p.type), a.value.ty), None))
+        return self._en_wrap(tgt.bind.get("en"), tgt.bind.get("eno"), out, "eno" in bind)
+
+    def s_If(self, s: A.If) -> list:
+        orelse = self.stmts(s.orelse) if s.orelse else []
+        for cond, body in reversed(s.branches[1:]):
+            node = py.If(self.expr(cond), self.block(body), orelse)
+            _set_lines(node, cond.span.line)
+            orelse = [node]
+        cond, body = s.branches[0]
+        return [py.If(self.expr(cond), self.block(body), orelse)]
+
+    def s_Case(self, s: A.Case) -> list:
+        out = []
+        sel = self.expr(s.selector)
+        if not isinstance(sel, (py.Name, py.Constant)):
+            tmp = self.new_tmp()
+            out.append(py.Assign([_name(tmp, py.Store())], sel))
+            sel = _name(tmp)
+        orelse = self.stmts(s.orelse) if s.orelse else []
+        for br in reversed(s.branches):
+            singles = []
+            ranges = []
+            for lo, hi in br.labels:
+                lv = lo.const if lo.const is not None else (lo.value if isinstance(lo, A.Literal) else None)
+                if hi is None:
+                    singles.append(lv)
+                else:
+                    hv = hi.const if hi.const is not None else (hi.value if isinstance(hi, A.Literal) else None)
+                    ranges.append((lv, hv))
+            tests = []
+            if len(singles) == 1:
+                tests.append(py.Compare(sel, [py.Eq()], [_const(singles[0])]))
+            elif singles:
+                tests.append(py.Compare(sel, [py.In()], [py.Set([_const(v) for v in singles])]))
+            for lv, hv in ranges:
+                tests.append(py.Compare(_const(lv), [py.LtE(), py.LtE()], [sel, _const(hv)]))
+            test = tests[0] if len(tests) == 1 else py.BoolOp(py.Or(), tests)
+            node = py.If(test, self.block(br.body), orelse)
+            _set_lines(node, br.span.line)
+            orelse = [node]
+        out.extend(orelse)
+        return out
+
+    def s_While(self, s: A.While) -> list:
+        return [py.While(self.expr(s.cond), self.block(s.body) + self._loop_guard(), [])]
+
+    def _loop_guard(self) -> list:
+        """A cheap check that lets the runtime's watchdog end an endless loop."""
+        return [py.If(_name("_wd_armed"), [py.Expr(_call("_wd_check"))], [])]
+
+    def s_Repeat(self, s: A.Repeat) -> list:
+        if _has_continue(s.body):
+            flag = self.new_tmp()
+            init = py.Assign([_name(flag, py.Store())], _const(True))
+            test = py.BoolOp(py.Or(), [_name(flag), py.UnaryOp(py.Not(), self.expr(s.cond))])
+            body = [py.Assign([_name(flag, py.Store())], _const(False))] + self.stmts(s.body) + self._loop_guard()
+            return [init, py.While(test, body, [])]
+        body = self.stmts(s.body) + self._loop_guard()
+        cond = self.expr(s.cond)
+        br = _set_lines(py.If(cond, [py.Break()], []), s.cond.span.line)
+        return [py.While(_const(True), body + [br], [])]
+
+    def s_For(self, s: A.For) -> list:
+        var = s.var
+        vt = T.base_of(var.ty)
+        start = self.coerce(self.expr(s.start), s.start, var.ty)
+        end = self.expr(s.end)
+        step_c = 1
+        out = []
+        if s.step is not None:
+            c = s.step.const if s.step.const is not None else (s.step.value if isinstance(s.step, A.Literal) else None)
+            step_c = c if isinstance(c, int) else None
+        if _assigns_var(s.body, var):
+            return self._for_while(s, start, end, step_c)
+        if step_c is None:
+            stp = self.new_tmp()
+            out.append(py.Assign([_name(stp, py.Store())], self.expr(s.step)))
+            step = _name(stp)
+            stop = py.BinOp(end, py.Add(), _call("_for_dir", step))
+        else:
+            step = _const(step_c)
+            stop = py.BinOp(end, py.Add(), _const(1 if step_c > 0 else -1)) if not isinstance(end, py.Constant) \
+                else _const(end.value + (1 if step_c > 0 else -1))
+        rng = _call("_range", start, stop, step) if step_c != 1 else _call("_range", start, stop)
+        # the loop variable, or a Python local that mirrors it
+        direct = isinstance(var, A.Name) and isinstance(var.sym, T.VarSym) and \
+            (var.sym in self.cached or self.self_name is None) and not var.sym.is_global
+        if direct:
+            loopvar = var.sym.pyname
+            self.written_locals.add(var.sym)
+            pre = []
+            body = self.block(s.body)
+        else:
+            loopvar = self.new_tmp()
+            pre = []
+            body = self.assign(var, _name(loopvar), None) + self.stmts(s.body)
+        # before: loopvar = start - step (so that 'else' can add step: the IEC final value)
+        init = py.Assign([_name(loopvar, py.Store())], py.BinOp(start, py.Sub(), step))
+        final = py.BinOp(_name(loopvar), py.Add(), step)
+        if vt.is_intlike:
+            final = wrap(final, vt)
+        orelse = [py.Assign([_name(loopvar, py.Store())], final)]
+        if not direct:
+            orelse += self.assign(var, _name(loopvar), None)
+        return out + pre + [init, py.For(_name(loopvar, py.Store()), rng, body, orelse)]
+
+    def _for_while(self, s, start, end, step_c):
+        """FOR whose body writes the loop variable: a faithful while loop."""
+        var = s.var
+        vt = T.base_of(var.ty)
+        out = self.assign(var, start, None)
+        endt = self.new_tmp()
+        out.append(py.Assign([_name(endt, py.Store())], end))
+        if step_c is None:
+            stp = self.new_tmp()
+            out.append(py.Assign([_name(stp, py.Store())], self.expr(s.step)))
+            step = _name(stp)
+            test = py.IfExp(py.Compare(step, [py.Gt()], [_const(0)]),
+                            py.Compare(self.expr(var), [py.LtE()], [_name(endt)]),
+                            py.Compare(self.expr(var), [py.GtE()], [_name(endt)]))
+        else:
+            step = _const(step_c)
+            test = py.Compare(self.expr(var), [py.LtE() if step_c > 0 else py.GtE()], [_name(endt)])
+        incr = self.assign(var, wrap(py.BinOp(self.expr(var), py.Add(), step), vt), None)
+        # CONTINUE must still increment: use try/finally-free form: increment at loop top after the first pass
+        first = self.new_tmp()
+        out.append(py.Assign([_name(first, py.Store())], _const(True)))
+        body = [py.If(_name(first), [py.Assign([_name(first, py.Store())], _const(False))], incr),
+                py.If(py.UnaryOp(py.Not(), test), [py.Break()], [])] + self.stmts(s.body)
+        out.append(py.While(_const(True), body, []))
+        return out
+
+
+class _Typed:
+    """A stand-in expression carrying only a type (for coercions of FB outputs)."""
+
+    def __init__(self, ty):
+        self.ty = ty
+        self.const = None
+
+
+def _has_continue(body) -> bool:
+    for s in body:
+        if isinstance(s, A.Continue):
+            return True
+        if isinstance(s, A.If):
+            if any(_has_continue(b) for _, b in s.branches) or _has_continue(s.orelse or []):
+                return True
+        if isinstance(s, A.Case):
+            if any(_has_continue(b.body) for b in s.branches) or _has_continue(s.orelse or []):
+                return True
+    return False
+
+
+def _assigns_var(body, var) -> bool:
+    if not isinstance(var, A.Name):
+        return True
+    key = var.name.lower()
+    for s in _walk_stmts(body):
+        if isinstance(s, A.Assign) and isinstance(s.target, A.Name) and s.target.name.lower() == key:
+            return True
+        if isinstance(s, A.For) and isinstance(s.var, A.Name) and s.var.name.lower() == key:
+            return True
+        if isinstance(s, A.CallStmt):
+            for a in s.call.args:
+                if (a.output or isinstance(s.call.target, CallTarget)) and isinstance(a.value, A.Name) \
+                        and a.value.name.lower() == key and a.output:
+                    return True
+    return False
+
+
+def _walk_stmts(body):
+    for s in body:
+        yield s
+        if isinstance(s, A.If):
+            for _, b in s.branches:
+                yield from _walk_stmts(b)
+            yield from _walk_stmts(s.orelse or [])
+        elif isinstance(s, A.Case):
+            for b in s.branches:
+                yield from _walk_stmts(b.body)
+            yield from _walk_stmts(s.orelse or [])
+        elif isinstance(s, (A.For, A.While, A.Repeat)):
+            yield from _walk_stmts(s.body)
+
+
+def _walk_exprs_in(body):
+    """Every expression node in a statement list (for pre-scans)."""
+    stack = []
+    for s in _walk_stmts(body):
+        if isinstance(s, A.Assign):
+            stack += [s.target, s.value]
+        elif isinstance(s, A.CallStmt):
+            stack.append(s.call)
+        elif isinstance(s, A.If):
+            stack += [c for c, _ in s.branches]
+        elif isinstance(s, A.Case):
+            stack.append(s.selector)
+        elif isinstance(s, A.For):
+            stack += [s.var, s.start, s.end] + ([s.step] if s.step else [])
+        elif isinstance(s, A.While):
+            stack.append(s.cond)
+        elif isinstance(s, A.Repeat):
+            stack.append(s.cond)
+    while stack:
+        e = stack.pop()
+        if e is None:
+            continue
+        yield e
+        if isinstance(e, A.Binary):
+            stack += [e.left, e.right]
+        elif isinstance(e, A.Unary):
+            stack.append(e.operand)
+        elif isinstance(e, (A.Field, A.Bit, A.Deref)):
+            stack.append(e.base)
+        elif isinstance(e, A.Index):
+            stack.append(e.base)
+            stack += e.indices
+        elif isinstance(e, A.Call):
+            stack.append(e.callee)
+            stack += [a.value for a in e.args]
+
+
+def _by_ref_names(body) -> set:
+    """Variables passed to functions as outputs / in-outs: they must stay attributes."""
+    names = set()
+    for e in _walk_exprs_in(body):
+        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "function":
+            pou = e.target.pou
+            for key, a in e.target.bind["params"].items():
+                p = pou.vars[key]
+                if p.section == "VAR_OUTPUT" or (p.section == "VAR_IN_OUT" and not T.unalias(p.type).is_aggregate):
+                    root = a.value
+                    while isinstance(root, (A.Field, A.Index, A.Bit)):
+                        root = root.base
+                    if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
+                        names.add(root.sym)
+        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "native" \
+                and e.target.sig.name.upper() in ("REF", "ADR"):
+            for a in e.target.args:
+                root = a.value
+                while isinstance(root, (A.Field, A.Index, A.Bit)):
+                    root = root.base
+                if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
+                    names.add(root.sym)
+    return names
