@@ -1,0 +1,70 @@
+"""Semantic analysis: declarations → types and symbols; bodies → typed, checked AST.
+
+The checker never raises on bad input: every problem becomes a diagnostic
+and checking goes on, so one run reports all errors. Expression nodes get
+their type in `.ty`; names get their symbol in `.sym`; calls get `.target`.
+"""
+from __future__ import annotations
+
+from ...diagnostics import DiagnosticSink
+from ...source import Span
+from .. import ast as A
+from ..library import Library
+from ..model import Project
+from .calls import CallsMixin
+from .common import _NULL, STEP, CallTarget, Scope, StepType
+from .configuration import ConfigurationMixin
+from .declarations import DeclarationsMixin
+from .expressions import ExpressionsMixin
+from .statements import StatementsMixin
+
+__all__ = ["Checker", "CallTarget", "STEP", "StepType", "Scope", "_NULL"]
+
+
+class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, ConfigurationMixin):
+    def __init__(self, sink: DiagnosticSink, libraries: list[Library]):
+        self.sink = sink
+        self.libraries = libraries
+        self.p = Project(libraries=libraries)
+        self._resolving: set = set()
+        self._decl_span: dict = {}
+        self._unit_library: dict = {}
+        self._pending_types: dict = {}
+        self._raw_const_busy: set = set()
+        self._deferred_inits: list = []
+        self._calls: dict = {}         # caller lower name → [(callee lower name, span)]
+        self._configs: list = []
+        self._global_blocks: list = []
+
+    # ================================================================ entry
+    def run(self, units: list[A.Unit], library_units: set[str]) -> Project:
+        self.library_units = library_units
+        for u in units:
+            self._collect(u)
+        for key, (decl, lib) in list(self._pending_types.items()):
+            self._resolve_named_type(key, decl.span)
+        for pou in list(self.p.pous.values()):
+            self._resolve_interface(pou)
+        self._resolve_globals()
+        for pou in list(self.p.pous.values()):
+            if pou.decl is not None:
+                self._check_body(pou)
+        self._check_cycles()
+        for cfg_decl in self._configs:
+            self._check_configuration(cfg_decl)
+        if not self.p.configs:
+            self._implicit_configuration()
+        self._warn_unused()
+        return self.p
+
+    # ================================================================ helpers
+    def err(self, code: str, span: Span, msg: str, hint: str = "") -> None:
+        self.sink.error(code, span, msg, hint)
+
+    def warn(self, code: str, span: Span, msg: str, hint: str = "") -> None:
+        if span is not None and span.file in self.library_units:
+            return
+        self.sink.warning(code, span, msg, hint)
+
+    def _lib_of(self, span: Span) -> str:
+        return "lib" if span is not None and span.file in self.library_units else ""

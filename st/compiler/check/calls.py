@@ -1,0 +1,319 @@
+"""Calls: FB instances, user functions, native (library) functions, REF(); argument binding."""
+from __future__ import annotations
+
+import re
+from typing import Optional
+
+from .. import ast as A
+from .. import types as T
+from ..library import FuncSig
+from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies
+
+
+class CallsMixin:
+    # ---------------------------------------------------------------- calls
+    def call(self, c: A.Call, scope: Scope, statement: bool = False, expected=None) -> Optional[T.Type]:
+        callee = c.callee
+        if isinstance(callee, A.Name):
+            key = callee.name.lower()
+            sym = self._lookup(key, scope)
+            if isinstance(sym, T.VarSym) and not isinstance(T.unalias(sym.type), T.POUType) and (
+                    key in self.p.pous or self._native(key) is not None):
+                sym = None      # LEN(x) is the function even where a variable is called len
+            if isinstance(sym, T.VarSym):
+                sym.used = True
+                callee.sym = sym
+                callee.ty = sym.type
+                return self._fb_call(c, sym.type, scope, statement)
+            if key == "ref" and sym is None and key not in self.p.pous:
+                return self._ref_call(c, scope)
+            if key in scope.actions or (scope.pou is not None and key in scope.pou.actions):
+                if c.args:
+                    self.err("E017", c.span, "an action takes no arguments")
+                c.target = CallTarget("action", name=key)
+                return None
+            pou = self.p.pous.get(key)
+            if pou is not None:
+                if pou.pou_kind != "FUNCTION":
+                    self.err("E020", c.span, f"'{callee.name}' is a {pou.pou_kind.replace('_', ' ')} type; "
+                             f"declare an instance and call that",
+                             f"VAR inst : {pou.name}; END_VAR ... inst(...);")
+                    return None
+                self._resolve_interface(pou)
+                return self._function_call(c, pou, scope)
+            sig = self._native(key)
+            if sig is not None:
+                return self._native_call(c, sig, scope, expected)
+            if self.p.enum_members.get(key) or sym is not None:
+                self.err("E020", c.span, f"'{callee.name}' is not callable")
+                return None
+            self.err("E010", c.span, f"undeclared function or function block '{callee.name}'")
+            for a in c.args:
+                if not a.output:
+                    self.expr(a.value, scope)
+            return None
+        # a call through a path: inst.sub(...), arr[i](...)
+        t = self.expr(callee, scope)
+        if t is None:
+            return None
+        return self._fb_call(c, t, scope, statement)
+
+    def _ref_call(self, c: A.Call, scope: Scope):
+        """REF(x): a reference to a variable (IEC 61131-3 3rd edition)."""
+        if len(c.args) != 1 or c.args[0].name:
+            self.err("E017", c.span, "REF takes exactly one variable")
+            return None
+        arg = c.args[0].value
+        if not isinstance(arg, (A.Name, A.Field, A.Index)):
+            self.err("E031", arg.span, "REF needs a variable")
+            return None
+        t = self.lvalue(arg, scope)
+        root = arg
+        while isinstance(root, (A.Field, A.Index)):
+            root = root.base
+        if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
+            root.sym.address_taken = True
+        c.target = CallTarget("ref", arg=arg)
+        return T.RefType(t) if t is not None else None
+
+    def _fb_call(self, c: A.Call, t: T.Type, scope: Scope, statement: bool):
+        fb = T.unalias(t)
+        if not isinstance(fb, T.POUType) or fb.pou_kind == "FUNCTION":
+            self.err("E020", c.span, f"a {t} is not callable")
+            return None
+        self._resolve_interface(fb)
+        if not statement:
+            self.err("E020", c.span, "a function block call is a statement; it has no value",
+                     "call it, then read its outputs, e.g. inst(...); x := inst.Q;")
+        bind = self._bind_args(c, fb, scope, is_fb=True)
+        c.target = CallTarget("fb", pou=fb, bind=bind)
+        return None
+
+    def _function_call(self, c: A.Call, pou: T.POUType, scope: Scope):
+        if scope.pou is not None:
+            self._calls.setdefault(scope.pou.name.lower(), []).append((pou.name.lower(), c.span))
+        bind = self._bind_args(c, pou, scope, is_fb=False)
+        c.target = CallTarget("function", pou=pou, bind=bind)
+        return pou.return_type
+
+    def _bind_args(self, c: A.Call, pou: T.POUType, scope: Scope, is_fb: bool):
+        """Match arguments to parameters: {lower param: Arg} plus EN/ENO."""
+        params = pou.params()
+        pos_params = params
+        bind: dict = {}
+        extras: dict = {}
+        npos = 0
+        for a in c.args:
+            key = a.name.lower()
+            if not a.name:
+                if npos >= len(pos_params):
+                    self.err("E017", a.span, f"too many arguments for {pou.name} (it has {len(pos_params)} parameters)")
+                    self.expr(a.value, scope)
+                    continue
+                p = pos_params[npos]
+                npos += 1
+                if p.section == "VAR_OUTPUT":
+                    a.output = True
+                bind[p.name.lower()] = a
+            elif key in ("en", "eno"):
+                extras[key] = a
+                if key == "eno" and "eno" in pou.vars:
+                    bind[key] = a       # the body sets ENO itself
+            else:
+                p = pou.vars.get(key)
+                if p is None or p.section not in _SECTIONS_PARAM:
+                    names = ", ".join(x.name for x in params) or "none"
+                    self.err("E016", a.span, f"{pou.name} has no parameter '{a.name}' (parameters: {names})")
+                    if not a.output:
+                        self.expr(a.value, scope)
+                    continue
+                if key in bind:
+                    self.err("E011", a.span, f"parameter '{a.name}' is given twice")
+                    continue
+                if a.output and p.section != "VAR_OUTPUT":
+                    self.err("E016", a.span, f"'{a.name}' is not an output; use ':=' to pass it")
+                elif not a.output and p.section == "VAR_OUTPUT":
+                    self.err("E016", a.span, f"'{a.name}' is an output; use '=>' to read it")
+                    a.output = True
+                bind[key] = a
+        for key, a in bind.items():
+            p = pou.vars[key]
+            if a.output:
+                if not isinstance(a.value, (A.Name, A.Field, A.Index, A.Bit, A.Deref, A.Direct)):
+                    self.err("E031", a.value.span, "an output argument must be a variable")
+                    continue
+                vt = self.lvalue(a.value, scope)
+                pt = p.type
+                if vt is not None and pt is not None and not (T.base_of(pt) is T.base_of(vt) or T.widens_to(pt, vt)):
+                    self.assignable(None, pt, vt, a.value.span, "assign output")
+            elif p.section == "VAR_IN_OUT":
+                if not isinstance(a.value, (A.Name, A.Field, A.Index, A.Bit, A.Deref, A.Direct)):
+                    self.err("E031", a.value.span, f"VAR_IN_OUT '{p.name}' needs a variable, not an expression")
+                    continue
+                vt = self.lvalue(a.value, scope)
+                if vt is not None and not self._same_type(vt, p.type) and not (
+                        isinstance(T.unalias(p.type), T.ArrayType) and T.unalias(p.type).dims[0] == (0, -1)):
+                    if not (isinstance(T.base_of(vt), T.StringType) and isinstance(T.base_of(p.type), T.StringType)):
+                        self.err("E013", a.value.span, f"VAR_IN_OUT '{p.name}' is {p.type}; {vt} cannot be passed")
+            else:
+                vt = self.expr(a.value, scope, p.type)
+                self.assignable(a.value, vt, p.type, a.value.span, "pass")
+        if "en" in extras:
+            et = self.expr(extras["en"].value, scope, T.BOOL)
+            if et is not None and not T.base_of(et).is_bool:
+                self.err("E013", extras["en"].span, "EN must be BOOL")
+        if "eno" in extras:
+            a = extras["eno"]
+            if not a.output:
+                self.err("E016", a.span, "ENO is an output; use 'ENO => var'")
+            else:
+                self.lvalue(a.value, scope)
+        if not is_fb:
+            if npos and not any(a.name and a.name.lower() not in ("en", "eno") for a in c.args):
+                # a non-formal call gives every input and in-out, in order (IEC 61131-3 6.6.1.4.2)
+                needed = [p for p in params if p.section != "VAR_OUTPUT"]
+                if npos < len(needed):
+                    self.err("E017", c.span, f"{pou.name} takes {len(needed)} argument(s), not {npos}",
+                             "name the arguments (x := ...) to leave some out")
+                    return {"params": bind, "en": extras.get("en"), "eno": extras.get("eno")}
+            for p in pou.in_outs():
+                if p.name.lower() not in bind:
+                    self.err("E017", c.span, f"VAR_IN_OUT '{p.name}' of {pou.name} must be given")
+        return {"params": bind, "en": extras.get("en"), "eno": extras.get("eno")}
+
+    def _native_call(self, c: A.Call, sig: FuncSig, scope: Scope, expected=None):
+        args = []
+        en = eno = None
+        named = {}
+        for a in c.args:
+            if a.name.lower() == "en":
+                en = a
+                continue
+            if a.name.lower() == "eno":
+                eno = a
+                continue
+            if a.output:
+                self.err("E016", a.span, f"{sig.name} has no output '{a.name}'")
+                continue
+            if a.name:
+                named[a.name.lower()] = a
+            args.append(a)
+        # named arguments in declaration order
+        if named:
+            ordered = []
+            names = [p.name.lower() for p in sig.params]
+            for a in args:
+                if a.name:
+                    key = a.name.lower()
+                    if key not in names:
+                        m = re.fullmatch(r"in(\d+)", key)
+                        if sig.extensible and m:
+                            continue
+                        self.err("E016", a.span, f"{sig.name} has no parameter '{a.name}' "
+                                 f"(parameters: {', '.join(p.name for p in sig.params)})")
+                        return None
+            pos = [a for a in args if not a.name]
+            for i, p in enumerate(sig.params):
+                a = named.get(p.name.lower())
+                if a is None and pos:
+                    a = pos.pop(0)
+                if a is not None:
+                    ordered.append(a)
+            if sig.extensible:
+                extra = sorted(((int(k[2:]), a) for k, a in named.items()
+                                if re.fullmatch(r"in\d+", k) and k not in names), key=lambda x: x[0])
+                ordered.extend(a for _, a in extra)
+            ordered.extend(pos)
+            args = ordered
+        n = len(args)
+        nmin = sig.min_args or len(sig.params)
+        if n < nmin or (not sig.extensible and n > len(sig.params)):
+            want = f"at least {nmin}" if sig.extensible else str(len(sig.params))
+            self.err("E017", c.span, f"{sig.name} takes {want} argument(s), not {n}")
+            for a in args:
+                self.expr(a.value, scope)
+            return None
+        # types
+        arg_types = []
+        groups: dict = {}
+        for i, a in enumerate(args):
+            p = sig.params[min(i, len(sig.params) - 1)]
+            want = T.ELEMENTARY.get(p.constraint)
+            t = self.expr(a.value, scope, want)
+            arg_types.append(t)
+            if t is None:
+                continue
+            if not _satisfies(t, p.constraint):
+                self.err("E013", a.value.span, f"argument {i + 1} of {sig.name} must be {p.constraint}, not {t}")
+                arg_types[-1] = None
+                continue
+            if p.group:
+                prev = groups.get(p.group)
+                if prev is None:
+                    groups[p.group] = t
+                else:
+                    ct = T.common_type(prev, t)
+                    if ct is None and isinstance(T.base_of(prev), T.StringType) and isinstance(T.base_of(t), T.StringType):
+                        ct = prev
+                    if ct is None and isinstance(T.base_of(prev), T.EnumType) and T.base_of(prev) is T.base_of(t):
+                        ct = prev
+                    if ct is None:
+                        self.err("E013", a.value.span, f"arguments of {sig.name} have incompatible types {prev} and {t}")
+                    else:
+                        groups[p.group] = ct
+            elif want is not None:
+                self.assignable(a.value, t, want, a.value.span, "pass")
+        if any(t is None for t in arg_types):
+            return None
+        for g, t in list(groups.items()):
+            if isinstance(t, T.LiteralType):
+                # all-literal arguments take the type the context expects (IEC: ANY_NUM literals)
+                eb = T.base_of(expected) if expected is not None else None
+                if sig.result == g and eb is not None and isinstance(eb, T.ElemType) and \
+                        (eb.is_num or (eb.is_bit and t is T.LIT_INT)) and not (t is T.LIT_REAL and not eb.is_real):
+                    groups[g] = eb
+                else:
+                    groups[g] = T.default_type_for_literal(t)
+        # settle literal arguments to their group's type
+        for i, a in enumerate(args):
+            p = sig.params[min(i, len(sig.params) - 1)]
+            if p.group and isinstance(arg_types[i], T.LiteralType):
+                gt = groups[p.group]
+                if isinstance(a.value, A.Literal) and isinstance(a.value.value, int) and T.base_of(gt).is_intlike:
+                    if not T.literal_fits(a.value.value, gt):
+                        self.err("E021", a.value.span, f"{a.value.value} does not fit in {gt}")
+                a.value.ty = gt
+                arg_types[i] = gt
+        res = sig.result
+        eb = T.base_of(expected) if expected is not None else None
+        if callable(res) and arg_types and all(isinstance(t, T.LiteralType) for t in arg_types) \
+                and isinstance(eb, T.ElemType) and eb.is_real:
+            # SQRT(2.0) in a REAL context computes in REAL
+            for a in args:
+                a.value.ty = eb
+            arg_types = [eb] * len(arg_types)
+        if getattr(sig, "result_from_context", False) and isinstance(eb, T.ElemType) and eb.is_int:
+            rt = eb             # TRUNC: ANY_REAL → the integer type the context wants
+        elif callable(res):
+            rt = res(arg_types)
+            if isinstance(rt, str):
+                self.err("E013", c.span, rt)
+                return None
+            if isinstance(rt, T.LiteralType):
+                # all-literal arguments: the type the context expects
+                if isinstance(eb, T.ElemType) and (eb.is_real or (eb.is_intlike and rt is T.LIT_INT)):
+                    rt = eb
+                else:
+                    rt = T.default_type_for_literal(rt)
+        elif res in groups:
+            rt = groups[res]
+        elif res is None:
+            rt = None
+        else:
+            rt = T.ELEMENTARY[res]
+        if en is not None:
+            self.expr(en.value, scope, T.BOOL)
+        if eno is not None:
+            self.lvalue(eno.value, scope)
+        c.target = CallTarget("native", sig=sig, args=args, arg_types=arg_types, en=en, eno=eno)
+        return rt

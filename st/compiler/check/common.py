@@ -1,0 +1,113 @@
+"""Shared pieces of the checker: call targets, scopes, the STEP and NULL pseudo-types, generic constraints."""
+from __future__ import annotations
+
+import re
+from typing import Optional
+
+from .. import ast as A
+from .. import types as T
+
+_SECTIONS_PARAM = ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")
+_LOGIC = {"AND", "OR", "XOR", "AND_THEN", "OR_ELSE"}
+_CMP = {"=", "<>", "<", ">", "<=", ">="}
+_DIRECT = re.compile(r"%([IQM])([XBWDL]?)(\*|[0-9]+(?:\.[0-9]+)*)")
+_DIRECT_TYPES = {"X": T.BOOL, "": T.BOOL, "B": T.BYTE, "W": T.WORD, "D": T.DWORD, "L": T.LWORD}
+
+
+class CallTarget:
+    """What a call resolved to (kept on `Call.target` for code generation)."""
+
+    def __init__(self, kind: str, **kw):
+        self.kind = kind            # fb, function, native, action, conversion
+        self.__dict__.update(kw)
+
+
+class StepType(T.Type):
+    kind = "step"
+    name = "STEP"
+
+
+STEP = StepType()
+
+
+class Scope:
+    def __init__(self, pou: Optional[T.POUType], vars: dict, *, library: str = ""):
+        self.pou = pou
+        self.vars = vars
+        self.loop_depth = 0
+        self.steps: dict = {}
+        self.actions: dict = {}
+        self.library = library
+
+
+def _names_in(body):
+    """Every Name node in a statement list."""
+    stack = list(body)
+    while stack:
+        x = stack.pop()
+        if isinstance(x, A.Name):
+            yield x
+            continue
+        if isinstance(x, list):
+            stack.extend(x)
+        elif isinstance(x, tuple):
+            stack.extend(x)
+        elif hasattr(x, "__dataclass_fields__"):
+            for f in x.__dataclass_fields__:
+                if f in ("span", "ty", "const", "sym"):
+                    continue
+                v = getattr(x, f, None)
+                if isinstance(v, CallTarget):
+                    continue
+                if isinstance(v, (list, tuple)) or hasattr(v, "__dataclass_fields__"):
+                    stack.append(v)
+
+
+class _NullType(T.Type):
+    kind = "null"
+    name = "NULL"
+
+
+_NULL = _NullType()
+
+
+def _satisfies(t: T.Type, constraint: str) -> bool:
+    b = T.base_of(t)
+    if constraint == "ANY":
+        return True
+    if isinstance(b, T.LiteralType):
+        if constraint in ("ANY_NUM", "ANY_MAGNITUDE", "ANY_ELEMENTARY"):
+            return True
+        if constraint in ("ANY_INT", "ANY_BIT", "ANY_INTLIKE"):
+            return b is T.LIT_INT
+        if constraint == "ANY_REAL":
+            return True
+        c = T.ELEMENTARY.get(constraint)
+        if c is not None:
+            return c.is_num or (c.is_bit and b is T.LIT_INT)
+        return False
+    k = b.kind
+    if constraint == "ANY_NUM":
+        return k in ("int", "real")
+    if constraint == "ANY_REAL":
+        return k in ("int", "real")     # integers are accepted and computed as LREAL
+    if constraint == "ANY_INT":
+        return k == "int" or k == "bit"
+    if constraint == "ANY_BIT":
+        return k in ("bit", "int", "bool")
+    if constraint == "ANY_INTLIKE":
+        return k in ("bit", "int")
+    if constraint == "ANY_MAGNITUDE":
+        return k in ("int", "real", "time")
+    if constraint == "ANY_STRING":
+        return k == "string"
+    if constraint == "ANY_DATE":
+        return k in ("date", "tod", "dt")
+    if constraint == "ANY_ELEMENTARY":
+        return b.is_elementary or isinstance(b, T.EnumType)
+    if constraint == "ANY_CHARS":
+        return k in ("string", "char")
+    c = T.ELEMENTARY.get(constraint)
+    if c is None:
+        return False
+    return b is c or T.widens_to(b, c)

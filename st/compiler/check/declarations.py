@@ -1,0 +1,491 @@
+"""Declarations: POUs and types collected, types resolved, interfaces and globals declared, constants evaluated."""
+from __future__ import annotations
+
+from typing import Optional
+
+from ...source import Span
+from .. import ast as A
+from .. import types as T
+from ..names import mangle
+from .common import _DIRECT, _DIRECT_TYPES, Scope, _names_in
+
+
+class DeclarationsMixin:
+    # ================================================================ collection
+    def _collect(self, u: A.Unit) -> None:
+        for item in u.items:
+            if isinstance(item, A.TypeBlock):
+                for td in item.types:
+                    key = td.name.lower()
+                    if key in self._pending_types or key in self.p.pous:
+                        self._dup(td.name, td.span)
+                        continue
+                    if key in T.ELEMENTARY:
+                        self.err("E011", td.span, f"'{td.name}' is an elementary type and cannot be redefined")
+                        continue
+                    self._pending_types[key] = (td, self._lib_of(td.span))
+                    self._decl_span[key] = td.span
+            elif isinstance(item, A.POU):
+                key = item.name.lower()
+                if key in self.p.pous or key in self._pending_types:
+                    old = self.p.pous.get(key)
+                    if old is not None and old.library and not self._lib_of(item.span):
+                        # a user POU replaces a library POU of the same name
+                        self.warn("W004", item.span, f"'{item.name}' replaces the standard library's {item.name}")
+                    else:
+                        self._dup(item.name, item.span)
+                        continue
+                pt = T.POUType(item.name, item.kind, decl=item, library=self._lib_of(item.span))
+                pt.pyname = {"FUNCTION": "_fn_", "FUNCTION_BLOCK": "_fb_", "PROGRAM": "_prg_"}[item.kind] + \
+                    mangle(item.name)
+                self.p.pous[key] = pt
+                self._decl_span[key] = item.span
+            elif isinstance(item, A.Configuration):
+                self._configs.append(item)
+            elif isinstance(item, A.VarBlock):
+                if item.kind != "VAR_GLOBAL":
+                    self.err("E003", item.span, f"{item.kind} is not allowed outside a POU")
+                    continue
+                self._global_blocks.append(("", item))
+            elif isinstance(item, A.TestBlock):
+                self.p.tests.append(item)
+
+    def _dup(self, name: str, span: Span) -> None:
+        prev = self._decl_span.get(name.lower())
+        where = f" (first declared at {prev.file}:{prev.line})" if prev else ""
+        self.err("E011", span, f"'{name}' is declared twice{where}")
+
+    # ================================================================ types
+    def _resolve_named_type(self, key: str, span: Span) -> Optional[T.Type]:
+        if key in self.p.types:
+            return self.p.types[key]
+        if key not in self._pending_types:
+            return None
+        if key in self._resolving:
+            self.err("E012", span, f"type '{key}' is defined in terms of itself")
+            return None
+        td, lib = self._pending_types[key]
+        self._resolving.add(key)
+        try:
+            t = self._type_from_decl(td)
+        finally:
+            self._resolving.discard(key)
+        self.p.types[key] = t
+        return t
+
+    def _type_from_decl(self, td: A.TypeDecl) -> T.Type:
+        spec = td.spec
+        if isinstance(spec, A.EnumType):
+            if isinstance(td.init, A.Name) and not spec.default:
+                spec.default = td.init.name       # TYPE E : (A, B) := B;
+            elif td.init is not None and not spec.default:
+                self.err("E013", td.init.span, "an enumeration's default must be one of its values")
+            return self._enum(td.name, spec)
+        if isinstance(spec, A.StructType):
+            st = T.StructType(td.name, pyname="_st_" + mangle(td.name))
+            self.p.types[td.name.lower()] = st     # allow references to itself through REF_TO
+            for d in spec.members:
+                mt = self.resolve_type(d.type, None)
+                for n, sp in d.names:
+                    if n.lower() in st.members:
+                        self.err("E011", sp, f"field '{n}' is declared twice in {td.name}")
+                        continue
+                    st.members[n.lower()] = T.Member(n, mt, d.init, sp, mangle(n))
+                    if d.init is not None:
+                        self.check_initializer(d.init, mt, None)
+            st.resolved = True
+            return st
+        if isinstance(spec, A.SubrangeType):
+            t = self.resolve_type(spec, None)
+            if isinstance(t, T.SubrangeType):
+                t = T.SubrangeType(td.name, t.base, t.lo, t.hi)
+            if td.init is not None:
+                self.check_initializer(td.init, t, None)
+                return T.AliasType(td.name, t, td.init)
+            return t
+        target = self.resolve_type(spec, None)
+        if td.init is not None:
+            self.check_initializer(td.init, target, None)
+        return T.AliasType(td.name, target, td.init)
+
+    def _enum(self, name: str, spec: A.EnumType) -> T.EnumType:
+        base = T.INT
+        if spec.base:
+            b = T.ELEMENTARY.get(spec.base.upper())
+            if b is None or not b.is_intlike:
+                self.err("E012", spec.span, f"an enumeration's base type must be an integer type, not '{spec.base}'")
+            else:
+                base = b
+        et = T.EnumType(name or "enum", base=base)
+        nxt = 0
+        for v in spec.values:
+            if v.value is not None:
+                c = self.const_value(v.value, None)
+                if not isinstance(c, int):
+                    self.err("E029", v.span, f"the value of '{v.name}' must be an integer constant")
+                    c = nxt
+                nxt = c
+            if v.name.lower() in et.members:
+                self.err("E011", v.span, f"'{v.name}' appears twice in the enumeration")
+                continue
+            et.members[v.name.lower()] = (v.name, nxt)
+            et.names_by_value.setdefault(nxt, v.name)
+            self.p.enum_members.setdefault(v.name.lower(), []).append((et, v.name, nxt))
+            nxt += 1
+        if et.members:
+            et.default_value = next(iter(et.members.values()))[1]
+        if spec.default:
+            m = et.members.get(spec.default.lower())
+            if m is None:
+                self.err("E010", spec.span, f"'{spec.default}' is not a value of this enumeration")
+            else:
+                et.default_value = m[1]
+        return et
+
+    def resolve_type(self, spec: A.TypeSpec, scope: Optional[Scope]) -> T.Type:
+        if isinstance(spec, A.NamedType):
+            key = spec.name.lower()
+            up = spec.name.upper()
+            if up in T.ELEMENTARY:
+                return T.ELEMENTARY[up]
+            t = self._resolve_named_type(key, spec.span)
+            if t is not None:
+                return t
+            pou = self.p.pous.get(key)
+            if pou is not None:
+                if pou.pou_kind == "FUNCTION":
+                    self.err("E012", spec.span, f"'{spec.name}' is a FUNCTION, not a type")
+                    return T.INT
+                return pou
+            self.err("E012", spec.span, f"unknown type '{spec.name}'")
+            return T.INT
+        if isinstance(spec, A.StringType):
+            n = 80
+            if spec.length is not None:
+                c = self.const_value(spec.length, scope)
+                if not isinstance(c, int) or c < 1:
+                    self.err("E029", spec.span, "a string length must be a positive integer constant")
+                else:
+                    n = c
+            return T.StringType(n, spec.wide)
+        if isinstance(spec, A.ArrayType):
+            dims = []
+            for r in spec.ranges:
+                if r is None:
+                    dims.append((0, -1))      # ARRAY[*]: bounds come from the argument
+                    continue
+                lo, hi = self.const_value(r[0], scope), self.const_value(r[1], scope)
+                if not isinstance(lo, int) or not isinstance(hi, int):
+                    self.err("E029", spec.span, "array bounds must be integer constants")
+                    lo, hi = 0, 0
+                elif hi < lo:
+                    self.err("E029", spec.span, f"empty array range {lo}..{hi}")
+                    hi = lo
+                dims.append((lo, hi))
+            elem = self.resolve_type(spec.element, scope)
+            return T.ArrayType(dims, elem)
+        if isinstance(spec, A.RefType):
+            return T.RefType(self.resolve_type(spec.target, scope), spec.kind)
+        if isinstance(spec, A.SubrangeType):
+            base = T.ELEMENTARY.get(spec.base.upper())
+            if base is None or not base.is_intlike:
+                self.err("E012", spec.span, f"a subrange needs an integer base type, not '{spec.base}'")
+                base = T.INT
+            lo, hi = self.const_value(spec.lo, scope), self.const_value(spec.hi, scope)
+            if not isinstance(lo, int) or not isinstance(hi, int):
+                self.err("E029", spec.span, "subrange bounds must be integer constants")
+                lo, hi = base.lo, base.hi
+            return T.SubrangeType(f"{base.name}({lo}..{hi})", base, lo, hi)
+        if isinstance(spec, A.EnumType):
+            return self._enum("", spec)
+        if isinstance(spec, A.StructType):
+            self.err("E012", spec.span, "STRUCT is only allowed in a TYPE declaration")
+            return T.INT
+        raise AssertionError(spec)
+
+    # ================================================================ interfaces
+    def _resolve_interface(self, pou: T.POUType) -> None:
+        if pou.resolved or pou.decl is None:
+            return
+        pou.resolved = True
+        d = pou.decl
+        scope = Scope(pou, pou.vars)
+        if d.kind == "FUNCTION":
+            if d.return_type is not None:
+                pou.return_type = self.resolve_type(d.return_type, scope)
+        for block in d.var_blocks:
+            self._declare_block(block, pou.vars, scope, pou)
+        if d.kind in ("FUNCTION", "FUNCTION_BLOCK"):
+            # EN and ENO are implicit in every function and FB; declare them when the body uses them
+            mentioned = {n.name.lower() for n in _names_in(d.body)}
+            for key, section in (("en", "VAR_INPUT"), ("eno", "VAR_OUTPUT")):
+                if key in mentioned and key not in pou.vars:
+                    true = A.Literal(d.span, "bool", True, "", "TRUE")
+                    pou.vars[key] = T.VarSym(key.upper(), T.BOOL, section, d.span, true, pyname=key.upper(),
+                                             owner=pou, used=True)
+        for act in d.actions:
+            if act.name.lower() in pou.actions:
+                self.err("E011", act.span, f"action '{act.name}' is declared twice")
+            pou.actions[act.name.lower()] = act
+
+    def _declare_block(self, block: A.VarBlock, table: dict, scope: Optional[Scope], owner) -> None:
+        kind = block.kind
+        quals = set(block.qualifiers)
+        if owner is not None:
+            allowed = {
+                "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL"},
+                "FUNCTION_BLOCK": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL",
+                                   "VAR_INST", "VAR_STAT"},
+                "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL",
+                            "VAR_GLOBAL"},
+            }[owner.pou_kind]
+            if kind not in allowed:
+                self.err("E003", block.span, f"{kind} is not allowed in a {owner.pou_kind}")
+                return
+            if kind == "VAR_GLOBAL":
+                self._global_blocks.append((owner.name, block))
+                return
+        for decl in block.decls:
+            t = self.resolve_type(decl.type, scope)
+            if isinstance(t, T.POUType) and t.pou_kind == "PROGRAM" and owner is not None:
+                self.err("E012", decl.type.span, f"a PROGRAM ('{t.name}') cannot be instantiated inside a POU")
+            for n, sp in decl.names:
+                key = n.lower()
+                if key in table:
+                    self.err("E011", sp, f"'{n}' is declared twice")
+                    continue
+                if owner is not None and owner.pou_kind == "FUNCTION" and key == owner.name.lower():
+                    self.err("E011", sp, f"'{n}' is the function's own name (its return value)")
+                    continue
+                sym = T.VarSym(n, t, kind, sp, decl.init, decl.location,
+                               constant="CONSTANT" in quals, retain="RETAIN" in quals,
+                               persistent="PERSISTENT" in quals, edge=decl.edge, pyname=mangle(n), owner=owner)
+                if kind == "VAR_EXTERNAL":
+                    sym.is_global = True
+                table[key] = sym
+                if decl.location:
+                    self._check_location(decl.location, t, sp)
+            if decl.init is not None and kind != "VAR_EXTERNAL" and owner is None:
+                self._deferred_inits.append((decl, t))
+            elif decl.init is not None and kind != "VAR_EXTERNAL":
+                self.check_initializer(decl.init, t, scope)
+                if "CONSTANT" in quals:
+                    cv = self.const_value(decl.init, scope) if isinstance(decl.init, A.Expr) else None
+                    if cv is not None:
+                        for n, _ in decl.names:
+                            table[n.lower()].const_value = cv
+            if kind in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT") and owner is None:
+                self.err("E003", decl.span, f"{kind} is only allowed in a POU")
+
+    def _check_location(self, loc: str, t: T.Type, span: Span) -> None:
+        m = _DIRECT.fullmatch(loc)
+        if not m:
+            self.err("E004", span, f"malformed address '{loc}'")
+            return
+        size = m.group(2)
+        if m.group(3) == "*":
+            return
+        want = _DIRECT_TYPES[size]
+        bt = T.base_of(t)
+        if isinstance(bt, T.ElemType) and bt.bits != want.bits and not (size in ("", "X") and bt.is_bool):
+            self.err("E013", span, f"'{loc}' is {want.bits} bit(s) wide; it cannot hold a {t}")
+
+    def _resolve_globals(self) -> None:
+        for cfg in self._configs:
+            for b in cfg.var_blocks:
+                self._global_blocks.append((cfg.name, b))
+            for r in cfg.resources:
+                for b in r.var_blocks:
+                    self._global_blocks.append((cfg.name + "." + r.name, b))
+        for prefix, block in self._global_blocks:
+            table: dict = {}
+            if block.kind == "VAR_CONFIG":
+                continue
+            self._declare_block(block, table, None, None)
+            for key, sym in table.items():
+                sym.section = "VAR_GLOBAL"
+                sym.is_global = True
+                scope_name = prefix.replace(".", "_")
+                sym.pyname = "_g_" + (mangle(scope_name) + "_" if scope_name else "") + mangle(sym.name)
+                uniq = sym.pyname
+                if uniq in self.p.globals:
+                    other = self.p.globals[uniq]
+                    self.err("E011", sym.span, f"global '{sym.name}' is declared twice "
+                             f"(first at {other.span.file}:{other.span.line})")
+                    continue
+                self.p.globals[uniq] = sym
+                self.p.global_names.setdefault(key, []).append(sym)
+        # global initializers may name other globals: check them once all are declared
+        for decl, t in self._deferred_inits:
+            self.check_initializer(decl.init, t, None)
+        self._deferred_inits = []
+        # bind VAR_EXTERNAL declarations
+        for pou in self.p.pous.values():
+            for sym in pou.vars.values():
+                if sym.section == "VAR_EXTERNAL":
+                    cands = self.p.global_names.get(sym.name.lower())
+                    if not cands:
+                        self.err("E010", sym.span, f"VAR_EXTERNAL '{sym.name}' has no matching VAR_GLOBAL")
+                        continue
+                    g = cands[0]
+                    sym.global_ref = g
+                    sym.pyname = g.pyname
+                    if not self._same_type(g.type, sym.type):
+                        self.err("E013", sym.span, f"VAR_EXTERNAL '{sym.name}' is declared {sym.type} "
+                                 f"but the VAR_GLOBAL is {g.type}")
+
+    def _same_type(self, a: T.Type, b: T.Type) -> bool:
+        a, b = T.unalias(a), T.unalias(b)
+        if a is b:
+            return True
+        if isinstance(a, T.StringType) and isinstance(b, T.StringType):
+            return a.wide == b.wide
+        if isinstance(a, T.ArrayType) and isinstance(b, T.ArrayType):
+            return a.dims == b.dims and self._same_type(a.element, b.element)
+        if isinstance(a, T.SubrangeType) or isinstance(b, T.SubrangeType):
+            return T.base_of(a) is T.base_of(b)
+        if isinstance(a, T.RefType) and isinstance(b, T.RefType):
+            return self._same_type(a.target, b.target)
+        return False
+
+    # ================================================================ constants
+    def const_value(self, e, scope: Optional[Scope]):
+        """Evaluate a constant expression (literals, CONSTANT variables, enum values), or None."""
+        if isinstance(e, A.Field):
+            return e.const if isinstance(e.sym, T.EnumType) else None
+        if isinstance(e, A.Literal):
+            return e.value
+        if isinstance(e, A.EnumLit):
+            et = self._resolve_named_type(e.type_name.lower(), e.span)
+            if isinstance(et, T.EnumType):
+                m = et.members.get(e.member.lower())
+                return m[1] if m else None
+            return None
+        if isinstance(e, A.Name):
+            key = e.name.lower()
+            sym = scope.vars.get(key) if scope is not None else None
+            if sym is None:
+                gs = self.p.global_names.get(key)
+                sym = gs[0] if gs else None
+            if sym is not None:
+                if sym.global_ref is not None:
+                    sym = sym.global_ref
+                if sym.constant and sym.init is not None and isinstance(sym.init, A.Expr):
+                    sym.used = True
+                    return self.const_value(sym.init, None)
+                return None
+            mems = self.p.enum_members.get(key)
+            if mems and len({m[2] for m in mems}) == 1:
+                return mems[0][2]
+            return self._raw_global_constant(key)
+        if isinstance(e, A.Unary):
+            v = self.const_value(e.operand, scope)
+            if v is None:
+                return None
+            if e.op == "-":
+                return -v
+            if e.op == "+":
+                return v
+            if e.op == "NOT" and isinstance(v, bool):
+                return not v
+            return None
+        if isinstance(e, A.Binary):
+            a, b = self.const_value(e.left, scope), self.const_value(e.right, scope)
+            if a is None or b is None or isinstance(a, str) or isinstance(b, str):
+                return None
+            try:
+                op = e.op
+                if op == "+":
+                    return a + b
+                if op == "-":
+                    return a - b
+                if op == "*":
+                    return a * b
+                if op == "/":
+                    if isinstance(a, int) and isinstance(b, int):
+                        q = abs(a) // abs(b)
+                        return q if (a >= 0) == (b >= 0) else -q
+                    return a / b
+                if op == "MOD":
+                    return 0 if b == 0 else a - b * int(a / b)
+                if op == "**":
+                    return float(a) ** b
+                if op == "AND":
+                    return a & b
+                if op == "OR":
+                    return a | b
+                if op == "XOR":
+                    return a ^ b
+            except (ZeroDivisionError, OverflowError):
+                return None
+            return None
+        return None
+
+    def _raw_global_constant(self, key: str):
+        """A VAR_GLOBAL CONSTANT not declared yet (types and POU interfaces are resolved first)."""
+        if key in self._raw_const_busy:
+            return None
+        blocks = list(self._global_blocks)
+        for cfg in getattr(self, "_configs", []):
+            blocks += [("", b) for b in cfg.var_blocks]
+            for r in cfg.resources:
+                blocks += [("", b) for b in r.var_blocks]
+        for _, b in blocks:
+            if "CONSTANT" not in b.qualifiers:
+                continue
+            for d in b.decls:
+                if any(n.lower() == key for n, _ in d.names) and isinstance(d.init, A.Expr):
+                    self._raw_const_busy.add(key)
+                    try:
+                        return self.const_value(d.init, None)
+                    finally:
+                        self._raw_const_busy.discard(key)
+        return None
+
+    # ================================================================ initializers
+    def check_initializer(self, init, t: T.Type, scope: Optional[Scope]) -> None:
+        bt = T.unalias(t)
+        if isinstance(init, A.ArrayInit):
+            if not isinstance(bt, T.ArrayType):
+                self.err("E013", init.span, f"an array initializer cannot initialize a {t}")
+                return
+            count = 0
+            for item in init.items:
+                if isinstance(item, A.RepeatInit):
+                    for sub in item.items:
+                        self.check_initializer(sub, bt.element, scope)
+                    count += item.count * max(1, len(item.items))
+                else:
+                    self.check_initializer(item, bt.element, scope)
+                    count += 1
+            if count > bt.size:
+                self.err("E022", init.span, f"{count} initial values for an array of {bt.size} elements")
+            return
+        if isinstance(init, A.StructInit):
+            if isinstance(bt, T.StructType):
+                fields, what = bt.members, "field"
+            elif isinstance(bt, T.POUType) and bt.pou_kind != "FUNCTION":
+                self._resolve_interface(bt)
+                fields, what = bt.vars, "variable"
+            else:
+                self.err("E013", init.span, f"a structure initializer cannot initialize a {t}")
+                return
+            for name, sp, val in init.fields:
+                m = fields.get(name.lower())
+                if m is None:
+                    self.err("E023", sp, f"'{t}' has no {what} '{name}'")
+                    continue
+                self.check_initializer(val, m.type, scope)
+            return
+        if isinstance(init, A.Expr):
+            if isinstance(bt, T.ArrayType) and isinstance(init, A.Literal):
+                # CODESYS-style: a single value initializes... no; IEC needs [..]
+                self.err("E013", init.span, f"an array needs an initializer in brackets, e.g. [{init.text}]")
+                return
+            st = self.expr(init, scope or Scope(None, {}), t)
+            for n in _names_in([init]):
+                if isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
+                    self.err("E029", n.span, f"an initial value must be a constant; '{n.name}' is a variable",
+                             "assign it in the code instead, or declare it CONSTANT")
+                    return
+            self.assignable(init, st, t, init.span)

@@ -1,0 +1,399 @@
+"""Expressions: typing of literals, names, operators, fields, indices."""
+from __future__ import annotations
+
+from typing import Optional
+
+from .. import ast as A
+from .. import types as T
+from ..library import FuncSig
+from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, Scope
+
+
+class ExpressionsMixin:
+    # ---------------------------------------------------------------- expressions
+    def expr(self, e: A.Expr, scope: Optional[Scope], expected: Optional[T.Type] = None, *,
+             lvalue: bool = False) -> Optional[T.Type]:
+        t = self._expr(e, scope or Scope(None, {}), expected, lvalue)
+        e.ty = t
+        return t
+
+    def _expr(self, e, scope: Scope, expected, lvalue):
+        if isinstance(e, A.Literal):
+            return self._literal(e, expected)
+        if isinstance(e, A.Name):
+            return self._name(e, scope, expected)
+        if isinstance(e, A.Binary):
+            return self._binary(e, scope, expected)
+        if isinstance(e, A.Unary):
+            return self._unary(e, scope, expected)
+        if isinstance(e, A.Call):
+            return self.call(e, scope, expected=expected)
+        if isinstance(e, A.Field):
+            return self._field(e, scope)
+        if isinstance(e, A.Index):
+            return self._index(e, scope)
+        if isinstance(e, A.Bit):
+            bt = self.expr(e.base, scope)
+            b = T.base_of(bt) if bt is not None else None
+            if b is None:
+                return T.BOOL
+            size = e.size
+            rt = {"X": T.BOOL, "B": T.BYTE, "W": T.WORD, "D": T.DWORD, "L": T.LWORD}[size]
+            width = 1 if size == "X" else rt.bits
+            if not b.is_intlike:
+                self.err("E023", e.span, f"bit access needs an integer or bit-string variable, not {bt}")
+                return rt
+            if (e.index + 1) * width > b.bits:
+                self.err("E022", e.span, f"{bt} has no {'bit' if size == 'X' else size} {e.index}")
+            return rt
+        if isinstance(e, A.Deref):
+            bt = self.expr(e.base, scope)
+            b = T.unalias(bt) if bt is not None else None
+            if not isinstance(b, T.RefType):
+                self.err("E023", e.span, f"'^' needs a reference, not {bt}")
+                return None
+            return b.target
+        if isinstance(e, A.EnumLit):
+            et = self._resolve_named_type(e.type_name.lower(), e.span)
+            et = T.unalias(et) if et is not None else None
+            if not isinstance(et, T.EnumType):
+                self.err("E012", e.span, f"'{e.type_name}' is not an enumeration type")
+                return None
+            m = et.members.get(e.member.lower())
+            if m is None:
+                self.err("E010", e.span, f"'{e.member}' is not a value of {e.type_name}")
+                return et
+            e.const = m[1]
+            return et
+        if isinstance(e, A.Direct):
+            m = _DIRECT.fullmatch(e.address)
+            if not m or m.group(3) == "*":
+                self.err("E004", e.span, f"malformed address '{e.address}'")
+                return T.BOOL
+            t = _DIRECT_TYPES[m.group(2)]
+            pyname = "_d_" + e.address[1:].replace(".", "_")
+            self.p.direct_vars[e.address if m.group(2) else e.address[:2] + "X" + e.address[2:]] = (pyname, t)
+            e.const = None
+            return t
+        raise AssertionError(e)
+
+    def _literal(self, e: A.Literal, expected):
+        k = e.kind
+        if e.type_name:
+            tn = e.type_name
+            if k in ("time", "date", "tod", "dt"):
+                name = {"T": "TIME", "TIME": "TIME", "LT": "LTIME", "LTIME": "LTIME", "D": "DATE",
+                        "DATE": "DATE", "LD": "LDATE", "LDATE": "LDATE", "TOD": "TOD", "TIME_OF_DAY": "TOD",
+                        "LTOD": "LTOD", "LTIME_OF_DAY": "LTOD", "DT": "DT", "DATE_AND_TIME": "DT", "LDT": "LDT",
+                        "LDATE_AND_TIME": "LDT"}[tn]
+                return T.ELEMENTARY[name]
+            t = T.ELEMENTARY.get(tn)
+            if t is None:
+                at = self._resolve_named_type(tn.lower(), e.span)
+                if at is not None and T.base_of(at).is_elementary:
+                    t = at
+            if t is None:
+                self.err("E012", e.span, f"unknown type '{tn}' in literal {e.text}")
+                return None
+            b = T.base_of(t)
+            if k == "int":
+                if b.is_bool:
+                    if e.value not in (0, 1):
+                        self.err("E021", e.span, f"{e.text} is not a BOOL value")
+                    e.value = bool(e.value)
+                elif b.is_real:
+                    e.value = float(e.value)
+                elif b.is_intlike:
+                    if not T.literal_fits(e.value, t):
+                        self.err("E021", e.span, f"{e.text} does not fit in {t}")
+                else:
+                    self.err("E013", e.span, f"{e.text}: an integer is not a {t}")
+            elif k == "real" and not b.is_real:
+                self.err("E013", e.span, f"{e.text}: a real number is not a {t}")
+            elif k == "bool" and not (b.is_bool or b.is_intlike):
+                self.err("E013", e.span, f"{e.text}: a BOOL is not a {t}")
+            elif k in ("string", "wstring") and not (b.is_string or b.kind == "char"):
+                self.err("E013", e.span, f"{e.text}: a string is not a {t}")
+            if k == "bool" and b.is_intlike:
+                e.value = int(e.value)
+            return t
+        if k == "int":
+            return T.LIT_INT
+        if k == "real":
+            return T.LIT_REAL
+        if k == "bool":
+            return T.BOOL
+        if k == "string":
+            if expected is not None and T.base_of(expected).kind == "char" and len(e.value) == 1:
+                return T.base_of(expected)
+            return T.StringType(max(1, len(e.value)), False)
+        if k == "wstring":
+            return T.StringType(max(1, len(e.value)), True)
+        return T.ELEMENTARY.get(k.upper(), T.TIME)
+
+    def _lookup(self, key: str, scope: Scope):
+        sym = scope.vars.get(key)
+        if sym is not None:
+            return sym
+        if scope.pou is not None and scope.pou.pou_kind == "FUNCTION" and key == scope.pou.name.lower():
+            return "RESULT"
+        if key in scope.steps:
+            return "STEP"
+        gs = self.p.global_names.get(key)
+        if gs:
+            return gs[0]
+        return None
+
+    def _name(self, e: A.Name, scope: Scope, expected):
+        key = e.name.lower()
+        sym = self._lookup(key, scope)
+        if sym == "RESULT":
+            pou = scope.pou
+            e.sym = pou
+            return pou.return_type
+        if sym == "STEP":
+            e.sym = STEP
+            e.const = scope.steps[key]
+            return STEP
+        if isinstance(sym, T.VarSym) and expected is not None and isinstance(T.base_of(expected), T.EnumType) \
+                and key in T.base_of(expected).members and not isinstance(T.base_of(sym.type), T.EnumType):
+            sym = None      # an enum value of the expected type wins over a same-named variable
+        if isinstance(sym, T.VarSym):
+            sym.used = True
+            e.sym = sym
+            if sym.constant and sym.const_value is not None:
+                e.const = sym.const_value
+            return sym.type
+        if key == "null":
+            e.sym = _NULL
+            return _NULL
+        mems = self.p.enum_members.get(key)
+        if mems:
+            pick = None
+            if expected is not None:
+                et = T.base_of(expected)
+                for m in mems:
+                    if m[0] is et:
+                        pick = m
+            if pick is None:
+                if len(mems) > 1:
+                    self.err("E010", e.span, f"'{e.name}' is a value of several enumerations",
+                             f"qualify it, e.g. {mems[0][0].name}#{e.name}")
+                pick = mems[0]
+            e.sym = pick[0]
+            e.const = pick[2]
+            return pick[0]
+        if key in self.p.pous or self._native(key) is not None:
+            self.err("E026", e.span, f"'{e.name}' is a POU, not a value")
+            return None
+        self.err("E010", e.span, f"undeclared identifier '{e.name}'", self._suggest(key, scope))
+        return None
+
+    def _suggest(self, key: str, scope: Scope) -> str:
+        import difflib
+        names = [s.name for s in scope.vars.values()] + [s[0].name for s in self.p.global_names.values()]
+        m = difflib.get_close_matches(key, [n.lower() for n in names], n=1, cutoff=0.75)
+        if m:
+            for n in names:
+                if n.lower() == m[0]:
+                    return f"did you mean '{n}'?"
+        return ""
+
+    def _native(self, key: str) -> Optional[FuncSig]:
+        for lib in self.libraries:
+            sig = lib.lookup(key)
+            if sig is not None:
+                return sig
+        return None
+
+    def _binary(self, e: A.Binary, scope: Scope, expected):
+        op = e.op
+        hint = expected if op not in _CMP and op not in ("MOD", "**") else None
+        lt = self.expr(e.left, scope, hint)
+        rt = self.expr(e.right, scope, lt if lt is not None and not isinstance(lt, T.LiteralType) else hint)
+        if isinstance(lt, T.LiteralType) and rt is not None and not isinstance(rt, T.LiteralType):
+            lt = self.expr(e.left, scope, rt)
+        if lt is None or rt is None:
+            return T.BOOL if op in _CMP else (lt or rt)
+        a, b = T.base_of(lt), T.base_of(rt)
+        if op in _LOGIC:
+            if a.is_bool and b.is_bool:
+                return T.BOOL
+            if op in ("AND_THEN", "OR_ELSE"):
+                return self._bad_operands(e, lt, rt)
+            if (a.is_intlike or a is T.LIT_INT) and (b.is_intlike or b is T.LIT_INT):
+                c = T.common_type(a, b)
+                if c is None:
+                    return self._bad_operands(e, lt, rt)
+                return c if not isinstance(c, T.LiteralType) else T.default_type_for_literal(c)
+            return self._bad_operands(e, lt, rt)
+        if op in _CMP:
+            if isinstance(a, T.EnumType) or isinstance(b, T.EnumType):
+                if a is b:
+                    return T.BOOL
+                return self._bad_operands(e, lt, rt)
+            if isinstance(a, T.StringType) and isinstance(b, T.StringType):
+                return T.BOOL
+            if a.kind == "char" and isinstance(b, (T.StringType,)) or b.kind == "char" and isinstance(a, T.StringType):
+                return T.BOOL
+            if isinstance(a, T.RefType) and (isinstance(b, T.RefType) or b is _NULL) or a is _NULL:
+                return T.BOOL
+            c = T.common_type(a, b)
+            if c is None or isinstance(c, (T.ArrayType, T.StructType, T.POUType)):
+                return self._bad_operands(e, lt, rt)
+            return T.BOOL
+        # arithmetic
+        if op in ("+", "-", "*", "/"):
+            tt = self._time_arith(op, a, b)
+            if tt is not None:
+                return tt
+            if (a.is_num or isinstance(a, T.LiteralType)) and (b.is_num or isinstance(b, T.LiteralType)):
+                c = T.common_type(a, b)
+                if c is None:
+                    return self._bad_operands(e, lt, rt)
+                return c
+            if a.is_bit and b.is_bit or a.is_bit and b is T.LIT_INT or b.is_bit and a is T.LIT_INT:
+                # IEC has no arithmetic on bit strings, but every dialect allows it
+                return T.common_type(a, b)
+            return self._bad_operands(e, lt, rt)
+        if op == "MOD":
+            if (a.is_intlike or a is T.LIT_INT) and (b.is_intlike or b is T.LIT_INT):
+                c = T.common_type(a, b)
+                if c is not None:
+                    return c
+            return self._bad_operands(e, lt, rt)
+        if op == "**":
+            if (a.is_num or isinstance(a, T.LiteralType)) and (b.is_num or isinstance(b, T.LiteralType)):
+                if a.is_real:
+                    return a
+                if a is T.LIT_REAL or a is T.LIT_INT:
+                    return T.LIT_REAL if (b is T.LIT_INT or b is T.LIT_REAL) else T.LREAL
+                return T.REAL if a.bits <= 16 else T.LREAL
+            return self._bad_operands(e, lt, rt)
+        raise AssertionError(op)
+
+    def _time_arith(self, op, a, b):
+        ka, kb = a.kind, b.kind
+        num_b = b.is_num or isinstance(b, T.LiteralType)
+        num_a = a.is_num or isinstance(a, T.LiteralType)
+        if ka == "time" and kb == "time" and op in ("+", "-"):
+            return a if a.long or not b.long else b
+        if ka == "time" and num_b and op in ("*", "/"):
+            return a
+        if kb == "time" and num_a and op == "*":
+            return b
+        if ka in ("dt", "tod") and kb == "time" and op in ("+", "-"):
+            return a
+        if ka == "time" and kb in ("dt", "tod") and op == "+":
+            return b
+        if ka == kb and ka in ("dt", "tod", "date") and op == "-":
+            return T.LTIME if a.long else T.TIME
+        return None
+
+    def _bad_operands(self, e: A.Binary, lt, rt):
+        self.err("E014", e.span, f"operator {e.op} cannot combine {lt} and {rt}",
+                 self._conv_hint(lt, rt))
+        return T.BOOL if e.op in _CMP else lt
+
+    def _conv_hint(self, lt, rt) -> str:
+        a, b = T.base_of(lt), T.base_of(rt)
+        if isinstance(a, T.ElemType) and isinstance(b, T.ElemType) and a.is_elementary and b.is_elementary:
+            return f"convert one side, e.g. {b.name}_TO_{a.name}(...)"
+        return ""
+
+    def _unary(self, e: A.Unary, scope: Scope, expected):
+        t = self.expr(e.operand, scope, expected)
+        if t is None:
+            return None
+        b = T.base_of(t)
+        if e.op == "NOT":
+            if b.is_bool or b.is_intlike:
+                return t
+            if b is T.LIT_INT:
+                return T.default_type_for_literal(b)
+        else:
+            if b.is_num or isinstance(b, T.LiteralType) or b.is_time:
+                if e.op == "-" and b.is_int and not b.signed:
+                    self.warn("W005", e.span, f"negating an unsigned {t} wraps around")
+                return t
+        self.err("E014", e.span, f"operator {e.op} cannot be applied to {t}")
+        return t
+
+    def _field(self, e: A.Field, scope: Scope):
+        if isinstance(e.base, A.Name) and self._lookup(e.base.name.lower(), scope) is None:
+            et = self._resolve_named_type(e.base.name.lower(), e.base.span)
+            if isinstance(T.unalias(et) if et is not None else None, T.EnumType):
+                # Color.Red: CODESYS's qualified enumeration value
+                et = T.unalias(et)
+                m = et.members.get(e.name.lower())
+                if m is None:
+                    self.err("E010", e.name_span, f"'{e.name}' is not a value of {et.name}")
+                    return et
+                e.const = m[1]
+                e.sym = et
+                return et
+        bt = self.expr(e.base, scope)
+        if bt is None:
+            return None
+        b = T.unalias(bt)
+        key = e.name.lower()
+        if b is STEP:
+            up = e.name.upper()
+            if up == "X":
+                return T.BOOL
+            if up == "T":
+                return T.TIME
+            self.err("E023", e.name_span, f"a step has only the flags .X and .T, not .{e.name}")
+            return None
+        if isinstance(b, T.StructType):
+            m = b.members.get(key)
+            if m is None:
+                self.err("E023", e.name_span, f"'{bt}' has no field '{e.name}'")
+                return None
+            e.sym = m
+            return m.type
+        if isinstance(b, T.POUType) and b.pou_kind != "FUNCTION":
+            self._resolve_interface(b)
+            v = b.vars.get(key)
+            if v is None:
+                if key in b.actions:
+                    self.err("E026", e.name_span, f"'{e.name}' is an action; call it: {e.name}()")
+                    return None
+                self.err("E023", e.name_span, f"{b.name} has no variable '{e.name}'")
+                return None
+            if v.section in ("VAR", "VAR_TEMP") and b.pou_kind == "FUNCTION_BLOCK" and not b.library and \
+                    scope.pou is not b:
+                # IEC hides an FB's internal variables; most dialects let you read them
+                pass
+            v.used = True
+            e.sym = v
+            return v.type
+        if isinstance(b, T.ElemType) and b.is_intlike and e.name.isdigit():
+            return T.BOOL
+        self.err("E023", e.span, f"'{bt}' is not a structure or function block instance, it has no field '{e.name}'")
+        return None
+
+    def _index(self, e: A.Index, scope: Scope):
+        bt = self.expr(e.base, scope)
+        for i in e.indices:
+            it = self.expr(i, scope, T.DINT)
+            if it is not None and not (T.base_of(it).is_intlike or it is T.LIT_INT or isinstance(T.base_of(it), T.EnumType)):
+                self.err("E013", i.span, f"an array index must be an integer, not {it}")
+        if bt is None:
+            return None
+        b = T.unalias(bt)
+        if isinstance(b, T.StringType):
+            self.err("E023", e.span, "strings cannot be indexed; use MID()")
+            return None
+        if not isinstance(b, T.ArrayType):
+            self.err("E023", e.span, f"'{bt}' is not an array")
+            return None
+        if len(e.indices) != len(b.dims):
+            # ARRAY OF ARRAY written a[i, j] is not allowed; a[i][j] is
+            self.err("E023", e.span, f"this array has {len(b.dims)} dimension(s), not {len(e.indices)}")
+            return b.element
+        for i, (lo, hi) in zip(e.indices, b.dims):
+            c = self.const_value(i, scope)
+            if isinstance(c, int) and hi >= lo and not (lo <= c <= hi):
+                self.err("E022", i.span, f"index {c} is outside the bounds {lo}..{hi}")
+        return b.element

@@ -1,0 +1,303 @@
+"""Bodies: statements, SFC networks, assignability and lvalues."""
+from __future__ import annotations
+
+from typing import Optional
+
+from ...source import Span
+from .. import ast as A
+from .. import types as T
+from ..model import SfcModel, StepModel, TransitionModel
+from .common import _NULL, STEP, Scope
+
+
+class StatementsMixin:
+    # ================================================================ bodies
+    def _check_body(self, pou: T.POUType) -> None:
+        d = pou.decl
+        scope = Scope(pou, pou.vars, library=pou.library)
+        if d.steps or d.transitions:
+            self._check_sfc(pou, scope)
+        for act in d.actions:
+            scope.actions[act.name.lower()] = act
+        self.stmts(d.body, scope)
+        for act in d.actions:
+            self.stmts(act.body, scope)
+        if pou.pou_kind == "FUNCTION" and pou.return_type is None and self._assigns_name(d.body, pou.name):
+            self.err("E013", d.span, f"FUNCTION {pou.name} has no return type but assigns a result")
+
+    def _assigns_name(self, body, name) -> bool:
+        key = name.lower()
+        for s in body:
+            if isinstance(s, A.Assign) and isinstance(s.target, A.Name) and s.target.name.lower() == key:
+                return True
+        return False
+
+    # ---------------------------------------------------------------- SFC
+    def _check_sfc(self, pou: T.POUType, scope: Scope) -> None:
+        d = pou.decl
+        steps = []
+        index = {}
+        for s in d.steps:
+            key = s.name.lower()
+            if key in index:
+                self.err("E011", s.span, f"step '{s.name}' is declared twice")
+                continue
+            if key in pou.vars:
+                self.err("E011", s.span, f"step '{s.name}' has the name of a variable")
+            index[key] = len(steps)
+            steps.append(StepModel(s.name, len(steps), s.initial, [], s.span))
+        initial = [s for s in steps if s.initial]
+        if len(initial) != 1:
+            self.err("E030", d.span, f"an SFC needs exactly one INITIAL_STEP (found {len(initial)})")
+        scope.steps = index
+        actions: dict = {}
+        for act in d.actions:
+            actions[act.name.lower()] = act
+        action_names: list = []
+        action_index: dict = {}
+        for s, sm in zip(d.steps, steps):
+            for aa in s.actions:
+                key = aa.action.lower()
+                if key not in actions:
+                    sym = pou.vars.get(key)
+                    if sym is None or not T.base_of(sym.type).is_bool:
+                        self.err("E030", aa.span, f"'{aa.action}' is neither an ACTION of {pou.name} nor a BOOL variable")
+                        continue
+                    sym.used = sym.written = True
+                q = aa.qualifier
+                if q not in ("N", "R", "S", "P", "L", "D", "SD", "DS", "SL", "P0", "P1"):
+                    self.err("E030", aa.span, f"unknown action qualifier '{q}'")
+                    continue
+                if q in ("L", "D", "SD", "DS", "SL"):
+                    if aa.time is None:
+                        self.err("E030", aa.span, f"qualifier {q} needs a time, e.g. {aa.action}({q}, T#1s)")
+                        continue
+                    tt = self.expr(aa.time, scope, T.TIME)
+                    if tt is not None and not T.base_of(tt).is_time:
+                        self.err("E013", aa.time.span, f"the time of qualifier {q} must be a TIME, not {tt}")
+                if key not in action_index:
+                    action_index[key] = len(action_names)
+                    action_names.append(key)
+                sm.actions.append((key, q, aa.time))
+        transitions = []
+        for i, t in enumerate(d.transitions):
+            srcs, dsts = [], []
+            for names, out in ((t.sources, srcs), (t.targets, dsts)):
+                for n, sp in names:
+                    if n.lower() not in index:
+                        self.err("E030", sp, f"unknown step '{n}'")
+                    else:
+                        out.append(index[n.lower()])
+            prio = 0
+            if t.priority is not None:
+                c = self.const_value(t.priority, scope)
+                prio = c if isinstance(c, int) else 0
+            if t.cond is not None:
+                ct = self.expr(t.cond, scope, T.BOOL)
+                if not T.base_of(ct).is_bool:
+                    self.err("E015", t.cond.span, f"a transition condition must be BOOL, not {ct}")
+                cond = t.cond
+            else:
+                cond = None
+                self.stmts(t.body or [], scope)
+            transitions.append(TransitionModel(i, srcs, dsts, cond, prio, t.span))
+        self.p.sfc[pou.name.lower()] = SfcModel(steps, transitions, action_names, action_index)
+
+    # ---------------------------------------------------------------- statements
+    def stmts(self, body: list, scope: Scope) -> None:
+        for s in body:
+            try:
+                self.stmt(s, scope)
+            except Exception as exc:
+                if not hasattr(exc, "st_span"):
+                    exc.st_span = s.span      # where the internal error happened, for the report
+                raise
+
+    def stmt(self, s: A.Stmt, scope: Scope) -> None:
+        if isinstance(s, A.Assign):
+            tt = self.lvalue(s.target, scope)
+            if s.kind in ("S=", "R="):
+                vt = self.expr(s.value, scope, T.BOOL)
+                if not T.base_of(tt).is_bool or not T.base_of(vt).is_bool:
+                    self.err("E013", s.span, f"'{s.kind}' needs BOOL operands")
+                return
+            vt = self.expr(s.value, scope, tt)
+            if tt is not None:
+                self.assignable(s.value, vt, tt, s.value.span)
+        elif isinstance(s, A.CallStmt):
+            self.call(s.call, scope, statement=True)
+        elif isinstance(s, A.If):
+            for cond, body in s.branches:
+                self.condition(cond, scope, "IF")
+                self.stmts(body, scope)
+            if s.orelse:
+                self.stmts(s.orelse, scope)
+        elif isinstance(s, A.Case):
+            self._case(s, scope)
+        elif isinstance(s, A.For):
+            vt = self.lvalue(s.var, scope)
+            if vt is not None and not T.base_of(vt).is_intlike:
+                self.err("E025", s.var.span, f"a FOR variable must be an integer, not {vt}")
+            for e in (s.start, s.end, s.step):
+                if e is not None:
+                    et = self.expr(e, scope, vt)
+                    if vt is not None:
+                        self.assignable(e, et, vt, e.span)
+            if isinstance(s.step, A.Expr):
+                c = self.const_value(s.step, scope)
+                if c == 0:
+                    self.err("E029", s.step.span, "a FOR step of 0 never ends")
+            scope.loop_depth += 1
+            self.stmts(s.body, scope)
+            scope.loop_depth -= 1
+        elif isinstance(s, A.While):
+            self.condition(s.cond, scope, "WHILE")
+            scope.loop_depth += 1
+            self.stmts(s.body, scope)
+            scope.loop_depth -= 1
+        elif isinstance(s, A.Repeat):
+            scope.loop_depth += 1
+            self.stmts(s.body, scope)
+            scope.loop_depth -= 1
+            self.condition(s.cond, scope, "UNTIL")
+        elif isinstance(s, (A.Exit, A.Continue)):
+            if scope.loop_depth == 0:
+                self.err("E024", s.span, f"{'EXIT' if isinstance(s, A.Exit) else 'CONTINUE'} outside a loop")
+        elif isinstance(s, (A.Return, A.Empty)):
+            pass
+        else:  # pragma: no cover
+            raise AssertionError(s)
+
+    def condition(self, e: A.Expr, scope: Scope, what: str) -> None:
+        t = self.expr(e, scope, T.BOOL)
+        if t is not None and not T.base_of(t).is_bool:
+            self.err("E015", e.span, f"the {what} condition must be BOOL, not {t}",
+                     "compare explicitly, e.g. x <> 0" if T.base_of(t).is_num else "")
+
+    def _case(self, s: A.Case, scope: Scope) -> None:
+        st = self.expr(s.selector, scope)
+        bst = T.base_of(st) if st is not None else None
+        if bst is not None and not (bst.is_intlike or isinstance(bst, T.EnumType)):
+            self.err("E019", s.selector.span, f"a CASE selector must be an integer or enumeration, not {st}")
+            bst = None
+        seen: list = []
+        for br in s.branches:
+            for lo, hi in br.labels:
+                vals = []
+                for e in (lo, hi):
+                    if e is None:
+                        continue
+                    et = self.expr(e, scope, st)
+                    if bst is not None and et is not None:
+                        if isinstance(bst, T.EnumType):
+                            if T.base_of(et) is not bst:
+                                self.err("E019", e.span, f"CASE label of type {et} for a selector of type {st}")
+                        elif not (T.base_of(et).is_intlike or et is T.LIT_INT):
+                            self.err("E019", e.span, f"CASE label of type {et} for a selector of type {st}")
+                    v = self.const_value(e, scope)
+                    if v is None:
+                        self.err("E029", e.span, "a CASE label must be a constant")
+                    vals.append(v)
+                if not all(isinstance(v, int) for v in vals):
+                    continue        # a wrong label type was reported above
+                if len(vals) == 2:
+                    a, b = vals
+                    for (c, d, sp) in seen:
+                        if a <= d and c <= b:
+                            self.err("E019", lo.span, f"CASE label {a}..{b} overlaps an earlier label")
+                            break
+                    seen.append((a, b, lo.span))
+                elif len(vals) == 1:
+                    a = vals[0]
+                    for (c, d, sp) in seen:
+                        if c <= a <= d:
+                            self.err("E019", lo.span, f"duplicate CASE label {a}")
+                            break
+                    seen.append((a, a, lo.span))
+            self.stmts(br.body, scope)
+        if s.orelse:
+            self.stmts(s.orelse, scope)
+
+    # ---------------------------------------------------------------- assignability
+    def assignable(self, e, src: Optional[T.Type], dst: Optional[T.Type], span: Span, what: str = "") -> bool:
+        if src is None or dst is None:
+            return True
+        s, d = T.base_of(src), T.base_of(dst)
+        if s is d:
+            if isinstance(T.unalias(dst), T.SubrangeType) and isinstance(e, A.Expr):
+                c = self.const_value(e, None) if isinstance(e, (A.Literal, A.Unary)) else None
+                sub = T.unalias(dst)
+                if isinstance(c, int) and not (sub.lo <= c <= sub.hi):
+                    self.err("E021", span, f"{c} is outside the range {sub.lo}..{sub.hi} of {dst}")
+                    return False
+            return True
+        what = what or "assign"
+        if s is T.LIT_INT:
+            if d.is_intlike or isinstance(T.unalias(dst), T.SubrangeType):
+                v = self.const_value(e, None) if isinstance(e, A.Expr) else None
+                if isinstance(v, int) and not T.literal_fits(v, dst):
+                    self.err("E021", span, f"{v} does not fit in {dst} ({T.base_of(dst).lo}..{T.base_of(dst).hi})")
+                    return False
+                return True
+            if d.is_real:
+                return True
+        if s is T.LIT_REAL and d.is_real:
+            return True
+        if isinstance(s, T.StringType) and isinstance(d, T.StringType):
+            if s.wide != d.wide:
+                self.err("E013", span, f"cannot {what} {src} to {dst}", "use STRING_TO_WSTRING / WSTRING_TO_STRING")
+                return False
+            if isinstance(e, A.Literal) and isinstance(e.value, str) and len(e.value) > d.length:
+                self.warn("W003", span, f"the string ({len(e.value)} characters) is truncated to {d.length}")
+            return True
+        if isinstance(s, T.ElemType) and s.kind == "char" and isinstance(d, T.StringType):
+            return True
+        if isinstance(d, T.ElemType) and d.kind == "char" and isinstance(e, A.Literal) and isinstance(e.value, str):
+            if len(e.value) != 1:
+                self.err("E013", span, f"a {d} literal holds exactly one character")
+                return False
+            return True
+        if T.widens_to(s, d):
+            return True
+        if isinstance(s, T.ArrayType) and isinstance(d, T.ArrayType):
+            if self._same_type(s, d) or (d.dims and d.dims[0] == (0, -1)):
+                return True
+        if isinstance(s, T.RefType) and isinstance(d, T.RefType):
+            if self._same_type(s.target, d.target) or s.target is None:
+                return True
+        if s is _NULL and isinstance(d, T.RefType):
+            return True
+        if isinstance(s, T.ElemType) and isinstance(d, T.ElemType) and (
+                s.kind in ("int", "real", "bit") and d.kind in ("int", "real", "bit")
+                or s.kind == d.kind and s.kind in ("time", "date", "tod", "dt") and s.long and not d.long):
+            conv = f"{s.name}_TO_{d.name}"
+            self.err("E027", span, f"implicit conversion from {src} to {dst} may lose data",
+                     f"convert explicitly with {conv}(...)")
+            return False
+        self.err("E013", span, f"type mismatch: cannot {what} {src} to {dst}")
+        return False
+
+    # ---------------------------------------------------------------- lvalues
+    def lvalue(self, e: A.Expr, scope: Scope) -> Optional[T.Type]:
+        t = self.expr(e, scope, lvalue=True)
+        root = e
+        while isinstance(root, (A.Field, A.Index, A.Bit)):
+            root = root.base
+        if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym) or isinstance(root, A.Name) \
+                and isinstance(root.sym, T.VarSym):
+            sym = e.sym if isinstance(e, A.Name) else root.sym
+            sym.written = True
+            g = sym.global_ref or sym
+            if g.constant or sym.constant:
+                self.err("E018", e.span, f"'{sym.name}' is a CONSTANT")
+                return t
+            if sym.section == "VAR_INPUT" and scope.pou is not None and sym.owner is scope.pou \
+                    and not isinstance(T.unalias(sym.type), (T.POUType,)) and isinstance(e, A.Name):
+                self.err("E018", e.span, f"'{sym.name}' is an input of {scope.pou.name} and cannot be written here",
+                         "copy it into a local variable first")
+                return t
+        elif isinstance(e, (A.Literal, A.Call, A.Binary, A.Unary, A.EnumLit)):
+            self.err("E013", e.span, "this expression cannot be assigned to")
+        elif isinstance(e, A.Name) and e.sym is STEP:
+            self.err("E013", e.span, "a step cannot be assigned to")
+        return t
