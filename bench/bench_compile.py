@@ -70,7 +70,7 @@ t = time.perf_counter()
 mods = ModuleGen(project, sink).generate()
 T["codegen (Python ast)"] = time.perf_counter() - t
 t = time.perf_counter()
-codes = [compile(m, p, "exec") for p, m in mods.items()]
+codes = [compile(m, p, "exec") for p, m in mods]
 T["Python compile()"] = time.perf_counter() - t
 for k, v in T.items():
     print(k + "\\t" + repr(v))

@@ -242,3 +242,31 @@ def test_program_connections_and_var_config():
     assert (plc["%QX0.2"], plc["g_level"], plc["inst.level"], plc["inst.speed"]) == (True, 142, 142, 100)
     plc["inst.alarm"] = True
     assert plc["%QX1.7"] is True
+
+
+def test_globals_of_struct_and_fb_types():
+    src = """
+TYPE S : STRUCT a : INT := 7; END_STRUCT; END_TYPE
+FUNCTION_BLOCK Cnt
+VAR_OUTPUT n : INT; END_VAR
+n := n + 1;
+END_FUNCTION_BLOCK
+VAR_GLOBAL gs : S; gc : Cnt; END_VAR
+PROGRAM main
+VAR_EXTERNAL gs : S; gc : Cnt; END_VAR
+VAR total : INT; END_VAR
+gc();
+total := gs.a + gc.n;
+END_PROGRAM
+"""
+    plc = PLC.from_source(src, use_cache=False)
+    plc.scan(3)
+    assert (plc["main.total"], plc["gs.a"], plc["gc.n"]) == (10, 7, 3)
+
+
+def test_conversions_iec_does_not_define_are_unknown_functions():
+    from st.api import compile_text
+    from st.diagnostics import CompileError
+    with pytest.raises(CompileError) as info:
+        compile_text("PROGRAM p\nVAR r : REAL; t : TOD; END_VAR\nt := REAL_TO_TOD(r);\nEND_PROGRAM\n", use_cache=False)
+    assert [(d.code, d.span.line) for d in info.value.errors] == [("E010", 3)]

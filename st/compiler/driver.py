@@ -164,10 +164,10 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
             gen = ModuleGen(project, sink)
             py_modules = gen.generate()
             if not sink.has_errors:
-                for path, mod in py_modules.items():
+                for path, mod in py_modules:
                     if emit_python:
                         import ast as pyast
-                        pysrc[path] = pyast.unparse(mod)
+                        pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + pyast.unparse(mod)
                     modules.append((path, compile(mod, path, "exec")))
     except RecursionError as exc:
         first = sources[0].path if sources else "<input>"

@@ -300,7 +300,11 @@ class PLC:
         out = {}
         for lname, (name, obj, pou) in self.instances.items():
             for sym in pou.vars.values():
-                if sym.section in ("VAR_EXTERNAL", "VAR_TEMP"):
+                if sym.section == "VAR_TEMP":
+                    continue
+                if sym.section == "VAR_EXTERNAL":
+                    if sym.global_ref is not None:
+                        out[f"{name}.{sym.name}"] = to_json(self.ns[sym.global_ref.pyname], sym.global_ref.type)
                     continue
                 out[f"{name}.{sym.name}"] = to_json(getattr(obj, sym.pyname), sym.type)
         return out

@@ -322,7 +322,7 @@ def _conversion(name: str, time_unit: str):
     if m and (m.group(1) is None or m.group(1) in ("REAL", "LREAL")) and m.group(2) in T.ELEMENTARY:
         dst = T.ELEMENTARY[m.group(2)]
         if dst.is_int:
-            return _trunc_sig(up, dst)
+            return _trunc_sig(up, dst.name)
     for i in [k.start() for k in re.finditer("_TO_", up)] + ([-1] if up.startswith("TO_") else []):
         if i == -1:
             left, right = "", up[3:]
@@ -343,6 +343,11 @@ def _conversion(name: str, time_unit: str):
         src = T.ELEMENTARY[left] if left else None
         if dst_bcd and src is not None and not src.is_intlike:
             continue
+        if src is not None:
+            try:        # only pairs IEC defines exist (REAL_TO_TOD does not)
+                convert(py.Name("x", py.Load()), src, dst, src_bcd, dst_bcd, time_unit)
+            except TypeError:
+                return None
         return _conversion_sig(up, src, dst, src_bcd, dst_bcd, time_unit)
     return None
 

@@ -483,7 +483,10 @@ class ExprGen:
                 v = self.coerce(v, a.value, want)
             args.append(v)
         if sig.emit is not None:
-            node = sig.emit(self, args, tgt.arg_types, e.ty)
+            try:
+                node = sig.emit(self, args, tgt.arg_types, e.ty)
+            except TypeError as exc:       # e.g. TO_TOD of a REAL: no such conversion
+                raise Unsupported(e.span, f"{sig.name}: {exc}") from None
         else:
             extra = sig.extra(tgt.arg_types, e.ty) if sig.extra else ()
             node = _call(sig.helper, *args, *[_const(x) for x in extra])

@@ -20,8 +20,8 @@ class ModuleGen:
         self.tmp = 0
 
     # ------------------------------------------------------------------ modules
-    def generate(self) -> dict[str, py.Module]:
-        """Returns {st file path: Python module AST}."""
+    def generate(self) -> list:
+        """Returns [(st file path, Python module AST)] in execution order."""
         by_file: dict[str, list] = {}
 
         def add(path, node):
@@ -57,22 +57,23 @@ class ModuleGen:
             init_stmts.append(_set_lines(py.Assign([_name(g.pyname, py.Store())], val), g.span.line if g.span else 1))
         for addr, (pyname, t) in self.p.direct_vars.items():
             init_stmts.append(_set_lines(py.Assign([_name(pyname, py.Store())], _const(default_value(t))), 1))
-        if init_stmts:
-            # globals go first so that POU code executed later finds them
-            path = next(iter(self.p.globals.values())).span.file if self.p.globals else "<globals>"
-            by_file.setdefault(path, [])
-            by_file[path] = init_stmts + by_file[path]
         for cfg in self.p.configs:
             for im in cfg.instances:
                 if im.args:
                     path = im.span.file if im.span else "<config>"
                     by_file.setdefault(path, []).extend(self.connections(im))
-        modules = {}
-        for path, body in by_file.items():
+        # globals are initialised last, once every struct and FB class they may instantiate exists
+        if init_stmts:
+            path = next(iter(self.p.globals.values())).span.file if self.p.globals else "<globals>"
+            by_file_list = list(by_file.items()) + [(path, init_stmts)]
+        else:
+            by_file_list = list(by_file.items())
+        modules = []
+        for path, body in by_file_list:
             m = py.Module(body=body, type_ignores=[])
             for node in body:
                 _set_lines(node, getattr(node, "lineno", None) or 1)
-            modules[path] = m
+            modules.append((path, m))
         return modules
 
     def connections(self, im) -> list:
