@@ -101,8 +101,8 @@ def run(files, scans, duration, cycle, virtual, dump_json, time_unit, f_trig_fir
     result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
     try:
         plc = PLC(result, cycle)
-    except ValueError as e:
-        click.echo(f"error: {e}", err=True)
+    except (ValueError, MemoryError) as e:
+        click.echo(f"error: cannot start the PLC: {e or type(e).__name__}", err=True)
         sys.exit(2)
     if not plc.instances:
         click.echo("error: nothing to run: no PROGRAM and no CONFIGURATION", err=True)

@@ -33,7 +33,9 @@ EXPLANATIONS = {
     "E031": "An output (=>) or VAR_IN_OUT argument must be a variable.",
     "E032": "A POU calls itself, directly or through others: IEC 61131-3 does not allow recursion.",
     "E040": "A construct the code generator does not support yet.",
-    "E041": "A statement is nested too deeply to compile (e.g. an expression of tens of thousands of terms).",
+    "E041": "Code nested too deeply to compile: an expression of tens of thousands of terms, or more than "
+            "about 20 nested loops.",
+    "E042": "An array is too large (more than 50,000,000 elements).",
     "E099": "An internal compiler error (a bug in st): please report it with the source file.",
     "W001": "A pragma { ... } is ignored.",
     "W002": "A variable is declared but never used.",

@@ -181,3 +181,11 @@ def test_configuration_errors():
            " VAR_CONFIG\n  a.x : INT := 1;\n  c.x : INT := 2;\n END_VAR\nEND_CONFIGURATION\n")
     e = diags(src)
     assert [(c, l) for c, l, _ in codes(e)] == [("E013", 7), ("E028", 8), ("E028", 9), ("E010", 12), ("E010", 13)]
+
+
+def test_limits_give_diagnostics_not_crashes():
+    big = diags("PROGRAM p\nVAR s : ARRAY[1..99999999999] OF BOOL; END_VAR\ns[1] := TRUE;\nEND_PROGRAM\n")
+    assert codes(big) == [("E042", 2, 9)]
+    loops = "".join("FOR i := 1 TO 1 DO\n" for _ in range(25)) + "x := x + 1;\n" + "END_FOR;\n" * 25
+    deep = diags("PROGRAM p\nVAR x : INT; i : INT; END_VAR\n" + loops + "END_PROGRAM\n")
+    assert [d.code for d in deep.errors] == ["E041"]

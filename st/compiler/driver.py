@@ -173,6 +173,9 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
         first = sources[0].path if sources else "<input>"
         sink.error("E041", getattr(exc, "st_span", None) or Span(first, 1, 1),
                    "this statement is nested too deeply to compile", "split the expression into several assignments")
+    except SyntaxError as exc:       # Python's own limits, e.g. more than 20 nested loops
+        sink.error("E041", Span(exc.filename or (sources[0].path if sources else "<input>"), exc.lineno or 1, 1),
+                   f"this code is nested too deeply to compile ({exc.msg})", "move inner loops into a FUNCTION")
     except Exception as exc:  # a compiler bug must still not show the user a traceback
         first = sources[0].path if sources else "<input>"
         sink.error("E099", getattr(exc, "st_span", None) or Span(first, 1, 1), f"internal compiler error: {type(exc).__name__}: {exc}",

@@ -10,6 +10,9 @@ from ..names import mangle
 from .common import _DIRECT, _DIRECT_TYPES, Scope, _names_in
 
 
+MAX_ARRAY_ELEMENTS = 50_000_000
+
+
 class DeclarationsMixin:
     # ================================================================ collection
     def _collect(self, u: A.Unit) -> None:
@@ -183,7 +186,12 @@ class DeclarationsMixin:
                     hi = lo
                 dims.append((lo, hi))
             elem = self.resolve_type(spec.element, scope)
-            return T.ArrayType(dims, elem)
+            at = T.ArrayType(dims, elem)
+            if at.size > MAX_ARRAY_ELEMENTS:
+                self.err("E042", spec.span, f"an array of {at.size:,} elements is too large "
+                         f"(at most {MAX_ARRAY_ELEMENTS:,})")
+                return T.ArrayType([(0, 0)], elem)
+            return at
         if isinstance(spec, A.RefType):
             return T.RefType(self.resolve_type(spec.target, scope), spec.kind)
         if isinstance(spec, A.SubrangeType):
