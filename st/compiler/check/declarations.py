@@ -190,7 +190,6 @@ class DeclarationsMixin:
             if at.size > MAX_ARRAY_ELEMENTS:
                 self.err("E042", spec.span, f"an array of {at.size:,} elements is too large "
                          f"(at most {MAX_ARRAY_ELEMENTS:,})")
-                return T.ArrayType([(0, 0)], elem)
             return at
         if isinstance(spec, A.RefType):
             return T.RefType(self.resolve_type(spec.target, scope), spec.kind)
