@@ -17,13 +17,15 @@ def libraries(f_trig_first_scan: bool = False, time_unit: str = "ms") -> list:
 
 def compile_text(text: str, name: str = "<source>.st", *, f_trig_first_scan: bool = False,
                  time_unit: str = "ms", use_cache: bool = True, emit_python: bool = False,
-                 raise_on_error: bool = True) -> CompiledProgram:
+                 raise_on_error: bool = True, coverage: bool = False) -> CompiledProgram:
     src = SourceFile(name, text.replace("\r\n", "\n"))
     return compile_sources([src], libraries(f_trig_first_scan, time_unit), use_cache=use_cache,
-                           emit_python=emit_python, raise_on_error=raise_on_error)
+                           emit_python=emit_python, raise_on_error=raise_on_error, coverage=coverage)
 
 
 def compile_paths(paths: list, *, f_trig_first_scan: bool = False, time_unit: str = "ms",
-                  use_cache: bool = True, emit_python: bool = False, raise_on_error: bool = True) -> CompiledProgram:
+                  use_cache: bool = True, emit_python: bool = False, raise_on_error: bool = True,
+                  coverage: bool = False) -> CompiledProgram:
     return compile_sources(load_files([str(p) for p in paths]), libraries(f_trig_first_scan, time_unit),
-                           use_cache=use_cache, emit_python=emit_python, raise_on_error=raise_on_error)
+                           use_cache=use_cache, emit_python=emit_python, raise_on_error=raise_on_error,
+                           coverage=coverage)

@@ -32,6 +32,8 @@ EXPLANATIONS = {
     "E030": "An SFC error: unknown step or action, missing INITIAL_STEP, a bad qualifier.",
     "E031": "An output (=>) or VAR_IN_OUT argument must be a variable.",
     "E032": "A POU calls itself, directly or through others: IEC 61131-3 does not allow recursion.",
+    "E033": "A unit-test statement (ASSERT_*, ADVANCE_TIME, MOCK, MOCK_FUNCTION, MOCK_VERIFY_*) outside a "
+            "TEST, SETUP or TEARDOWN block. Move it into a test, or rename the POU or variable it was meant to be.",
     "E040": "A construct the code generator does not support yet.",
     "E041": "Code nested too deeply to compile: an expression of tens of thousands of terms, or more than "
             "about 20 nested loops.",

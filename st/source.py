@@ -50,6 +50,16 @@ class SourceFile:
         line, col = self.position(offset)
         return Span(self.path, line, col)
 
+    def offset(self, line: int, col: int) -> int:
+        starts = self._starts()
+        return starts[min(max(line, 1), len(starts)) - 1] + col - 1
+
+    def text_of(self, span: Span) -> str:
+        """The source text a span covers (one line's rest when the span has no end)."""
+        if not span.end_line:
+            return self.line_text(span.line)[span.col - 1:].strip()
+        return self.text[self.offset(span.line, span.col):self.offset(span.end_line, span.end_col)]
+
     def line_text(self, line: int) -> str:
         starts = self._starts()
         if line < 1 or line > len(starts):

@@ -145,6 +145,20 @@ class CallStmt(Stmt):
 
 
 @dataclass(slots=True, eq=False)
+class Mock(Stmt):
+    """MOCK inst; (unit tests): the instance's body is skipped from now on, calls are counted."""
+    target: Expr = None
+
+
+@dataclass(slots=True, eq=False)
+class MockFunction(Stmt):
+    """MOCK_FUNCTION f RETURNS v; (unit tests)."""
+    name: str = ""
+    value: Expr = None
+    pou: Any = field(default=None, repr=False)      # filled by the checker
+
+
+@dataclass(slots=True, eq=False)
 class If(Stmt):
     branches: list = None   # [(cond, [stmt])]
     orelse: list = None     # [stmt] or None

@@ -391,6 +391,12 @@ class AstBuilder(Transformer):
     def call_stmt(self, c):
         return A.CallStmt(c[0].span, c[0])
 
+    def mock_stmt(self, c):
+        return A.Mock(self.sp(c[0]), c[1])
+
+    def mock_function_stmt(self, c):
+        return A.MockFunction(self.sp(c[0]), str(c[1]), c[3])
+
     def empty_stmt(self, c):
         return None
 
@@ -521,7 +527,9 @@ class AstBuilder(Transformer):
         return A.Unary(self.sp(c[0]), op, operand)
 
     def call(self, c):
-        return A.Call(c[0].span, c[0], [a for a in c[1:] if isinstance(a, A.Arg)])
+        start, end = c[0].span, c[-1]
+        span = Span(start.file, start.line, start.col, end.end_line, end.end_column)
+        return A.Call(span, c[0], [a for a in c[1:] if isinstance(a, A.Arg)])
 
     def pos_arg(self, c):
         return A.Arg(c[0].span, "", c[0])

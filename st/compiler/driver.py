@@ -51,6 +51,8 @@ class CompiledProgram:
     helpers: dict = field(default_factory=dict)
     python_source: dict = field(default_factory=dict)   # path → Python text (emit python)
     from_cache: bool = False
+    coverage_points: list = field(default_factory=list)  # [(file, line, kind, label, target)] (coverage builds)
+    coverage_hits: Optional[bytearray] = None            # one byte per point, shared by every PLC of this build
 
 
 def parse_source(src: SourceFile, sink: DiagnosticSink) -> Optional[A.Unit]:
@@ -114,7 +116,8 @@ def _cache_key(sources: list[SourceFile], libraries: list[Library], emit_python:
 
 
 def compile_sources(sources: list[SourceFile], libraries: list[Library], *, emit_python: bool = False,
-                    use_cache: bool = True, raise_on_error: bool = True) -> CompiledProgram:
+                    use_cache: bool = True, raise_on_error: bool = True, coverage: bool = False) -> CompiledProgram:
+    """Compile ST sources with the given libraries; `coverage` adds line and branch probes (not cached)."""
     # The compiler allocates millions of small objects that all live until the end:
     # the cyclic GC would rescan them again and again (a third of the time on 20k lines).
     enabled = gc.isenabled()
@@ -123,15 +126,15 @@ def compile_sources(sources: list[SourceFile], libraries: list[Library], *, emit
     limit = sys.getrecursionlimit()
     sys.setrecursionlimit(max(limit, 20000))
     try:
-        return _compile_sources(sources, libraries, emit_python=emit_python, use_cache=use_cache,
-                                raise_on_error=raise_on_error)
+        return _compile_sources(sources, libraries, emit_python=emit_python, use_cache=use_cache and not coverage,
+                                raise_on_error=raise_on_error, coverage=coverage)
     finally:
         sys.setrecursionlimit(limit)
         if enabled:
             gc.enable()
 
 
-def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_error) -> CompiledProgram:
+def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_error, coverage) -> CompiledProgram:
     all_sources = {s.path: s for s in sources}
     key = _cache_key(sources, libraries, emit_python)
     cdir = _cache_dir() if use_cache else None
@@ -158,10 +161,12 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
     modules = []
     pysrc = {}
     project = Project()
+    gen = None
     try:
         project = checker.run(units, lib_paths)
+        _attach_test_texts(project, all_sources)
         if not sink.has_errors:
-            gen = ModuleGen(project, sink)
+            gen = ModuleGen(project, sink, coverage=coverage)
             py_modules = gen.generate()
             if not sink.has_errors:
                 for path, mod in py_modules:
@@ -187,6 +192,9 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
     for lib in libraries:
         helpers.update(lib.helpers)
     result = CompiledProgram(modules, project, diags, all_sources, helpers, pysrc)
+    if coverage and gen is not None:
+        result.coverage_points = gen.cov_points
+        result.coverage_hits = bytearray(len(gen.cov_points))
     if any(d.is_error for d in diags):
         if raise_on_error:
             raise CompileError(diags, all_sources)
@@ -194,6 +202,14 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
     if cdir is not None:
         _store_cache(cdir / key, result)
     return result
+
+
+def _attach_test_texts(project: Project, sources: dict) -> None:
+    """Each test statement's source text, for failure reports (`ASSERT_EQ(uut.count, 3)`)."""
+    for info in project.test_asserts:
+        src = sources.get(info.span.file)
+        if src is not None:
+            info.text = src.text_of(info.span)
 
 
 def _strip_for_cache(project: Project) -> None:

@@ -4,6 +4,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..source import Span
+
 from .types import POUType
 
 
@@ -72,8 +74,34 @@ class Project:
     enum_members: dict = field(default_factory=dict)   # lower member → [(EnumType, name, value)]
     direct_vars: dict = field(default_factory=dict)    # "%QX0.0" → (pyname, Type)
     sfc: dict = field(default_factory=dict)            # pou lower → SfcModel
-    tests: list = field(default_factory=list)          # ast.TestBlock (issue: unit tests)
+    test_blocks: list = field(default_factory=list)    # ast.TestBlock as parsed
+    tests: list = field(default_factory=list)          # [TestModel], checked
+    test_asserts: list = field(default_factory=list)   # [AssertInfo], index = id in generated code
     libraries: list = field(default_factory=list)
 
     def user_pous(self):
         return [p for p in self.pous.values() if not p.library]
+
+
+@dataclass(eq=False)
+class TestModel:
+    """One TEST block: generated as the function `pyname` (SETUP, the TEST, then TEARDOWN)."""
+
+    name: str
+    span: Span
+    pyname: str
+    pou: Any = None             # the pseudo-POU holding SETUP + TEST variables (dropped from the cache)
+    setup: list = field(default_factory=list)
+    body: list = field(default_factory=list)
+    teardown: list = field(default_factory=list)
+
+
+@dataclass(eq=False)
+class AssertInfo:
+    """What a failure report of one test statement needs: its kind, place, source text and types."""
+
+    kind: str                   # ASSERT_EQ, ADVANCE_TIME, MOCK_VERIFY_CALLED, ...
+    span: Span
+    text: str = ""              # the statement's source text, filled by the driver
+    types: list = field(default_factory=list)
+    index: int = -1

@@ -274,7 +274,7 @@ class VarSym:
 @dataclass(eq=False)
 class POUType(Type):
     name: str = "?"
-    pou_kind: str = "FUNCTION_BLOCK"   # FUNCTION, FUNCTION_BLOCK, PROGRAM
+    pou_kind: str = "FUNCTION_BLOCK"   # FUNCTION, FUNCTION_BLOCK, PROGRAM (TEST: a unit test's variables)
     decl: Any = None        # ast.POU (None for native)
     vars: dict = field(default_factory=dict)      # lower → VarSym, declaration order
     return_type: Optional[Type] = None
@@ -286,7 +286,7 @@ class POUType(Type):
 
     @property
     def kind(self) -> str:  # type: ignore[override]
-        return {"FUNCTION": "function", "FUNCTION_BLOCK": "fb", "PROGRAM": "fb"}[self.pou_kind]
+        return {"FUNCTION": "function", "FUNCTION_BLOCK": "fb", "PROGRAM": "fb", "TEST": "test"}[self.pou_kind]
 
     def inputs(self):
         return [v for v in self.vars.values() if v.section == "VAR_INPUT"]

@@ -17,8 +17,7 @@ from typing import Optional
 from ..compiler import types as T
 from ..compiler.driver import CompiledProgram
 from .faults import FaultInfo, fault_from_exception
-from .helpers import BASE_NAMESPACE, make_f32
-from .sfc import SfcDesc, SfcState
+from .namespace import build_namespace
 from .watchdog import Watchdog
 from .values import ValueError_, from_python, parse_duration_arg, to_json, to_python
 
@@ -53,15 +52,9 @@ class PLC:
     def __init__(self, compiled: CompiledProgram, cycle=None, *, watchdog=None):
         self.compiled = compiled
         self.project = compiled.project
-        ns: dict = dict(BASE_NAMESPACE)
-        ns.update(compiled.helpers)
-        ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True,
-                   "_f32": make_f32()})
-        ns["_ns"] = ns
-        self._wd = Watchdog(ns)
-        for path, code in compiled.modules:
-            exec(code, ns)
-        self.ns = ns
+        def install(ns):
+            self._wd = Watchdog(ns)
+        ns = self.ns = build_namespace(compiled, install)
         self.state = "RUN"
         self.fault: Optional[FaultInfo] = None
         self._time = 0
@@ -380,7 +373,7 @@ def _norm_addr(addr: str) -> str:
 
 def _compile_kw(kw: dict) -> dict:
     out = {}
-    for k in ("f_trig_first_scan", "time_unit", "use_cache"):
+    for k in ("f_trig_first_scan", "time_unit", "use_cache", "coverage"):
         if k in kw:
             out[k] = kw.pop(k)
     return out

@@ -56,6 +56,43 @@ def to_json(v, t: T.Type):
     return _convert(v, t, _json_leaf)
 
 
+def to_st_literal(v, t) -> str:
+    """A runtime value as ST source text (TRUE, 16#FF stays 255, 0.1, T#1s500ms, 'text'), for reports."""
+    if t is None:
+        return repr(v)
+    ut = T.unalias(t)
+    if isinstance(ut, T.EnumType):
+        name = ut.names_by_value.get(v)
+        return f"{ut.name}#{name}" if name is not None else str(v)
+    if ut.is_aggregate or isinstance(ut, T.RefType):
+        import json
+        return json.dumps(to_json(v, t))
+    bt = T.base_of(t)
+    if isinstance(v, bool) or bt.is_bool:
+        return "TRUE" if v else "FALSE"
+    if isinstance(bt, T.StringType) or bt.kind == "char":
+        q = '"' if getattr(bt, "wide", False) or getattr(bt, "name", "") == "WCHAR" else "'"
+        body = str(v).replace("$", "$$").replace(q, "$" + q).replace("\n", "$N").replace("\r", "$R") \
+            .replace("\t", "$T")
+        return q + body + q
+    if isinstance(v, float):
+        if v != v or v in (math.inf, -math.inf):
+            return str(v)
+        if bt is T.REAL:
+            for digits in range(1, 10):
+                text = f"{v:.{digits}g}"
+                if _f32(float(text)) == v:
+                    return _real_text(text)
+        return _real_text(repr(v))
+    if isinstance(bt, T.ElemType) and bt.kind in ("time", "date", "tod", "dt"):
+        return _json_leaf(v, bt)
+    return str(v)
+
+
+def _real_text(text: str) -> str:
+    return text if any(c in text for c in ".eEn") else text + ".0"
+
+
 def _nest(flat: list, dims: list) -> list:
     if len(dims) <= 1:
         return flat

@@ -17,11 +17,12 @@ from .configuration import ConfigurationMixin
 from .declarations import DeclarationsMixin
 from .expressions import ExpressionsMixin
 from .statements import StatementsMixin
+from .tests import TestsMixin
 
 __all__ = ["Checker", "CallTarget", "STEP", "StepType", "Scope", "_NULL"]
 
 
-class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, ConfigurationMixin):
+class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, ConfigurationMixin, TestsMixin):
     def __init__(self, sink: DiagnosticSink, libraries: list[Library]):
         self.sink = sink
         self.libraries = libraries
@@ -49,6 +50,7 @@ class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, 
         for pou in list(self.p.pous.values()):
             if pou.decl is not None:
                 self._check_body(pou)
+        self._check_tests()
         self._check_cycles()
         for cfg_decl in self._configs:
             self._check_configuration(cfg_decl)

@@ -8,6 +8,7 @@ from .. import ast as A
 from .. import types as T
 from ..library import FuncSig
 from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies
+from .tests import TEST_CALLS
 
 
 class CallsMixin:
@@ -27,6 +28,8 @@ class CallsMixin:
                 return self._fb_call(c, sym.type, scope, statement)
             if key == "ref" and sym is None and key not in self.p.pous:
                 return self._ref_call(c, scope)
+            if key in TEST_CALLS and sym is None and key not in self.p.pous:
+                return self._test_call(c, key, scope, statement)
             if key in scope.actions or (scope.pou is not None and key in scope.pou.actions):
                 if c.args:
                     self.err("E017", c.span, "an action takes no arguments")

@@ -38,6 +38,7 @@ class Scope:
         self.steps: dict = {}
         self.actions: dict = {}
         self.library = library
+        self.test = False           # inside TEST/SETUP/TEARDOWN: test statements allowed
 
 
 def _names_in(body):

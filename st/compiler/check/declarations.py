@@ -51,7 +51,7 @@ class DeclarationsMixin:
                     continue
                 self._global_blocks.append(("", item))
             elif isinstance(item, A.TestBlock):
-                self.p.tests.append(item)
+                self.p.test_blocks.append(item)
 
     def _dup(self, name: str, span: Span) -> None:
         prev = self._decl_span.get(name.lower())
@@ -245,6 +245,7 @@ class DeclarationsMixin:
                                    "VAR_INST", "VAR_STAT"},
                 "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL",
                             "VAR_GLOBAL"},
+                "TEST": {"VAR", "VAR_TEMP"},
             }[owner.pou_kind]
             if kind not in allowed:
                 self.err("E003", block.span, f"{kind} is not allowed in a {owner.pou_kind}")
@@ -254,7 +255,8 @@ class DeclarationsMixin:
                 return
         for decl in block.decls:
             t = self.resolve_type(decl.type, scope)
-            if isinstance(t, T.POUType) and t.pou_kind == "PROGRAM" and owner is not None:
+            if isinstance(t, T.POUType) and t.pou_kind == "PROGRAM" and owner is not None \
+                    and owner.pou_kind != "TEST":
                 self.err("E012", decl.type.span, f"a PROGRAM ('{t.name}') cannot be instantiated inside a POU")
             for n, sp in decl.names:
                 key = n.lower()

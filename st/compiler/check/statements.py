@@ -165,6 +165,10 @@ class StatementsMixin:
                 self.err("E024", s.span, f"{'EXIT' if isinstance(s, A.Exit) else 'CONTINUE'} outside a loop")
         elif isinstance(s, (A.Return, A.Empty)):
             pass
+        elif isinstance(s, A.Mock):
+            self._mock(s, scope)
+        elif isinstance(s, A.MockFunction):
+            self._mock_function(s, scope)
         else:  # pragma: no cover
             raise AssertionError(s)
 

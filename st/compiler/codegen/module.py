@@ -9,15 +9,31 @@ from .expressions import InitGen
 from .pous import BodyGen, FuncGen
 from .pyast import Unsupported, _args, _attr, _const, _name, _set_lines, default_value
 from .statements import StmtGen, _Typed
+from .tests import TestGen
 
 
 class ModuleGen:
     """Generates the Python modules for a checked project."""
 
-    def __init__(self, project: Project, sink):
+    def __init__(self, project: Project, sink, coverage: bool = False):
         self.p = project
         self.sink = sink
         self.tmp = 0
+        self.coverage = coverage
+        self.cov_points: list = []      # [(file, line, kind, label, target)]; index = probe id
+        self._line_probe: dict = {}
+
+    def probe(self, file: str, line: int, kind: str, label: str = "", target: int = 0) -> py.stmt:
+        """`_cov[k] = 1`: marks a statement line or a branch arm as run (coverage builds only)."""
+        if kind == "line":
+            k = self._line_probe.get((file, line))
+            if k is None:
+                k = self._line_probe[(file, line)] = len(self.cov_points)
+                self.cov_points.append((file, line, kind, label, target))
+        else:
+            k = len(self.cov_points)
+            self.cov_points.append((file, line, kind, label, target))
+        return py.Assign([py.Subscript(_name("_cov"), _const(k), py.Store())], _const(1))
 
     # ------------------------------------------------------------------ modules
     def generate(self) -> list:
@@ -49,6 +65,11 @@ class ModuleGen:
                     add(d.span.file, n)
             else:
                 add(d.span.file, node)
+        for test in self.p.tests:
+            try:
+                add(test.span.file, TestGen(self, test).function())
+            except Unsupported as u:
+                self.sink.error("E040", u.span, u.msg)
         # module-level globals: VAR_GLOBAL and directly addressed variables
         init_stmts = []
         for g in self.p.globals.values():

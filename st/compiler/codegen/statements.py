@@ -11,8 +11,15 @@ from .pyast import (Unsupported, _attr, _call, _const, _name, _set_lines)
 
 
 class StmtGen(ExprGen):
+    @property
+    def covered(self) -> bool:
+        """Coverage probes go into user POUs only (not the library, not the tests themselves)."""
+        pou = self.pou
+        return self.mod.coverage and pou is not None and not pou.library and pou.pou_kind != "TEST"
+
     def stmts(self, body: list) -> list:
         out = []
+        covered = self.covered
         for s in body:
             try:
                 r = self.stmt(s)
@@ -22,10 +29,22 @@ class StmtGen(ExprGen):
                 if not hasattr(exc, "st_span"):
                     exc.st_span = s.span      # where the internal error happened, for the report
                 raise
+            if covered and r:
+                r.insert(0, self.mod.probe(s.span.file, s.span.line, "line"))
             for n in r:
                 _set_lines(n, s.span.line)
             out.extend(r)
         return out
+
+    def _arm(self, body: list, decision, label: str) -> list:
+        """The statements of one arm of a decision, with its branch probe when measuring coverage."""
+        code = self.stmts(body)
+        if not self.covered:
+            return code or [py.Pass()]
+        target = body[0].span.line if body else 0
+        probe = _set_lines(self.mod.probe(decision.span.file, decision.span.line, "branch", label, target),
+                           target or decision.span.line)
+        return [probe] + code
 
     def block(self, body) -> list:
         b = self.stmts(body)
@@ -129,6 +148,8 @@ class StmtGen(ExprGen):
             return self.fb_call(c, tgt)
         if tgt.kind == "action":
             return [py.Expr(_call(_attr(_name(self.self_name), "_act_" + tgt.name)))]
+        if tgt.kind == "test":
+            return self.test_call(tgt)
         if tgt.kind == "function":
             en, eno = tgt.bind.get("en"), tgt.bind.get("eno")
             tgt.bind["en"] = None
@@ -184,13 +205,16 @@ class StmtGen(ExprGen):
         return self._en_wrap(tgt.bind.get("en"), tgt.bind.get("eno"), out, "eno" in bind)
 
     def s_If(self, s: A.If) -> list:
-        orelse = self.stmts(s.orelse) if s.orelse else []
+        if s.orelse is not None:
+            orelse = self._arm(s.orelse, s, "ELSE") if s.orelse or self.covered else []
+        else:
+            orelse = self._arm([], s, "implicit ELSE") if self.covered else []
         for cond, body in reversed(s.branches[1:]):
-            node = py.If(self.expr(cond), self.block(body), orelse)
+            node = py.If(self.expr(cond), self._arm(body, s, f"ELSIF (line {cond.span.line})"), orelse)
             _set_lines(node, cond.span.line)
             orelse = [node]
         cond, body = s.branches[0]
-        return [py.If(self.expr(cond), self.block(body), orelse)]
+        return [py.If(self.expr(cond), self._arm(body, s, "THEN"), orelse)]
 
     def s_Case(self, s: A.Case) -> list:
         out = []
@@ -199,7 +223,10 @@ class StmtGen(ExprGen):
             tmp = self.new_tmp()
             out.append(py.Assign([_name(tmp, py.Store())], sel))
             sel = _name(tmp)
-        orelse = self.stmts(s.orelse) if s.orelse else []
+        if s.orelse is not None:
+            orelse = self._arm(s.orelse, s, "CASE ELSE") if s.orelse or self.covered else []
+        else:
+            orelse = self._arm([], s, "implicit ELSE") if self.covered else []
         for br in reversed(s.branches):
             singles = []
             ranges = []
@@ -218,7 +245,7 @@ class StmtGen(ExprGen):
             for lv, hv in ranges:
                 tests.append(py.Compare(_const(lv), [py.LtE(), py.LtE()], [sel, _const(hv)]))
             test = tests[0] if len(tests) == 1 else py.BoolOp(py.Or(), tests)
-            node = py.If(test, self.block(br.body), orelse)
+            node = py.If(test, self._arm(br.body, s, f"CASE (line {br.span.line})"), orelse)
             _set_lines(node, br.span.line)
             orelse = [node]
         out.extend(orelse)
@@ -385,6 +412,10 @@ def _walk_exprs_in(body):
             stack.append(s.cond)
         elif isinstance(s, A.Repeat):
             stack.append(s.cond)
+        elif isinstance(s, A.Mock):
+            stack.append(s.target)
+        elif isinstance(s, A.MockFunction):
+            stack.append(s.value)
     while stack:
         e = stack.pop()
         if e is None:

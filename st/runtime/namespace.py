@@ -1,0 +1,28 @@
+"""The namespace compiled ST runs in: helpers, then every generated module executed into it.
+
+One namespace per PLC (and per unit test, which is what isolates tests from one
+another: globals, FB classes and mocks are all fresh).
+"""
+from __future__ import annotations
+
+from typing import Callable, Optional
+
+from ..compiler.driver import CompiledProgram
+from .helpers import BASE_NAMESPACE, make_f32
+from .sfc import SfcDesc, SfcState
+
+
+def build_namespace(compiled: CompiledProgram, install: Optional[Callable[[dict], None]] = None) -> dict:
+    """`install(ns)` adds what must exist before module code runs (watchdog, test helpers)."""
+    ns: dict = dict(BASE_NAMESPACE)
+    ns.update(compiled.helpers)
+    ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True,
+               "_f32": make_f32()})
+    ns["_ns"] = ns
+    if compiled.coverage_hits is not None:
+        ns["_cov"] = compiled.coverage_hits
+    if install is not None:
+        install(ns)
+    for path, code in compiled.modules:
+        exec(code, ns)
+    return ns
