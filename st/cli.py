@@ -1,4 +1,4 @@
-"""The `st` command line: check, compile, run, explain."""
+"""The `st` command line: check, compile, run, test, explain."""
 from __future__ import annotations
 
 import json
@@ -129,6 +129,62 @@ def run(files, scans, duration, cycle, virtual, dump_json, time_unit, f_trig_fir
         click.echo(f"stopped after {plc.scans} scan(s) at PLC time {plc.time / 1e9:g} s, state {plc.state}",
                    err=True)
     sys.exit(code)
+
+
+@main.command("test")
+@click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
+@click.option("-k", "keyword", default="", help="Run only tests whose name contains this text (or matches a glob).")
+@click.option("-x", "--exitfirst", is_flag=True, help="Stop at the first failing test.")
+@click.option("-q", "--quiet", is_flag=True, help="Print failing tests and the summary only.")
+@click.option("--timeout", default="10s", show_default=True, help="Watchdog per test (an endless loop fails the test).")
+@click.option("--cov", "cov", is_flag=True, help="Measure which ST lines and branches ran; print a table.")
+@click.option("--cov-html", default=None, metavar="DIR", help="Also write the coverage report as HTML into DIR.")
+@dialect
+def test_cmd(files, keyword, exitfirst, quiet, timeout, cov, cov_html, time_unit, f_trig_first_scan):
+    """Run the TEST blocks of ST files (STruC++ syntax). A file test_X.st is compiled with X.st beside it.
+
+    Prints PASS/FAIL per test and ends with `N passed, M failed`; exit code 0 when all pass,
+    1 when a test failed, 2 when the sources do not compile, 5 when there is no test to run."""
+    from .testing.runner import TestSuite, resolve_sources
+    paths = resolve_sources(files)
+    measure = cov or cov_html is not None
+    try:
+        from .api import compile_paths
+        result = compile_paths(paths, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan,
+                               raise_on_error=False, coverage=measure)
+    except CompileError as e:
+        click.echo(e.render(), err=True)
+        sys.exit(2)
+    if _report(result):
+        sys.exit(2)
+    suite = TestSuite(result, timeout)
+    cases = suite.select(keyword)
+    if not cases:
+        click.echo("no tests ran" + (f" (none matches -k {keyword!r})" if keyword else ""))
+        sys.exit(5)
+
+    def show(r):
+        where = f"({r.case.file}:{r.case.line})"
+        if r.passed:
+            if not quiet:
+                click.echo(f"{click.style('PASS', fg='green')}  {r.case.name}  {where}")
+            return
+        click.echo(f"{click.style('FAIL', fg='red')}  {r.case.name}  {where}")
+        for line in str(r.report).splitlines():
+            click.echo("      " + line)
+
+    results = suite.run_all(cases, show, exitfirst)
+    failed = sum(1 for r in results if not r.passed)
+    if measure:
+        from .testing.coverage import html_report, terminal_report
+        from .testing.measure import coverage_data
+        data = coverage_data([result])
+        click.echo("")
+        terminal_report(data, sys.stdout)
+        if cov_html is not None:
+            click.echo(f"HTML coverage report: {html_report(data, cov_html)}")
+    click.echo(f"{len(results) - failed} passed, {failed} failed")
+    sys.exit(1 if failed else 0)
 
 
 @main.command()
