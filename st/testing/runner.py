@@ -53,6 +53,8 @@ class Report:
 
 
 class TestFailed(Exception):
+    __test__ = False        # (the Test* names are not pytest classes)
+
     def __init__(self, report: Report):
         super().__init__(str(report))
         self.report = report
@@ -60,6 +62,8 @@ class TestFailed(Exception):
 
 @dataclass
 class TestCase:
+    __test__ = False
+
     name: str
     file: str
     line: int
@@ -68,6 +72,8 @@ class TestCase:
 
 @dataclass
 class TestResult:
+    __test__ = False
+
     case: TestCase
     passed: bool
     report: Optional[Report]
@@ -76,6 +82,8 @@ class TestResult:
 
 class TestSuite:
     """The TEST blocks of one compiled program, and how to run them."""
+    __test__ = False
+
 
     def __init__(self, compiled: CompiledProgram, timeout=DEFAULT_TIMEOUT):
         self.compiled = compiled
