@@ -25,7 +25,7 @@ from .codegen import ModuleGen
 from .library import Library
 from .model import Project
 
-COMPILER_VERSION = "0.1.0-8"
+COMPILER_VERSION = "0.1.0-9"
 _parser_lock = threading.Lock()
 _parser = None
 _builder = None
@@ -53,6 +53,7 @@ class CompiledProgram:
     from_cache: bool = False
     coverage_points: list = field(default_factory=list)  # [(file, line, kind, label, target)] (coverage builds)
     coverage_hits: Optional[bytearray] = None            # one byte per point, shared by every PLC of this build
+    test_modules: list = field(default_factory=list)     # [(filename, code)]: `_test_<n>` functions (TEST blocks)
 
 
 def parse_source(src: SourceFile, sink: DiagnosticSink) -> Optional[A.Unit]:
@@ -159,6 +160,7 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
             units.append(u)
     checker = Checker(sink, libraries)
     modules = []
+    test_modules = []
     pysrc = {}
     project = Project()
     gen = None
@@ -169,11 +171,12 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
             gen = ModuleGen(project, sink, coverage=coverage)
             py_modules = gen.generate()
             if not sink.has_errors:
-                for path, mod in py_modules:
-                    if emit_python:
-                        import ast as pyast
-                        pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + pyast.unparse(mod)
-                    modules.append((path, compile(mod, path, "exec")))
+                for out, group in ((modules, py_modules), (test_modules, gen.test_modules())):
+                    for path, mod in group:
+                        if emit_python:
+                            import ast as pyast
+                            pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + pyast.unparse(mod)
+                        out.append((path, compile(mod, path, "exec")))
     except RecursionError as exc:
         first = sources[0].path if sources else "<input>"
         sink.error("E041", getattr(exc, "st_span", None) or Span(first, 1, 1),
@@ -192,6 +195,7 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
     for lib in libraries:
         helpers.update(lib.helpers)
     result = CompiledProgram(modules, project, diags, all_sources, helpers, pysrc)
+    result.test_modules = test_modules
     if coverage and gen is not None:
         result.coverage_points = gen.cov_points
         result.coverage_hits = bytearray(len(gen.cov_points))
@@ -218,7 +222,8 @@ def _strip_for_cache(project: Project) -> None:
         if pou.decl is not None:
             pou.decl = _PouStub(pou.decl.span, pou.decl.kind, pou.decl.name)
         for v in pou.vars.values():
-            v.init = None
+            if not isinstance(v.init, A.Literal):       # literal initial values serve the Python API
+                v.init = None
         pou.actions = {k: None for k in pou.actions}
     for t in project.types.values():
         if hasattr(t, "members") and isinstance(t.members, dict):
@@ -235,6 +240,9 @@ def _strip_for_cache(project: Project) -> None:
         for st in sfc.steps:
             st.actions = [(a, q, None) for a, q, _ in st.actions]
     project.libraries = []
+    project.test_blocks = []
+    for t in project.tests:
+        t.pou, t.setup, t.body, t.teardown = None, [], [], []
     for cfg in project.configs:
         for inst in cfg.instances:
             inst.args = [(p, None, o) for p, _, o in inst.args]
@@ -249,13 +257,12 @@ class _PouStub:
 
 def _store_cache(path: Path, result: CompiledProgram) -> None:
     try:
-        if result.project.tests:
-            return      # unit-test ASTs are compiled on demand; keep it simple
         proj = result.project
         libs = proj.libraries
         _strip_for_cache(proj)
         payload = pickle.dumps({
             "modules": [(p, marshal.dumps(c)) for p, c in result.modules],
+            "test_modules": [(p, marshal.dumps(c)) for p, c in result.test_modules],
             "project": proj,
             "diagnostics": result.diagnostics,
             "python": result.python_source,
@@ -276,6 +283,7 @@ def _load_cache(path: Path, sources: dict, libraries: list[Library]) -> Optional
     try:
         d = pickle.loads(data)
         modules = [(p, marshal.loads(c)) for p, c in d["modules"]]
+        test_modules = [(p, marshal.loads(c)) for p, c in d["test_modules"]]
     except Exception:
         return None
     helpers = {}
@@ -284,7 +292,9 @@ def _load_cache(path: Path, sources: dict, libraries: list[Library]) -> Optional
         for p, text in lib.sources:
             sources[p] = SourceFile(p, text)
     d["project"].libraries = libraries
-    return CompiledProgram(modules, d["project"], d["diagnostics"], sources, helpers, d["python"], True)
+    result = CompiledProgram(modules, d["project"], d["diagnostics"], sources, helpers, d["python"], True)
+    result.test_modules = test_modules
+    return result
 
 
 def load_files(paths: list[str]) -> list[SourceFile]:

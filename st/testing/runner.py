@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import fnmatch
 import time
+import types
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable, Optional
@@ -90,6 +91,12 @@ class TestSuite:
         self.asserts = compiled.project.test_asserts
         self.timeout_ns = parse_duration_arg(timeout)
         self.cases = [TestCase(t.name, t.span.file, t.span.line, t.pyname) for t in compiled.project.tests]
+        # the test functions' code, defined once; each run binds one of them to its fresh namespace
+        self._code: dict = {}
+        for path, code in compiled.test_modules:
+            scratch: dict = {}
+            exec(code, scratch)
+            self._code.update({k: f.__code__ for k, f in scratch.items() if k.startswith("_test_")})
 
     @classmethod
     def from_paths(cls, paths: Iterable, *, coverage: bool = False, timeout=DEFAULT_TIMEOUT,
@@ -123,7 +130,7 @@ class TestSuite:
             ns = build_namespace(self.compiled, ctx.install)
             ctx.watchdog.start(self.timeout_ns)
             try:
-                ns[case.pyname]()
+                types.FunctionType(self._code[case.pyname], ns, case.pyname)()
             finally:
                 ctx.watchdog.stop()
         except TestFailed as f:

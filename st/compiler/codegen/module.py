@@ -22,6 +22,15 @@ class ModuleGen:
         self.coverage = coverage
         self.cov_points: list = []      # [(file, line, kind, label, target)]; index = probe id
         self._line_probe: dict = {}
+        self.tests_by_file: dict = {}       # path → [FunctionDef]: unit tests, kept apart from the program
+
+    def test_modules(self) -> list:
+        """[(st file path, Python module)] holding the `_test_<n>` functions (after `generate`)."""
+        out = []
+        for path, fns in self.tests_by_file.items():
+            m = py.Module(body=fns, type_ignores=[])
+            out.append((path, m))
+        return out
 
     def probe(self, file: str, line: int, kind: str, label: str = "", target: int = 0) -> py.stmt:
         """`_cov[k] = 1`: marks a statement line or a branch arm as run (coverage builds only)."""
@@ -67,7 +76,7 @@ class ModuleGen:
                 add(d.span.file, node)
         for test in self.p.tests:
             try:
-                add(test.span.file, TestGen(self, test).function())
+                self.tests_by_file.setdefault(test.span.file, []).append(TestGen(self, test).function())
             except Unsupported as u:
                 self.sink.error("E040", u.span, u.msg)
         # module-level globals: VAR_GLOBAL and directly addressed variables
