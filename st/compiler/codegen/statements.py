@@ -205,16 +205,18 @@ class StmtGen(ExprGen):
         return self._en_wrap(tgt.bind.get("en"), tgt.bind.get("eno"), out, "eno" in bind)
 
     def s_If(self, s: A.If) -> list:
+        # arms first, in source order (coverage probes are numbered in that order)
+        arms = [self._arm(body, s, "THEN" if i == 0 else f"ELSIF (line {cond.span.line})")
+                for i, (cond, body) in enumerate(s.branches)]
         if s.orelse is not None:
             orelse = self._arm(s.orelse, s, "ELSE") if s.orelse or self.covered else []
         else:
             orelse = self._arm([], s, "implicit ELSE") if self.covered else []
-        for cond, body in reversed(s.branches[1:]):
-            node = py.If(self.expr(cond), self._arm(body, s, f"ELSIF (line {cond.span.line})"), orelse)
+        for (cond, body), arm in reversed(list(zip(s.branches[1:], arms[1:]))):
+            node = py.If(self.expr(cond), arm, orelse)
             _set_lines(node, cond.span.line)
             orelse = [node]
-        cond, body = s.branches[0]
-        return [py.If(self.expr(cond), self._arm(body, s, "THEN"), orelse)]
+        return [py.If(self.expr(s.branches[0][0]), arms[0], orelse)]
 
     def s_Case(self, s: A.Case) -> list:
         out = []
@@ -223,11 +225,14 @@ class StmtGen(ExprGen):
             tmp = self.new_tmp()
             out.append(py.Assign([_name(tmp, py.Store())], sel))
             sel = _name(tmp)
+        arms = [self._arm(br.body, s, "CASE " + _labels_text(br.labels)) for br in s.branches]
         if s.orelse is not None:
             orelse = self._arm(s.orelse, s, "CASE ELSE") if s.orelse or self.covered else []
+        elif self.covered and not _covers_enum(s):
+            orelse = self._arm([], s, "implicit ELSE")
         else:
-            orelse = self._arm([], s, "implicit ELSE") if self.covered else []
-        for br in reversed(s.branches):
+            orelse = []
+        for br, arm in reversed(list(zip(s.branches, arms))):
             singles = []
             ranges = []
             for lo, hi in br.labels:
@@ -245,7 +250,7 @@ class StmtGen(ExprGen):
             for lv, hv in ranges:
                 tests.append(py.Compare(_const(lv), [py.LtE(), py.LtE()], [sel, _const(hv)]))
             test = tests[0] if len(tests) == 1 else py.BoolOp(py.Or(), tests)
-            node = py.If(test, self._arm(br.body, s, f"CASE (line {br.span.line})"), orelse)
+            node = py.If(test, arm, orelse)
             _set_lines(node, br.span.line)
             orelse = [node]
         out.extend(orelse)
@@ -347,6 +352,35 @@ class _Typed:
     def __init__(self, ty):
         self.ty = ty
         self.const = None
+
+
+def _label_text(e) -> str:
+    if isinstance(e, A.Name):
+        return e.name
+    if isinstance(e, A.EnumLit):
+        return f"{e.type_name}#{e.member}" if e.type_name else e.member
+    if isinstance(e, A.Literal) and e.text:
+        return e.text
+    return str(e.const if e.const is not None else getattr(e, "value", "?"))
+
+
+def _labels_text(labels) -> str:
+    return ", ".join(_label_text(lo) + (".." + _label_text(hi) if hi is not None else "") for lo, hi in labels)
+
+
+def _covers_enum(s: A.Case) -> bool:
+    """A CASE on an enum whose labels name every value has no reachable implicit ELSE."""
+    et = T.unalias(s.selector.ty) if s.selector.ty is not None else None
+    if not isinstance(et, T.EnumType):
+        return False
+    seen = set()
+    for br in s.branches:
+        for lo, hi in br.labels:
+            if hi is None:
+                seen.add(lo.const)
+            elif lo.const is not None and hi.const is not None:
+                seen.update(range(lo.const, hi.const + 1))
+    return all(v in seen for _, v in et.members.values())
 
 
 def _has_continue(body) -> bool:
