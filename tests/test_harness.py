@@ -78,3 +78,14 @@ def test_batch_counter_never_passes_the_batch_size(parts, size):
         rising += part and not prev
         prev = part
         assert c.count == min(rising, size)
+
+
+def test_api_writes_of_bad_values_are_value_errors():
+    p = TestPLC.from_source("TYPE Color : (Red, Green); END_TYPE\n"
+                            "PROGRAM main VAR t : TIME; r : REAL; c : Color; END_VAR END_PROGRAM")
+    with pytest.raises(ValueError, match="main.t: empty duration"):
+        p["main.t"] = ""
+    with pytest.raises(ValueError, match="main.r: the value is too large for REAL"):
+        p["main.r"] = 10 ** 400
+    with pytest.raises(ValueError, match="main.c: True is not a value of Color"):
+        p["main.c"] = True

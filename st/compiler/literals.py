@@ -43,7 +43,9 @@ def parse_duration(body: str) -> int:
     """'1h2m3s4ms', '1.5s', '-5s', '1d_2h' → ns."""
     s = body.strip()
     sign = 1
-    if s[:1] in "+-":
+    if not s:
+        raise LiteralError("empty duration")
+    if s[0] in "+-":
         sign = -1 if s[0] == "-" else 1
         s = s[1:]
     s = s.replace("_", "") if "." not in s else s

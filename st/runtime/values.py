@@ -112,7 +112,7 @@ def from_python(v, t: T.Type, where: str = ""):
                 if name.lower() == v.lower() or f"{ut.name}#{name}".lower() == v.lower():
                     return val
             raise ValueError_(f"{where}: '{v}' is not a value of {ut.name}")
-        if isinstance(v, int) and v in ut.names_by_value:
+        if isinstance(v, int) and not isinstance(v, bool) and v in ut.names_by_value:
             return v
         raise ValueError_(f"{where}: {v!r} is not a value of {ut.name}")
     if isinstance(ut, T.ArrayType):
@@ -139,7 +139,10 @@ def from_python(v, t: T.Type, where: str = ""):
     if k == "real":
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise ValueError_(f"{where}: expected a number, got {v!r}")
-        return _f32(float(v)) if bt.bits == 32 else float(v)
+        try:
+            return _f32(float(v)) if bt.bits == 32 else float(v)
+        except OverflowError:
+            raise ValueError_(f"{where}: the value is too large for {bt.name}") from None
     if k in ("time", "date", "tod", "dt"):
         if isinstance(v, int) and not isinstance(v, bool):
             return v
