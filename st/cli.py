@@ -176,7 +176,7 @@ def test_cmd(files, keyword, exitfirst, quiet, timeout, cov, cov_html, time_unit
     results = suite.run_all(cases, show, exitfirst)
     failed = sum(1 for r in results if not r.passed)
     if measure:
-        from .testing.coverage import html_report, terminal_report
+        from .testing.covreport import html_report, terminal_report
         from .testing.measure import coverage_data
         data = coverage_data([result])
         click.echo("")

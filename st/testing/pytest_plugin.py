@@ -189,7 +189,7 @@ def pytest_testnodedown(node, error):
     """xdist controller: merge a worker's coverage data."""
     payload = getattr(node, "workeroutput", {}).get("st_cov")
     if payload is not None:
-        from .coverage import CoverageData
+        from .covreport import CoverageData
         config = node.config
         config.stash.setdefault(_WORKER_DATA_KEY, []).append(CoverageData.from_json(payload))
 
@@ -197,7 +197,7 @@ def pytest_testnodedown(node, error):
 def pytest_terminal_summary(terminalreporter, config):
     if not _measuring(config) or hasattr(config, "workeroutput"):
         return
-    from .coverage import html_report, terminal_report
+    from .covreport import html_report, terminal_report
     data = _collect_coverage(config)
     terminalreporter.section("ST coverage")
     buf = io.StringIO()
