@@ -58,7 +58,7 @@ class TestsMixin:
         pou.pyname = f"_test_{index}"
         scope = Scope(pou, pou.vars)
         scope.test = True
-        for block in (setup.var_blocks if setup else []) + tb.var_blocks:
+        for block in (setup.var_blocks if setup else []) + tb.var_blocks + (teardown.var_blocks if teardown else []):
             self._declare_block(block, pou.vars, scope, pou)
         parts = []
         for block in (setup, tb, teardown):
