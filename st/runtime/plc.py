@@ -1,29 +1,37 @@
-"""The PLC: program instances of a configuration, tasks on a tick, the clock, variable access.
+"""The PLC: program instances of a configuration, tasks, the scan engine, states and variable access.
 
-This is the runtime's first stage: tasks run cyclically in declaration order
-on a base tick (the GCD of the task intervals), as OpenPLC v3 does, on virtual
-time (`scan`, `advance`) or paced by the real clock (`run_realtime`). The PLC
-clock that timers read is the scan's release time, so a run is deterministic
-whether it is paced or not.
+One engine serves both clocks: on virtual time (`scan`, `advance`: tests, simulation) the
+clock jumps from event to event; on real time (`run_realtime`) it sleeps to absolute
+deadlines on CLOCK_MONOTONIC. The policy (`scheduler.py`) orders the released jobs; each job
+latches the process image's inputs, runs its task's program instances and publishes the
+outputs. The PLC clock that timers read is the job's release time, so a run is deterministic
+whether it is paced or not. States: STOP, RUN, FAULT.
 """
 from __future__ import annotations
 
+import gc
 import math
 import re
-import time as _time
-from dataclasses import dataclass
-from typing import Optional
+import threading
+from typing import Callable, Optional
 
 from ..compiler import types as T
 from ..compiler.driver import CompiledProgram
+from .clock import RealClock, VirtualClock
 from .faults import FaultInfo, fault_from_exception
 from .namespace import build_namespace
+from .process_image import AddressError, Binding, ProcessImage, from_raw, parse_address, to_raw
+from .retain import RetainStore
+from .scheduler import Task, make_policy
+from .stats import TaskStats
 from .watchdog import Watchdog
 from .values import ValueError_, from_python, parse_duration_arg, to_json, to_python
 
 DEFAULT_CYCLE = 10_000_000
 _PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\.([A-Za-z_][A-Za-z0-9_]*|[0-9]+)|\[([^\]]*)\])")
 _ADDR = re.compile(r"%([IQM])([XBWDL]?)([0-9]+(?:\.[0-9]+)*)$", re.I)
+
+STOP, RUN, FAULT = "STOP", "RUN", "FAULT"
 
 
 class PLCFaultError(RuntimeError):
@@ -34,42 +42,64 @@ class PLCFaultError(RuntimeError):
         self.fault = fault
 
 
-@dataclass
-class Task:
-    name: str
-    interval: int               # ns (0: event task)
-    priority: int
-    instances: list             # [(name, object, InstanceModel)]
-    single: str = ""
-    prev_single: bool = False
-    runs: int = 0
-    calls: list = None          # [(name, object, copy-in fn, copy-out fn)]
-
-
 class PLC:
-    """A running PLC for one compiled program (its first CONFIGURATION)."""
+    """A PLC for one compiled program (its first CONFIGURATION).
 
-    def __init__(self, compiled: CompiledProgram, cycle=None, *, watchdog=None):
+    policy: openplc | priority | edf | frame.  watchdog: a budget per task (default 10 ×
+    its interval on real time, at least 1 s on virtual time).  retain: a SQLite file for
+    RETAIN/PERSISTENT variables (restored here unless cold=True).  safe_outputs: {"%QX0.1":
+    True, …} written to the image on a fault or stop instead of FALSE/0.
+    """
+
+    def __init__(self, compiled: CompiledProgram, cycle=None, *, watchdog=None, policy: str = "openplc",
+                 retain: Optional[str] = None, retain_interval="1s", cold: bool = False,
+                 safe_outputs: Optional[dict] = None):
+        self.cycle = parse_duration_arg(cycle) if cycle is not None else None
+        self.watchdog = parse_duration_arg(watchdog) if watchdog is not None else None
+        self.policy_name = policy
+        self.safe_outputs = {k: v for k, v in (safe_outputs or {}).items()}
+        self.image = ProcessImage()
+        self.image_lock = threading.Lock()      # held by a job under the frame policy (the thesis's semaphore)
+        self.state = RUN
+        self.fault: Optional[FaultInfo] = None
+        self.faults: list = []
+        self._time = 0
+        self.scans = 0
+        self.clock = VirtualClock()
+        self._stats: dict = {}
+        self._load(compiled)
+        self.retain_store = RetainStore(retain) if retain else None
+        self.retain_interval = parse_duration_arg(retain_interval)
+        self._next_retain = self.retain_interval
+        self.retain_restored = 0
+        if self.retain_store is not None:
+            if cold:
+                self.retain_store.clear()
+            else:
+                self.retain_restored = self._restore_retained(self.retain_store.load())
+
+    # ------------------------------------------------------------------ construction
+    def _load(self, compiled: CompiledProgram) -> None:
+        """Namespace, instances, tasks and image bindings for `compiled` (also used by online change)."""
         self.compiled = compiled
         self.project = compiled.project
+        self._bindings: dict = {}
+        self._binding_of: dict = {}
+
         def install(ns):
             self._wd = Watchdog(ns)
         ns = self.ns = build_namespace(compiled, install)
-        self.state = "RUN"
-        self.fault: Optional[FaultInfo] = None
-        self._time = 0
-        self.scans = 0
         cfg = self.project.configs[0] if self.project.configs else None
         self.config = cfg
         self.instances: dict = {}           # lower name → (display name, object, POUType)
         self.tasks: list[Task] = []
-        cyc = parse_duration_arg(cycle) if cycle is not None else None
+        cyc = self.cycle
         if cfg is not None:
             for tm in cfg.tasks:
                 interval = tm.interval
                 if cfg.implicit or (interval == 0 and not tm.single):
                     interval = cyc or DEFAULT_CYCLE
-                self.tasks.append(Task(tm.name, interval, tm.priority, [], tm.single))
+                self.tasks.append(Task(tm.name, interval, tm.priority, [], tm.single, index=len(self.tasks)))
             by_task = {t.name.lower(): t for t in self.tasks}
             for im in cfg.instances:
                 obj = ns[im.type.pyname]()
@@ -84,12 +114,23 @@ class PLC:
         for t in self.tasks:
             t.calls = [(name, obj, ns.get("_cfg_in_" + name.lower()), ns.get("_cfg_out_" + name.lower()))
                        for name, obj, im in t.instances]
+            old = self._stats.get(t.name)
+            t.stats = old if old is not None and old.period == t.interval else TaskStats(t.name, t.interval)
+            self._stats[t.name] = t.stats
         intervals = [t.interval for t in self.tasks if t.interval > 0]
         self.tick = math.gcd(*intervals) if intervals else (cyc or DEFAULT_CYCLE)
-        self.watchdog = parse_duration_arg(watchdog) if watchdog is not None else None
-        self._located = self._collect_located()
+        self.policy = make_policy(self.policy_name, self.tasks, self.tick)
+        self._bind_image()
+        self._event_tasks = [t for t in self.tasks if t.single]
+        self._reset_releases(self._time)
 
-    # ------------------------------------------------------------------ construction
+    def _reset_releases(self, now: int) -> None:
+        for t in self.tasks:
+            t.pending = None
+            if t.interval > 0:
+                t.next_release = -(-now // t.interval) * t.interval     # the next multiple of the interval
+        self._next_tick = -(-now // self.tick) * self.tick
+
     @classmethod
     def from_source(cls, text: str, cycle=None, *, name: str = "<source>.st", **kw) -> "PLC":
         from ..api import compile_text
@@ -110,63 +151,229 @@ class PLC:
             except (KeyError, ValueError_) as e:
                 raise ValueError(f"{span.file}:{span.line}: VAR_CONFIG {'.'.join(path)}: {e}") from None
 
-    def _collect_located(self) -> dict:
-        """address → [(container, attribute, type)] for every located variable of every instance."""
-        out: dict = {}
+    # ------------------------------------------------------------------ process image
+    def _located(self):
+        """(address, container, key, type, owning instance name or None) of every located variable."""
         for lname, (name, obj, pou) in self.instances.items():
             for sym in pou.vars.values():
                 if sym.location and "*" not in sym.location:
-                    out.setdefault(_norm_addr(sym.location), []).append((obj, sym.pyname, sym.type))
+                    yield sym.location, obj, sym.pyname, sym.type, lname
         for g in self.project.globals.values():
             if g.location and "*" not in g.location:
-                out.setdefault(_norm_addr(g.location), []).append((self.ns, g.pyname, g.type))
+                yield g.location, self.ns, g.pyname, g.type, None
         for addr, (pyname, t) in self.project.direct_vars.items():
-            out.setdefault(_norm_addr(addr), []).append((self.ns, pyname, t))
+            yield addr, self.ns, pyname, t, None
         if self.config is not None:
             for path, location, init, ty, span in self.config.var_config:
                 if location and "*" not in location:
                     try:
                         container, key, t = self._resolve(".".join(path))
-                        out.setdefault(_norm_addr(location), []).append((container, key, t))
                     except KeyError:
-                        pass
-        return out
+                        continue
+                    yield location, container, key, t, path[0].lower()
 
-    # ------------------------------------------------------------------ time
+    def _bind_image(self) -> None:
+        """Each task latches the inputs of its own instances (and located globals) and publishes its outputs."""
+        self._bindings: dict = {}          # normalised address → [Binding]
+        self._binding_of: dict = {}        # (id(container), key) → Binding
+        owner_task = {}
+        for t in self.tasks:
+            t.ins, t.outs = [], []
+            for name, obj, im in t.instances:
+                owner_task[name.lower()] = t
+        for addr, container, key, t, inst in self._located():
+            try:
+                b = Binding(addr, container, key, t, self.image)
+            except AddressError as e:
+                raise ValueError(f"{addr}: {e}") from None
+            self._bindings.setdefault(_norm_addr(addr), []).append(b)
+            self._binding_of[(id(container), key)] = b
+            targets = [owner_task[inst]] if inst in owner_task else self.tasks
+            for task in targets:
+                if b.area in "IM":
+                    task.ins.append(b)
+                if b.area in "QM":
+                    task.outs.append(b)
+            b.publish() if b.area in "QM" else b.latch_in()
+
+    # ------------------------------------------------------------------ time and the engine
     @property
     def time(self) -> int:
         """The PLC time (ns) at which the next scan runs."""
         return self._time
 
+    def set_cost(self, task: str, cost) -> None:
+        """Simulated execution time of a task's job on virtual time (e.g. to study overload)."""
+        for t in self.tasks:
+            if t.name.lower() == task.lower():
+                t.cost = parse_duration_arg(cost)
+                return
+        raise KeyError(f"no task named {task!r}")
+
     def scan(self, n: int = 1) -> None:
-        """Run n base ticks on virtual time; each due task runs its program instances once."""
-        for _ in range(n):
-            self._tick()
+        """Run n base ticks on virtual time."""
+        self._run_virtual(self._time + n * self.tick)
 
     def advance(self, duration) -> None:
-        """Run scans on virtual time until `duration` more PLC time has passed."""
+        """Run on virtual time until `duration` more PLC time has passed (whole base ticks)."""
         d = parse_duration_arg(duration)
-        end = self._time + d
-        while self._time < end:
-            self._tick()
+        self._run_virtual(self._time + -(-d // self.tick) * self.tick)
 
-    def _tick(self) -> None:
-        if self.state == "FAULT":
+    def _run_virtual(self, t_end: int) -> None:
+        if self.state == FAULT:
             raise PLCFaultError(self.fault)
-        now = self._time
-        ns = self.ns
-        ns["_now"] = now
-        for task in self.tasks:
-            due = False
-            if task.single:
-                cur = bool(ns.get(task.single, False))
-                due = cur and not task.prev_single
-                task.prev_single = cur
-            elif task.interval > 0 and now % task.interval == 0:
-                due = True
-            if not due:
+        if not isinstance(self.clock, VirtualClock):
+            self.clock = VirtualClock(self._time)
+        if self.clock.now() < self._time:
+            self.clock.t = self._time
+        self._engine(t_end)
+
+    def run_realtime(self, scans: Optional[int] = None, duration=None, on_idle: Optional[Callable] = None,
+                     phase="500us", gc_control: bool = True, stop: Optional[threading.Event] = None) -> None:
+        """Pace the engine by CLOCK_MONOTONIC with absolute deadlines (no drift) until `scans` base ticks
+        or `duration` have passed, `stop` is set, or Ctrl-C. `on_idle(plc)` runs between jobs when there
+        is slack (status line, file watching). A fault ends the run with PLCFaultError."""
+        if self.state == FAULT:
+            raise PLCFaultError(self.fault)
+        end = math.inf
+        if scans is not None:
+            end = self._time + scans * self.tick
+        if duration is not None:
+            end = min(end, self._time + parse_duration_arg(duration))
+        self.clock = RealClock(self._time, parse_duration_arg(phase) if phase else 0)
+        gc_was = gc.isenabled()
+        if gc_control:
+            gc.collect()
+            gc.freeze()
+            gc.disable()
+        self._on_idle = on_idle
+        self._stop_event = stop
+        try:
+            self._engine(end)
+        finally:
+            self._on_idle = None
+            self._stop_event = None
+            if gc_control:
+                gc.unfreeze()
+                if gc_was:
+                    gc.enable()
+            self.clock = VirtualClock(self._time)
+
+    _on_idle = None
+    _stop_event = None
+
+    def _engine(self, t_end) -> None:
+        """Release and run jobs until PLC time t_end (exclusive for releases)."""
+        clock = self.clock
+        eager = self.policy.eager
+        key = self.policy.key
+        tasks = self.tasks
+        idle_jobs = 0
+        while True:
+            if self._stop_event is not None and self._stop_event.is_set():
+                self._time = max(self._time, min(self._next_tick, t_end))
+                return
+            now = clock.now()
+            if eager:
+                self._release_until(min(now, t_end - 1))
+                ready = [t for t in tasks if t.pending is not None]
+                if ready and self.state == RUN:
+                    task = min(ready, key=lambda t: key(t, t.pending))
+                    release = task.pending
+                    task.pending = None
+                    self._job(task, release)
+                    idle_jobs += 1
+                    continue
+                for t in ready:         # STOP or FAULT: releases lapse
+                    t.pending = None
+                nxt = min([t.next_release for t in tasks if t.interval > 0] +
+                          ([self._next_tick] if self._event_tasks else []) + [math.inf])
+            else:
+                nxt = self._next_tick
+                if nxt < t_end and nxt <= now:
+                    self._openplc_tick(nxt)
+                    idle_jobs += 1
+                    continue
+            self._time = max(self._time, min(t_end, max(self._next_tick, 0)))
+            if nxt >= t_end:
+                if t_end != math.inf:
+                    self._idle(t_end, idle_jobs)
+                    clock.sleep_until(t_end)
+                    self._time = t_end
+                    self.scans = t_end // self.tick
+                return
+            self._idle(nxt, idle_jobs)
+            idle_jobs = 0
+            clock.sleep_until(nxt)
+
+    def _idle(self, next_event: int, jobs_since: int) -> None:
+        """Slack before the next event: retained data, a young-generation GC, the caller's hook."""
+        if self.retain_store is not None and self.clock.now() >= self._next_retain:
+            self.commit_retained()
+            self._next_retain = self.clock.now() + self.retain_interval
+        if self.clock.real:
+            if jobs_since and next_event - self.clock.now() > 2_000_000:
+                gc.collect(0)
+            if self._on_idle is not None:
+                self._on_idle(self)
+
+    def _release_until(self, now: int) -> None:
+        """Eager policies: every periodic release up to `now` (a stale unstarted job is replaced), and
+        event tasks at the base ticks."""
+        for t in self.tasks:
+            if t.interval <= 0:
                 continue
-            budget = self.watchdog or max(10 * task.interval, 1_000_000_000)
+            while t.next_release <= now:
+                if t.pending is not None:
+                    t.stats.record_skip()
+                t.pending = t.next_release
+                t.next_release += t.interval
+        if self._event_tasks:
+            while self._next_tick <= now:
+                for t in self._event_tasks:
+                    if self._edge(t):
+                        if t.pending is not None:
+                            t.stats.record_skip()
+                        t.pending = self._next_tick
+                self._next_tick += self.tick
+        elif self._next_tick <= now:
+            self._next_tick = (now // self.tick + 1) * self.tick
+
+    def _edge(self, t: Task) -> bool:
+        cur = bool(self.ns.get(t.single, False))
+        rising = cur and not t.prev_single
+        t.prev_single = cur
+        return rising
+
+    def _openplc_tick(self, tick_time: int) -> None:
+        """OpenPLC v3: at base tick k, every due task runs, in declaration order (late ticks catch up)."""
+        for t in self.tasks:
+            if t.single:
+                due = self._edge(t)
+            else:
+                due = t.interval > 0 and tick_time % t.interval == 0
+            if due and self.state == RUN:
+                self._job(t, tick_time)
+        self._next_tick = tick_time + self.tick
+
+    def _job(self, task: Task, release: int) -> None:
+        """One execution of a task: latch inputs, run its instances, publish outputs, record statistics."""
+        clock = self.clock
+        start = clock.now()
+        ns = self.ns
+        lock = self.image_lock if self.policy.name == "frame" else None
+        if lock is not None:
+            lock.acquire()
+        try:
+            for b in task.ins:
+                b.latch_in()
+            ns["_now"] = release
+            if self.watchdog:
+                budget = self.watchdog
+            elif clock.real:
+                budget = 10 * (task.interval or self.tick)
+            else:
+                budget = max(10 * (task.interval or self.tick), 1_000_000_000)
             self._wd.start(budget)
             try:
                 for name, obj, cin, cout in task.calls:
@@ -175,60 +382,163 @@ class PLC:
                     obj._body()
                     if cout is not None:
                         cout(obj)
-            except Exception as exc:  # noqa: BLE001 - every fault of user code lands here
+            finally:
                 self._wd.stop()
-                info = fault_from_exception(exc, task.name)
-                self.state = "FAULT"
-                self.fault = info
-                raise PLCFaultError(info) from None
-            self._wd.stop()
-            task.runs += 1
-        self.scans += 1
-        self._time = now + self.tick
+            for b in task.outs:
+                b.publish()
+        except Exception as exc:  # noqa: BLE001 - every fault of user code lands here
+            info = fault_from_exception(exc, task.name)
+            self._enter_fault(info)
+            raise PLCFaultError(info) from None
+        finally:
+            if lock is not None:
+                lock.release()
+        clock.spend(task.cost)
+        task.stats.record(release, start, clock.now())
+        task.runs += 1
 
-    def run_realtime(self, scans: Optional[int] = None, duration=None, on_scan=None) -> None:
-        """Pace scans by CLOCK_MONOTONIC with absolute deadlines (no drift)."""
-        end_scans = self.scans + scans if scans is not None else None
-        stop_at = self._time + parse_duration_arg(duration) if duration is not None else None
-        t0 = _time.monotonic_ns() - self._time
-        while True:
-            if end_scans is not None and self.scans >= end_scans:
-                break
-            if stop_at is not None and self._time >= stop_at:
-                break
-            deadline = t0 + self._time
-            delay = deadline - _time.monotonic_ns()
-            if delay > 0:
-                _time.sleep(delay / 1e9)
-            self._tick()
-            if on_scan is not None:
-                on_scan(self)
+    # ------------------------------------------------------------------ states and faults
+    def _enter_fault(self, info: FaultInfo) -> None:
+        self.state = FAULT
+        self.fault = info
+        self.faults.append(info)
+        self._safe_outputs()
+
+    def _safe_outputs(self) -> None:
+        """Outputs to their safe values: FALSE/0, or what `safe_outputs` configures."""
+        self.image.clear("Q")
+        for addr, v in self.safe_outputs.items():
+            area, size, i = parse_address(addr)
+            self.image.tables[(area, size)][i] = v if size == "X" else int(v)
+
+    def stop(self) -> None:
+        """RUN → STOP: no task runs, outputs safe, retained data committed."""
+        if self.state == RUN:
+            self.state = STOP
+        self._safe_outputs()
+        if self.retain_store is not None:
+            self.commit_retained()
+
+    def start(self) -> None:
+        if self.state == FAULT:
+            raise PLCFaultError(self.fault)
+        self.state = RUN
+        self._reset_releases(self._time)
+        for t in self.tasks:
+            for b in t.outs:
+                b.publish()
 
     def reset_fault(self) -> None:
-        self.state = "RUN"
+        """FAULT → RUN with the program's state as the fault left it."""
+        self.state = RUN
         self.fault = None
+        self._reset_releases(self._time)
+
+    def restart(self) -> None:
+        """Warm restart after a fault (--on-fault restart): fresh instances, retained values restored."""
+        snapshot = self._retained_values() if self.retain_store is None else None
+        committed = self.retain_store.load() if self.retain_store is not None else snapshot
+        self.fault = None
+        self.state = RUN
+        self._load(self.compiled)
+        if committed:
+            self._restore_retained(committed)
+
+    def close(self) -> None:
+        """Clean shutdown: outputs safe, retained data committed and the store closed."""
+        self.stop()
+        if self.retain_store is not None:
+            self.retain_store.close()
+            self.retain_store = None
+
+    # ------------------------------------------------------------------ retained data
+    def _retained_paths(self):
+        """(path, container, key, type) of every RETAIN/PERSISTENT variable of the instances and globals."""
+        for lname, (name, obj, pou) in self.instances.items():
+            for sym in pou.vars.values():
+                if (sym.retain or sym.persistent) and sym.section not in ("VAR_EXTERNAL", "VAR_TEMP"):
+                    yield f"{name}.{sym.name}", obj, sym.pyname, sym.type
+        for g in self.project.globals.values():
+            if g.retain or g.persistent:
+                yield g.name, self.ns, g.pyname, g.type
+
+    def _retained_values(self) -> dict:
+        out = {}
+        for path, c, k, t in self._retained_paths():
+            out[path] = (str(t), to_python(c[k] if isinstance(c, dict) else getattr(c, k), t))
+        return out
+
+    def commit_retained(self) -> None:
+        if self.retain_store is not None:
+            self.retain_store.save(self._retained_values(), self._time)
+
+    def _restore_retained(self, saved: dict) -> int:
+        n = 0
+        for path, c, k, t in self._retained_paths():
+            got = saved.get(path)
+            if got is None or got[0] != str(t):
+                continue
+            try:
+                _restore_into(c, k, t, got[1])
+                n += 1
+            except (ValueError, KeyError, TypeError, IndexError):
+                continue
+        return n
+
+    # ------------------------------------------------------------------ statistics
+    def stats(self) -> list:
+        """Per-task statistics summaries (see runtime/stats.py)."""
+        return [t.stats.summary() for t in self.tasks]
 
     # ------------------------------------------------------------------ variables
     def __getitem__(self, path: str):
         if path.strip().startswith("%"):
-            binds = self._located.get(_norm_addr(path))
-            if not binds:
-                raise KeyError(f"no variable is located at {path}")
-            c, k, t = binds[0]
-            return to_python(_get(c, k), t)
+            return self._image_read(path)
         container, key, t = self._resolve(path)
         return to_python(_get(container, key), t)
 
     def __setitem__(self, path: str, value) -> None:
         if path.strip().startswith("%"):
-            binds = self._located.get(_norm_addr(path))
-            if not binds:
-                raise KeyError(f"no variable is located at {path}")
-            for c, k, t in binds:
-                _set(c, k, from_python(value, t, path))
+            self._image_write(path, value)
             return
         container, key, t = self._resolve(path)
-        _set(container, key, from_python(value, t, path))
+        v = from_python(value, t, path)
+        _set(container, key, v)
+        b = self._binding_of.get((id(container), key))
+        if b is not None:                   # keep the image in step, or the next latch would undo the write
+            b.table[b.index] = to_raw(v, t, b.size)
+
+    def _image_read(self, addr: str):
+        """%I, %Q, %M read from the process image (what I/O and the HMI see), typed by the bound variable."""
+        try:
+            area, size, i = parse_address(addr)
+        except AddressError as e:
+            raise KeyError(str(e)) from None
+        raw = self.image.tables[(area, size)][i]
+        binds = self._bindings.get(_norm_addr(addr))
+        if binds:
+            return to_python(from_raw(raw, binds[0].type, size), binds[0].type)
+        return raw
+
+    def _image_write(self, addr: str, value) -> None:
+        """Write an image cell; %Q and %M also write their variables (the program would overwrite them)."""
+        try:
+            area, size, i = parse_address(addr)
+        except AddressError as e:
+            raise KeyError(str(e)) from None
+        binds = self._bindings.get(_norm_addr(addr), [])
+        if binds:
+            t = binds[0].type
+            v = from_python(value, t, addr)
+            raw = to_raw(v, t, size)
+            if area in "QM":
+                for b in binds:
+                    b.write_var(from_python(value, b.type, addr))
+        else:
+            if isinstance(value, bool) and size != "X" or not isinstance(value, (bool, int)):
+                raise ValueError_(f"{addr}: expected {'a BOOL' if size == 'X' else 'an integer'}, got {value!r}")
+            raw = value
+        self.image.set(addr, raw)
 
     def _resolve(self, path: str):
         """path → (container, key, type): key is an attribute name or a list index."""
@@ -304,6 +614,34 @@ class PLC:
 
     def globals(self) -> dict:
         return {g.name: to_json(self.ns[g.pyname], g.type) for g in self.project.globals.values()}
+
+
+def _restore_into(container, key, t, value) -> None:
+    """Write a to_python-form value back into a variable, aggregates element by element."""
+    ut = T.unalias(t)
+    if isinstance(ut, T.ArrayType):
+        arr = _get(container, key)
+        flat = _flatten(value, len(ut.dims))
+        if len(flat) != len(arr):
+            raise ValueError("array size changed")
+        for i, v in enumerate(flat):
+            _restore_into(arr, i, ut.element, v)
+    elif isinstance(ut, (T.StructType, T.POUType)):
+        obj = _get(container, key)
+        members = ut.members if isinstance(ut, T.StructType) else ut.vars
+        for m in members.values():
+            if m.name in value and getattr(m, "section", "") not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
+                _restore_into(obj, m.pyname, m.type, value[m.name])
+    elif isinstance(ut, T.RefType):
+        return
+    else:
+        _set(container, key, from_python(value, t, ""))
+
+
+def _flatten(v, depth: int) -> list:
+    if depth <= 1:
+        return list(v)
+    return [x for row in v for x in _flatten(row, depth - 1)]
 
 
 class _Holder:

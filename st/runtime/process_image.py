@@ -1,0 +1,139 @@
+"""The process image: %I, %Q and %M in OpenPLC v3's layout, latched at scan boundaries.
+
+OpenPLC keeps one table per area and size (`bool_input[1024][8]`, `int_input[1024]`,
+`int_memory[1024]`, `dint_memory[1024]`, …) instead of IEC's overlapping byte view, and so
+do we: `%IX3.2` is bit 2 of byte 3 of the input bits, `%IW3` is the fourth input word, and the
+two do not alias. Each table has 1024 entries (8192 bits for X). Cells hold raw unsigned bits
+(a REAL at `%MD0` is its IEEE-754 pattern); variables are converted on latch.
+
+A scan of a task: `latch_in` copies `%I` (and `%M`, which an HMI may have written) into the
+located variables of the task's program instances and the located globals; `publish`
+copies `%Q` and `%M` variables back into the image at the end.
+"""
+from __future__ import annotations
+
+import re
+import struct
+
+from ..compiler import types as T
+
+SIZES = {"X": 1, "B": 8, "W": 16, "D": 32, "L": 64}
+TABLE_LEN = 1024
+_ADDR = re.compile(r"%([IQM])([XBWDL]?)([0-9]+)(?:\.([0-9]+))?$", re.I)
+
+
+class AddressError(KeyError):
+    pass
+
+
+def parse_address(addr: str):
+    """'%QX1.2' → ('Q', 'X', 10); '%IW3' → ('I', 'W', 3). Bits count byte × 8 + bit."""
+    m = _ADDR.match(addr.strip().upper())
+    if not m:
+        raise AddressError(f"malformed address {addr!r}")
+    area, size, a, b = m.group(1), m.group(2) or "X", int(m.group(3)), m.group(4)
+    if size == "X":
+        if b is None:
+            raise AddressError(f"{addr}: a bit address needs byte.bit, e.g. %{area}X0.0")
+        bit = int(b)
+        if bit > 7:
+            raise AddressError(f"{addr}: bit {bit} is not 0..7")
+        index = a * 8 + bit
+        limit = TABLE_LEN * 8
+    else:
+        if b is not None:
+            raise AddressError(f"{addr}: only bit addresses (X) have a '.'")
+        index, limit = a, TABLE_LEN
+    if index >= limit:
+        raise AddressError(f"{addr} is outside the process image ({TABLE_LEN} entries per table)")
+    return area, size, index
+
+
+class ProcessImage:
+    def __init__(self):
+        self.tables = {(a, s): ([False] if s == "X" else [0]) * (TABLE_LEN * (8 if s == "X" else 1))
+                       for a in "IQM" for s in SIZES}
+
+    def get(self, addr: str):
+        area, size, i = parse_address(addr)
+        return self.tables[(area, size)][i]
+
+    def set(self, addr: str, raw) -> None:
+        area, size, i = parse_address(addr)
+        self.tables[(area, size)][i] = _mask(raw, size)
+
+    def clear(self, area: str) -> None:
+        for s in SIZES:
+            t = self.tables[(area, s)]
+            t[:] = [False if s == "X" else 0] * len(t)
+
+
+def _mask(raw, size):
+    if size == "X":
+        return bool(raw)
+    return int(raw) & ((1 << SIZES[size]) - 1)
+
+
+# ---------------------------------------------------------------------- value ↔ raw bits
+
+_F = struct.Struct("<f")
+_D = struct.Struct("<d")
+
+
+def to_raw(v, t: T.Type, size: str):
+    """A variable's value as the unsigned bits of its image cell."""
+    if size == "X":
+        return bool(v)
+    bt = T.base_of(t)
+    bits = SIZES[size]
+    if bt.is_real:
+        return int.from_bytes(_F.pack(v) if bits == 32 else _D.pack(v), "little") if bits in (32, 64) else 0
+    return int(v) & ((1 << bits) - 1)
+
+
+def from_raw(raw, t: T.Type, size: str):
+    """An image cell's bits as a value of the variable's type."""
+    if size == "X":
+        return bool(raw)
+    bt = T.base_of(t)
+    bits = SIZES[size]
+    if bt.is_real:
+        if bits == 32:
+            return _F.unpack(raw.to_bytes(4, "little"))[0]
+        if bits == 64:
+            return _D.unpack(raw.to_bytes(8, "little"))[0]
+        return 0.0
+    if bt.is_bool:
+        return bool(raw)
+    if isinstance(bt, T.ElemType) and bt.signed and raw >= 1 << (bits - 1):
+        return raw - (1 << bits)
+    return raw
+
+
+class Binding:
+    """One located variable: where it lives (container + attribute/key) and its image cell."""
+
+    __slots__ = ("addr", "area", "size", "index", "container", "key", "type", "table")
+
+    def __init__(self, addr, container, key, t, image: ProcessImage):
+        self.addr = addr
+        self.area, self.size, self.index = parse_address(addr)
+        self.container, self.key, self.type = container, key, t
+        self.table = image.tables[(self.area, self.size)]
+
+    def read_var(self):
+        c = self.container
+        return c[self.key] if isinstance(c, dict) else getattr(c, self.key)
+
+    def write_var(self, v) -> None:
+        c = self.container
+        if isinstance(c, dict):
+            c[self.key] = v
+        else:
+            setattr(c, self.key, v)
+
+    def latch_in(self) -> None:
+        self.write_var(from_raw(self.table[self.index], self.type, self.size))
+
+    def publish(self) -> None:
+        self.table[self.index] = to_raw(self.read_var(), self.type, self.size)
