@@ -1,7 +1,6 @@
 """The `st` command line: check, compile, run, test, explain."""
 from __future__ import annotations
 
-import json
 import sys
 
 import click
@@ -90,45 +89,42 @@ def compile(files, emit, time_unit, f_trig_first_scan):
 @click.option("--scans", type=int, default=None, help="Stop after N base ticks.")
 @click.option("--duration", default=None, help="Stop after this much PLC time (e.g. 5s).")
 @click.option("--cycle", default=None, help="Task cycle for a program without CONFIGURATION (default 10ms).")
-@click.option("--virtual/--realtime", default=None,
-              help="Run on virtual time (as fast as possible) or paced by the clock. "
-                   "Default: virtual when --scans or --duration is given, else real time.")
+@click.option("--virtual", is_flag=True, help="Run on virtual time, as fast as the CPU allows (default: real time).")
+@click.option("--policy", type=click.Choice(["openplc", "priority", "edf", "frame"]), default="openplc",
+              show_default=True, help="Scheduling policy (docs/runtime.md).")
 @click.option("--dump-json", is_flag=True, help="After the run, print every variable as one JSON object.")
+@click.option("--stats-json", type=click.Path(), default=None, help="Write per-task statistics to this JSON file.")
+@click.option("--stats-plot", type=click.Path(), default=None, help="Draw the wake-up latency histogram (PNG).")
+@click.option("--on-fault", type=click.Choice(["stop", "restart"]), default="stop", show_default=True,
+              help="After a fault: stay in FAULT with safe outputs, or restart warm.")
+@click.option("--watchdog", default=None, help="Watchdog budget per task (default 10 x its interval).")
+@click.option("--retain", "retain_file", type=click.Path(), default=None,
+              help="SQLite file for RETAIN/PERSISTENT variables (default: <program>.retain.db when there are any).")
+@click.option("--no-retain", is_flag=True, help="Do not keep retained variables.")
+@click.option("--retain-interval", default="1s", show_default=True, help="How often retained data is committed.")
+@click.option("--cold", is_flag=True, help="Cold start: clear retained data first.")
+@click.option("--watch", is_flag=True, help="Online change: recompile when a file changes and swap at a scan boundary.")
+@click.option("--rt/--no-rt", default=True, help="Real time: ask for SCHED_FIFO, mlockall, cpu_dma_latency (default on).")
+@click.option("--rt-priority", type=int, default=30, show_default=True, help="SCHED_FIFO priority.")
+@click.option("--cpu", type=int, default=None, help="Pin the scan to this CPU.")
+@click.option("--sim-cost", multiple=True, metavar="TASK=DURATION",
+              help="Virtual time: simulated execution time of a task's job (overload studies).")
+@click.option("--quiet", "-q", is_flag=True, help="No live status line and no summary.")
 @dialect
-def run(files, scans, duration, cycle, virtual, dump_json, time_unit, f_trig_first_scan):
-    """Run a program: its CONFIGURATION's tasks, or its PROGRAM as one cyclic task."""
-    from .runtime.plc import PLC, PLCFaultError
+def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, stats_plot, on_fault, watchdog,
+        retain_file, no_retain, retain_interval, cold, watch, rt, rt_priority, cpu, sim_cost, quiet, time_unit,
+        f_trig_first_scan):
+    """Run a program: its CONFIGURATION's tasks (or a lone PROGRAM as one cyclic task), in real time
+    with a live status line until Ctrl-C, --duration or --scans; --virtual runs on virtual time."""
+    from .runtime.session import RunOptions, run_plc
     result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
-    try:
-        plc = PLC(result, cycle)
-    except (ValueError, MemoryError) as e:
-        click.echo(f"error: cannot start the PLC: {e or type(e).__name__}", err=True)
-        sys.exit(2)
-    if not plc.instances:
-        click.echo("error: nothing to run: no PROGRAM and no CONFIGURATION", err=True)
-        sys.exit(1)
-    if virtual is None:
-        virtual = scans is not None or duration is not None
-    code = 0
-    try:
-        if virtual:
-            if scans is not None:
-                plc.scan(scans)
-            if duration is not None:
-                plc.advance(duration)
-        else:
-            plc.run_realtime(scans=scans, duration=duration)
-    except PLCFaultError as e:
-        click.echo(str(e.fault), err=True)
-        code = 3
-    except KeyboardInterrupt:
-        pass
-    if dump_json:
-        click.echo(json.dumps(plc.variables(), indent=None))
-    else:
-        click.echo(f"stopped after {plc.scans} scan(s) at PLC time {plc.time / 1e9:g} s, state {plc.state}",
-                   err=True)
-    sys.exit(code)
+    opts = RunOptions(files=list(files), scans=scans, duration=duration, cycle=cycle, virtual=virtual,
+                      policy=policy, dump_json=dump_json, stats_json=stats_json, stats_plot=stats_plot,
+                      on_fault=on_fault, watchdog=watchdog, retain_file=retain_file, no_retain=no_retain,
+                      retain_interval=retain_interval, cold=cold, watch=watch, rt=rt, rt_priority=rt_priority,
+                      cpu=cpu, sim_cost=list(sim_cost), quiet=quiet, time_unit=time_unit,
+                      f_trig_first_scan=f_trig_first_scan)
+    sys.exit(run_plc(result, opts))
 
 
 @main.command("test")

@@ -203,10 +203,11 @@ class PLC:
         return self._time
 
     def set_cost(self, task: str, cost) -> None:
-        """Simulated execution time of a task's job on virtual time (e.g. to study overload)."""
+        """Simulated execution time of a task's job on virtual time (to study overload): a duration,
+        or a callable returning ns for each job (e.g. random execution times)."""
         for t in self.tasks:
             if t.name.lower() == task.lower():
-                t.cost = parse_duration_arg(cost)
+                t.cost = cost if callable(cost) else parse_duration_arg(cost)
                 return
         raise KeyError(f"no task named {task!r}")
 
@@ -240,12 +241,12 @@ class PLC:
             end = self._time + scans * self.tick
         if duration is not None:
             end = min(end, self._time + parse_duration_arg(duration))
-        self.clock = RealClock(self._time, parse_duration_arg(phase) if phase else 0)
         gc_was = gc.isenabled()
         if gc_control:
             gc.collect()
             gc.freeze()
             gc.disable()
+        self.clock = RealClock(self._time, parse_duration_arg(phase) if phase else 0)
         self._on_idle = on_idle
         self._stop_event = stop
         try:
@@ -261,6 +262,7 @@ class PLC:
 
     _on_idle = None
     _stop_event = None
+    idle_slack = 0              # ns until the next release, as seen by an `on_idle` hook
 
     def _engine(self, t_end) -> None:
         """Release and run jobs until PLC time t_end (exclusive for releases)."""
@@ -274,6 +276,10 @@ class PLC:
                 self._time = max(self._time, min(self._next_tick, t_end))
                 return
             now = clock.now()
+            if now >= t_end:            # overloaded on virtual time: the clock passed the end; stop here
+                self._time = max(self._time, t_end)
+                self.scans = self._time // self.tick
+                return
             if eager:
                 self._release_until(min(now, t_end - 1))
                 ready = [t for t in tasks if t.pending is not None]
@@ -315,6 +321,7 @@ class PLC:
             if jobs_since and next_event - self.clock.now() > 2_000_000:
                 gc.collect(0)
             if self._on_idle is not None:
+                self.idle_slack = next_event - self.clock.now()
                 self._on_idle(self)
 
     def _release_until(self, now: int) -> None:
@@ -368,13 +375,8 @@ class PLC:
             for b in task.ins:
                 b.latch_in()
             ns["_now"] = release
-            if self.watchdog:
-                budget = self.watchdog
-            elif clock.real:
-                budget = 10 * (task.interval or self.tick)
-            else:
-                budget = max(10 * (task.interval or self.tick), 1_000_000_000)
-            self._wd.start(budget)
+            self._wd.start(self.watchdog or (10 * (task.interval or self.tick) if clock.real else
+                                             max(10 * (task.interval or self.tick), 1_000_000_000)))
             try:
                 for name, obj, cin, cout in task.calls:
                     if cin is not None:
@@ -388,12 +390,15 @@ class PLC:
                 b.publish()
         except Exception as exc:  # noqa: BLE001 - every fault of user code lands here
             info = fault_from_exception(exc, task.name)
+            # the faulting job consumes its base tick: a restart resumes with the next one
+            self._time = max(self._time, (clock.now() // self.tick + 1) * self.tick)
             self._enter_fault(info)
             raise PLCFaultError(info) from None
         finally:
             if lock is not None:
                 lock.release()
-        clock.spend(task.cost)
+        cost = task.cost
+        clock.spend(cost() if callable(cost) else cost)
         task.stats.record(release, start, clock.now())
         task.runs += 1
 
@@ -403,6 +408,9 @@ class PLC:
         self.fault = info
         self.faults.append(info)
         self._safe_outputs()
+        if self.retain_store is not None:
+            # as a PLC's retain memory: the values as the faulting scan left them, nothing lost
+            self.commit_retained()
 
     def _safe_outputs(self) -> None:
         """Outputs to their safe values: FALSE/0, or what `safe_outputs` configures."""
@@ -484,6 +492,54 @@ class PLC:
             except (ValueError, KeyError, TypeError, IndexError):
                 continue
         return n
+
+    # ------------------------------------------------------------------ online change
+    def online_change(self, compiled: CompiledProgram) -> str:
+        """Swap in a new build of the program at this scan boundary, carrying every variable over by
+        name and type. Raises ValueError (and keeps the running program) when that is not possible:
+        the configuration changed, or a variable kept its name but changed its type."""
+        problems = self._change_problems(compiled)
+        if problems:
+            raise ValueError("online change refused, the old program keeps running:\n  " + "\n  ".join(problems))
+        old_instances = {k: (n, o, p) for k, (n, o, p) in self.instances.items()}
+        old_globals = {g.name.lower(): (g, self.ns[g.pyname]) for g in self.project.globals.values()}
+        old_ns = self.ns
+        self._load(compiled)
+        for key, (name, obj, pou) in self.instances.items():
+            old = old_instances.get(key)
+            if old is not None:
+                _restore_into(_Holder(obj), "v", pou, to_python(old[1], old[2]))
+        for g in self.project.globals.values():
+            og = old_globals.get(g.name.lower())
+            if og is not None and str(og[0].type) == str(g.type):
+                _restore_into(self.ns, g.pyname, g.type, to_python(og[1], og[0].type))
+        self.ns["_now"] = old_ns.get("_now", 0)
+        for t in self.tasks:
+            for b in t.outs:
+                b.publish()
+        return f"online change: {len(self.instances)} instance(s) carried over"
+
+    def _change_problems(self, compiled: CompiledProgram) -> list:
+        new_cfg = compiled.project.configs[0] if compiled.project.configs else None
+        out = []
+
+        def shape(cfg):
+            if cfg is None:
+                return set(), set()
+            return ({(t.name.lower(), t.interval, t.priority, t.single) for t in cfg.tasks},
+                    {(i.name.lower(), i.type.name.lower(), i.task.lower()) for i in cfg.instances})
+        if shape(self.config) != shape(new_cfg):
+            out.append("the configuration's tasks or program instances changed (restart the PLC to apply it)")
+        new_pous = {i.name.lower(): i.type for i in (new_cfg.instances if new_cfg else [])}
+        for key, (name, obj, pou) in self.instances.items():
+            if key in new_pous:
+                _type_changes(pou, new_pous[key], name, out)
+        new_globals = {g.name.lower(): g for g in compiled.project.globals.values()}
+        for g in self.project.globals.values():
+            ng = new_globals.get(g.name.lower())
+            if ng is not None:
+                _type_changes(g.type, ng.type, g.name, out)
+        return out
 
     # ------------------------------------------------------------------ statistics
     def stats(self) -> list:
@@ -636,6 +692,21 @@ def _restore_into(container, key, t, value) -> None:
         return
     else:
         _set(container, key, from_python(value, t, ""))
+
+
+def _type_changes(old: T.Type, new: T.Type, path: str, out: list) -> None:
+    """Variables that keep their name but change their type (their values cannot be carried over)."""
+    uo, un = T.unalias(old), T.unalias(new)
+    if isinstance(uo, (T.POUType, T.StructType)) and isinstance(un, (T.POUType, T.StructType)) \
+            and type(uo) is type(un) and uo.name.lower() == un.name.lower():
+        om = uo.members if isinstance(uo, T.StructType) else uo.vars
+        nm = un.members if isinstance(un, T.StructType) else un.vars
+        for k, m in om.items():
+            if k in nm and getattr(m, "section", "") not in ("VAR_TEMP", "VAR_EXTERNAL", "VAR_IN_OUT"):
+                _type_changes(m.type, nm[k].type, f"{path}.{m.name}", out)
+        return
+    if str(old) != str(new):
+        out.append(f"{path} changed its type from {old} to {new}")
 
 
 def _flatten(v, depth: int) -> list:

@@ -110,30 +110,51 @@ def from_raw(raw, t: T.Type, size: str):
     return raw
 
 
+def _converters(t: T.Type, size: str):
+    """(raw → value, value → raw) for one variable type and cell size, decided once per binding."""
+    if size == "X":
+        return bool, bool
+    bt = T.base_of(t)
+    bits = SIZES[size]
+    mask = (1 << bits) - 1
+    if bt.is_real or bt.is_bool or not (isinstance(bt, T.ElemType) and bt.signed):
+        return (lambda raw: from_raw(raw, t, size)), (lambda v: to_raw(v, t, size))
+    half = 1 << (bits - 1)
+    full = 1 << bits
+    return (lambda raw: raw - full if raw >= half else raw), (lambda v: v & mask)
+
+
 class Binding:
     """One located variable: where it lives (container + attribute/key) and its image cell."""
 
-    __slots__ = ("addr", "area", "size", "index", "container", "key", "type", "table")
+    __slots__ = ("addr", "area", "size", "index", "container", "key", "type", "table", "conv_in", "conv_out",
+                 "is_dict")
 
     def __init__(self, addr, container, key, t, image: ProcessImage):
         self.addr = addr
         self.area, self.size, self.index = parse_address(addr)
         self.container, self.key, self.type = container, key, t
         self.table = image.tables[(self.area, self.size)]
+        self.conv_in, self.conv_out = _converters(t, self.size)
+        self.is_dict = isinstance(container, dict)
 
     def read_var(self):
         c = self.container
-        return c[self.key] if isinstance(c, dict) else getattr(c, self.key)
+        return c[self.key] if self.is_dict else getattr(c, self.key)
 
     def write_var(self, v) -> None:
-        c = self.container
-        if isinstance(c, dict):
-            c[self.key] = v
+        if self.is_dict:
+            self.container[self.key] = v
         else:
-            setattr(c, self.key, v)
+            setattr(self.container, self.key, v)
 
     def latch_in(self) -> None:
-        self.write_var(from_raw(self.table[self.index], self.type, self.size))
+        v = self.conv_in(self.table[self.index])
+        if self.is_dict:
+            self.container[self.key] = v
+        else:
+            setattr(self.container, self.key, v)
 
     def publish(self) -> None:
-        self.table[self.index] = to_raw(self.read_var(), self.type, self.size)
+        c = self.container
+        self.table[self.index] = self.conv_out(c[self.key] if self.is_dict else getattr(c, self.key))

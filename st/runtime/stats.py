@@ -3,11 +3,11 @@
 For every job (one execution of a task): its release a (the ideal start), its start t and its
 end e. Wake-up latency = t − a (the thesis's jitter J); execution time = e − t; response time
 R = e − a; period = t − previous t. A job overruns when it ends after its next release
-(R ≥ period), and a release that finds the previous job not yet started is skipped (also an
-overrun). The (m,k)-firm time utility U(T_i) = (1/k) Σ u over the last k jobs, u = 1 when R < C
+(R ≥ period); a release that finds the previous job not yet started is skipped (counted apart
+from overruns). The (m,k)-firm time utility U(T_i) = (1/k) Σ u over the last k jobs, u = 1 when R < C
 (thesis eq. 3.4); a skipped job counts u = 0.
 
-Samples are kept in a bounded ring (the latest `keep`), so percentiles describe the recent
+Samples are kept in bounded deques (the latest `keep`), so percentiles describe the recent
 window while min/avg/max and counts cover the whole run. Recording is a few list operations.
 """
 from __future__ import annotations
@@ -32,9 +32,8 @@ class TaskStats:
         self.exec_min = math.inf
         self.exec_max = 0
         self.exec_sum = 0
-        self.latencies: list = []  # ring of the latest `keep` samples (ns)
-        self.periods: list = []    # start-to-start intervals (ns), same ring size
-        self._ring = 0
+        self.latencies: deque = deque(maxlen=keep)  # the latest `keep` samples (ns)
+        self.periods: deque = deque(maxlen=keep)    # start-to-start intervals (ns)
         self._last_start = None
         self.utility_window: deque = deque(maxlen=k)
         self.mk_violations = 0     # windows (after the first k jobs) with U < m/k
@@ -53,22 +52,13 @@ class TaskStats:
         if ex > self.exec_max:
             self.exec_max = ex
         self.exec_sum += ex
-        period = self.period
-        late = period > 0 and end - release >= period
+        self.latencies.append(lat)
+        if self._last_start is not None:
+            self.periods.append(start - self._last_start)
+        self._last_start = start
+        late = end - release >= self.period > 0
         if late:
             self.overruns += 1
-        if len(self.latencies) < self.keep:
-            self.latencies.append(lat)
-        else:
-            self.latencies[self._ring] = lat
-        if self._last_start is not None:
-            p = start - self._last_start
-            if len(self.periods) < self.keep:
-                self.periods.append(p)
-            else:
-                self.periods[self._ring] = p
-        self._ring = (self._ring + 1) % self.keep if len(self.latencies) >= self.keep else self._ring
-        self._last_start = start
         self._utility(0 if late else 1)
 
     def record_skip(self, n: int = 1) -> None:
