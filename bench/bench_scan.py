@@ -112,7 +112,8 @@ def main(argv=None) -> int:
         lib = os.path.join(tmp, "plantlib.st")
         with open(lib, "w") as f:
             f.write(generate(a.lines))
-        paths = sorted(glob.glob(os.path.join(root, "programs", "*.st"))) + [lib]
+        paths = sorted(p for p in glob.glob(os.path.join(root, "programs", "*.st"))
+                       if not os.path.basename(p).startswith("test_")) + [lib]
         print(f"ns per scan: median of {a.runs} runs of {a.scans} scans, gc disabled "
               f"(Python {sys.version.split()[0]})\n")
         print(f"{'program':28} {'lines':>6} {'tick':>6} {'ns/scan':>10} {'min':>10} {'max':>10}")

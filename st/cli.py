@@ -109,11 +109,13 @@ def compile(files, emit, time_unit, f_trig_first_scan):
 @click.option("--cpu", type=int, default=None, help="Pin the scan to this CPU.")
 @click.option("--sim-cost", multiple=True, metavar="TASK=DURATION",
               help="Virtual time: simulated execution time of a task's job (overload studies).")
+@click.option("--safe-output", "safe_outputs", multiple=True, metavar="ADDR=VALUE",
+              help="Value of an output in STOP and FAULT (default FALSE/0), e.g. %QX0.1=TRUE.")
 @click.option("--quiet", "-q", is_flag=True, help="No live status line and no summary.")
 @dialect
 def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, stats_plot, on_fault, watchdog,
-        retain_file, no_retain, retain_interval, cold, watch, rt, rt_priority, cpu, sim_cost, quiet, time_unit,
-        f_trig_first_scan):
+        retain_file, no_retain, retain_interval, cold, watch, rt, rt_priority, cpu, sim_cost, safe_outputs, quiet,
+        time_unit, f_trig_first_scan):
     """Run a program: its CONFIGURATION's tasks (or a lone PROGRAM as one cyclic task), in real time
     with a live status line until Ctrl-C, --duration or --scans; --virtual runs on virtual time."""
     from .runtime.session import RunOptions, run_plc
@@ -122,7 +124,7 @@ def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, s
                       policy=policy, dump_json=dump_json, stats_json=stats_json, stats_plot=stats_plot,
                       on_fault=on_fault, watchdog=watchdog, retain_file=retain_file, no_retain=no_retain,
                       retain_interval=retain_interval, cold=cold, watch=watch, rt=rt, rt_priority=rt_priority,
-                      cpu=cpu, sim_cost=list(sim_cost), quiet=quiet, time_unit=time_unit,
+                      cpu=cpu, sim_cost=list(sim_cost), safe_outputs=list(safe_outputs), quiet=quiet, time_unit=time_unit,
                       f_trig_first_scan=f_trig_first_scan)
     sys.exit(run_plc(result, opts))
 

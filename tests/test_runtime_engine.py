@@ -53,6 +53,16 @@ def test_every_task_runs_at_its_interval_under_every_policy(policy, first_tick):
     assert plc.tick == 10_000_000 and plc.time == 1_000_000_000
 
 
+def test_several_program_instances_share_a_task_and_run_in_declaration_order():
+    src = ORDER.replace("PROGRAM p_mid WITH mid : Rec (id := 20);",
+                        "PROGRAM p_mid WITH mid : Rec (id := 20);\n    PROGRAM p_fast2 WITH fast : Rec (id := 11);")
+    plc = PLC.from_source(src, policy="edf")
+    plc.scan(2)                      # ticks 0 and 10 ms: fast's job runs p_fast then p_fast2 each time
+    assert plc["log"][:6] == [10, 11, 20, 40, 10, 11]
+    assert [t.runs for t in plc.tasks] == [1, 2, 1, 0]
+    assert plc["p_fast2.id"] == 11 and plc.tasks[1].stats.jobs == 2
+
+
 def test_event_task_runs_once_per_rising_edge():
     for policy in ("openplc", "priority"):
         plc = PLC.from_source(ORDER, policy=policy)
@@ -329,3 +339,31 @@ def test_st_run_real_time_for_a_short_duration(tmp_path):
     assert out.returncode == 0, out.stderr
     d = json.loads((tmp_path / "s.json").read_text())
     assert d["clock"] == "real" and d["tasks"][0]["jobs"] == 30
+
+
+WATCHED = """PROGRAM P VAR x : DINT; y : INT; END_VAR x := x + 1; END_PROGRAM
+CONFIGURATION c RESOURCE r ON PLC
+  TASK a (INTERVAL := T#10ms, PRIORITY := 1);
+  PROGRAM p1 WITH a : P;
+END_RESOURCE END_CONFIGURATION
+"""
+
+
+def test_st_run_watch_swaps_new_code_in_and_refuses_a_type_change(tmp_path):
+    prog = tmp_path / "w.st"
+    prog.write_text(WATCHED)
+    child = subprocess.Popen([sys.executable, "-m", "st.cli", "run", str(prog), "--duration", "4s", "--no-rt",
+                              "--watch", "--dump-json", "--stats-plot", str(tmp_path / "lat.png")],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.2)
+    prog.write_text(WATCHED.replace("x := x + 1;", "x := x + 1000;"))
+    time.sleep(1.2)
+    prog.write_text(WATCHED.replace("y : INT", "y : REAL").replace("x := x + 1;", "x := x + 7;"))
+    out, err = child.communicate(timeout=60)
+    assert child.returncode == 0, err
+    assert "online change: 1 instance(s) carried over" in err
+    assert "online change refused, the old program keeps running:\n  p1.y changed its type from INT to REAL" in err
+    x = json.loads(out.splitlines()[-1])["p1.x"]
+    before, after = x % 1000, x // 1000                  # jobs of the first build, then of the second
+    assert before > 50 and after > 50 and before + after == 400
+    assert (tmp_path / "lat.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -57,7 +57,10 @@ class PLC:
         self.cycle = parse_duration_arg(cycle) if cycle is not None else None
         self.watchdog = parse_duration_arg(watchdog) if watchdog is not None else None
         self.policy_name = policy
-        self.safe_outputs = {k: v for k, v in (safe_outputs or {}).items()}
+        self.safe_outputs = dict(safe_outputs or {})
+        for addr in self.safe_outputs:
+            if parse_address(addr)[0] != "Q":
+                raise ValueError(f"safe output {addr}: only outputs (%Q…) have safe values")
         self.image = ProcessImage()
         self.image_lock = threading.Lock()      # held by a job under the frame policy (the thesis's semaphore)
         self.state = RUN

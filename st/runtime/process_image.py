@@ -23,7 +23,8 @@ _ADDR = re.compile(r"%([IQM])([XBWDL]?)([0-9]+)(?:\.([0-9]+))?$", re.I)
 
 
 class AddressError(KeyError):
-    pass
+    def __str__(self) -> str:           # KeyError would quote the message
+        return str(self.args[0]) if self.args else ""
 
 
 def parse_address(addr: str):

@@ -43,6 +43,7 @@ class RunOptions:
     rt_priority: int = 30
     cpu: Optional[int] = None
     sim_cost: list = field(default_factory=list)
+    safe_outputs: list = field(default_factory=list)      # ["%QX0.1=TRUE", "%QW3=100"]
     quiet: bool = False
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
@@ -65,7 +66,7 @@ def run_plc(compiled, o: RunOptions) -> int:
         retain = o.retain_file or str(Path(o.files[0]).with_suffix(".retain.db"))
     try:
         plc = PLC(compiled, o.cycle, watchdog=o.watchdog, policy=o.policy, retain=retain,
-                  retain_interval=o.retain_interval, cold=o.cold)
+                  retain_interval=o.retain_interval, cold=o.cold, safe_outputs=_safe_values(o.safe_outputs))
         for spec in o.sim_cost:
             name, _, cost = spec.partition("=")
             plc.set_cost(name.strip(), cost.strip())
@@ -103,6 +104,24 @@ def run_plc(compiled, o: RunOptions) -> int:
         _restore_signals(old_handlers)
     _report(plc, o)
     return code
+
+
+def _safe_values(specs: list) -> dict:
+    """["%QX0.1=TRUE", "%QW3=100"] → {"%QX0.1": True, "%QW3": 100}."""
+    out = {}
+    for spec in specs:
+        addr, sep, text = spec.partition("=")
+        text = text.strip().upper()
+        if not sep or not text:
+            raise ValueError(f"--safe-output {spec!r}: expected ADDRESS=VALUE, e.g. %QX0.1=TRUE")
+        if text in ("TRUE", "FALSE"):
+            out[addr.strip()] = text == "TRUE"
+            continue
+        try:
+            out[addr.strip()] = int(text, 0)
+        except ValueError:
+            raise ValueError(f"--safe-output {spec!r}: the value must be TRUE, FALSE or an integer") from None
+    return out
 
 
 def _run_virtual(plc: PLC, o: RunOptions, stop) -> int:

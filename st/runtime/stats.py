@@ -127,6 +127,16 @@ class TaskStats:
         return [i * bin_us for i in range(n + 1)], counts
 
 
+def _nice_bin(raw_us: float) -> float:
+    """The smallest of 1, 2, 5, 10, 20, 50, … µs that is at least raw_us."""
+    step = 1.0
+    while True:
+        for m in (1, 2, 5):
+            if m * step >= raw_us:
+                return m * step
+        step *= 10
+
+
 def _us(v) -> float:
     return round(v / 1e3, 3)
 
@@ -154,12 +164,14 @@ def plot_latency(stats: list, path: str) -> None:
     except ImportError:
         raise RuntimeError("--stats-plot needs matplotlib: pip install 'st-plc[plot]'") from None
     fig, ax = plt.subplots(figsize=(8, 4.5))
+    top_us = max((max(s.latencies) for s in stats if s.latencies), default=0) / 1e3
+    bin_us = _nice_bin(top_us / 100)
     for s in stats:
-        edges, counts = s.latency_histogram(10.0)
+        edges, counts = s.latency_histogram(bin_us)
         if counts:
-            ax.step(edges[:-1], counts, where="post", label=f"{s.name} ({s.period / 1e6:g} ms)")
+            ax.stairs(counts, edges, label=f"{s.name} ({s.period / 1e6:g} ms): max {max(s.latencies) / 1e3:.0f} µs")
     ax.set_yscale("log")
-    ax.set_xlabel("wake-up latency (µs, 10 µs bins)")
+    ax.set_xlabel(f"wake-up latency (µs, {bin_us:g} µs bins)")
     ax.set_ylabel("jobs")
     ax.set_title("st run: wake-up latency per task")
     ax.legend()
