@@ -111,11 +111,25 @@ def compile(files, emit, time_unit, f_trig_first_scan):
               help="Virtual time: simulated execution time of a task's job (overload studies).")
 @click.option("--safe-output", "safe_outputs", multiple=True, metavar="ADDR=VALUE",
               help="Value of an output in STOP and FAULT (default FALSE/0), e.g. %QX0.1=TRUE.")
+@click.option("--modbus", default=None, metavar="[HOST:]PORT",
+              help="Serve a Modbus TCP slave (OpenPLC's map), e.g. 127.0.0.1:5020; port 502 needs root.")
+@click.option("--modbus-map", type=click.Path(exists=True), default=None,
+              help="TOML file mapping any variable to a Modbus table and address.")
+@click.option("--modbus-read-only", is_flag=True, help="Refuse every Modbus write (exception 02).")
+@click.option("--modbus-writable", default=None, metavar="RANGES",
+              help="Only these are writable, e.g. holding:0-99,coil:0-15 (a write elsewhere gets 02).")
+@click.option("--modbus-max-connections", type=int, default=16, show_default=True)
+@click.option("--modbus-idle-timeout", type=float, default=60.0, show_default=True, help="Seconds.")
+@click.option("--modbus-rate", type=float, default=1000.0, show_default=True,
+              help="Requests per second per connection (0: unbounded).")
+@click.option("--modbus-unit-ids", default=None, metavar="IDS",
+              help="Answer only these unit ids, e.g. 1,255 (others: exception 0x0B). Default: all.")
 @click.option("--quiet", "-q", is_flag=True, help="No live status line and no summary.")
 @dialect
 def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, stats_plot, on_fault, watchdog,
-        retain_file, no_retain, retain_interval, cold, watch, rt, rt_priority, cpu, sim_cost, safe_outputs, quiet,
-        time_unit, f_trig_first_scan):
+        retain_file, no_retain, retain_interval, cold, watch, rt, rt_priority, cpu, sim_cost, safe_outputs,
+        modbus, modbus_map, modbus_read_only, modbus_writable, modbus_max_connections, modbus_idle_timeout,
+        modbus_rate, modbus_unit_ids, quiet, time_unit, f_trig_first_scan):
     """Run a program: its CONFIGURATION's tasks (or a lone PROGRAM as one cyclic task), in real time
     with a live status line until Ctrl-C, --duration or --scans; --virtual runs on virtual time."""
     from .runtime.session import RunOptions, run_plc
@@ -124,7 +138,11 @@ def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, s
                       policy=policy, dump_json=dump_json, stats_json=stats_json, stats_plot=stats_plot,
                       on_fault=on_fault, watchdog=watchdog, retain_file=retain_file, no_retain=no_retain,
                       retain_interval=retain_interval, cold=cold, watch=watch, rt=rt, rt_priority=rt_priority,
-                      cpu=cpu, sim_cost=list(sim_cost), safe_outputs=list(safe_outputs), quiet=quiet, time_unit=time_unit,
+                      cpu=cpu, sim_cost=list(sim_cost), safe_outputs=list(safe_outputs),
+                      modbus=modbus, modbus_map=modbus_map, modbus_read_only=modbus_read_only,
+                      modbus_writable=modbus_writable, modbus_max_connections=modbus_max_connections,
+                      modbus_idle_timeout=modbus_idle_timeout, modbus_rate=modbus_rate,
+                      modbus_unit_ids=modbus_unit_ids, quiet=quiet, time_unit=time_unit,
                       f_trig_first_scan=f_trig_first_scan)
     sys.exit(run_plc(result, opts))
 
@@ -194,6 +212,41 @@ def explain(code):
         click.echo(f"unknown code {code}; codes: {', '.join(sorted(EXPLANATIONS))}", err=True)
         sys.exit(1)
     click.echo(f"{code.upper()}: {text}")
+
+
+@main.group()
+def modbus():
+    """The Modbus TCP slave (see `st run --modbus`)."""
+
+
+@modbus.command("map")
+@click.argument("files", nargs=-1, required=True, type=click.Path())
+@click.option("--map", "map_file", type=click.Path(exists=True), default=None, help="A TOML map file to add.")
+@dialect
+def modbus_map(files, map_file, time_unit, f_trig_first_scan):
+    """Print the effective Modbus map of a program: OpenPLC's located variables plus the map file."""
+    from .io.modbus import MapError, effective_map, load_map
+    from .io.modbus.exchange import TABLE_NAMES
+    from .runtime.plc import PLC
+    result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
+    try:
+        plc = PLC(result)
+        entries = load_map(map_file, plc) if map_file else []
+    except MapError as e:
+        click.echo(str(e), err=True)
+        sys.exit(2)
+    except (ValueError, KeyError) as e:
+        click.echo(f"error: {e}", err=True)
+        sys.exit(2)
+    rows = effective_map(plc, entries)
+    head = ("table", "addresses", "variable", "type", "encoding", "access")
+    body = [(TABLE_NAMES[r.table], str(r.first) if r.first == r.last else f"{r.first}-{r.last}", r.source,
+             r.type_name, r.encoding, "read/write" if r.writable else "read") for r in rows]
+    widths = [max(len(x[i]) for x in [head] + body) for i in range(len(head))]
+    for line in [head] + body:
+        click.echo("  ".join(c.ljust(w) for c, w in zip(line, widths)).rstrip())
+    click.echo("other addresses in OpenPLC's ranges (coils and discrete inputs 0-8191, input registers "
+               "0-1023, holding registers 0-8191) read 0 and keep what is written; beyond them: exception 02")
 
 
 if __name__ == "__main__":

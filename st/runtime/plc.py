@@ -70,6 +70,7 @@ class PLC:
         self.scans = 0
         self.clock = VirtualClock()
         self._stats: dict = {}
+        self.io: list = []                      # I/O drivers: before_job(), after_job(), rebind()
         self._load(compiled)
         self.retain_store = RetainStore(retain) if retain else None
         self.retain_interval = parse_duration_arg(retain_interval)
@@ -126,6 +127,8 @@ class PLC:
         self._bind_image()
         self._event_tasks = [t for t in self.tasks if t.single]
         self._reset_releases(self._time)
+        for d in self.io:
+            d.rebind()
 
     def _reset_releases(self, now: int) -> None:
         for t in self.tasks:
@@ -374,7 +377,11 @@ class PLC:
         lock = self.image_lock if self.policy.name == "frame" else None
         if lock is not None:
             lock.acquire()
+        io = self.io
         try:
+            if io:
+                for d in io:
+                    d.before_job()
             for b in task.ins:
                 b.latch_in()
             ns["_now"] = release
@@ -391,6 +398,9 @@ class PLC:
                 self._wd.stop()
             for b in task.outs:
                 b.publish()
+            if io:
+                for d in io:
+                    d.after_job()
         except Exception as exc:  # noqa: BLE001 - every fault of user code lands here
             info = fault_from_exception(exc, task.name)
             # the faulting job consumes its base tick: a restart resumes with the next one
@@ -421,6 +431,8 @@ class PLC:
         for addr, v in self.safe_outputs.items():
             area, size, i = parse_address(addr)
             self.image.tables[(area, size)][i] = v if size == "X" else int(v)
+        for d in self.io:
+            d.after_job()
 
     def stop(self) -> None:
         """RUN → STOP: no task runs, outputs safe, retained data committed."""

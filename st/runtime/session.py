@@ -44,6 +44,14 @@ class RunOptions:
     cpu: Optional[int] = None
     sim_cost: list = field(default_factory=list)
     safe_outputs: list = field(default_factory=list)      # ["%QX0.1=TRUE", "%QW3=100"]
+    modbus: Optional[str] = None                          # "[HOST:]PORT"
+    modbus_map: Optional[str] = None
+    modbus_read_only: bool = False
+    modbus_writable: Optional[str] = None
+    modbus_max_connections: int = 16
+    modbus_idle_timeout: float = 60.0
+    modbus_rate: float = 1000.0
+    modbus_unit_ids: Optional[str] = None
     quiet: bool = False
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
@@ -76,6 +84,26 @@ def run_plc(compiled, o: RunOptions) -> int:
     if not plc.instances:
         _err("error: nothing to run: no PROGRAM and no CONFIGURATION")
         return 2
+    slave = None
+    if o.modbus:
+        from ..io.modbus import MapError, ModbusSlave, parse_endpoint
+        try:
+            host, port = parse_endpoint(o.modbus)
+            units = None if not o.modbus_unit_ids else [int(u) for u in o.modbus_unit_ids.split(",")]
+            slave = ModbusSlave(plc, host, port, map_file=o.modbus_map, read_only=o.modbus_read_only,
+                                writable=o.modbus_writable, max_connections=o.modbus_max_connections,
+                                idle_timeout=o.modbus_idle_timeout, max_rate=o.modbus_rate, unit_ids=units).start()
+        except MapError as e:
+            _err(str(e))
+            plc.close()
+            return 2
+        except (ValueError, OSError) as e:
+            _err(f"error: cannot start the Modbus slave: {e}")
+            plc.close()
+            return 2
+        if not o.quiet:
+            _err(f"modbus: serving on {host}:{slave.port} (OpenPLC map" +
+                 (f" + {o.modbus_map}" if o.modbus_map else "") + (", read-only" if o.modbus_read_only else "") + ")")
     if retain and not o.quiet:
         _err(f"retained data: {retain} ({'cold start' if o.cold else f'{plc.retain_restored} value(s) restored'})")
     stop = threading.Event()
@@ -99,6 +127,8 @@ def run_plc(compiled, o: RunOptions) -> int:
         if status is not None:
             status.close()
         plc.close()
+        if slave is not None:
+            slave.stop()
         if rt_setup is not None:
             rt_setup.release()
         _restore_signals(old_handlers)

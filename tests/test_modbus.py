@@ -1,0 +1,465 @@
+"""The Modbus TCP slave, driven by clients that are not pymodbus: umodbus (PyPI), mbpoll (Debian)
+and raw sockets for exact bytes. The PLC runs on virtual time in the test's thread; the server is
+its own process."""
+import os
+import shutil
+import socket
+import struct
+import subprocess
+import textwrap
+import time
+
+import pytest
+from umodbus import exceptions as uexc
+from umodbus.client import tcp
+
+from st import PLC
+from st.io.modbus import MapError, ModbusSlave
+
+PROGRAM = textwrap.dedent("""
+    PROGRAM main
+      VAR
+        lamp AT %QX1.0 : BOOL;
+        valve AT %QX0.3 : BOOL;
+        flap AT %QX0.4 : BOOL;
+        button AT %IX0.2 : BOOL;
+        level AT %IW3 : INT;
+        setpoint AT %QW0 : INT;
+        speed AT %MW2 : UINT;
+        total AT %MD1 : DINT;
+        big AT %ML0 : LINT;
+        temp : REAL := 21.5;
+        name : STRING[10] := 'pump';
+        count : DINT;
+        echo : INT;
+      END_VAR
+      count := count + 1;
+      lamp := button;
+      echo := setpoint * 2;
+    END_PROGRAM
+""")
+
+MAP = textwrap.dedent("""
+    [[register]]
+    path = "main.temp"
+    table = "holding"
+    address = 10000
+    type = "REAL"
+
+    [[register]]
+    path = "main.name"
+    table = "input"
+    address = 2000
+
+    [[register]]
+    path = "main.count"
+    table = "input"
+    address = 2010
+    word_order = "little"
+""")
+
+
+@pytest.fixture
+def plc(tmp_path):
+    src = tmp_path / "main.st"
+    src.write_text(PROGRAM)
+    return PLC.from_files(str(src))
+
+
+@pytest.fixture
+def slave(plc, tmp_path):
+    m = tmp_path / "map.toml"
+    m.write_text(MAP)
+    with ModbusSlave(plc, port=0, map_file=str(m), idle_timeout=30) as s:
+        yield s
+
+
+def connect(slave) -> socket.socket:
+    s = socket.create_connection(("127.0.0.1", slave.port), timeout=5)
+    s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    return s
+
+
+def raw(sock, pdu: bytes, unit=1, tid=7) -> bytes:
+    """Send one ADU, return the reply's PDU (after checking its MBAP header)."""
+    sock.sendall(struct.pack(">HHHB", tid, 0, len(pdu) + 1, unit) + pdu)
+    head = _recv(sock, 7)
+    rtid, pid, length, runit = struct.unpack(">HHHB", head)
+    assert (rtid, pid, runit) == (tid, 0, unit)
+    return _recv(sock, length - 1)
+
+
+def _recv(sock, n) -> bytes:
+    data = b""
+    while len(data) < n:
+        chunk = sock.recv(n - len(data))
+        if not chunk:
+            raise ConnectionError("closed")
+        data += chunk
+    return data
+
+
+def closed_by_peer(sock, timeout=5.0) -> bool:
+    sock.settimeout(timeout)
+    try:
+        return sock.recv(100) == b""
+    except (ConnectionResetError, BrokenPipeError):
+        return True
+
+
+# ---------------------------------------------------------------------------- OpenPLC's map
+
+def test_every_table_of_openplc_map_through_umodbus(plc, slave):
+    plc["%IX0.2"] = True                      # discrete input 2; the program copies it to %QX1.0 (coil 8)
+    plc["%IW3"] = -7                          # input register 3
+    plc["main.setpoint"] = 1234               # holding 0
+    plc["main.speed"] = 500                   # %MW2 → holding 1026
+    plc["main.total"] = 0x12345678            # %MD1 → holding 2050-2051, high word first
+    plc["main.big"] = 0x0102030405060708      # %ML0 → holding 4096-4099
+    plc.scan()
+    s = connect(slave)
+    assert tcp.send_message(tcp.read_coils(1, 8, 1), s) == [1]
+    assert tcp.send_message(tcp.read_coils(1, 0, 16), s) == [0] * 8 + [1] + [0] * 7
+    assert tcp.send_message(tcp.read_discrete_inputs(1, 0, 4), s) == [0, 0, 1, 0]
+    assert tcp.send_message(tcp.read_input_registers(1, 3, 1), s) == [0xFFF9]
+    assert tcp.send_message(tcp.read_holding_registers(1, 0, 1), s) == [1234]
+    assert tcp.send_message(tcp.read_holding_registers(1, 1026, 1), s) == [500]
+    assert tcp.send_message(tcp.read_holding_registers(1, 2050, 2), s) == [0x1234, 0x5678]
+    assert tcp.send_message(tcp.read_holding_registers(1, 4096, 4), s) == [0x0102, 0x0304, 0x0506, 0x0708]
+    # unused addresses read 0 and keep what is written (scratch memory, as OpenPLC)
+    assert tcp.send_message(tcp.read_holding_registers(1, 7, 2), s) == [0, 0]
+    tcp.send_message(tcp.write_multiple_registers(1, 7, [99, 98]), s)
+    assert tcp.send_message(tcp.read_holding_registers(1, 7, 2), s) == [99, 98]
+    tcp.send_message(tcp.write_single_coil(1, 100, 1), s)
+    assert tcp.send_message(tcp.read_coils(1, 99, 3), s) == [0, 1, 0]
+    s.close()
+
+
+def test_writes_are_applied_at_the_start_of_the_next_scan(plc, slave):
+    plc.scan()
+    s = connect(slave)
+    tcp.send_message(tcp.write_single_register(1, 0, 0xFFFD), s)      # %QW0 := -3
+    tcp.send_message(tcp.write_single_coil(1, 3, 1), s)               # %QX0.3
+    tcp.send_message(tcp.write_multiple_coils(1, 4, [1]), s)          # %QX0.4 only, not the byte
+    tcp.send_message(tcp.write_multiple_registers(1, 2050, [0xFFFF, 0xFFFE]), s)   # %MD1 := -2
+    assert (plc["main.setpoint"], plc["main.valve"]) == (0, False)    # nothing happens between scans
+    plc.scan()
+    assert (plc["main.setpoint"], plc["main.echo"], plc["main.valve"], plc["main.flap"], plc["main.total"]) == \
+        (-3, -6, True, True, -2)
+    assert tcp.send_message(tcp.read_coils(1, 0, 8), s) == [0, 0, 0, 1, 1, 0, 0, 0]
+    # one register of a %MD changes only its half; the last writer wins
+    tcp.send_message(tcp.write_single_register(1, 2051, 5), s)
+    tcp.send_message(tcp.write_single_register(1, 1026, 1), s)
+    tcp.send_message(tcp.write_single_register(1, 1026, 2), s)
+    plc.scan()
+    assert (plc["main.total"], plc["main.speed"]) == (-65536 + 5, 2)
+    assert tcp.send_message(tcp.read_holding_registers(1, 2050, 2), s) == [0xFFFF, 5]
+    # read/write multiple (FC23, which umodbus lacks): the reply already shows the write
+    assert raw(s, bytes([23, 0, 0, 0, 2, 0, 0, 0, 1, 2, 0, 40])) == bytes([23, 4, 0, 40, 0, 0])
+    plc.scan()
+    assert plc["main.echo"] == 80
+    s.close()
+
+
+def test_map_file_real_string_and_word_order(plc, slave):
+    plc["main.count"] = 0x00010002
+    plc.scan()
+    s = connect(slave)
+    assert tcp.send_message(tcp.read_holding_registers(1, 10000, 2), s) == [0x41AC, 0x0000]     # 21.5
+    assert tcp.send_message(tcp.read_input_registers(1, 2000, 5), s) == [0x7075, 0x6D70, 0, 0, 0]  # 'pump'
+    assert tcp.send_message(tcp.read_input_registers(1, 2010, 2), s) == [0x0003, 0x0001]       # little (the scan added 1)
+    pi = struct.unpack(">HH", struct.pack(">f", 3.14159))
+    tcp.send_message(tcp.write_multiple_registers(1, 10000, list(pi)), s)
+    plc.scan()
+    assert plc["main.temp"] == pytest.approx(3.14159, rel=1e-7)
+    assert tcp.send_message(tcp.read_holding_registers(1, 10000, 2), s) == list(pi)
+    with pytest.raises(uexc.IllegalDataAddressError):                 # input registers are read-only
+        tcp.send_message(tcp.write_single_register(1, 10002, 1), s)  # and 10002 is outside the map
+    s.close()
+
+
+def test_map_file_errors_name_file_line_and_column(plc, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[register]]\npath = "main.nope"\naddress = 5\n')
+    with pytest.raises(MapError) as info:
+        ModbusSlave(plc, port=0, map_file=str(bad))
+    assert str(info.value).startswith(f"{bad}:2:8: error: no variable 'main.nope' in the program")
+    bad.write_text('[[register]]\npath = "main.temp"\ntable = "coil"\naddress = 1\n')
+    with pytest.raises(MapError) as info:
+        ModbusSlave(plc, port=0, map_file=str(bad))
+    assert str(info.value) == f"{bad}:2:8: error: 'main.temp' is REAL: only BOOL variables go into the coils"
+    bad.write_text('[[register]]\npath = "main.temp"\naddress = 10\n[[register]]\npath = "main.count"\n'
+                   'address = 11\n')
+    with pytest.raises(MapError) as info:
+        ModbusSlave(plc, port=0, map_file=str(bad))
+    assert "'main.count' at holding registers 11 overlaps 'main.temp' (10..11)" in str(info.value)
+
+
+def test_st_modbus_map_prints_the_effective_map(tmp_path):
+    (tmp_path / "main.st").write_text(PROGRAM)
+    (tmp_path / "map.toml").write_text(MAP)
+    out = subprocess.run(["st", "modbus", "map", str(tmp_path / "main.st"), "--map", str(tmp_path / "map.toml")],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    lines = [ln.split() for ln in out.stdout.splitlines()[1:-1]]
+    assert [ln[:4] if ln[0] != "coils" else ln[:3] for ln in lines][:3] == [
+        ["coils", "3", "%QX0.3"], ["coils", "4", "%QX0.4"], ["coils", "8", "%QX1.0"]]
+    assert ["holding", "registers", "2050-2051", "%MD1", "DINT"] == lines[-3][:5]
+    assert ["holding", "registers", "10000-10001", "main.temp", "REAL"] == lines[-1][:5]
+
+
+# ---------------------------------------------------------------------------- protocol
+
+def test_exception_codes_exact_bytes(plc, slave):
+    plc.scan()
+    s = connect(slave)
+    assert raw(s, bytes([0x11])) == bytes([0x91, 0x01])                          # unsupported function
+    assert raw(s, bytes([0x08, 0, 0, 0x12, 0x34])) == bytes([0x88, 0x01])
+    assert raw(s, bytes([0x03, 0x23, 0x28, 0, 1])) == bytes([0x83, 0x02])        # holding 9000: outside
+    assert raw(s, bytes([0x04, 0x04, 0x00, 0, 1])) == bytes([0x84, 0x02])        # input register 1024
+    assert raw(s, bytes([0x03, 0x1F, 0xFF, 0, 2])) == bytes([0x83, 0x02])        # 8191..8192 crosses the end
+    assert raw(s, bytes([0x03, 0, 0, 0, 126])) == bytes([0x83, 0x03])            # > 125 registers
+    assert raw(s, bytes([0x03, 0, 0, 0, 0])) == bytes([0x83, 0x03])
+    assert raw(s, bytes([0x01, 0, 0, 0x07, 0xD1])) == bytes([0x81, 0x03])        # > 2000 bits
+    assert raw(s, bytes([0x02, 0, 0, 0x07, 0xD0]))[:2] == bytes([0x02, 250])     # 2000 bits is fine
+    assert raw(s, bytes([0x05, 0, 3, 0x12, 0x34])) == bytes([0x85, 0x03])        # FC5 value not 0/FF00
+    assert raw(s, bytes([0x10, 0, 0, 0, 2, 3, 0, 1, 0])) == bytes([0x90, 0x03])  # byte count 3 for 2 regs
+    assert raw(s, bytes([0x10, 0, 0, 0, 1, 2, 0])) == bytes([0x90, 0x03])        # frame shorter than count
+    assert raw(s, bytes([0x0F, 0, 0, 0, 9, 1, 0xFF])) == bytes([0x8F, 0x03])     # 9 coils need 2 bytes
+    assert raw(s, bytes([0x06, 0x23, 0x28, 0, 1])) == bytes([0x86, 0x02])        # write outside
+    assert raw(s, bytes([0x2B, 0x0D, 1, 0])) == bytes([0xAB, 0x01])              # MEI type 13: unsupported
+    assert raw(s, bytes([0x2B, 0x0E, 9, 0])) == bytes([0xAB, 0x03])              # read code 9
+    assert raw(s, bytes([0x05, 0, 3, 0xFF, 0x00])) == bytes([0x05, 0, 3, 0xFF, 0x00])   # and it still works
+    s.close()
+
+
+def test_device_identification(plc, slave):
+    s = connect(slave)
+    reply = raw(s, bytes([0x2B, 0x0E, 1, 0]))                                    # basic: objects 0, 1, 2
+    assert reply[:7] == bytes([0x2B, 0x0E, 1, 0x83, 0, 0, 3])
+    objs, pos = {}, 7
+    while pos < len(reply):
+        oid, n = reply[pos], reply[pos + 1]
+        objs[oid] = reply[pos + 2:pos + 2 + n].decode()
+        pos += 2 + n
+    assert objs == {0: "st", 1: "st-plc", 2: "0.1"}
+    assert raw(s, bytes([0x2B, 0x0E, 4, 4]))[6:] == bytes([1, 4, 11]) + b"st soft PLC"
+    assert raw(s, bytes([0x2B, 0x0E, 4, 0x55])) == bytes([0xAB, 0x02])           # no such object
+    s.close()
+
+
+def test_several_requests_in_one_segment_are_all_answered_in_order(plc, slave):
+    plc["main.setpoint"] = 11
+    plc.scan()
+    s = connect(slave)
+    frames = b"".join(struct.pack(">HHHB", tid, 0, 6, 1) + bytes([3, 0, 0, 0, 1]) for tid in (1, 2, 3))
+    frames += struct.pack(">HHHB", 4, 0, 2, 1) + bytes([0x11])
+    s.sendall(frames)
+    replies = _recv(s, 3 * 11 + 9)
+    assert [struct.unpack_from(">H", replies, off)[0] for off in (0, 11, 22, 33)] == [1, 2, 3, 4]
+    assert replies[9:11] == b"\x00\x0b" and replies[-2:] == b"\x91\x01"
+    s.close()
+
+
+def test_unit_id_policy(plc):
+    with ModbusSlave(plc, port=0, unit_ids=[1, 255]) as slave:
+        s = connect(slave)
+        assert raw(s, bytes([3, 0, 0, 0, 1]), unit=255) == bytes([3, 2, 0, 0])
+        assert raw(s, bytes([3, 0, 0, 0, 1]), unit=5) == bytes([0x83, 0x0B])
+        s.close()
+
+
+def test_read_only_and_writable_ranges(plc):
+    with ModbusSlave(plc, port=0, read_only=True) as slave:
+        s = connect(slave)
+        assert raw(s, bytes([6, 0, 0, 0, 1])) == bytes([0x86, 0x02])
+        assert raw(s, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
+        s.close()
+    with ModbusSlave(plc, port=0, writable="holding:0-9,coil:3-3") as slave:
+        s = connect(slave)
+        assert raw(s, bytes([6, 0, 9, 0, 1])) == bytes([6, 0, 9, 0, 1])
+        assert raw(s, bytes([0x10, 0, 9, 0, 2, 4, 0, 1, 0, 2])) == bytes([0x90, 0x02])   # 9..10 leaves the range
+        assert raw(s, bytes([5, 0, 3, 0xFF, 0])) == bytes([5, 0, 3, 0xFF, 0])
+        assert raw(s, bytes([5, 0, 4, 0xFF, 0])) == bytes([0x85, 0x02])
+        s.close()
+        plc.scan()
+    assert (plc["main.valve"], plc["main.flap"]) == (True, False)
+
+
+@pytest.mark.skipif(shutil.which("mbpoll") is None, reason="mbpoll (Debian package mbpoll) is not installed")
+def test_mbpoll_reads_and_writes(plc, slave):
+    plc["main.setpoint"] = -2
+    plc.scan()
+    base = ["mbpoll", "-m", "tcp", "-p", str(slave.port), "-a", "1", "-0", "-1"]
+
+    def poll(*args):
+        out = subprocess.run(base + list(args) + ["127.0.0.1"], capture_output=True, text=True, timeout=20)
+        return out.returncode, [ln.split(":", 1)[1].strip() for ln in out.stdout.splitlines() if ln.startswith("[")]
+    assert poll("-t", "4", "-r", "0", "-c", "1") == (0, ["65534 (-2)"])
+    assert poll("-t", "4:float", "-B", "-r", "10000", "-c", "1") == (0, ["21.5"])
+    assert poll("-t", "0", "-r", "8", "-c", "1") == (0, ["0"])
+    assert subprocess.run(base + ["-t", "4", "-r", "1026", "127.0.0.1", "321"], capture_output=True).returncode == 0
+    plc.scan()
+    assert plc["main.speed"] == 321
+    assert poll("-t", "4", "-r", "9000", "-c", "1")[0] == 1                     # exception 02 → exit 1
+
+
+# ---------------------------------------------------------------------------- robustness and limits
+
+def test_malformed_headers_close_only_that_connection(plc, tmp_path):
+    log = tmp_path / "modbus.log"
+    slave = ModbusSlave(plc, port=0, log_path=str(log)).start()
+    plc.scan()
+    good = connect(slave)
+    assert raw(good, bytes([3, 0, 0, 0, 1]), tid=0xBEEF) == bytes([3, 2, 0, 0])
+    for frame in (struct.pack(">HHHB", 1, 7, 6, 1) + bytes([3, 0, 0, 0, 1]),      # protocol id 7
+                  struct.pack(">HHHB", 1, 0, 1, 1),                               # length 1: no function code
+                  struct.pack(">HHHB", 1, 0, 300, 1) + bytes(299),                # longer than any ADU
+                  os.urandom(1) + b"\xA5" * 40):                                  # garbage
+        bad = connect(slave)
+        bad.sendall(frame)
+        assert closed_by_peer(bad)
+        bad.close()
+    assert raw(good, bytes([3, 0, 0, 0, 1]), tid=0xBEEF) == bytes([3, 2, 0, 0])
+    good.close()
+    slave.stop()
+    err = log.read_text()
+    assert "malformed MBAP header (protocol id 7, length 6)" in err
+    assert "be ef" not in err and "beef" not in err                                 # never another client's frame
+
+
+def test_truncated_frames_and_slow_senders_time_out_while_others_are_served(plc):
+    with ModbusSlave(plc, port=0, idle_timeout=1.0) as slave:
+        slow = [connect(slave) for _ in range(3)]
+        for i, s in enumerate(slow):
+            s.sendall(struct.pack(">HHHB", 1, 0, 6, 1)[: 3 + i])                  # a frame that never ends
+        good = connect(slave)
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 2.5:
+            assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
+            time.sleep(0.1)
+        assert all(closed_by_peer(s, 3.0) for s in slow)                         # idle timeout (1 s)
+        assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])           # active: kept
+        good.close()
+
+
+def test_a_thousand_connections_do_not_lock_out_a_polling_client(plc):
+    import resource
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if soft < 1200:
+        resource.setrlimit(resource.RLIMIT_NOFILE, (min(hard, 4096), hard))
+    with ModbusSlave(plc, port=0, max_connections=16) as slave:
+        good = connect(slave)
+        crowd = []
+        for i in range(1000):
+            crowd.append(socket.create_connection(("127.0.0.1", slave.port), timeout=5))
+            if i % 50 == 0:
+                assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
+        assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
+        deadline = time.monotonic() + 10
+        while True:                                  # the server accepts the backlog and evicts as it goes
+            still_open = [c for c in crowd if not (_readable(c) and closed_by_peer(c, 0.01))]
+            if len(still_open) <= 15 or time.monotonic() > deadline:
+                break
+            time.sleep(0.2)
+        assert len(still_open) == 15                 # 16 with the polling client
+        assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
+        for c in crowd:
+            c.close()
+        good.close()
+
+
+def _readable(sock) -> bool:
+    import select
+    return bool(select.select([sock], [], [], 0)[0])
+
+
+def test_connection_limit_evicts_never_active_then_longest_idle(plc):
+    with ModbusSlave(plc, port=0, max_connections=3) as slave:
+        a, b = connect(slave), connect(slave)
+        raw(a, bytes([3, 0, 0, 0, 1]))
+        raw(b, bytes([3, 0, 0, 0, 1]))
+        silent = connect(slave)
+        time.sleep(0.1)
+        d = connect(slave)                          # 4th: the never-active one goes
+        assert closed_by_peer(silent, 2.0)
+        raw(b, bytes([3, 0, 0, 0, 1]))
+        raw(d, bytes([3, 0, 0, 0, 1]))
+        time.sleep(0.1)
+        e = connect(slave)                          # 5th: a is now the longest idle
+        assert closed_by_peer(a, 2.0)
+        assert raw(e, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
+        for s in (b, d, e):
+            s.close()
+
+
+def test_request_rate_is_bounded_per_connection(plc):
+    with ModbusSlave(plc, port=0, max_rate=50) as slave:
+        s = connect(slave)
+        frames = b"".join(struct.pack(">HHHB", t, 0, 6, 1) + bytes([3, 0, 0, 0, 1]) for t in range(100))
+        t0 = time.monotonic()
+        s.sendall(frames)
+        replies = _recv(s, 100 * 11)
+        elapsed = time.monotonic() - t0
+        assert [struct.unpack_from(">H", replies, 11 * i)[0] for i in range(100)] == list(range(100))
+        assert elapsed >= 0.9                       # a burst of 50, then 50 per second
+        s.close()
+
+
+def test_a_client_that_never_reads_replies_is_throttled_and_memory_stays_bounded(plc):
+    with ModbusSlave(plc, port=0, max_rate=0) as slave:
+        rss0 = _rss(slave.proc.pid)
+        hog = connect(slave)
+        hog.setblocking(False)
+        frame = struct.pack(">HHHB", 1, 0, 6, 1) + bytes([3, 0, 0, 0, 125])      # 259-byte replies
+        sent = 0
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 3.0:
+            try:
+                sent += hog.send(frame * 100)
+            except BlockingIOError:
+                time.sleep(0.01)
+        good = connect(slave)
+        assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
+        grew = _rss(slave.proc.pid) - rss0
+        assert sent < 50_000_000 and grew < 20_000_000, (sent, grew)             # the hog was stopped
+        good.close()
+        hog.close()
+
+
+def _rss(pid) -> int:
+    with open(f"/proc/{pid}/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    return 0
+
+
+def test_st_run_with_modbus_serves_and_stops_cleanly(tmp_path):
+    (tmp_path / "main.st").write_text(PROGRAM)
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    child = subprocess.Popen(["st", "run", str(tmp_path / "main.st"), "--no-rt", "--duration", "20s",
+                              "--modbus", f"127.0.0.1:{port}", "--dump-json"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 15
+    while True:
+        try:
+            s = socket.create_connection(("127.0.0.1", port), timeout=1)
+            break
+        except OSError:
+            assert time.monotonic() < deadline and child.poll() is None
+            time.sleep(0.1)
+    tcp.send_message(tcp.write_single_register(1, 0, 21), s)
+    time.sleep(0.2)
+    assert tcp.send_message(tcp.read_holding_registers(1, 0, 1), s) == [21]
+    s.close()
+    child.terminate()
+    out, err = child.communicate(timeout=20)
+    assert child.returncode == 0, err
+    assert f"modbus: serving on 127.0.0.1:{port}" in err
+    import json
+    assert json.loads(out.splitlines()[-1])["main.echo"] == 42
+    with pytest.raises(OSError):                                # the server process is gone
+        socket.create_connection(("127.0.0.1", port), timeout=1)
