@@ -463,3 +463,23 @@ def test_st_run_with_modbus_serves_and_stops_cleanly(tmp_path):
     assert json.loads(out.splitlines()[-1])["main.echo"] == 42
     with pytest.raises(OSError):                                # the server process is gone
         socket.create_connection(("127.0.0.1", port), timeout=1)
+
+
+def test_forced_values_win_over_hmi_writes_and_the_program(plc, slave):
+    plc.force("main.setpoint", 5)                       # a %QW0 variable the HMI writes
+    plc.force("%QX1.0", True)                           # lamp, which the program sets from button
+    s = connect(slave)
+    tcp.send_message(tcp.write_single_register(1, 0, 77), s)
+    plc.scan()
+    assert (plc["main.setpoint"], plc["main.echo"], plc["main.lamp"]) == (5, 10, True)
+    assert tcp.send_message(tcp.read_holding_registers(1, 0, 1), s) == [5]
+    assert tcp.send_message(tcp.read_coils(1, 8, 1), s) == [1]
+    assert plc.forced == ["%qx1.0", "main.setpoint"]
+    plc.unforce("main.setpoint")
+    tcp.send_message(tcp.write_single_register(1, 0, 77), s)
+    plc.scan()
+    assert (plc["main.setpoint"], plc["main.echo"], plc["main.lamp"]) == (77, 154, True)
+    plc.unforce()
+    plc.scan()
+    assert plc["main.lamp"] is False
+    s.close()

@@ -71,6 +71,8 @@ class PLC:
         self.clock = VirtualClock()
         self._stats: dict = {}
         self.io: list = []                      # I/O drivers: before_job(), after_job(), rebind()
+        self._forced: dict = {}                 # (path, id(container), key) → (container, key, value, binding)
+        self._force_spec: dict = {}             # path → the value asked for (re-applied after a reload)
         self._load(compiled)
         self.retain_store = RetainStore(retain) if retain else None
         self.retain_interval = parse_duration_arg(retain_interval)
@@ -127,6 +129,13 @@ class PLC:
         self._bind_image()
         self._event_tasks = [t for t in self.tasks if t.single]
         self._reset_releases(self._time)
+        if getattr(self, "_force_spec", None):
+            spec, self._forced = dict(self._force_spec), {}
+            for path, value in spec.items():
+                try:
+                    self.force(path, value)
+                except (KeyError, ValueError, TypeError):
+                    self._force_spec.pop(path, None)       # the variable is gone or changed its type
         for d in self.io:
             d.rebind()
 
@@ -384,6 +393,8 @@ class PLC:
                     d.before_job()
             for b in task.ins:
                 b.latch_in()
+            if self._forced:
+                self._apply_forced()
             ns["_now"] = release
             self._wd.start(self.watchdog or (10 * (task.interval or self.tick) if clock.real else
                                              max(10 * (task.interval or self.tick), 1_000_000_000)))
@@ -396,6 +407,8 @@ class PLC:
                         cout(obj)
             finally:
                 self._wd.stop()
+            if self._forced:
+                self._apply_forced()
             for b in task.outs:
                 b.publish()
             if io:
@@ -567,6 +580,45 @@ class PLC:
             return self._image_read(path)
         container, key, t = self._resolve(path)
         return to_python(_get(container, key), t)
+
+    def force(self, path: str, value) -> None:
+        """Force a variable (or a located variable by its %address): it holds `value` when every job
+        starts and ends, whatever the program, the inputs or an HMI write it, until unforce()."""
+        if path.strip().startswith("%"):
+            binds = self._bindings.get(_norm_addr(path))
+            if not binds:
+                raise KeyError(f"{path}: no located variable at this address")
+            targets = [(b.container, b.key, b.type) for b in binds]
+        else:
+            targets = [self._resolve(path)]
+        self._force_spec[path] = value
+        for container, key, t in targets:
+            v = from_python(value, t, path)
+            _set(container, key, v)
+            self._forced[(path.strip().lower(), id(container), key)] = (container, key, v,
+                                                                       self._binding_of.get((id(container), key)))
+        self._apply_forced()
+
+    def unforce(self, path: Optional[str] = None) -> None:
+        """Release one forced variable, or all of them."""
+        if path is None:
+            self._forced.clear()
+            self._force_spec.clear()
+            return
+        self._force_spec.pop(path, None)
+        p = path.strip().lower()
+        for k in [k for k in self._forced if k[0] == p]:
+            del self._forced[k]
+
+    @property
+    def forced(self) -> list:
+        return sorted({k[0] for k in self._forced})
+
+    def _apply_forced(self) -> None:
+        for container, key, v, b in self._forced.values():
+            _set(container, key, v)
+            if b is not None:
+                b.table[b.index] = b.conv_out(v)
 
     def __setitem__(self, path: str, value) -> None:
         if path.strip().startswith("%"):
