@@ -483,3 +483,19 @@ def test_forced_values_win_over_hmi_writes_and_the_program(plc, slave):
     plc.scan()
     assert plc["main.lamp"] is False
     s.close()
+
+
+def test_online_change_rebinds_the_served_cells(plc, slave, tmp_path):
+    from st.api import compile_text
+    plc["main.setpoint"] = 3
+    plc.scan()
+    src = PROGRAM.replace("echo : INT;", "echo : INT;\n    extra AT %QW5 : INT;").replace(
+        "echo := setpoint * 2;", "echo := setpoint * 2; extra := extra + 1;")
+    assert plc.online_change(compile_text(src, str(tmp_path / "main.st"))) == \
+        "online change: 1 instance(s) carried over"
+    s = connect(slave)
+    tcp.send_message(tcp.write_single_register(1, 5, 100), s)
+    plc.scan()
+    assert (plc["main.extra"], plc["main.setpoint"]) == (101, 3)
+    assert tcp.send_message(tcp.read_holding_registers(1, 0, 6), s) == [3, 0, 0, 0, 0, 101]
+    s.close()

@@ -176,14 +176,13 @@ class Handler:
         return values
 
     def _write(self, table: int, address: int, values: list) -> None:
-        end = address + len(values)
         self._check(table, address, len(values), write=True)
+        # every write goes to the PLC, which applies what its current bindings own (they can
+        # change with an online change); scratch memory (cells no variable owns) takes the values
+        # here at once, owned cells show the PLC's value after its next publish
+        if not self.ex.put_write(table, address, values):
+            raise _Exc(BUSY)
         owned = self.cfg.owned.get(table, ())
-        if _overlaps(owned, address, end):
-            if not self.ex.put_write(table, address, values):
-                raise _Exc(BUSY)
-        # scratch memory (cells no variable owns) takes the values at once; owned cells are
-        # rewritten by the PLC's next publish anyway
         dst = self.ex.bits[table] if table in (COILS, DISCRETE) else self.ex.regs[table]
         for i, v in enumerate(values):
             a = address + i
