@@ -12,7 +12,8 @@ from .stdlib.iec import default_library
 
 
 def libraries(f_trig_first_scan: bool = False, time_unit: str = "ms") -> list:
-    return [default_library(f_trig_first_scan, time_unit)]
+    from .stdlib.plcopen import library as plcopen_library
+    return [default_library(f_trig_first_scan, time_unit), plcopen_library()]
 
 
 def compile_text(text: str, name: str = "<source>.st", *, f_trig_first_scan: bool = False,

@@ -25,4 +25,6 @@ def build_namespace(compiled: CompiledProgram, install: Optional[Callable[[dict]
         install(ns)
     for path, code in compiled.modules:
         exec(code, ns)
+    for name in sorted(k for k in ns if k.startswith("_post_exec_")):
+        ns[name](ns)            # libraries with native parts finish their classes here
     return ns

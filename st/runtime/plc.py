@@ -94,7 +94,16 @@ class PLC:
 
         def install(ns):
             self._wd = Watchdog(ns)
+        old_ns = getattr(self, "ns", None)
         ns = self.ns = build_namespace(compiled, install)
+        # drivers that live in the namespace (the motion kernel) follow it; the old ones hand over
+        old_drivers = {type(d): d for d in self.io if getattr(d, "per_namespace", False)}
+        self.io = [d for d in self.io if not getattr(d, "per_namespace", False)]
+        for d in ns.get("_io_drivers", []):
+            prev = old_drivers.get(type(d))
+            if prev is not None and old_ns is not None and hasattr(d, "adopt"):
+                d.adopt(prev)
+            self.io.insert(0, d)
         cfg = self.project.configs[0] if self.project.configs else None
         self.config = cfg
         self.instances: dict = {}           # lower name → (display name, object, POUType)
@@ -390,7 +399,7 @@ class PLC:
         try:
             if io:
                 for d in io:
-                    d.before_job()
+                    d.before_job(task)
             for b in task.ins:
                 b.latch_in()
             if self._forced:
@@ -413,7 +422,7 @@ class PLC:
                 b.publish()
             if io:
                 for d in io:
-                    d.after_job()
+                    d.after_job(task)
         except Exception as exc:  # noqa: BLE001 - every fault of user code lands here
             info = fault_from_exception(exc, task.name)
             # the faulting job consumes its base tick: a restart resumes with the next one

@@ -189,7 +189,7 @@ class ModbusSlave:
         self._bits, self._words, self._vars, self._route = bits, words, varcells, route
 
     # ------------------------------------------------------------------ the job boundary
-    def after_job(self) -> None:
+    def after_job(self, task=None) -> None:
         """Publish every owned cell into the snapshot (seqlock: readers retry while it moves)."""
         ex = self.ex
         if ex is None:
@@ -215,7 +215,7 @@ class ModbusSlave:
         finally:
             ex.end_write()
 
-    def before_job(self) -> None:
+    def before_job(self, task=None) -> None:
         """Apply the queued HMI writes, oldest first."""
         ex = self.ex
         if ex is None or not ex.pending():

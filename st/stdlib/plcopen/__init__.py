@@ -1,0 +1,84 @@
+"""PLCopen Motion Control Part 1 (v2.0): MC_* function blocks, the axis state machine, profiles.
+
+The blocks are declared in `plcopen.st` and run natively (`fbs.py`); each axis (`axis.py`) keeps
+its state, command ledger and buffer and is advanced by the kernel after its task's job.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ...compiler.library import Library
+from .axis import Axis, AxisConfig
+from .errors import E
+
+SOURCE_PATH = Path(__file__).with_name("plcopen.st")
+
+
+def library() -> Library:
+    from .fbs import install
+    lib = Library("plcopen", sources=[(str(SOURCE_PATH), SOURCE_PATH.read_text())], version="1")
+    lib.helpers["_post_exec_plcopen"] = install
+    return lib
+
+
+def registry(plc):
+    """The PLC's MotionRegistry (None when the program uses no MC_* block)."""
+    return plc.ns.get("_motion")
+
+
+def axis_of(plc, path: str) -> Axis:
+    """The Axis behind an AXIS_REF variable, e.g. axis_of(plc, "main.axis1")."""
+    reg = registry(plc)
+    if reg is None:
+        raise KeyError("the program uses no PLCopen motion block")
+    container, key, t = plc._resolve(path)
+    from ...runtime.plc import _get
+    return reg.axis(_get(container, key))
+
+
+def configure_axes(plc, axes) -> None:
+    """Axis configurations by AxisNo: a dict {no: {field: value}} or {no: AxisConfig}, or the path
+    of a TOML file with [[axis]] tables (no = 1, modulo = 360.0, max_velocity = …; see AxisConfig).
+    Axes already in use get the new configuration at once."""
+    reg = registry(plc)
+    if reg is None:
+        raise KeyError("the program uses no PLCopen motion block")
+    if isinstance(axes, (str, Path)):
+        axes = load_axes(str(axes))
+    for no, cfg in axes.items():
+        if not isinstance(cfg, AxisConfig):
+            cfg = AxisConfig(**{"name": f"axis{no}", **cfg})
+        reg.configs[int(no)] = cfg
+    for ax in reg.axes.values():
+        no = getattr(ax, "axis_no", None)
+        if no in reg.configs:
+            ax.cfg = reg.configs[no]
+
+
+def load_axes(path: str) -> dict:
+    """[[axis]] tables of a TOML file → {AxisNo: AxisConfig}; errors name the file and the entry."""
+    import dataclasses
+    import tomllib
+    try:
+        with open(path, "rb") as f:
+            doc = tomllib.load(f)
+    except OSError as e:
+        raise ValueError(f"{path}: cannot read the axis configuration: {e.strerror}") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ValueError(f"{path}: {e}") from None
+    fields = {f.name for f in dataclasses.fields(AxisConfig)}
+    out = {}
+    for i, item in enumerate(doc.get("axis", []), 1):
+        item = dict(item)
+        no = item.pop("no", None)
+        if not isinstance(no, int) or no <= 0:
+            raise ValueError(f"{path}: axis entry {i}: needs no = <AxisNo>, a positive integer")
+        unknown = set(item) - fields
+        if unknown:
+            raise ValueError(f"{path}: axis {no}: unknown setting '{sorted(unknown)[0]}' "
+                             f"(known: {', '.join(sorted(fields))})")
+        out[no] = AxisConfig(**{"name": f"axis{no}", **item})
+    return out
+
+
+__all__ = ["Axis", "AxisConfig", "E", "library", "registry", "axis_of", "configure_axes", "load_axes"]

@@ -1,0 +1,475 @@
+"""One PLCopen axis: the state machine, the command ledger, the buffer and the per-cycle kernel.
+
+Execution model (pinned by tests): in each cycle the programs run first; an FB call submits its
+command to the axis, which changes state at once (a later MC_ReadStatus in the same scan sees
+it). After the task's job the kernel advances every axis of that task by one cycle: the active
+profile is sampled at k × cycle; when it has run ceil(T / cycle) cycles it is finished, its
+command is Done and a buffered successor becomes active in the same cycle. A profile of
+duration T started in cycle n therefore reports Done in the FB call of cycle n + ceil(T / cycle).
+
+Positions are user units, times seconds. A virtual axis's actual values follow its set values.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+from .errors import E
+from .profiles import Profile, RuckigProfile, position_profile, velocity_profile
+
+DISABLED, STANDSTILL, HOMING, DISCRETE, CONTINUOUS, STOPPING, ERRORSTOP = (
+    "Disabled", "Standstill", "Homing", "DiscreteMotion", "ContinuousMotion", "Stopping", "ErrorStop")
+
+ABORTING, BUFFERED, BLEND_LOW, BLEND_PREVIOUS, BLEND_NEXT, BLEND_HIGH = range(6)
+POSITIVE, SHORTEST, NEGATIVE, CURRENT = range(4)
+
+QUEUED, ACTIVE, DONE, ABORTED, ERROR = "queued", "active", "done", "aborted", "error"
+
+
+@dataclass
+class AxisConfig:
+    """What a project file (or the defaults) says about one axis."""
+    name: str = ""
+    units_per_rev: float = 360.0
+    increments_per_unit: float = 1.0
+    modulo: float = 0.0                 # period of a modulo axis (0: linear)
+    max_velocity: float = math.inf
+    max_acceleration: float = math.inf
+    max_deceleration: float = math.inf
+    stop_deceleration: float = 0.0      # the ramp used on entering ErrorStop (0: max_deceleration or 10 × the last)
+    sw_limit_min: float = -math.inf
+    sw_limit_max: float = math.inf
+    following_error_window: float = math.inf
+    enable_timeout: float = 2.0         # s
+    enable_delay: float = 0.0           # simulated drive: seconds until the power stage is on (inf: never)
+    buffer_size: int = 8
+
+
+@dataclass(eq=False)
+class Command:
+    id: int
+    kind: str                           # move_abs, move_rel, move_vel, halt, stop, home, set_pos
+    params: dict
+    buffer_mode: int = ABORTING
+    status: str = QUEUED
+    error_id: int = 0
+    in_velocity: bool = False
+    profile: object = None
+    steps: int = 0                      # kernel cycles run
+    total_steps: int = 0                # cycles the profile needs
+    target: float = 0.0
+    end_v: float = 0.0
+    execute_low: bool = False           # MC_Stop: its Execute has been seen FALSE
+    shown: bool = False                 # the terminal status was reported while Execute was TRUE
+    continuous_update: bool = False
+
+    @property
+    def terminal(self) -> bool:
+        return self.status in (DONE, ABORTED, ERROR)
+
+
+class Axis:
+    def __init__(self, handle: int, config: Optional[AxisConfig] = None):
+        self.handle = handle
+        self.cfg = config or AxisConfig()
+        self.state = DISABLED
+        self.set_pos = self.set_vel = self.set_acc = 0.0
+        self.act_pos = self.act_vel = 0.0
+        self.active: Optional[Command] = None
+        self.queue: list = []
+        self.stop_cmd: Optional[Command] = None
+        self.power_owner = 0            # id of the MC_Power instance that owns the axis
+        self.power_on = False           # MC_Power.Status
+        self.power_request = False
+        self.power_wait = 0.0           # seconds waited for the power stage
+        self.axis_error = 0             # ErrorID of the pending axis error (MC_ReadAxisError)
+        self.last_dir = 1.0
+        self.cycle = 0.0                # s, set by the task that calls the axis's FBs
+        self.task = None
+        self._next_id = 1
+        self.commands: dict = {}        # id → Command, for the FBs' ledgers
+        self.drive = None               # an attached drive (EtherCAT); None: virtual axis
+        self.axis_no = 0
+
+    # ------------------------------------------------------------------ helpers
+    def new_command(self, kind: str, params: dict, buffer_mode: int = ABORTING) -> Command:
+        cmd = Command(self._next_id, kind, params, buffer_mode)
+        self._next_id += 1
+        self.commands[cmd.id] = cmd
+        return cmd
+
+    def forget(self, cmd_id: int) -> None:
+        self.commands.pop(cmd_id, None)
+
+    def _fail(self, cmd: Command, code: int) -> Command:
+        cmd.status, cmd.error_id = ERROR, code
+        return cmd
+
+    def _abort_all(self, status=ABORTED, code=0) -> None:
+        for c in ([self.active] if self.active else []) + self.queue:
+            if not c.terminal:
+                c.status, c.error_id, c.in_velocity = status, code, False
+        self.active = None
+        self.queue = []
+
+    @property
+    def modulo(self) -> float:
+        return self.cfg.modulo
+
+    def position(self) -> float:
+        """The set position as the user sees it (wrapped on a modulo axis)."""
+        return self.set_pos % self.modulo if self.modulo else self.set_pos
+
+    def actual_position(self) -> float:
+        return self.act_pos % self.modulo if self.modulo else self.act_pos
+
+    # ------------------------------------------------------------------ power, reset, errors
+    def power(self, fb_id: int, enable: bool):
+        """MC_Power, every call: returns (status, error_id)."""
+        if self.power_owner and self.power_owner != fb_id:
+            return False, E.POWER_ALREADY_ACTIVE if enable else 0
+        if not enable:
+            if self.power_owner == fb_id:
+                self.power_owner = 0
+            self.power_request = False
+            if self.power_on or self.state != DISABLED:
+                self.power_on = False
+                if self.state != ERRORSTOP:
+                    self._abort_all()
+                    self.stop_cmd = None
+                    self.state = DISABLED
+                self.set_vel = self.set_acc = 0.0
+            return False, 0
+        self.power_owner = fb_id
+        if self.state == ERRORSTOP:
+            return self.power_on, 0
+        if not self.power_on:
+            if not self.power_request:
+                self.power_request, self.power_wait = True, 0.0
+            if self.power_wait >= self.cfg.enable_delay:
+                self.power_on = True
+                self.set_pos, self.set_vel, self.set_acc = self.act_pos, 0.0, 0.0
+                if self.state == DISABLED:
+                    self.state = STANDSTILL
+            elif self.power_wait >= self.cfg.enable_timeout:
+                return False, E.ENABLE_TIMEOUT
+        return self.power_on, 0
+
+    def error_stop(self, code: int) -> None:
+        """An axis error: ErrorStop now; the active and every buffered command report Error."""
+        if self.state == ERRORSTOP:
+            return
+        self._abort_all(ERROR, E.AXIS_ERRORSTOP)
+        if self.stop_cmd is not None and not self.stop_cmd.terminal:
+            self._fail(self.stop_cmd, E.AXIS_ERRORSTOP)
+        self.stop_cmd = None
+        self.axis_error = code
+        self.state = ERRORSTOP
+        dec = self.cfg.stop_deceleration or (self.cfg.max_deceleration if math.isfinite(self.cfg.max_deceleration)
+                                             else 0.0)
+        self._ramp = velocity_profile(self.set_pos, self.set_vel, 0.0, 1.0, dec) if dec and self.set_vel else None
+        self._ramp_t = 0.0
+        if not self._ramp:
+            self.set_vel = self.set_acc = 0.0
+
+    def reset(self, cmd: Command) -> Command:
+        if self.state != ERRORSTOP:
+            return self._fail(cmd, E.NO_ERROR_TO_RESET)
+        self.axis_error = 0
+        self._ramp = None
+        self.set_vel = self.set_acc = 0.0
+        self.state = STANDSTILL if (self.power_on and self.power_request) else DISABLED
+        if self.state == DISABLED:
+            self.power_on = False
+        cmd.status = DONE
+        return cmd
+
+    # ------------------------------------------------------------------ submitting commands
+    def submit(self, cmd: Command) -> Command:
+        """Validate, then reject, abort-and-take-over, or buffer. The state changes at once."""
+        code = self._validate(cmd)
+        if code:
+            return self._fail(cmd, code)
+        st = self.state
+        if cmd.kind == "stop":
+            if st == ERRORSTOP:
+                return self._fail(cmd, E.AXIS_ERRORSTOP)
+            if st == DISABLED:
+                return self._fail(cmd, E.AXIS_DISABLED)
+            if st == STOPPING and self.stop_cmd is not None:
+                return self._fail(cmd, E.STOP_ALREADY_ACTIVE)
+            self._abort_all()
+            self.stop_cmd = cmd
+            self.state = STOPPING
+            self._activate(cmd)
+            return cmd
+        if cmd.kind == "set_pos":
+            if st not in (DISABLED, STANDSTILL):
+                return self._fail(cmd, E.INVALID_STATE)
+            new = cmd.params["position"] + (self.act_pos if cmd.params["relative"] else 0.0)
+            delta = new - self.act_pos
+            self.set_pos += delta
+            self.act_pos += delta
+            cmd.status = DONE
+            return cmd
+        blocked = {DISABLED: E.AXIS_DISABLED, ERRORSTOP: E.AXIS_ERRORSTOP, STOPPING: E.AXIS_STOPPING,
+                   HOMING: E.AXIS_HOMING}.get(st)
+        if blocked:
+            return self._fail(cmd, blocked)
+        if cmd.kind == "home":
+            if st != STANDSTILL:
+                return self._fail(cmd, E.INVALID_STATE)
+            self.state = HOMING
+            self._activate(cmd)
+            return cmd
+        if cmd.buffer_mode == ABORTING or self.active is None:
+            self._abort_all()
+            self._activate(cmd)
+            return cmd
+        if len(self.queue) >= self.cfg.buffer_size:
+            return self._fail(cmd, E.BUFFER_FULL)
+        self.queue.append(cmd)
+        if cmd.buffer_mode != BUFFERED and len(self.queue) == 1:
+            self._replan_for_blend()
+        return cmd
+
+    def _validate(self, cmd: Command) -> int:
+        p = cmd.params
+        for key, code in (("acc", E.INVALID_ACCELERATION), ("dec", E.INVALID_DECELERATION)):
+            if key in p and not (p[key] > 0 and math.isfinite(p[key])):
+                return code
+        if "jerk" in p and not (p["jerk"] >= 0 and not math.isnan(p["jerk"])):
+            return E.INVALID_JERK
+        if cmd.kind in ("move_abs", "move_rel"):
+            if not (p["vel"] > 0 and math.isfinite(p["vel"])):
+                return E.INVALID_VELOCITY
+        if cmd.kind == "move_vel" and not math.isfinite(p["vel"]):
+            return E.INVALID_VELOCITY
+        if cmd.kind == "move_abs":
+            pos = p["pos"]
+            if not math.isfinite(pos) or (self.modulo and not 0 <= pos < self.modulo):
+                return E.INVALID_POSITION
+            if p["dir"] not in (POSITIVE, SHORTEST, NEGATIVE, CURRENT):
+                return E.INVALID_DIRECTION
+        if cmd.kind == "move_rel" and not math.isfinite(p["dist"]):
+            return E.INVALID_POSITION
+        if cmd.kind == "move_vel" and p.get("dir", POSITIVE) not in (POSITIVE, NEGATIVE, CURRENT):
+            return E.INVALID_DIRECTION
+        if not 0 <= cmd.buffer_mode <= 5:
+            return E.INVALID_BUFFER_MODE
+        if cmd.kind in ("move_abs", "move_rel"):
+            tgt = self._target(cmd, self._start_pos_for(cmd))
+            lo, hi = self.cfg.sw_limit_min, self.cfg.sw_limit_max
+            if not self.modulo and not lo <= tgt <= hi:
+                return E.SW_LIMIT_TARGET
+        return 0
+
+    def _start_pos_for(self, cmd: Command) -> float:
+        """Where a command starts: now (aborting), or where the last queued/active command ends."""
+        if cmd.buffer_mode == ABORTING or self.active is None:
+            return self.set_pos
+        last = self.queue[-1] if self.queue else self.active
+        return last.target if last.kind in ("move_abs", "move_rel") else self.set_pos
+
+    def _target(self, cmd: Command, start: float) -> float:
+        p = cmd.params
+        if cmd.kind == "move_rel":
+            return start + p["dist"]
+        if not self.modulo:
+            return p["pos"]
+        period = self.modulo
+        cur = start % period
+        fwd = (p["pos"] - cur) % period
+        back = fwd - period if fwd else 0.0
+        d = p["dir"]
+        if d == CURRENT:
+            d = POSITIVE if (self.set_vel or self.last_dir) > 0 else NEGATIVE
+        if d == POSITIVE:
+            delta = fwd
+        elif d == NEGATIVE:
+            delta = back
+        else:                                   # shortest; exactly half a period goes positive
+            delta = fwd if fwd <= period / 2 else back
+        return start + delta
+
+    def _limits(self, cmd: Command):
+        p = cmd.params
+        c = self.cfg
+        return (min(abs(p.get("vel", 0.0)) or c.max_velocity, c.max_velocity),
+                min(p.get("acc", math.inf), c.max_acceleration), min(p.get("dec", math.inf), c.max_deceleration),
+                p.get("jerk", 0.0))
+
+    def _activate(self, cmd: Command, end_v: float = 0.0) -> None:
+        """Plan `cmd` from the current set state and make it the active command."""
+        cmd.status = ACTIVE
+        cmd.steps = 0
+        vmax, acc, dec, jerk = self._limits(cmd)
+        k = cmd.kind
+        if k in ("move_abs", "move_rel"):
+            if k == "move_rel":                 # measured from the set position where the command starts
+                cmd.params.setdefault("_start", self.set_pos)
+                cmd.target = cmd.params["_start"] + cmd.params["dist"]
+            else:
+                cmd.target = self._target(cmd, self.set_pos)
+            cmd.end_v = end_v
+            cmd.profile = self._plan_position(cmd.target, vmax, acc, dec, jerk, end_v)
+            self.state = DISCRETE
+        elif k == "move_vel":
+            v = cmd.params["vel"]
+            d = cmd.params.get("dir", POSITIVE)
+            if d == NEGATIVE:
+                v = -v
+            elif d == CURRENT:
+                v = math.copysign(abs(v), self.set_vel or self.last_dir)
+            cmd.target = v
+            cmd.profile = self._plan_velocity(v, acc, dec, jerk)
+            self.state = CONTINUOUS
+        elif k in ("halt", "stop"):
+            cmd.profile = self._plan_velocity(0.0, dec, dec, jerk)
+            if k == "halt":
+                self.state = DISCRETE
+        elif k == "home":
+            cmd.profile = Profile(self.set_pos, 0.0)
+        cmd.total_steps = self._steps(cmd.profile.duration)
+        self.active = cmd if k != "stop" else None
+        if k == "stop":
+            self.stop_cmd = cmd
+
+    def _plan_position(self, target, vmax, acc, dec, jerk, end_v):
+        if jerk > 0:
+            return RuckigProfile(self.set_pos, self.set_vel, self.set_acc, target=target, vmax=vmax, acc=acc,
+                                 dec=dec, jerk=jerk, end_v=end_v)
+        return position_profile(self.set_pos, self.set_vel, target, vmax, acc, dec, end_v)
+
+    def _plan_velocity(self, v, acc, dec, jerk):
+        if jerk > 0:
+            return RuckigProfile(self.set_pos, self.set_vel, self.set_acc, target_v=v, acc=acc, dec=dec, jerk=jerk)
+        return velocity_profile(self.set_pos, self.set_vel, v, acc, dec)
+
+    def _steps(self, duration: float) -> int:
+        if not self.cycle:
+            return 0
+        return max(0, math.ceil(duration / self.cycle - 1e-9))
+
+    def _handover_velocity(self, prev: Command, nxt: Command) -> float:
+        """The standard's hand-over speeds for the blending modes (signed in prev's direction)."""
+        if prev.kind not in ("move_abs", "move_rel") or nxt.kind not in ("move_abs", "move_rel"):
+            return 0.0
+        start = prev.target
+        d1 = prev.target - (prev.profile.p0 if prev.profile else self.set_pos)
+        d2 = self._target(nxt, start) - start
+        if d1 == 0 or d2 == 0 or (d1 > 0) != (d2 > 0):
+            return 0.0                          # opposite directions: degrade to Buffered
+        v1, v2 = abs(prev.params["vel"]), abs(nxt.params["vel"])
+        v = {BLEND_LOW: min(v1, v2), BLEND_PREVIOUS: v1, BLEND_NEXT: v2, BLEND_HIGH: max(v1, v2)}[nxt.buffer_mode]
+        return math.copysign(v, d1)
+
+    def _replan_for_blend(self) -> None:
+        """The active move must arrive at its target with the hand-over speed of its blending successor."""
+        cur, nxt = self.active, self.queue[0]
+        if cur is None or cur.kind not in ("move_abs", "move_rel") or nxt.buffer_mode == BUFFERED:
+            return
+        vh = self._handover_velocity(cur, nxt)
+        if vh == 0.0:
+            return
+        vmax, acc, dec, jerk = self._limits(cur)
+        vmax = max(vmax, abs(vh))
+        cur.profile = self._plan_position(cur.target, vmax, acc, dec, jerk, vh)
+        cur.end_v = cur.profile.end_velocity
+        cur.steps = 0
+        cur.total_steps = self._steps(cur.profile.duration)
+
+    # ------------------------------------------------------------------ the kernel
+    def step(self) -> None:
+        """Advance the set state by one cycle (the kernel phase)."""
+        dt = self.cycle
+        if self.drive is None and self.power_request and not self.power_on:
+            self.power_wait += dt
+        if self.state == ERRORSTOP:
+            ramp = getattr(self, "_ramp", None)
+            if ramp is not None:
+                self._ramp_t += dt
+                self.set_pos, self.set_vel, self.set_acc = ramp.sample(self._ramp_t)
+                if self._ramp_t >= ramp.duration:
+                    self._ramp = None
+                    self.set_vel = self.set_acc = 0.0
+            self._follow()
+            return
+        cmd = self.stop_cmd if self.state == STOPPING else self.active
+        if cmd is not None and cmd.status == ACTIVE:
+            cmd.steps += 1
+            t = cmd.steps * dt
+            finished = cmd.steps >= cmd.total_steps
+            if finished:
+                p, v, a = cmd.profile.end
+                if cmd.kind in ("move_abs", "move_rel"):
+                    p = cmd.target
+            else:
+                p, v, a = cmd.profile.sample(t)
+            self.set_pos, self.set_vel, self.set_acc = p, v, a
+            if v:
+                self.last_dir = 1.0 if v > 0 else -1.0
+            if cmd.kind == "move_vel":
+                cmd.in_velocity = finished
+                if finished and self.queue:
+                    self._next()
+            elif finished:
+                self._finish(cmd)
+        elif cmd is not None and cmd.kind == "move_vel" and self.queue:
+            self._next()
+        elif self.state == STOPPING and self.stop_cmd is None:
+            self.state = STANDSTILL
+        self._check_limits()
+        self._follow()
+
+    def _finish(self, cmd: Command) -> None:
+        cmd.status = DONE
+        if cmd.kind == "stop":
+            self.set_vel = self.set_acc = 0.0
+            if cmd.execute_low:
+                self.stop_cmd = None
+                self.state = STANDSTILL
+            return
+        if cmd.kind == "home":
+            self.set_pos = self.act_pos = cmd.params["pos"]
+        self.active = None
+        if self.queue:
+            self._next()
+        else:
+            self.set_vel = self.set_acc = 0.0
+            self.state = STANDSTILL
+
+    def _next(self) -> None:
+        prev = self.active
+        if prev is not None and prev.status == ACTIVE:
+            prev.status = DONE                    # MoveVelocity hands over at InVelocity
+            prev.in_velocity = False
+        nxt = self.queue.pop(0)
+        self.active = None
+        self._activate(nxt, 0.0)
+        if self.queue and self.queue[0].buffer_mode != BUFFERED:
+            self._replan_for_blend()
+
+    def _check_limits(self) -> None:
+        c = self.cfg
+        if not self.modulo and not c.sw_limit_min <= self.set_pos <= c.sw_limit_max:
+            self.set_pos = min(max(self.set_pos, c.sw_limit_min), c.sw_limit_max)
+            self.error_stop(E.SW_LIMIT_REACHED)
+
+    def _follow(self) -> None:
+        if self.drive is None:                    # a virtual axis: the actual value follows the set value
+            self.act_pos, self.act_vel = self.set_pos, self.set_vel
+        elif abs(self.set_pos - self.act_pos) > self.cfg.following_error_window and self.state != ERRORSTOP:
+            self.error_stop(E.FOLLOWING_ERROR)
+
+    # ------------------------------------------------------------------ stop release
+    def stop_execute(self, cmd: Command, execute: bool) -> None:
+        """MC_Stop's Execute, every call: Stopping is released when Done and Execute is FALSE."""
+        if not execute:
+            cmd.execute_low = True
+            if cmd is self.stop_cmd and cmd.status == DONE and self.state == STOPPING:
+                self.stop_cmd = None
+                self.state = STANDSTILL
+        else:
+            cmd.execute_low = False

@@ -1,0 +1,272 @@
+"""The native bodies of the MC_* function blocks and the per-PLC motion registry.
+
+`plcopen.st` declares the blocks (so the compiler checks every call against the standard's
+interfaces); when a PLC's namespace is built, `install(ns)` replaces their `_body` with the
+functions below and adds a `MotionRegistry`, which the PLC runs as an I/O driver: after each
+task's job it advances the axes that task commands (the kernel phase).
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+from .axis import (ABORTED, ACTIVE, CONTINUOUS, DISABLED, DISCRETE, DONE, ERROR, ERRORSTOP, HOMING, QUEUED,
+                   STANDSTILL, STOPPING, Axis, AxisConfig)
+
+DEFAULT_CYCLE_S = 0.001
+
+
+class MotionRegistry:
+    """Every axis of one PLC, by handle; configurations by AxisNo."""
+
+    per_namespace = True
+
+    def __init__(self):
+        self.axes: dict = {}            # handle → Axis
+        self.configs: dict = {}         # AxisNo → AxisConfig
+        self.task = None
+        self.traces: list = []          # [AxisTrace]
+
+    def axis(self, ref) -> Axis:
+        """The Axis behind an AXIS_REF value (created on first use)."""
+        h = ref.Handle
+        ax = self.axes.get(h)
+        if ax is None:
+            h = h or (max(self.axes, default=0) + 1)
+            ax = Axis(h, self.configs.get(ref.AxisNo) or AxisConfig(name=f"axis{ref.AxisNo or h}"))
+            ax.axis_no = ref.AxisNo
+            self.axes[h] = ax
+            ref.Handle = h
+        if ax.task is None and self.task is not None:
+            ax.task = self.task
+            ax.cycle = (self.task.interval or 0) / 1e9 or DEFAULT_CYCLE_S
+        elif not ax.cycle:
+            ax.cycle = DEFAULT_CYCLE_S
+        return ax
+
+    def adopt(self, old: "MotionRegistry") -> None:
+        """Online change: the new program's AXIS_REFs carry their handles over, so keep the axes."""
+        self.axes, self.configs, self.traces = old.axes, old.configs, old.traces
+
+    # the I/O driver interface
+    def before_job(self, task=None) -> None:
+        self.task = task
+
+    def after_job(self, task=None) -> None:
+        if task is None:
+            return
+        for ax in self.axes.values():
+            if ax.task is task:
+                ax.step()
+        for tr in self.traces:
+            if tr.axis is not None and tr.axis.task is task:
+                tr.sample()
+
+    def rebind(self) -> None:
+        pass
+
+
+# ---------------------------------------------------------------------------- output helpers
+
+def _execute_outputs(fb, cmd, execute: bool, has_active=True, has_aborted=True) -> None:
+    """Busy/Active/Done/CommandAborted/Error/ErrorID from the command's ledger entry (PLCopen §2.4.1):
+    terminal outputs stay while Execute is TRUE, and show for exactly one call if it already fell."""
+    busy = active = done = aborted = error = False
+    code = 0
+    if cmd is not None:
+        st = cmd.status
+        if st == QUEUED:
+            busy = True
+        elif st == ACTIVE:
+            busy = active = True
+        elif st == DONE:
+            done = True
+        elif st == ABORTED:
+            aborted = True
+        elif st == ERROR:
+            error, code = True, cmd.error_id
+        if cmd.terminal:
+            if execute:
+                cmd.shown = True
+            elif cmd.shown:                       # already reported while Execute was TRUE: cleared
+                busy = active = done = aborted = error = False
+                code = 0
+                fb.CmdId = 0
+            else:                                 # Execute fell before the end: this one call shows it
+                fb.CmdId = 0
+    fb.Busy, fb.Done, fb.Error, fb.ErrorID = busy, done, error, code
+    if has_active:
+        fb.Active = active
+    if has_aborted:
+        fb.CommandAborted = aborted
+
+
+def _edge(fb) -> bool:
+    ex = bool(fb.Execute)
+    rising = ex and not fb.PrevEdge
+    fb.PrevEdge = ex
+    return rising
+
+
+def _lookup(ax: Axis, fb) -> Optional[object]:
+    return ax.commands.get(fb.CmdId) if fb.CmdId else None
+
+
+def _motion_body(kind: str, params):
+    """An Execute-type motion FB: submit on the rising edge, then report from the ledger."""
+
+    def body(self, _reg=None):
+        reg = self._motion
+        ax = reg.axis(self.Axis)
+        if _edge(self):
+            old = _lookup(ax, self)
+            if old is not None and old.terminal:
+                ax.forget(old.id)
+            cmd = ax.new_command(kind, params(self), int(getattr(self, "BufferMode", 0)))
+            cmd.continuous_update = bool(getattr(self, "ContinuousUpdate", False))
+            ax.submit(cmd)
+            self.CmdId = cmd.id
+        cmd = _lookup(ax, self)
+        if cmd is not None and cmd.continuous_update and cmd.status in (ACTIVE, QUEUED) and self.ContinuousUpdate:
+            _continuous_update(ax, cmd, params(self))
+        if kind == "stop" and cmd is not None:
+            ax.stop_execute(cmd, bool(self.Execute))
+        _execute_outputs(self, cmd, bool(self.Execute), hasattr(self, "Active"), hasattr(self, "CommandAborted"))
+        if kind == "move_vel":
+            self.InVelocity = bool(cmd is not None and cmd.status == ACTIVE and cmd.in_velocity)
+            if self.InVelocity:
+                self.Busy = self.Active = True
+        if cmd is not None and cmd.terminal and not self.Execute and self.CmdId == 0:
+            ax.forget(cmd.id)
+    return body
+
+
+def _continuous_update(ax: Axis, cmd, new: dict) -> None:
+    """ContinuousUpdate: apply changed inputs to the running move (relative moves keep their start)."""
+    changed = any(new.get(k) != cmd.params.get(k) for k in new)
+    if not changed:
+        return
+    start = cmd.params.get("_start")
+    cmd.params.update(new)
+    if start is not None:
+        cmd.params["_start"] = start
+    if cmd.status == ACTIVE and ax._validate(cmd) == 0:
+        ax._activate(cmd)
+
+
+def _p_abs(fb):
+    return {"pos": float(fb.Position), "vel": float(fb.Velocity), "acc": float(fb.Acceleration),
+            "dec": float(fb.Deceleration), "jerk": float(fb.Jerk), "dir": int(fb.Direction)}
+
+
+def _p_rel(fb):
+    return {"dist": float(fb.Distance), "vel": float(fb.Velocity), "acc": float(fb.Acceleration),
+            "dec": float(fb.Deceleration), "jerk": float(fb.Jerk)}
+
+
+def _p_vel(fb):
+    return {"vel": float(fb.Velocity), "acc": float(fb.Acceleration), "dec": float(fb.Deceleration),
+            "jerk": float(fb.Jerk), "dir": int(fb.Direction)}
+
+
+def _p_stop(fb):
+    return {"dec": float(fb.Deceleration), "jerk": float(fb.Jerk)}
+
+
+def _p_home(fb):
+    return {"pos": float(fb.Position)}
+
+
+def _p_setpos(fb):
+    return {"position": float(fb.Position), "relative": bool(fb.Relative)}
+
+
+def _power_body(self):
+    reg = self._motion
+    ax = reg.axis(self.Axis)
+    en = bool(self.Enable)
+    status, code = ax.power(id(self), en)
+    self.Status = status
+    self.Error = code != 0
+    self.ErrorID = code
+    self.Valid = en and not self.Error
+    self.Busy = en
+
+
+def _reset_body(self):
+    reg = self._motion
+    ax = reg.axis(self.Axis)
+    if _edge(self):
+        old = _lookup(ax, self)
+        if old is not None:
+            ax.forget(old.id)
+        cmd = ax.new_command("reset", {})
+        ax.reset(cmd)
+        self.CmdId = cmd.id
+    cmd = _lookup(ax, self)
+    _execute_outputs(self, cmd, bool(self.Execute), False, False)
+
+
+def _read_status_body(self):
+    ax = self._motion.axis(self.Axis)
+    en = bool(self.Enable)
+    st = ax.state if en else None
+    self.Valid = self.Busy = en
+    self.Error, self.ErrorID = False, 0
+    self.ErrorStop, self.Disabled, self.Stopping = st == ERRORSTOP, st == DISABLED, st == STOPPING
+    self.Homing, self.Standstill = st == HOMING, st == STANDSTILL
+    self.DiscreteMotion, self.ContinuousMotion, self.SynchronizedMotion = st == DISCRETE, st == CONTINUOUS, False
+
+
+def _read_position_body(self):
+    ax = self._motion.axis(self.Axis)
+    en = bool(self.Enable)
+    self.Valid = self.Busy = en
+    self.Error, self.ErrorID = False, 0
+    self.Position = ax.actual_position() if en else 0.0
+
+
+def _read_velocity_body(self):
+    ax = self._motion.axis(self.Axis)
+    en = bool(self.Enable)
+    self.Valid = self.Busy = en
+    self.Error, self.ErrorID = False, 0
+    self.Velocity = ax.act_vel if en else 0.0
+
+
+def _read_axis_error_body(self):
+    ax = self._motion.axis(self.Axis)
+    en = bool(self.Enable)
+    self.Valid = self.Busy = en
+    self.Error, self.ErrorID = False, 0
+    self.AxisErrorID = int(ax.axis_error) if en else 0
+
+
+BODIES = {
+    "MC_Power": _power_body,
+    "MC_MoveAbsolute": _motion_body("move_abs", _p_abs),
+    "MC_MoveRelative": _motion_body("move_rel", _p_rel),
+    "MC_MoveVelocity": _motion_body("move_vel", _p_vel),
+    "MC_Halt": _motion_body("halt", _p_stop),
+    "MC_Stop": _motion_body("stop", _p_stop),
+    "MC_Home": _motion_body("home", _p_home),
+    "MC_SetPosition": _motion_body("set_pos", _p_setpos),
+    "MC_Reset": _reset_body,
+    "MC_ReadStatus": _read_status_body,
+    "MC_ReadActualPosition": _read_position_body,
+    "MC_ReadActualVelocity": _read_velocity_body,
+    "MC_ReadAxisError": _read_axis_error_body,
+}
+
+
+def install(ns: dict) -> None:
+    """Namespace hook: native bodies for the MC_* classes of this namespace and its registry."""
+    if "_fb_MC_Power" not in ns:
+        return
+    reg = MotionRegistry()
+    ns["_motion"] = reg
+    ns.setdefault("_io_drivers", []).append(reg)
+    for name, body in BODIES.items():
+        cls = ns.get("_fb_" + name)
+        if cls is not None:
+            cls._body = body
+            cls._motion = reg
