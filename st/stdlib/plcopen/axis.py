@@ -147,12 +147,12 @@ class Axis:
         if not self.power_on:
             if not self.power_request:
                 self.power_request, self.power_wait = True, 0.0
-            if self.power_wait >= self.cfg.enable_delay:
+            if self.power_wait >= self.cfg.enable_delay - 1e-9:
                 self.power_on = True
                 self.set_pos, self.set_vel, self.set_acc = self.act_pos, 0.0, 0.0
                 if self.state == DISABLED:
                     self.state = STANDSTILL
-            elif self.power_wait >= self.cfg.enable_timeout:
+            elif self.power_wait >= self.cfg.enable_timeout - 1e-9:
                 return False, E.ENABLE_TIMEOUT
         return self.power_on, 0
 
@@ -401,12 +401,11 @@ class Axis:
             cmd.steps += 1
             t = cmd.steps * dt
             finished = cmd.steps >= cmd.total_steps
-            if finished:
-                p, v, a = cmd.profile.end
-                if cmd.kind in ("move_abs", "move_rel"):
-                    p = cmd.target
-            else:
-                p, v, a = cmd.profile.sample(t)
+            p, v, a = cmd.profile.sample(t)       # past its end a velocity profile holds the speed
+            if finished and cmd.kind in ("move_abs", "move_rel"):
+                p = cmd.target                    # exactly, without the closed form's rounding
+            elif finished and cmd.kind != "move_vel":
+                v = a = 0.0
             self.set_pos, self.set_vel, self.set_acc = p, v, a
             if v:
                 self.last_dir = 1.0 if v > 0 else -1.0
@@ -452,9 +451,12 @@ class Axis:
             self._replan_for_blend()
 
     def _check_limits(self) -> None:
+        """Moving further out past a software limit is an axis error (the stop ramp then overshoots
+        by its braking distance; after MC_Reset the axis may move back inside)."""
         c = self.cfg
-        if not self.modulo and not c.sw_limit_min <= self.set_pos <= c.sw_limit_max:
-            self.set_pos = min(max(self.set_pos, c.sw_limit_min), c.sw_limit_max)
+        if self.modulo:
+            return
+        if (self.set_pos > c.sw_limit_max and self.set_vel > 0) or (self.set_pos < c.sw_limit_min and self.set_vel < 0):
             self.error_stop(E.SW_LIMIT_REACHED)
 
     def _follow(self) -> None:

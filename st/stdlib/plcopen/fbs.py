@@ -93,7 +93,10 @@ def _execute_outputs(fb, cmd, execute: bool, has_active=True, has_aborted=True) 
                 fb.CmdId = 0
             else:                                 # Execute fell before the end: this one call shows it
                 fb.CmdId = 0
-    fb.Busy, fb.Done, fb.Error, fb.ErrorID = busy, done, error, code
+    fb.Busy, fb.Error, fb.ErrorID = busy, error, code
+    names = type(fb).__slots__
+    if "Done" in names:
+        fb.Done = done
     if has_active:
         fb.Active = active
     if has_aborted:
@@ -130,7 +133,8 @@ def _motion_body(kind: str, params):
             _continuous_update(ax, cmd, params(self))
         if kind == "stop" and cmd is not None:
             ax.stop_execute(cmd, bool(self.Execute))
-        _execute_outputs(self, cmd, bool(self.Execute), hasattr(self, "Active"), hasattr(self, "CommandAborted"))
+        names = type(self).__slots__
+        _execute_outputs(self, cmd, bool(self.Execute), "Active" in names, "CommandAborted" in names)
         if kind == "move_vel":
             self.InVelocity = bool(cmd is not None and cmd.status == ACTIVE and cmd.in_velocity)
             if self.InVelocity:

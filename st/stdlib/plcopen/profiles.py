@@ -54,12 +54,16 @@ class Profile:
         self.segments.append(Segment(t0, p, v, a, dt))
 
     def sample(self, t: float):
-        if t <= 0 or not self.segments:
+        """(p, v, a) at time t; past the end the final velocity is held (MoveVelocity)."""
+        if not self.segments:
+            return self.p0 + self.v0 * max(t, 0.0), self.v0, 0.0
+        if t <= 0:
             return self.p0, self.v0, 0.0
         for s in self.segments:
             if t < s.t0 + s.dt:
                 return s.at(t)
-        return self.end
+        p, v, _ = self.end
+        return p + v * (t - self.duration), v, 0.0
 
     def extrema(self):
         """(min, max) position over the profile (at segment ends and velocity zero crossings)."""
@@ -216,11 +220,15 @@ class RuckigProfile:
         self.p0, self.v0 = p0, v0
 
     def sample(self, t: float):
+        """(p, v, a) at time t; past the end the final velocity is held (MoveVelocity)."""
+        if t > self.duration and self.stages:
+            p, v, _ = self.sample(self.duration)
+            return p + v * (t - self.duration), v, 0.0
         for t0, traj in reversed(self.stages):
             if t >= t0:
                 pv = traj.at_time(min(t - t0, traj.duration))
                 return pv[0][0], pv[1][0], pv[2][0]
-        return self.p0, self.v0, 0.0
+        return self.p0 + self.v0 * max(t, 0.0), self.v0, 0.0
 
     @property
     def end(self):
