@@ -124,12 +124,18 @@ def compile(files, emit, time_unit, f_trig_first_scan):
               help="Requests per second per connection (0: unbounded).")
 @click.option("--modbus-unit-ids", default=None, metavar="IDS",
               help="Answer only these unit ids, e.g. 1,255 (others: exception 0x0B). Default: all.")
+@click.option("--axes", type=click.Path(exists=True), default=None,
+              help="Axis configuration (TOML, [[axis]] tables by AxisNo): modulo, limits, …")
+@click.option("--trace", multiple=True, metavar="AXIS_REF",
+              help="Record an axis every cycle, e.g. main.axis1 (repeatable); written as CSV at the end.")
+@click.option("--trace-plot", type=click.Path(), default=None, help="Draw the traced axes (PNG).")
+@click.option("--trace-csv", type=click.Path(), default=None, help="Where the trace CSV goes (default beside the plot).")
 @click.option("--quiet", "-q", is_flag=True, help="No live status line and no summary.")
 @dialect
 def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, stats_plot, on_fault, watchdog,
         retain_file, no_retain, retain_interval, cold, watch, rt, rt_priority, cpu, sim_cost, safe_outputs,
         modbus, modbus_map, modbus_read_only, modbus_writable, modbus_max_connections, modbus_idle_timeout,
-        modbus_rate, modbus_unit_ids, quiet, time_unit, f_trig_first_scan):
+        modbus_rate, modbus_unit_ids, axes, trace, trace_plot, trace_csv, quiet, time_unit, f_trig_first_scan):
     """Run a program: its CONFIGURATION's tasks (or a lone PROGRAM as one cyclic task), in real time
     with a live status line until Ctrl-C, --duration or --scans; --virtual runs on virtual time."""
     from .runtime.session import RunOptions, run_plc
@@ -142,7 +148,8 @@ def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, s
                       modbus=modbus, modbus_map=modbus_map, modbus_read_only=modbus_read_only,
                       modbus_writable=modbus_writable, modbus_max_connections=modbus_max_connections,
                       modbus_idle_timeout=modbus_idle_timeout, modbus_rate=modbus_rate,
-                      modbus_unit_ids=modbus_unit_ids, quiet=quiet, time_unit=time_unit,
+                      modbus_unit_ids=modbus_unit_ids, axes=axes, trace=list(trace), trace_plot=trace_plot,
+                      trace_csv=trace_csv, quiet=quiet, time_unit=time_unit,
                       f_trig_first_scan=f_trig_first_scan)
     sys.exit(run_plc(result, opts))
 

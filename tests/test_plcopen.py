@@ -448,3 +448,25 @@ def test_modulo_axis_directions(start, target, direction, end_unwrapped):
     ax = axis_of(plc, "main.ax")
     assert ax.set_pos - start == pytest.approx(end_unwrapped - start)
     assert plc["main.apos.Position"] == pytest.approx(target % 360.0)
+
+
+def test_continuous_update_retargets_a_relative_move_from_its_original_start():
+    # the standard's example: MoveRelative by 100 from 0; at 50 the distance becomes 130 → ends at 130
+    plc = make()
+    put(plc, "rel", Distance=100.0, ContinuousUpdate=True, Execute=True, **MOVE)
+    plc.scan()
+    scans_until(plc, lambda: axis_of(plc, "main.ax").set_pos >= 50.0)
+    put(plc, "rel", Distance=130.0)
+    scans_until(plc, lambda: plc["main.rel.Done"])
+    assert axis_of(plc, "main.ax").set_pos == 130.0
+
+
+def test_halt_in_standstill_is_done_at_once():
+    plc = make()
+    put(plc, "halt", Deceleration=10.0, Execute=True)
+    plc.scan()
+    plc.scan()
+    assert out(plc, "halt") == DONE and state(plc) == "Standstill"
+    put(plc, "setpos", Position=12.5, Relative=True, Execute=True)
+    plc.scan()
+    assert plc["main.apos.Position"] == 12.5 and state(plc) == "Standstill"

@@ -52,6 +52,10 @@ class RunOptions:
     modbus_idle_timeout: float = 60.0
     modbus_rate: float = 1000.0
     modbus_unit_ids: Optional[str] = None
+    axes: Optional[str] = None                            # axis configuration (TOML)
+    trace: list = field(default_factory=list)             # AXIS_REF paths
+    trace_plot: Optional[str] = None
+    trace_csv: Optional[str] = None
     quiet: bool = False
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
@@ -84,6 +88,18 @@ def run_plc(compiled, o: RunOptions) -> int:
     if not plc.instances:
         _err("error: nothing to run: no PROGRAM and no CONFIGURATION")
         return 2
+    traces = []
+    if o.axes or o.trace:
+        from ..stdlib.plcopen import configure_axes
+        from ..stdlib.plcopen.trace import start_traces
+        try:
+            if o.axes:
+                configure_axes(plc, o.axes)
+            traces = start_traces(plc, o.trace)
+        except (KeyError, TypeError, ValueError) as e:
+            _err(f"error: {e.args[0] if e.args else e}")
+            plc.close()
+            return 2
     slave = None
     if o.modbus:
         from ..io.modbus import MapError, ModbusSlave, parse_endpoint
@@ -133,7 +149,22 @@ def run_plc(compiled, o: RunOptions) -> int:
             rt_setup.release()
         _restore_signals(old_handlers)
     _report(plc, o)
+    if traces:
+        _write_traces(traces, o)
     return code
+
+
+def _write_traces(traces: list, o: RunOptions) -> None:
+    from ..stdlib.plcopen import trace
+    csv_path = o.trace_csv or (str(Path(o.trace_plot).with_suffix(".csv")) if o.trace_plot else "trace.csv")
+    trace.write_csv(traces, csv_path)
+    if not o.quiet:
+        _err(f"trace: {sum(len(t.rows) for t in traces)} samples of {', '.join(t.path for t in traces)} → {csv_path}")
+    if o.trace_plot:
+        try:
+            trace.plot(traces, o.trace_plot, title=", ".join(Path(f).name for f in o.files))
+        except RuntimeError as e:
+            _err(f"error: {e}")
 
 
 def _safe_values(specs: list) -> dict:

@@ -58,7 +58,8 @@ class MotionRegistry:
             if ax.task is task:
                 ax.step()
         for tr in self.traces:
-            if tr.axis is not None and tr.axis.task is task:
+            ax = tr.axis
+            if ax is not None and ax.task is task:
                 tr.sample()
 
     def rebind(self) -> None:
