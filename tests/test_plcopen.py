@@ -470,3 +470,14 @@ def test_halt_in_standstill_is_done_at_once():
     put(plc, "setpos", Position=12.5, Relative=True, Execute=True)
     plc.scan()
     assert plc["main.apos.Position"] == 12.5 and state(plc) == "Standstill"
+
+
+def test_online_change_keeps_the_axes_and_the_running_move():
+    plc = make()
+    put(plc, "abs1", Position=100.0, Execute=True, **MOVE)
+    plc.scan(1000)
+    changed = PROGRAM.replace("seen_state_after_abs1 : BOOL;", "seen_state_after_abs1 : BOOL; extra : INT;")
+    assert plc.online_change(compile_text(changed, "motion.st")) == "online change: 1 instance(s) carried over"
+    assert axis_of(plc, "main.ax").set_pos == pytest.approx(37.5)
+    n = scans_until(plc, lambda: plc["main.abs1.Done"])
+    assert n == 1501 and axis_of(plc, "main.ax").set_pos == 100.0   # Done in cycle n + 2500

@@ -46,6 +46,8 @@ class MotionRegistry:
     def adopt(self, old: "MotionRegistry") -> None:
         """Online change: the new program's AXIS_REFs carry their handles over, so keep the axes."""
         self.axes, self.configs, self.traces = old.axes, old.configs, old.traces
+        for ax in self.axes.values():
+            ax.task = None                  # the new program's tasks claim their axes on the next call
 
     # the I/O driver interface
     def before_job(self, task=None) -> None:
