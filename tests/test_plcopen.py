@@ -380,6 +380,37 @@ def test_buffered_successor_starts_when_the_predecessor_is_done():
     assert n == 1100 and axis_of(plc, "main.ax").set_pos == 130.0   # 100 → 130 from rest: 1.1 s
 
 
+def test_a_command_buffered_after_move_velocity_starts_at_in_velocity_and_aborts_it():
+    plc = make()
+    put(plc, "vel", Velocity=50.0, Acceleration=100.0, Deceleration=100.0, Execute=True)
+    put(plc, "halt", Deceleration=100.0, BufferMode=1, Execute=True)
+    plc.scan()
+    assert out(plc, "halt") == (True, False, False, False, False)  # queued: Busy, not Active
+    n = scans_until(plc, lambda: plc["main.halt.Active"])
+    assert n == 500                                               # 0.5 s: Active in cycle n + 500
+    assert out(plc, "vel", ("Busy", "Active", "InVelocity", "CommandAborted")) == (False, False, False, True)
+    assert state(plc) == "DiscreteMotion"
+    n = scans_until(plc, lambda: plc["main.halt.Done"])
+    assert n == 500 and state(plc) == "Standstill"
+
+
+def test_enable_false_while_stopping_aborts_the_stop_and_disables():
+    plc = make()
+    put(plc, "vel", Velocity=50.0, Acceleration=100.0, Deceleration=100.0, Execute=True)
+    plc.scan(600)
+    put(plc, "stop", Deceleration=100.0, Execute=True)
+    plc.scan(10)
+    assert state(plc) == "Stopping" and out(plc, "stop") == BUSY
+    plc["main.en"] = False
+    plc.scan()
+    assert state(plc) == "Disabled"
+    plc.scan()
+    assert out(plc, "stop") == ABORTED
+    put(plc, "stop", Execute=False)
+    plc.scan()
+    assert out(plc, "stop") == (False, False, False, False, False)
+
+
 @pytest.mark.parametrize("mode, first, second", [(2, 2313, 4125), (3, 2250, 4000), (4, 2313, 4125),
                                                  (5, 2250, 4000)])
 def test_blending_hands_over_at_the_standard_velocity(mode, first, second):

@@ -137,6 +137,8 @@ class Axis:
                 self.power_on = False
                 if self.state != ERRORSTOP:
                     self._abort_all()
+                    if self.stop_cmd is not None and not self.stop_cmd.terminal:
+                        self.stop_cmd.status = ABORTED
                     self.stop_cmd = None
                     self.state = DISABLED
                 self.set_vel = self.set_acc = 0.0
@@ -442,7 +444,7 @@ class Axis:
     def _next(self) -> None:
         prev = self.active
         if prev is not None and prev.status == ACTIVE:
-            prev.status = DONE                    # MoveVelocity hands over at InVelocity
+            prev.status = ABORTED                 # MoveVelocity (no Done output) hands over at InVelocity
             prev.in_velocity = False
         nxt = self.queue.pop(0)
         self.active = None
