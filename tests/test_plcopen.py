@@ -18,6 +18,7 @@ PROGRAM main
     status : MC_ReadStatus; apos : MC_ReadActualPosition; avel : MC_ReadActualVelocity; aerr : MC_ReadAxisError;
     en : BOOL := TRUE;
     seen_state_after_abs1 : BOOL;
+    ref_switch : BOOL;
   END_VAR
   power(Axis := ax, Enable := en);
   power2(Axis := ax);
@@ -460,6 +461,76 @@ def test_set_position_and_home_shift_the_coordinates():
     assert plc["main.status.Homing"] and out(plc, "home") == BUSY  # referencing at the current position
     plc.scan()
     assert plc["main.home.Done"] and state(plc) == "Standstill" and plc["main.apos.Position"] == 0.0
+
+
+HOMING = dict(homing="switch", home_switch_position=-20.005, home_direction=-1, home_velocity=10.0,
+              home_acceleration=100.0)
+
+
+def test_home_by_a_move_latches_the_switch_edge_and_shifts_the_coordinates():
+    plc = make(**HOMING)
+    put(plc, "home", Position=100.0, Execute=True)
+    plc.scan()
+    assert state(plc) == "Homing" and out(plc, "home") == BUSY
+    ax = axis_of(plc, "main.ax")
+    n = scans_until(plc, lambda: plc["main.home.Done"])
+    assert n == 2151                         # 0.1 s ramp, 19.505 units at 10/s seen in the next cycle, 0.1 s brake
+    assert state(plc) == "Standstill"
+    assert ax.act_pos == pytest.approx(99.495, abs=1e-9)  # the edge at -20.005 is now 100; 0.505 past it
+    assert plc["main.apos.Position"] == ax.act_pos
+
+
+def test_home_starting_on_the_switch_leaves_it_the_other_way():
+    plc = make(**HOMING)
+    put(plc, "setpos", Position=-30.0, Execute=True)
+    plc.scan()
+    put(plc, "home", Position=0.0, Execute=True)
+    plc.scan()
+    ax = axis_of(plc, "main.ax")
+    scans_until(plc, lambda: plc["main.home.Done"])
+    # searched upwards until the cam (active at ≤ -20.005) went inactive, seen at -20.0, then braked
+    # 0.5 further: 0.505 past the edge, which is now 0
+    assert ax.act_pos == pytest.approx(0.505, abs=1e-9)
+
+
+def test_home_on_a_bool_variable_latches_the_actual_position_of_that_cycle():
+    plc = make(**{**HOMING, "home_switch_position": math.nan, "home_switch": "main.ref_switch"})
+    ax = axis_of(plc, "main.ax")
+    put(plc, "home", Position=0.0, Execute=True)
+    plc.scan(300)                            # searching downwards at 10 units/s
+    assert state(plc) == "Homing" and ax.act_pos == pytest.approx(-2.5, abs=1e-9)
+    plc["main.ref_switch"] = True            # the switch closes
+    n = scans_until(plc, lambda: plc["main.home.Done"])
+    assert n == 102                          # latched by the next kernel phase, 100 cycles braking, Done
+    assert ax.act_pos == pytest.approx(-0.5, abs=1e-9)  # the latched position is 0; braked 0.5 past it
+
+
+def test_home_errors_not_configured_search_distance_and_stop():
+    plc = make(homing="switch")
+    put(plc, "home", Position=0.0, Execute=True)
+    plc.scan()
+    assert out(plc, "home") == ERROR and plc["main.home.ErrorID"] == E.HOMING_NOT_CONFIGURED
+    assert state(plc) == "Standstill"
+
+    plc = make(**HOMING, home_search_distance=5.005)
+    put(plc, "home", Position=0.0, Execute=True)
+    plc.scan()
+    n = scans_until(plc, lambda: state(plc) == "ErrorStop")
+    assert n == 550                          # 0.5 units of ramp + 4.505 at 10/s
+    plc.scan()
+    assert out(plc, "home") == ERROR and plc["main.home.ErrorID"] == E.AXIS_ERRORSTOP
+    assert plc["main.aerr.AxisErrorID"] == E.HOMING_FAILED
+
+    plc = make(**HOMING)
+    put(plc, "home", Position=0.0, Execute=True)
+    plc.scan(100)
+    put(plc, "abs1", Position=0.0, Execute=True, **MOVE)          # rejected while Homing
+    put(plc, "stop", Deceleration=100.0, Execute=True)            # MC_Stop is allowed
+    plc.scan()
+    assert out(plc, "abs1") == ERROR and plc["main.abs1.ErrorID"] == E.AXIS_HOMING
+    assert state(plc) == "Stopping"
+    plc.scan()
+    assert out(plc, "home") == ABORTED
 
 
 @pytest.mark.parametrize("start, target, direction, end_unwrapped", [

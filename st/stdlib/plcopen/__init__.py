@@ -43,16 +43,34 @@ def configure_axes(plc, axes) -> None:
     reg = registry(plc)
     if reg is None:
         raise KeyError("the program uses no PLCopen motion block")
+    where = ""
     if isinstance(axes, (str, Path)):
+        where = f"{axes}: "
         axes = load_axes(str(axes))
     for no, cfg in axes.items():
         if not isinstance(cfg, AxisConfig):
             cfg = AxisConfig(**{"name": f"axis{no}", **cfg})
+        if cfg.homing not in ("current", "switch"):
+            raise ValueError(f"{where}axis {no}: homing must be 'current' or 'switch', not {cfg.homing!r}")
         reg.configs[int(no)] = cfg
+        reg.signals.pop(int(no), None)
+        if cfg.home_switch:
+            reg.signals[int(no)] = _switch_reader(plc, cfg.home_switch, f"{where}axis {no}")
     for ax in reg.axes.values():
         no = getattr(ax, "axis_no", None)
         if no in reg.configs:
             ax.cfg = reg.configs[no]
+            ax.home_signal = reg.signals.get(no)
+
+
+def _switch_reader(plc, path: str, what: str):
+    """A callable reading the BOOL variable `path` (the reference switch of an axis); resolved on
+    every read, which only happens while homing, so it survives an online change."""
+    try:
+        plc._resolve(path)
+    except KeyError:
+        raise ValueError(f"{what}: home_switch '{path}' is not a variable of the program") from None
+    return lambda: bool(plc[path])
 
 
 def load_axes(path: str) -> dict:

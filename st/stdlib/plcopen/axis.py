@@ -44,6 +44,19 @@ class AxisConfig:
     enable_timeout: float = 2.0         # s
     enable_delay: float = 0.0           # simulated drive: seconds until the power stage is on (inf: never)
     buffer_size: int = 8
+    # MC_Home: "current" references at the current position; "switch" moves at home_velocity in
+    # home_direction (+1/-1) until a reference switch changes, latches there, brakes and shifts
+    # the coordinates so that the switch edge is at MC_Home.Position. The switch is a BOOL variable
+    # (home_switch = "prog.var") or, on a virtual axis, a cam at home_switch_position that is
+    # active on the side the search moves towards. If the switch is already active at the start,
+    # the search runs the other way to the edge where it goes inactive (CiA 402 homing on a switch).
+    homing: str = "current"
+    home_switch: str = ""
+    home_switch_position: float = math.nan
+    home_direction: int = -1
+    home_velocity: float = 10.0
+    home_acceleration: float = 100.0
+    home_search_distance: float = math.inf   # no edge within this distance: ErrorStop HOMING_FAILED
 
 
 @dataclass(eq=False)
@@ -90,6 +103,7 @@ class Axis:
         self._next_id = 1
         self.commands: dict = {}        # id → Command, for the FBs' ledgers
         self.drive = None               # an attached drive (EtherCAT); None: virtual axis
+        self.home_signal = None         # callable → bool: the reference switch (config home_switch)
         self.axis_no = 0
 
     # ------------------------------------------------------------------ helpers
@@ -260,6 +274,11 @@ class Axis:
             return E.INVALID_DIRECTION
         if not 0 <= cmd.buffer_mode <= 5:
             return E.INVALID_BUFFER_MODE
+        if cmd.kind == "home":
+            if not math.isfinite(p["pos"]):
+                return E.INVALID_POSITION
+            if self.cfg.homing == "switch" and self.home_signal is None and math.isnan(self.cfg.home_switch_position):
+                return E.HOMING_NOT_CONFIGURED
         if cmd.kind in ("move_abs", "move_rel"):
             tgt = self._target(cmd, self._start_pos_for(cmd))
             lo, hi = self.cfg.sw_limit_min, self.cfg.sw_limit_max
@@ -332,7 +351,10 @@ class Axis:
             if k == "halt":
                 self.state = DISCRETE
         elif k == "home":
-            cmd.profile = Profile(self.set_pos, 0.0)
+            if self.cfg.homing == "switch":
+                self._start_homing_search(cmd)
+            else:
+                cmd.profile = Profile(self.set_pos, 0.0)
         cmd.total_steps = self._steps(cmd.profile.duration)
         self.active = cmd if k != "stop" else None
         if k == "stop":
@@ -348,6 +370,54 @@ class Axis:
         if jerk > 0:
             return RuckigProfile(self.set_pos, self.set_vel, self.set_acc, target_v=v, acc=acc, dec=dec, jerk=jerk)
         return velocity_profile(self.set_pos, self.set_vel, v, acc, dec)
+
+    # ------------------------------------------------------------------ homing on a switch
+    def _switch(self) -> bool:
+        if self.home_signal is not None:
+            return bool(self.home_signal())
+        x = self.cfg.home_switch_position
+        return self.act_pos >= x if self.cfg.home_direction > 0 else self.act_pos <= x
+
+    def _start_homing_search(self, cmd: Command) -> None:
+        c = self.cfg
+        direction = 1.0 if c.home_direction > 0 else -1.0
+        want = True                               # look for the switch becoming active
+        if self._switch():                        # already on it: leave it the other way
+            direction, want = -direction, False
+        cmd.params.update(_phase="search", _want=want, _from=self.act_pos)
+        cmd.profile = velocity_profile(self.set_pos, self.set_vel, direction * abs(c.home_velocity),
+                                       c.home_acceleration, c.home_acceleration)
+        cmd.steps = 0
+
+    def _step_homing(self, cmd: Command) -> None:
+        """One cycle of a search for the reference switch, then the braking ramp, then the shift."""
+        p = cmd.params
+        cmd.steps += 1
+        prev_act = self.act_pos
+        self.set_pos, self.set_vel, self.set_acc = cmd.profile.sample(cmd.steps * self.cycle)
+        self._follow()
+        if p["_phase"] == "search":
+            if self._switch() == p["_want"]:
+                x = self.cfg.home_switch_position
+                latch = x if (self.home_signal is None and min(prev_act, self.act_pos) <= x <= max(prev_act,
+                                                                                                    self.act_pos)) \
+                    else self.act_pos
+                p["_shift"] = p["pos"] - latch
+                p["_phase"] = "brake"
+                cmd.profile = velocity_profile(self.set_pos, self.set_vel, 0.0, self.cfg.home_acceleration,
+                                               self.cfg.home_acceleration)
+                cmd.steps = 0
+            elif abs(self.act_pos - p["_from"]) > self.cfg.home_search_distance:
+                self.error_stop(E.HOMING_FAILED)
+            return
+        if cmd.steps >= self._steps(cmd.profile.duration):
+            shift = p["_shift"]
+            self.set_pos += shift
+            self.act_pos += shift
+            self.set_vel = self.set_acc = 0.0
+            cmd.status = DONE
+            self.active = None
+            self.state = STANDSTILL
 
     def _steps(self, duration: float) -> int:
         if not self.cycle:
@@ -399,6 +469,9 @@ class Axis:
             self._follow()
             return
         cmd = self.stop_cmd if self.state == STOPPING else self.active
+        if cmd is not None and cmd.kind == "home" and "_phase" in cmd.params and cmd.status == ACTIVE:
+            self._step_homing(cmd)
+            return
         if cmd is not None and cmd.status == ACTIVE:
             cmd.steps += 1
             t = cmd.steps * dt
@@ -432,7 +505,7 @@ class Axis:
                 self.stop_cmd = None
                 self.state = STANDSTILL
             return
-        if cmd.kind == "home":
+        if cmd.kind == "home":                    # referencing at the current position
             self.set_pos = self.act_pos = cmd.params["pos"]
         self.active = None
         if self.queue:

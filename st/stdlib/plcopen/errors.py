@@ -26,6 +26,7 @@ class E(IntEnum):
     INVALID_BUFFER_MODE = 0x2007
     SW_LIMIT_TARGET = 0x2008        # the target lies outside the software limits (rejected up front)
     INVALID_AXIS_REF = 0x2009
+    HOMING_NOT_CONFIGURED = 0x200A  # MC_Home with homing = "switch" but no switch configured
     DRIVE_FAULT = 0x3001
     COMMUNICATION_LOST = 0x3002
     POWER_STAGE_LOST = 0x3003
@@ -33,3 +34,4 @@ class E(IntEnum):
     FOLLOWING_ERROR = 0x3005
     SW_LIMIT_REACHED = 0x3006       # the set position ran into a software limit
     RESET_FAILED = 0x3007
+    HOMING_FAILED = 0x3008          # MC_Home: no switch edge within home_search_distance

@@ -23,6 +23,7 @@ class MotionRegistry:
     def __init__(self):
         self.axes: dict = {}            # handle → Axis
         self.configs: dict = {}         # AxisNo → AxisConfig
+        self.signals: dict = {}         # AxisNo → callable: the reference switch of MC_Home
         self.task = None
         self.traces: list = []          # [AxisTrace]
 
@@ -34,6 +35,7 @@ class MotionRegistry:
             h = h or (max(self.axes, default=0) + 1)
             ax = Axis(h, self.configs.get(ref.AxisNo) or AxisConfig(name=f"axis{ref.AxisNo or h}"))
             ax.axis_no = ref.AxisNo
+            ax.home_signal = self.signals.get(ref.AxisNo)
             self.axes[h] = ax
             ref.Handle = h
         if ax.task is None and self.task is not None:
@@ -45,7 +47,7 @@ class MotionRegistry:
 
     def adopt(self, old: "MotionRegistry") -> None:
         """Online change: the new program's AXIS_REFs carry their handles over, so keep the axes."""
-        self.axes, self.configs, self.traces = old.axes, old.configs, old.traces
+        self.axes, self.configs, self.traces, self.signals = old.axes, old.configs, old.traces, old.signals
         for ax in self.axes.values():
             ax.task = None                  # the new program's tasks claim their axes on the next call
 
