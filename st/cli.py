@@ -130,12 +130,20 @@ def compile(files, emit, time_unit, f_trig_first_scan):
               help="Record an axis every cycle, e.g. main.axis1 (repeatable); written as CSV at the end.")
 @click.option("--trace-plot", type=click.Path(), default=None, help="Draw the traced axes (PNG).")
 @click.option("--trace-csv", type=click.Path(), default=None, help="Where the trace CSV goes (default beside the plot).")
+@click.option("--ethercat", type=click.Path(exists=True), default=None, metavar="SEGMENT.TOML",
+              help="Exchange process data with an EtherCAT segment every scan; drives move their axes.")
+@click.option("--ethercat-backend", type=click.Choice(["sim", "soem"]), default="sim", show_default=True,
+              help="sim: the emulated segment in process; soem: pysoem on --ethercat-iface.")
+@click.option("--ethercat-iface", default=None, help="Network interface of the soem backend (root).")
+@click.option("--ethercat-capture", type=click.Path(), default=None,
+              help="sim backend: write every frame to a pcap file (Wireshark/tshark).")
 @click.option("--quiet", "-q", is_flag=True, help="No live status line and no summary.")
 @dialect
 def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, stats_plot, on_fault, watchdog,
         retain_file, no_retain, retain_interval, cold, watch, rt, rt_priority, cpu, sim_cost, safe_outputs,
         modbus, modbus_map, modbus_read_only, modbus_writable, modbus_max_connections, modbus_idle_timeout,
-        modbus_rate, modbus_unit_ids, axes, trace, trace_plot, trace_csv, quiet, time_unit, f_trig_first_scan):
+        modbus_rate, modbus_unit_ids, axes, trace, trace_plot, trace_csv, ethercat, ethercat_backend, ethercat_iface,
+        ethercat_capture, quiet, time_unit, f_trig_first_scan):
     """Run a program: its CONFIGURATION's tasks (or a lone PROGRAM as one cyclic task), in real time
     with a live status line until Ctrl-C, --duration or --scans; --virtual runs on virtual time."""
     from .runtime.session import RunOptions, run_plc
@@ -149,7 +157,8 @@ def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, s
                       modbus_writable=modbus_writable, modbus_max_connections=modbus_max_connections,
                       modbus_idle_timeout=modbus_idle_timeout, modbus_rate=modbus_rate,
                       modbus_unit_ids=modbus_unit_ids, axes=axes, trace=list(trace), trace_plot=trace_plot,
-                      trace_csv=trace_csv, quiet=quiet, time_unit=time_unit,
+                      trace_csv=trace_csv, ethercat=ethercat, ethercat_backend=ethercat_backend,
+                      ethercat_iface=ethercat_iface, ethercat_capture=ethercat_capture, quiet=quiet, time_unit=time_unit,
                       f_trig_first_scan=f_trig_first_scan)
     sys.exit(run_plc(result, opts))
 
@@ -254,6 +263,106 @@ def modbus_map(files, map_file, time_unit, f_trig_first_scan):
         click.echo("  ".join(c.ljust(w) for c, w in zip(line, widths)).rstrip())
     click.echo("other addresses in OpenPLC's ranges (coils and discrete inputs 0-8191, input registers "
                "0-1023, holding registers 0-8191) read 0 and keep what is written; beyond them: exception 02")
+
+
+@main.group()
+def ethercat():
+    """EtherCAT: the emulated segment, scanning and timing plans (see `st run --ethercat`)."""
+
+
+def _segment_config_or_exit(path):
+    from .io.ethercat.config import ConfigError, load
+    try:
+        return load(path)
+    except ConfigError as e:
+        click.echo(str(e), err=True)
+        sys.exit(2)
+
+
+@ethercat.command("scan")
+@click.option("--config", "config_path", type=click.Path(exists=True), default=None,
+              help="sim: the segment configuration to emulate.")
+@click.option("--backend", type=click.Choice(["sim", "soem"]), default="sim", show_default=True)
+@click.option("--iface", default=None, help="soem: the network interface.")
+def ethercat_scan(config_path, backend, iface):
+    """List the slaves a master finds, with their identity, state and process-data sizes."""
+    from .io.ethercat.master import FrameMaster, MasterError
+    try:
+        if backend == "sim":
+            if not config_path:
+                click.echo("error: the sim backend needs --config segment.toml", err=True)
+                sys.exit(2)
+            from .io.ethercat.config import build_segment
+            seg = build_segment(_segment_config_or_exit(config_path))
+            clock = [0.0]
+
+            def transport(frame):
+                clock[0] += 20e-6
+                return seg.exchange(frame, clock[0])
+            m = FrameMaster(transport, pause=lambda s: clock.__setitem__(0, clock[0] + s))
+        else:
+            from .io.ethercat.soem import SoemMaster
+            if not iface:
+                click.echo("error: the soem backend needs --iface", err=True)
+                sys.exit(2)
+            m = SoemMaster(iface)
+        m.open()
+        slaves = m.scan()
+        m.configure()
+    except MasterError as e:
+        click.echo(f"error: {e}", err=True)
+        sys.exit(2)
+    click.echo(f"{len(slaves)} slave(s)")
+    click.echo("pos  station  vendor      product     revision  name  [state]  process data")
+    for s in slaves:
+        click.echo(s.describe())
+    m.close()
+
+
+@ethercat.command("plan")
+@click.argument("config_path", type=click.Path(exists=True))
+@click.option("--cycle", default=None, help="Cycle time to check, e.g. 1ms (default: the file's).")
+def ethercat_plan(config_path, cycle):
+    """Frame bytes, wire time at 100 Mbit/s, per-slave and end-to-end delays, and whether the cycle fits."""
+    from .io.ethercat.config import ConfigError, build_devices, parse_duration
+    from .io.ethercat.plan import SegmentTiming, SlaveTiming, format_plan, plan
+    cfg = _segment_config_or_exit(config_path)
+    try:
+        devices = build_devices(cfg)
+        cyc = parse_duration(cycle, "--cycle") if cycle else (cfg.cycle_s or 0.001)
+    except ConfigError as e:
+        click.echo(str(e), err=True)
+        sys.exit(2)
+    slaves = []
+    for sc, d in zip(cfg.slaves, devices):
+        fwd = sc.forwarding_delay_us if sc.forwarding_delay_us is not None else cfg.forwarding_delay_us
+        slaves.append(SlaveTiming(sc.name, d.rx_layout.size, d.tx_layout.size, forwarding_delay_s=fwd * 1e-6,
+                                  cable_m=cfg.cable_m, is_drive=sc.type != "dio"))
+    click.echo(format_plan(plan(SegmentTiming(slaves, cyc, host_s=cfg.host_delay_us * 1e-6, dc=cfg.dc))))
+
+
+@ethercat.command("serve")
+@click.option("--iface", required=True, help="The interface to answer on (e.g. one end of a veth pair).")
+@click.option("--config", "config_path", type=click.Path(exists=True), required=True)
+@click.option("--ready-file", type=click.Path(), default=None, help="Created once the socket is bound.")
+@click.option("--capture", type=click.Path(), default=None, help="Write every frame to a pcap file.")
+@click.option("--duration", type=float, default=0.0, help="Stop after this many seconds (0: until SIGTERM).")
+def ethercat_serve(iface, config_path, ready_file, capture, duration):
+    """Serve the emulated segment on a network interface for a real master (SOEM)."""
+    from .io.ethercat.config import build_segment
+    from .io.ethercat.serve import serve
+    seg = build_segment(_segment_config_or_exit(config_path))
+    if capture:
+        seg.open_capture(capture)
+    try:
+        n = serve(iface, seg, ready_file=ready_file, announce=lambda m: click.echo(m, err=True), duration=duration)
+    except PermissionError:
+        click.echo(f"error: opening a raw socket on {iface} needs root or CAP_NET_RAW", err=True)
+        sys.exit(2)
+    except OSError as e:
+        click.echo(f"error: {iface}: {e.strerror or e}", err=True)
+        sys.exit(2)
+    click.echo(f"answered {n} frame(s)", err=True)
 
 
 if __name__ == "__main__":

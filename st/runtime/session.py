@@ -56,6 +56,10 @@ class RunOptions:
     trace: list = field(default_factory=list)             # AXIS_REF paths
     trace_plot: Optional[str] = None
     trace_csv: Optional[str] = None
+    ethercat: Optional[str] = None                        # segment configuration (TOML)
+    ethercat_backend: str = "sim"
+    ethercat_iface: Optional[str] = None
+    ethercat_capture: Optional[str] = None
     quiet: bool = False
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
@@ -100,6 +104,19 @@ def run_plc(compiled, o: RunOptions) -> int:
             _err(f"error: {e.args[0] if e.args else e}")
             plc.close()
             return 2
+    ecat = None
+    if o.ethercat:
+        from ..io.ethercat import ConfigError, EtherCATDriver, MasterError, load_segment
+        try:
+            ecat = EtherCATDriver(plc, load_segment(o.ethercat), backend=o.ethercat_backend,
+                                  iface=o.ethercat_iface or "", capture=o.ethercat_capture or "")
+        except (ConfigError, MasterError) as e:
+            _err(f"error: {e}")
+            plc.close()
+            return 2
+        if not o.quiet:
+            _err(f"ethercat: {len(ecat.master.slaves)} slave(s) in OP ({o.ethercat_backend} backend), "
+                 f"{len(ecat.links)} drive(s) bound")
     slave = None
     if o.modbus:
         from ..io.modbus import MapError, ModbusSlave, parse_endpoint
@@ -143,6 +160,8 @@ def run_plc(compiled, o: RunOptions) -> int:
         if status is not None:
             status.close()
         plc.close()
+        if ecat is not None:
+            ecat.close()
         if slave is not None:
             slave.stop()
         if rt_setup is not None:
@@ -272,7 +291,9 @@ def _report(plc: PLC, o: RunOptions) -> None:
         with open(o.stats_json, "w") as f:
             json.dump({"policy": plc.policy_name, "clock": "virtual" if o.virtual else "real",
                        "plc_time_s": plc.time / 1e9, "state": plc.state,
-                       "faults": [str(x) for x in plc.faults], "tasks": stats}, f, indent=1)
+                       "faults": [str(x) for x in plc.faults], "tasks": stats,
+                       "io": {d.name: d.stats() for d in plc.io if hasattr(d, "stats") and hasattr(d, "name")}},
+                      f, indent=1)
     if o.stats_plot:
         from .stats import plot_latency
         try:
@@ -283,6 +304,11 @@ def _report(plc: PLC, o: RunOptions) -> None:
         print(json.dumps(plc.variables()))
     if not o.quiet:
         _err(f"stopped at PLC time {plc.time / 1e9:g} s, state {plc.state}")
+        for d in plc.io:
+            if getattr(d, "name", "") == "ethercat":
+                c = d.stats()
+                _err(f"  ethercat: {c['frames']} frames, {c['lost_frames']} lost, {c['wkc_errors']} working-counter "
+                     f"errors, {c['outages']} outage(s)")
         if not o.virtual:
             for s in stats:
                 lat, ex = s["latency_us"], s["exec_us"]

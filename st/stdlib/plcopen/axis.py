@@ -31,8 +31,8 @@ QUEUED, ACTIVE, DONE, ABORTED, ERROR = "queued", "active", "done", "aborted", "e
 class AxisConfig:
     """What a project file (or the defaults) says about one axis."""
     name: str = ""
-    units_per_rev: float = 360.0
-    increments_per_unit: float = 1.0
+    units_per_rev: float = 360.0        # user units per motor revolution (drives)
+    increments_per_unit: float = 0.0    # drive increments per user unit (0: encoder increments / units_per_rev)
     modulo: float = 0.0                 # period of a modulo axis (0: linear)
     max_velocity: float = math.inf
     max_acceleration: float = math.inf
@@ -147,6 +147,8 @@ class Axis:
             if self.power_owner == fb_id:
                 self.power_owner = 0
             self.power_request = False
+            if self.drive is not None:
+                self.drive.request_enable(False)
             if self.power_on or self.state != DISABLED:
                 self.power_on = False
                 if self.state != ERRORSTOP:
@@ -160,10 +162,13 @@ class Axis:
         self.power_owner = fb_id
         if self.state == ERRORSTOP:
             return self.power_on, 0
+        if self.drive is not None:
+            self.drive.request_enable(True)
         if not self.power_on:
             if not self.power_request:
                 self.power_request, self.power_wait = True, 0.0
-            if self.power_wait >= self.cfg.enable_delay - 1e-9:
+            ready = self.drive.enabled if self.drive is not None else self.power_wait >= self.cfg.enable_delay - 1e-9
+            if ready:
                 self.power_on = True
                 self.set_pos, self.set_vel, self.set_acc = self.act_pos, 0.0, 0.0
                 if self.state == DISABLED:
@@ -195,6 +200,10 @@ class Axis:
         self.axis_error = 0
         self._ramp = None
         self.set_vel = self.set_acc = 0.0
+        if self.drive is not None:                # fault reset in the drive; power returns through MC_Power
+            self.drive.fault_reset()
+            if not self.drive.enabled:
+                self.power_on = False
         self.state = STANDSTILL if (self.power_on and self.power_request) else DISABLED
         if self.state == DISABLED:
             self.power_on = False
@@ -456,7 +465,7 @@ class Axis:
     def step(self) -> None:
         """Advance the set state by one cycle (the kernel phase)."""
         dt = self.cycle
-        if self.drive is None and self.power_request and not self.power_on:
+        if self.power_request and not self.power_on:
             self.power_wait += dt
         if self.state == ERRORSTOP:
             ramp = getattr(self, "_ramp", None)
@@ -537,6 +546,9 @@ class Axis:
     def _follow(self) -> None:
         if self.drive is None:                    # a virtual axis: the actual value follows the set value
             self.act_pos, self.act_vel = self.set_pos, self.set_vel
+        elif not self.power_on:                   # a drive without power: the set value follows the actual
+            self.set_pos, self.set_vel, self.set_acc = self.act_pos, 0.0, 0.0
+            self._ramp = None
         elif abs(self.set_pos - self.act_pos) > self.cfg.following_error_window and self.state != ERRORSTOP:
             self.error_stop(E.FOLLOWING_ERROR)
 

@@ -1,0 +1,333 @@
+"""A deterministic servo motor with its drive's control cascade, for emulated CiA 402 drives.
+
+The cascade is the usual one of a servo amplifier: an optional position loop (P, plus velocity
+feed-forward) produces a velocity reference, a PI velocity loop turns the velocity error into a
+torque (current) reference, the reference is clamped to the current limit, a first-order lag
+stands in for the current loop, and the torque accelerates the rotor and load inertia against
+viscous and Coulomb friction. An incremental encoder quantises the shaft angle.
+
+Everything runs in float64 in fixed-size substeps (62.5 µs by default, a 16 kHz loop), so the
+same sequence of inputs always gives the same trajectory. Units: the mechanics work in SI
+(rad/s, N·m); the interface speaks the drive's units: positions in encoder increments, velocities
+in increments/s, torques in per-mille of the rated torque.
+
+Defaults are modelled on a Panasonic MINAS A6 100 W motor (MSMF012): 0.32 N·m rated, about 3×
+peak, 6000 rev/min, rotor inertia 0.051e-4 kg·m², 23-bit encoder.
+"""
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass
+from typing import Optional
+
+TWO_PI = 2.0 * math.pi
+
+# modes the model understands (the CiA 402 numbers of the cyclic synchronous modes)
+CSP, CSV, CST = 8, 9, 10
+_STOP, _HOLD = -1, -2            # internal: a deceleration ramp, then holding the stop position
+
+
+@dataclass
+class MotorParams:
+    rated_torque: float = 0.32            # N·m
+    max_torque: float = 0.95              # N·m, the current limit (≈ 3× rated)
+    max_speed_rpm: float = 6000.0         # rev/min
+    rotor_inertia: float = 0.051e-4       # kg·m²
+    load_inertia: float = 0.051e-4        # kg·m² (1:1 load by default)
+    viscous_friction: float = 5e-6        # N·m per rad/s
+    coulomb_friction: float = 0.002       # N·m; lets a coasting motor come to rest in finite time
+    torque_constant: float = 0.29         # N·m/A (only used for `current`)
+    encoder_bits: int = 23
+    velocity_bandwidth_hz: float = 500.0  # used when velocity_kp / velocity_ki are None
+    velocity_kp: Optional[float] = None   # N·m per rad/s
+    velocity_ki: Optional[float] = None   # N·m per rad (integral gain, per second)
+    position_kp: float = 300.0            # 1/s (velocity reference per position error)
+    current_tau: float = 1e-4             # s, first-order lag of the current loop (0 = ideal)
+    torque_noise: float = 0.0             # N·m standard deviation per substep; 0 = no randomness
+    seed: int = 0                         # seed of the noise generator (only used if torque_noise > 0)
+
+    @property
+    def inertia(self) -> float:
+        return self.rotor_inertia + self.load_inertia
+
+    @property
+    def counts_per_rev(self) -> int:
+        return 1 << self.encoder_bits
+
+
+class MotorModel:
+    """Inputs: `enabled`, `mode` (CSP / CSV / CST), `command_position()`, `target_velocity`,
+    `target_torque`, offsets and limits. Outputs: `position`, `velocity`, `torque` (drive units)
+    and the SI state `turns`, `omega`, `torque_nm`."""
+
+    def __init__(self, params: Optional[MotorParams] = None, substep: float = 62.5e-6):
+        p = self.params = params or MotorParams()
+        if substep <= 0:
+            raise ValueError("substep must be positive")
+        self.substep = substep
+        self.cpr = p.counts_per_rev
+        self.k = self.cpr / TWO_PI                          # increments per rad
+        J = p.inertia
+        wc = TWO_PI * p.velocity_bandwidth_hz
+        # PI tuned for a critically damped loop around the inertia: ω_n = ωc/2, ζ = 1
+        self.kv = p.velocity_kp if p.velocity_kp is not None else J * wc
+        self.ki = p.velocity_ki if p.velocity_ki is not None else J * wc * wc / 4.0
+        self.max_speed = p.max_speed_rpm * TWO_PI / 60.0  # rad/s
+        self._rng = random.Random(p.seed) if p.torque_noise > 0 else None
+        # mechanical state
+        self.turns = 0.0          # shaft angle in revolutions (exact encoder maths: cpr is a power of 2)
+        self.omega = 0.0          # rad/s
+        self.torque_nm = 0.0      # torque produced by the motor (after the current loop), N·m
+        self.load_torque = 0.0    # external torque on the shaft, N·m (positive accelerates forwards)
+        self.time = 0.0
+        # inputs
+        self.enabled = False
+        self.mode = CSP
+        self.target_velocity = 0      # increments/s (CSV)
+        self.target_torque = 0        # per-mille of rated torque (CST)
+        self.velocity_offset = 0      # increments/s, added to the velocity reference (CSP/CSV)
+        self.torque_offset = 0        # per-mille, added to the torque reference
+        self.torque_limit = None      # per-mille; None = max_torque
+        self.speed_limit = None       # rad/s; None = max_speed
+        # controller state
+        self._integ = 0.0             # velocity-loop integrator, N·m
+        self._torque_ref = 0.0
+        self._demand = 0.0            # position demand, increments (float)
+        self._ip_start = 0.0
+        self._ip_target = 0.0
+        self._ip_period = 0.0
+        self._ip_elapsed = 0.0
+        self._stop_v = 0.0            # ramp velocity during a stop, rad/s
+        self._stop_decel = None       # rad/s² or None = at the current limit
+        self._stop_done = False
+        self._resume_mode = CSP
+        self.limited = False          # a torque or speed limit was active during the last step()
+
+    # ------------------------------------------------------------------ outputs
+    @property
+    def position(self) -> int:
+        """Actual position in encoder increments (the encoder's count: floor of the angle)."""
+        return math.floor(self.turns * self.cpr)
+
+    @property
+    def velocity(self) -> int:
+        """Actual velocity in increments/s."""
+        return int(round(self.omega * self.k))
+
+    @property
+    def torque(self) -> int:
+        """Actual torque in per-mille of the rated torque."""
+        return int(round(self.torque_nm / self.params.rated_torque * 1000.0))
+
+    @property
+    def current(self) -> float:
+        return self.torque_nm / self.params.torque_constant
+
+    @property
+    def rpm(self) -> float:
+        return self.omega * 60.0 / TWO_PI
+
+    @property
+    def position_demand(self) -> float:
+        """The interpolated position the position loop is following (increments)."""
+        if self.enabled and self.mode in (CSP, _HOLD):
+            return self._demand
+        return float(self.position)
+
+    @property
+    def following_error(self) -> int:
+        """Position demand − actual position, increments (0 when no position loop is closed)."""
+        if self.enabled and self.mode in (CSP, _HOLD):
+            return int(round(self._demand)) - self.position
+        return 0
+
+    @property
+    def commanded_position(self) -> float:
+        """The last position target given to `command_position`."""
+        return self._ip_target
+
+    @property
+    def stopped(self) -> bool:
+        """A stop ramp has finished and the shaft is (nearly) at rest."""
+        return self.mode in (_STOP, _HOLD) and self._stop_done
+
+    # ------------------------------------------------------------------ inputs
+    def enable(self, mode: Optional[int] = None) -> None:
+        """Switch the power stage on. The position demand starts at the actual position, the
+        integrator at zero (no jump on enabling)."""
+        if mode is not None:
+            self.mode = mode
+        if not self.enabled:
+            self.enabled = True
+            self._integ = 0.0
+            self._reset_demand()
+
+    def disable(self) -> None:
+        """Power stage off: no torque; the motor coasts down by friction."""
+        self.enabled = False
+        self._integ = 0.0
+        self._torque_ref = 0.0
+        self.torque_nm = 0.0
+        if self.mode in (_STOP, _HOLD):
+            self.mode = self._resume_mode
+
+    def set_mode(self, mode: int) -> None:
+        """Change the operating mode bumplessly: CSP restarts from the actual position, and the
+        integrator is preset with the present torque when a velocity loop takes over from CST."""
+        if mode == self.mode:
+            return
+        if mode in (CSV, CSP, _STOP, _HOLD) and self.mode == CST:
+            self._integ = self._torque_ref
+        self.mode = mode
+        if mode == CSP:
+            self._reset_demand()
+
+    def command_position(self, target: float, period: float = 0.0) -> None:
+        """A new CSP target (increments). The demand moves there linearly within `period` seconds,
+        which also gives the velocity feed-forward; period 0 jumps at once (no feed-forward)."""
+        self._ip_start = self._demand if (self.enabled and self.mode == CSP) else float(self.position)
+        self._ip_target = float(target)
+        self._ip_period = max(0.0, float(period))
+        self._ip_elapsed = 0.0
+        if self._ip_period == 0.0:
+            self._demand = self._ip_target
+
+    def stop(self, decel: Optional[float] = None) -> None:
+        """Decelerate to rest, `decel` in increments/s² (None: at the current limit), then hold
+        the position where the shaft came to rest."""
+        if self.mode in (_STOP, _HOLD):
+            self._stop_decel = None if decel is None else decel / self.k
+            return
+        self._resume_mode = self.mode
+        self.mode = _STOP
+        self._stop_v = self.omega
+        self._stop_decel = None if decel is None else decel / self.k
+        self._stop_done = False
+        if self._resume_mode == CST:
+            self._integ = max(-self.params.max_torque, min(self.params.max_torque, self._torque_ref))
+
+    def set_position(self, increments: int) -> None:
+        """Place the shaft (while at rest, e.g. for a test); the demand follows."""
+        self.turns = increments / self.cpr
+        self._reset_demand()
+
+    def _reset_demand(self) -> None:
+        pos = float(self.position)
+        self._demand = self._ip_start = self._ip_target = pos
+        self._ip_period = self._ip_elapsed = 0.0
+
+    # ------------------------------------------------------------------ simulation
+    def step(self, dt: float) -> None:
+        """Advance by dt seconds in ceil(dt / substep) equal substeps."""
+        if dt <= 0:
+            return
+        n = max(1, math.ceil(dt / self.substep - 1e-9))
+        h = dt / n
+        self.limited = False
+        p = self.params
+        J = p.inertia
+        b = p.viscous_friction
+        tc = p.coulomb_friction
+        if (not self.enabled and self.omega == 0.0 and abs(self.load_torque) <= tc
+                and self._rng is None and self.torque_nm == 0.0):
+            self.time += dt                 # at rest and unpowered: nothing changes
+            return
+        cpr = self.cpr
+        k = self.k
+        kv, ki, kp = self.kv, self.ki, p.position_kp
+        vmax = self.max_speed if self.speed_limit is None else min(self.max_speed, self.speed_limit)
+        tmax = p.max_torque
+        if self.torque_limit is not None:
+            tmax = min(tmax, max(0.0, self.torque_limit) * p.rated_torque / 1000.0)
+        rated = p.rated_torque
+        alpha = 1.0 if p.current_tau <= 0 else 1.0 - math.exp(-h / p.current_tau)
+        standstill = TWO_PI / 60.0       # 1 rev/min
+        for _ in range(n):
+            w = self.omega
+            if self.enabled:
+                mode = self.mode
+                toff = self.torque_offset * rated / 1000.0
+                if mode == CST:
+                    u = self.target_torque * rated / 1000.0 + toff
+                    if (w > vmax and u > 0) or (w < -vmax and u < 0):
+                        u = 0.0             # speed limit in torque mode
+                        self.limited = True
+                else:
+                    if mode == CSP or mode == _HOLD:
+                        # the error uses the demand at the start of the substep; the feed-forward
+                        # carries it to where the demand will be at the end
+                        count = math.floor(self.turns * cpr)
+                        err = self._demand - count
+                        ff = 0.0
+                        if mode == CSP and self._ip_period > 0.0 and self._ip_elapsed < self._ip_period:
+                            span = self._ip_target - self._ip_start
+                            before = self._ip_elapsed
+                            self._ip_elapsed = before + h
+                            frac = min(self._ip_elapsed / self._ip_period, 1.0)
+                            self._demand = self._ip_start + span * frac
+                            ff = span / self._ip_period * (min(h, self._ip_period - before) / h)
+                        elif mode == CSP:
+                            self._demand = self._ip_target
+                        vref = (ff + kp * err + (self.velocity_offset if mode == CSP else 0)) / k
+                    elif mode == CSV:
+                        vref = (self.target_velocity + self.velocity_offset) / k
+                    else:                   # _STOP: ramp the reference to zero
+                        d = self._stop_decel
+                        if d is None:
+                            self._stop_v = 0.0
+                        elif self._stop_v > 0:
+                            self._stop_v = max(0.0, self._stop_v - d * h)
+                        else:
+                            self._stop_v = min(0.0, self._stop_v + d * h)
+                        vref = self._stop_v
+                        if vref == 0.0 and abs(w) <= standstill:
+                            self._stop_done = True
+                            self.mode = _HOLD
+                            self._demand = float(math.floor(self.turns * cpr))
+                    if vref > vmax:
+                        vref = vmax
+                        self.limited = True
+                    elif vref < -vmax:
+                        vref = -vmax
+                        self.limited = True
+                    e = vref - w
+                    integ = self._integ + ki * e * h
+                    u = kv * e + integ + toff
+                    # conditional integration: freeze the integrator while it would push further
+                    # into the limit (anti-windup)
+                    if (u > tmax and e > 0) or (u < -tmax and e < 0):
+                        integ = self._integ
+                    self._integ = max(-tmax, min(tmax, integ))
+                    u = kv * e + self._integ + toff
+                if u > tmax:
+                    u = tmax
+                    self.limited = True
+                elif u < -tmax:
+                    u = -tmax
+                    self.limited = True
+                self._torque_ref = u
+                self.torque_nm += (u - self.torque_nm) * alpha
+            else:
+                self.torque_nm = 0.0
+            # mechanics: semi-implicit Euler with Coulomb friction that never reverses the motion
+            drive = self.torque_nm + self.load_torque - b * w
+            if self._rng is not None:
+                drive += self._rng.gauss(0.0, p.torque_noise)
+            if w > 0.0:
+                w_new = w + (drive - tc) / J * h
+                if w_new < 0.0 and abs(drive) <= tc:
+                    w_new = 0.0
+            elif w < 0.0:
+                w_new = w + (drive + tc) / J * h
+                if w_new > 0.0 and abs(drive) <= tc:
+                    w_new = 0.0
+            elif drive > tc:
+                w_new = (drive - tc) / J * h
+            elif drive < -tc:
+                w_new = (drive + tc) / J * h
+            else:
+                w_new = 0.0                 # sticking
+            self.omega = w_new
+            self.turns += w_new * h / TWO_PI
+        self.time += dt
