@@ -185,12 +185,12 @@ def test_bit_fmmus_merge_into_shared_bytes():
     seg, m = in_op(1)
     s = seg.slaves[0]
     # the input SyncManager's bits 0..2 appear at logical bits 2..4 of byte 100; the others pass
-    s.mem[0x0620:0x0630] = struct.pack("<IHBBHBBB3x", 100, 1, 2, 4, 0x1400, 0, 1, 1)
+    send(seg, Datagram(FPWR, 0, 0x1001, 0x0620, bytearray(struct.pack("<IHBBHBBB3x", 100, 1, 2, 4, 0x1400, 0, 1, 1))))
     s.device.od[0x6041] = 0b101
     [d] = send(seg, Datagram.logical_dg(LRD, 100, bytearray([0b11100011])), t=0.01)
     assert d.wkc == 1 and d.data[0] == 0b11110111
     # and a bit-wise output: logical bits 5..6 of byte 101 land in bits 3..4 of a RAM byte
-    s.mem[0x0630:0x0640] = struct.pack("<IHBBHBBB3x", 101, 1, 5, 6, 0x1800, 3, 2, 1)
+    send(seg, Datagram(FPWR, 0, 0x1001, 0x0630, bytearray(struct.pack("<IHBBHBBB3x", 101, 1, 5, 6, 0x1800, 3, 2, 1))))
     s.mem[0x1800] = 0b10000001
     [d] = send(seg, Datagram.logical_dg(LWR, 101, bytearray([0b01000000])), t=0.01)
     assert d.wkc == 1 and s.mem[0x1800] == 0b10010001

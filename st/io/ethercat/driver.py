@@ -55,6 +55,7 @@ class DriveLink:
         self.velocity = 0
         self.error_code = 0
         self.offset_s = 0.0                 # delay compensation: how far ahead the setpoint is taken
+        self.resetting = 0                  # cycles left for a fault reset to show
         m = driver.master.slaves[slave]
         rx, tx = m.rx_layout, m.tx_layout
         self.rx_layout, self.tx_layout = rx, tx
@@ -87,6 +88,7 @@ class DriveLink:
     def fault_reset(self) -> None:
         if self.state in ("FAULT", "FAULT_REACTION_ACTIVE"):
             self.reset_phase = 2
+            self.resetting = 50                     # cycles the drive gets to leave Fault
 
     # ------------------------------------------------------------------ each cycle
     def attach(self, ax) -> None:
@@ -152,15 +154,16 @@ class DriveLink:
             return
         from ...stdlib.plcopen.errors import E
         if self.state in ("FAULT", "FAULT_REACTION_ACTIVE"):
-            if ax.power_on or ax.state != "ErrorStop":
-                ax.power_on = False
-                if ax.state not in ("ErrorStop", "Disabled"):
-                    ax.error_stop(E.DRIVE_FAULT)
-                elif ax.state == "Disabled" and self.want:
-                    ax.error_stop(E.DRIVE_FAULT)
+            ax.power_on = False
+            if self.resetting:                      # MC_Reset asked the drive to leave Fault: give it time
+                self.resetting -= 1
+            elif ax.state != "ErrorStop":
+                ax.error_stop(E.DRIVE_FAULT)
         elif self.was_enabled and not self.enabled and self.want and ax.power_on:
             ax.power_on = False
             ax.error_stop(E.POWER_STAGE_LOST)
+        else:
+            self.resetting = 0
         self.was_enabled = self.enabled
 
 
@@ -255,11 +258,10 @@ class EtherCATDriver:
                     link.offset_s = self.segment.d_comm(i) - self.segment.d_comm(0)
                 self.links.append(link)
             self._bind_io(i, sc)
-        for link in self.links:                    # the first inputs, so the axes start where the drives are
-            pass
-        self._exchange()
+        self._exchange()                           # the first inputs, so the axes start where the drives are
         m.set_state("OP")
         self._exchange()
+        self._claim_axes()
         self.plc.io.append(self)
 
     def _bind_io(self, i: int, sc) -> None:
@@ -290,16 +292,21 @@ class EtherCATDriver:
         self._slave_io = sorted({x[0] for x in self.io_in + self.io_out})
 
     # ------------------------------------------------------------------ the I/O driver interface
-    def before_job(self, task=None) -> None:
-        if task is not self.task or task is None:
-            return
+    def _claim_axes(self) -> None:
+        """Register the drive links with the motion registry: an axis is bound when it is created,
+        or now if it exists."""
         reg = self.plc.ns.get("_motion")
-        if reg is not None:
-            for link in self.links:
-                if link.axis is None or link.axis.drive is not link:
-                    ax = next((a for a in reg.axes.values() if a.axis_no == link.axis_no), None)
-                    if ax is not None:
-                        link.attach(ax)
+        if reg is None:
+            return
+        for link in self.links:
+            reg.drives[link.axis_no] = link
+            if link.axis is None or link.axis.drive is not link:
+                ax = next((a for a in reg.axes.values() if a.axis_no == link.axis_no), None)
+                if ax is not None:
+                    link.attach(ax)
+
+    def before_job(self, task=None) -> None:
+        pass
 
     def after_job(self, task=None) -> None:
         if task is None:                            # stop or fault: outputs safe, drives disabled
@@ -314,6 +321,7 @@ class EtherCATDriver:
     def rebind(self) -> None:
         for link in self.links:
             link.axis = None
+        self._claim_axes()
 
     # ------------------------------------------------------------------ one cycle
     def _exchange(self) -> None:

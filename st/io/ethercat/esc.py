@@ -34,7 +34,7 @@ REG_DCRX, REG_DCSYS, REG_DCRXPU, REG_DCOFS, REG_DCDLY, REG_DCDIFF = 0x0900, 0x09
 REG_DCCUC, REG_DCACT, REG_DCSTART, REG_DCCYC0 = 0x0980, 0x0981, 0x0990, 0x09A0
 
 # writable register ranges (end exclusive); the rest of 0x0000-0x0FFF is read-only
-_WRITABLE = ((0x0010, 0x0014), (0x0100, 0x0104), (0x0120, 0x0122), (0x0200, 0x0204), (0x0300, 0x0314),
+_WRITABLE_RANGES = ((0x0010, 0x0014), (0x0100, 0x0104), (0x0120, 0x0122), (0x0200, 0x0204), (0x0300, 0x0314),
              (0x0400, 0x0402), (0x0410, 0x0412), (0x0420, 0x0422), (0x0500, 0x0502), (0x0502, 0x0510),
              (0x0600, 0x0700), (0x0800, 0x0880), (0x0900, 0x0904), (0x0910, 0x0918), (0x0920, 0x0930),
              (0x0930, 0x0936), (0x0980, 0x09A8))
@@ -68,7 +68,9 @@ class SlaveController:
         self.sii_sms = sms
         self.sii = bytearray(siimod.build(device.vendor_id, device.product_code, device.revision, device.serial,
                                           device.name, device.group, device.name, sms, [1, 2, 3, 0],
-                                          mailbox=device.has_mailbox, alias=alias))
+                                          mailbox=device.has_mailbox, alias=alias,
+                                          rx_pdos=_sii_pdos(device, device.rx_assign, 2),
+                                          tx_pdos=_sii_pdos(device, device.tx_assign, 3)))
         struct.pack_into("<H", m, REG_ALIAS, alias)
         self.sdo = SdoServer(device.od, mbx_size) if device.has_mailbox else None
         self.mbx_queue: list = []
@@ -81,6 +83,9 @@ class SlaveController:
         self.set_links(False)
         self.pending_outputs = None       # (apply_at, bytes) when DC SYNC0 defers outputs
         self.stats = {"frames": 0, "commits": 0}
+        self._sm_cache = self._fmmu_cache = None
+        self._grid = False                # SYNC0 pulse grid cache (False: to be computed)
+        self._wd_limit = self._watchdog_limit()
 
     # ------------------------------------------------------------------ helpers
     @property
@@ -109,6 +114,17 @@ class SlaveController:
         ofs = struct.unpack_from("<Q", self.mem, REG_DCOFS)[0]
         return (self.local_ns(t) + ofs) & 0xFFFFFFFFFFFFFFFF
 
+    def _sms(self) -> list:
+        """Enabled SyncManagers as [(k, start, end, control)], cached until their registers change."""
+        c = self._sm_cache
+        if c is None:
+            c = self._sm_cache = []
+            for k in range(self.mem[0x0005]):
+                start, length, ctl, _st, en = self.sm(k)
+                if en and length:
+                    c.append((k, start, start + length, ctl))
+        return c
+
     def sm(self, k: int):
         """(start, length, control, status, enabled) of SyncManager k."""
         start, length, ctl, status, act = struct.unpack_from("<HHBBB", self.mem, REG_SM + 8 * k)
@@ -118,26 +134,51 @@ class SlaveController:
         a = REG_SM + 8 * k + 5
         self.mem[a] = (self.mem[a] | _SM_STATUS_MBX_FULL) if full else (self.mem[a] & ~_SM_STATUS_MBX_FULL & 0xFF)
 
+    def _sync_grid(self):
+        """(first SYNC0 pulse, period) in segment seconds while SYNC0 is active, else None."""
+        g = self._grid
+        if g is False:
+            g = None
+            if self.mem[REG_DCACT] & 0x03 == 0x03:
+                cyc = struct.unpack_from("<I", self.mem, REG_DCCYC0)[0]
+                start = struct.unpack_from("<Q", self.mem, REG_DCSTART)[0]
+                ofs = struct.unpack_from("<Q", self.mem, REG_DCOFS)[0]
+                if cyc:
+                    local = (start - ofs) & 0xFFFFFFFFFFFFFFFF
+                    g = ((local - self.clock_base_ns) * 1e-9, cyc * 1e-9)
+            self._grid = g
+        return g
+
     def advance(self, t: float) -> None:
-        """Bring the device to time t: apply deferred outputs at their SYNC0, step the physics,
-        check the SyncManager watchdog."""
+        """Bring the device to time t. With SYNC0 running the device works on the pulses, as a DC
+        drive does: it steps to the last pulse at or before t, taking deferred outputs at their
+        pulse, and its inputs are those of that pulse. Then the SyncManager watchdog."""
+        grid = self._sync_grid()
+        if grid is not None:
+            t0, cyc = grid
+            if t < t0:
+                return
+            t = t0 + int((t - t0) / cyc + 1e-9) * cyc
         if t <= self.t_dev:
             return
         po = self.pending_outputs
-        if po is not None and po[0] <= t:
+        if po is not None and po[0] <= t + 1e-12:
             if po[0] > self.t_dev:
                 self.device.step(po[0], po[0] - self.t_dev)
                 self.t_dev = po[0]
             self.pending_outputs = None
             self.device.write_outputs(po[1])
-        self.device.step(t, t - self.t_dev)
-        self.t_dev = t
-        if self.al_state == OP and self.last_commit is not None and self.device.rx_layout.size:
-            div, wd = struct.unpack_from("<H", self.mem, REG_WDDIV)[0], struct.unpack_from("<H", self.mem, REG_WDSM)[0]
-            limit = wd * (div + 2) * 40e-9
-            if wd and t - self.last_commit > limit:
-                self.mem[REG_WDSTAT] = 0
-                self._enter(SAFEOP, AL_SYNC_WATCHDOG)
+        if t > self.t_dev:
+            self.device.step(t, t - self.t_dev)
+            self.t_dev = t
+        if self.last_commit is not None and t - self.last_commit > self._wd_limit and self.al_state == OP \
+                and self._wd_limit > 0 and self.device.rx_layout.size:
+            self.mem[REG_WDSTAT] = 0
+            self._enter(SAFEOP, AL_SYNC_WATCHDOG)
+
+    def _watchdog_limit(self) -> float:
+        div, wd = struct.unpack_from("<H", self.mem, REG_WDDIV)[0], struct.unpack_from("<H", self.mem, REG_WDSM)[0]
+        return wd * (div + 2) * 40e-9
 
     # ------------------------------------------------------------------ the AL state machine
     def _enter(self, new: int, code: int = AL_OK) -> None:
@@ -260,22 +301,19 @@ class SlaveController:
         if ado < REG_DCSYS + 8 and end > REG_DCSYS:
             struct.pack_into("<Q", mem, REG_DCSYS, self.system_ns(t))
         if end > 0x1000:
-            for k in range(4):
-                start, length, ctl, status, en = self.sm(k)
-                if not en or not length or end <= start or ado >= start + length:
-                    continue
-                if ctl & 0x0C:                             # written by the master: reading is plain RAM
+            for k, start, stop, ctl in self._sms():
+                if end <= start or ado >= stop or ctl & 0x0C:   # written by the master: reading is plain RAM
                     continue
                 if ctl & 0x03 == 0x02:                     # mailbox the master reads
-                    if not status & _SM_STATUS_MBX_FULL:
+                    if not mem[REG_SM + 8 * k + 5] & _SM_STATUS_MBX_FULL:
                         return None
                     data = bytes(mem[ado:end])
-                    if end >= start + length:
+                    if end >= stop:
                         self._set_sm_status(k, False)
                         self._fill_mailbox()
                     return data
                 self.advance(t)                            # buffered inputs: the device's latest image
-                mem[start:start + length] = self.device.read_inputs()[:length]
+                mem[start:stop] = self.device.read_inputs()[:stop - start]
         return bytes(mem[ado:end])
 
     def write(self, ado: int, data, t: float) -> bool:
@@ -285,25 +323,22 @@ class SlaveController:
         mem = self.mem
         if ado < 0x1000:
             for a in range(ado, min(end, 0x1000)):
-                if _writable(a):
+                if _WRITABLE[a]:
                     mem[a] = data[a - ado]
             self._register_effects(ado, end, t)
             if end <= 0x1000:
                 return True
         commit = None
-        for k in range(4):
-            start, length, ctl, status, en = self.sm(k)
-            if not en or not length or end <= start or ado >= start + length:
-                continue
-            if not ctl & 0x04:                             # read by the master: writes are plain RAM
+        for k, start, stop, ctl in self._sms():
+            if end <= start or ado >= stop or not ctl & 0x04:   # read by the master: writes are plain RAM
                 continue
             if ctl & 0x03 == 0x02:
-                if status & _SM_STATUS_MBX_FULL:
+                if mem[REG_SM + 8 * k + 5] & _SM_STATUS_MBX_FULL:
                     return False
-                if end >= start + length:
+                if end >= stop:
                     commit = ("mbx", k)
-            elif end >= start + length:
-                commit = ("pd", k, start, length)
+            elif end >= stop:
+                commit = ("pd", k, start, stop - start)
         lo = max(ado, 0x1000)
         mem[lo:end] = data[lo - ado:]
         if commit is not None:
@@ -318,28 +353,31 @@ class SlaveController:
         return True
 
     def _outputs(self, data: bytes, t: float) -> None:
-        act = self.mem[REG_DCACT]
-        if act & 0x03 == 0x03:                             # DC SYNC0: outputs take effect at the next pulse
-            cyc = struct.unpack_from("<I", self.mem, REG_DCCYC0)[0]
-            start = struct.unpack_from("<Q", self.mem, REG_DCSTART)[0]
-            now = self.system_ns(t)
-            if cyc and now >= start:
-                nxt = start + ((now - start) // cyc + 1) * cyc
-            else:
-                nxt = max(start, now)
-            apply_at = t + (nxt - now) * 1e-9
+        grid = self._sync_grid()
+        if grid is not None:                               # DC SYNC0: outputs take effect at the next pulse
+            t0, cyc = grid
+            apply_at = t0 if t < t0 else t0 + (int((t - t0) / cyc + 1e-9) + 1) * cyc
             self.advance(t)
-            if self.pending_outputs is not None:           # a newer frame before the pulse: it wins
-                self.pending_outputs = None
-            self.pending_outputs = (apply_at, data)
+            self.pending_outputs = (apply_at, data)        # a newer frame before the pulse wins
             return
         self.advance(t)
         self.device.write_outputs(data)
 
     def _register_effects(self, ado: int, end: int, t: float) -> None:
+        if not any(_EFFECTS[ado:end]):
+            return
+
         def hit(a, n=2):
             return ado < a + n and end > a
 
+        if hit(REG_SM, 0x80):
+            self._sm_cache = None
+        if hit(REG_FMMU, 0x100):
+            self._fmmu_cache = None
+        if hit(REG_WDDIV) or hit(REG_WDSM):
+            self._wd_limit = self._watchdog_limit()
+        if hit(REG_DCOFS, 8) or hit(REG_DCCUC, 0x28):
+            self._grid = False
         if hit(REG_ALCTL):
             self._al_control(struct.unpack_from("<H", self.mem, REG_ALCTL)[0])
         if hit(REG_EEPCTL):
@@ -356,8 +394,10 @@ class SlaveController:
                 diff = ((mine & 0xFFFFFFFF) - ((written + delay) & 0xFFFFFFFF) + (1 << 31)) % (1 << 32) - (1 << 31)
             else:
                 diff = mine - (written + delay)
-            ofs = struct.unpack_from("<Q", self.mem, REG_DCOFS)[0]
-            struct.pack_into("<Q", self.mem, REG_DCOFS, (ofs - diff) & 0xFFFFFFFFFFFFFFFF)
+            if diff:
+                ofs = struct.unpack_from("<Q", self.mem, REG_DCOFS)[0]
+                struct.pack_into("<Q", self.mem, REG_DCOFS, (ofs - diff) & 0xFFFFFFFFFFFFFFFF)
+                self._grid = False
             struct.pack_into("<I", self.mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
         if hit(REG_SM + 8 + 6, 1):                         # SM1 repeat request: resend the last mail
             act = self.mem[REG_SM + 8 + 6]
@@ -377,7 +417,9 @@ class SlaveController:
     # ------------------------------------------------------------------ FMMUs
     def fmmus(self):
         """Active FMMUs: [(logical start, length, start bit, stop bit, physical start, phys bit, type)]."""
-        out = []
+        if self._fmmu_cache is not None:
+            return self._fmmu_cache
+        out = self._fmmu_cache = []
         for k in range(self.mem[0x0004]):
             a = REG_FMMU + 16 * k
             lstart, ln, lsb, leb, pstart, psb, typ, act = struct.unpack_from("<IHBBHBBB", self.mem, a)
@@ -444,10 +486,39 @@ class SlaveController:
 
 
 def _writable(a: int) -> bool:
-    for lo, hi in _WRITABLE:
+    for lo, hi in _WRITABLE_RANGES:
         if lo <= a < hi:
             return not (REG_SM <= a < REG_SM + 0x80 and (a - REG_SM) % 8 == 5)   # SM status is read-only
     return False
+
+
+_WRITABLE = bytes(_writable(a) for a in range(0x1000))
+# registers whose write has a side effect (see _register_effects)
+_EFFECTS = bytes(any(lo <= a < hi for lo, hi in ((REG_SM, REG_SM + 0x80), (REG_FMMU, REG_FMMU + 0x100),
+                                                   (REG_WDDIV, REG_WDDIV + 2), (REG_WDSM, REG_WDSM + 2),
+                                                   (REG_ALCTL, REG_ALCTL + 2), (REG_EEPCTL, REG_EEPCTL + 2),
+                                                   (REG_DCRX, REG_DCRX + 4), (REG_DCSYS, REG_DCSYS + 8),
+                                                   (REG_DCOFS, REG_DCOFS + 8), (REG_DCCUC, REG_DCCUC + 0x28)))
+                 for a in range(0x1000))
+
+
+def _sii_pdos(device, assign: int, sm: int) -> list:
+    """The assigned PDOs of a device for the SII PDO categories."""
+    from .od import DTYPES
+    od = device.od
+    if not od.has(assign):
+        return []
+    out = []
+    for k in range(1, int(od[assign, 0]) + 1):
+        pdo = int(od[assign, k])
+        entries = []
+        for j in range(1, int(od[pdo, 0]) + 1):
+            w = int(od[pdo, j])
+            ix, sx, bits = w >> 16, (w >> 8) & 0xFF, w & 0xFF
+            e = od.entries.get((ix, sx))
+            entries.append((ix, sx, bits, DTYPES[e.dtype][2] if e is not None else 0))
+        out.append((pdo, sm, entries))
+    return out
 
 
 def _touched(req: bytes):

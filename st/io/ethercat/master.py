@@ -57,6 +57,7 @@ class SlaveInfo:
     rx_layout: Optional[PdoLayout] = None
     tx_layout: Optional[PdoLayout] = None
     delay_ns: int = 0
+    sii_pdos: tuple = ((), ())        # the SII PDO categories (RxPDOs, TxPDOs)
     emergencies: list = field(default_factory=list)
 
     def describe(self) -> str:
@@ -159,6 +160,7 @@ class FrameMaster(Master):
             info.vendor_id, info.product_code, info.revision, info.serial = (si.vendor_id, si.product_code,
                                                                            si.revision, si.serial)
             info.alias, info.name, info.coe_details, info.sms = si.alias, si.name, si.coe_details, si.sms
+            info.sii_pdos = (si.rx_pdos, si.tx_pdos)
             info.mailbox = bool(si.mbx_protocols & siimod.MBX_COE) and si.mbx_out[1] > 0
             info.mbx_out, info.mbx_in = si.mbx_out, si.mbx_in
             feat = struct.unpack("<H", self._fprd(station, 0x0008, 2).data)[0]
@@ -347,7 +349,10 @@ class FrameMaster(Master):
 
     def _read_layouts(self, s: SlaveInfo):
         if not s.mailbox or not s.coe_details & siimod.COE_PDO_ASSIGN:
-            return PdoLayout([]), PdoLayout([])
+            return tuple(PdoLayout([(ix, sx, bits, _TYPE_CODES.get(code) or _dtype(bits, ix, sx),
+                                     KNOWN_NAMES.get(ix, f"{ix:#06x}:{sx:02x}"))
+                                    for _pdo, _sm, entries in pdos for ix, sx, bits, code in entries])
+                         for pdos in s.sii_pdos)
         out = []
         for assign in (0x1C12, 0x1C13):
             items = []
@@ -438,6 +443,9 @@ def _sm_bytes(start: int, length: int, control: int, enable: int) -> bytes:
 
 def _fmmu_bytes(logical: int, length: int, phys: int, typ: int) -> bytes:
     return struct.pack("<IHBBHBBB3x", logical, length, 0, 7, phys, 0, typ, 1)
+
+
+_TYPE_CODES = {code: name for name, (_f, _b, code) in DTYPES.items()}
 
 
 def _dtype(bits: int, index: int, sub: int) -> str:

@@ -87,6 +87,7 @@ class Entry:
 class ObjectDictionary:
     def __init__(self):
         self.entries: dict = {}        # (index, sub) → Entry
+        self._by_key: dict = {}        # the same entries by (index, sub) and, for subindex 0, by index
         self.state = "INIT"            # the device's AL state, for writable_in checks
 
     # ------------------------------------------------------------------ building
@@ -96,6 +97,9 @@ class ObjectDictionary:
             raise ValueError(f"unknown CoE data type {dtype}")
         e = Entry(index, sub, name, dtype, value, access, pdo, size, on_write, writable_in)
         self.entries[(index, sub)] = e
+        self._by_key[(index, sub)] = e
+        if sub == 0:
+            self._by_key[index] = e
         return e
 
     def add_record(self, index: int, name: str, subs: list, access: str = "rw", writable_in=("PREOP",)) -> None:
@@ -136,12 +140,11 @@ class ObjectDictionary:
         return (index, sub) in self.entries
 
     def __getitem__(self, key):
-        index, sub = key if isinstance(key, tuple) else (key, 0)
-        return self.entries[(index, sub)].value
+        """od[index] (subindex 0) or od[index, sub]: the value."""
+        return self._by_key[key].value
 
     def __setitem__(self, key, value):
-        index, sub = key if isinstance(key, tuple) else (key, 0)
-        self.entries[(index, sub)].value = value
+        self._by_key[key].value = value
 
     def subindices(self, index: int) -> list:
         return sorted(s for (i, s) in self.entries if i == index)

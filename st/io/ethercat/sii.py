@@ -42,7 +42,9 @@ def crc8(data: bytes) -> int:
 def build(vendor_id: int, product_code: int, revision: int, serial: int, name: str, group: str,
           order: str, sms: list, fmmus: list, mailbox: bool = True, alias: int = 0,
           coe_details: int = COE_SDO | COE_SDO_INFO | COE_PDO_ASSIGN | COE_PDO_CONFIG | COE_COMPLETE_ACCESS,
-          size_bytes: int = 2048) -> bytes:
+          size_bytes: int = 2048, rx_pdos: list = (), tx_pdos: list = ()) -> bytes:
+    """rx_pdos/tx_pdos: [(pdo index, SyncManager, [(index, sub, bits, CoE type code)])] for the PDO
+    categories (a master without CoE sizes the process data from them)."""
     cfg = struct.pack("<HHHHHHH", 0x0C08, 0x0000, 0x0000, 0x0000, alias, 0, 0)
     img = bytearray(cfg + struct.pack("<H", crc8(cfg)))
     img += struct.pack("<IIII", vendor_id, product_code, revision, serial)
@@ -76,6 +78,11 @@ def build(vendor_id: int, product_code: int, revision: int, serial: int, name: s
     img += category(CAT_FMMU, bytes(fmmus))
     img += category(CAT_SM, b"".join(struct.pack("<HHBBBB", s.start, s.length, s.control, 0, s.enable, s.kind)
                                      for s in sms))
+    for kind, pdos in ((CAT_TXPDO, tx_pdos), (CAT_RXPDO, rx_pdos)):
+        for index, sm, entries in pdos:
+            data = struct.pack("<HBBBBH", index, len(entries), sm, 0, 0, 0)
+            data += b"".join(struct.pack("<HBBBBH", ix, sx, 0, code, bits, 0) for ix, sx, bits, code in entries)
+            img += category(kind, data)
     img += struct.pack("<H", CAT_END)
     if len(img) > size_bytes:
         raise ValueError(f"SII image of {len(img)} bytes exceeds the EEPROM ({size_bytes})")
@@ -97,6 +104,8 @@ class SiiInfo:
     coe_details: int = 0
     fmmus: tuple = ()
     sms: tuple = ()           # SmConfig
+    rx_pdos: tuple = ()       # (pdo index, SyncManager, [(index, sub, bits, CoE type code)])
+    tx_pdos: tuple = ()
 
 
 def parse(image: bytes) -> SiiInfo:
@@ -125,6 +134,14 @@ def parse(image: bytes) -> SiiInfo:
         elif kind == CAT_SM:
             info.sms = tuple(SmConfig(*struct.unpack_from("<HHB", data, k), data[k + 6], data[k + 7])
                              for k in range(0, len(data) - 7, 8))
+        elif kind in (CAT_TXPDO, CAT_RXPDO) and len(data) >= 8:
+            index, n, sm = struct.unpack_from("<HBB", data, 0)
+            entries = [struct.unpack_from("<HBBBB", data, 8 + 8 * k) for k in range(n) if 16 + 8 * k <= len(data)]
+            pdo = (index, sm, [(ix, sx, bits, code) for ix, sx, _name, code, bits in entries])
+            if kind == CAT_TXPDO:
+                info.tx_pdos += (pdo,)
+            else:
+                info.rx_pdos += (pdo,)
         pos += 4 + size * 2
     if general is not None:
         get = lambda i: strings[i] if i < len(strings) else ""      # noqa: E731

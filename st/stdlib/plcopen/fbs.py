@@ -24,6 +24,7 @@ class MotionRegistry:
         self.axes: dict = {}            # handle → Axis
         self.configs: dict = {}         # AxisNo → AxisConfig
         self.signals: dict = {}         # AxisNo → callable: the reference switch of MC_Home
+        self.drives: dict = {}          # AxisNo → a drive link (EtherCAT) that claims the axis
         self.task = None
         self.traces: list = []          # [AxisTrace]
 
@@ -37,6 +38,9 @@ class MotionRegistry:
             ax.axis_no = ref.AxisNo
             ax.home_signal = self.signals.get(ref.AxisNo)
             self.axes[h] = ax
+            link = self.drives.get(ref.AxisNo)
+            if link is not None:
+                link.attach(ax)
             ref.Handle = h
         if ax.task is None and self.task is not None:
             ax.task = self.task
@@ -48,6 +52,7 @@ class MotionRegistry:
     def adopt(self, old: "MotionRegistry") -> None:
         """Online change: the new program's AXIS_REFs carry their handles over, so keep the axes."""
         self.axes, self.configs, self.traces, self.signals = old.axes, old.configs, old.traces, old.signals
+        self.drives = old.drives
         for ax in self.axes.values():
             ax.task = None                  # the new program's tasks claim their axes on the next call
 

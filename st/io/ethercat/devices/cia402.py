@@ -16,6 +16,15 @@ Timing conventions:
   enters Operation enabled (or switches to CSP in it) with 0x607A further than the following
   error window from the actual position, it does not move but faults with 0x8611.
 
+Statusword (bit 4 "voltage enabled" while `mains_on`, bit 9 "remote" always): not ready 0x0210,
+switch on disabled 0x0250, ready 0x0231, switched on 0x0233, operation enabled 0x0237 plus bit 12
+(drive follows the target), bit 10 (target reached: CSP within 0x6067, CSV within
+`velocity_window`, CST within `torque_window`) and bit 11 (torque or speed limit active), so
+0x1637 at rest; quick stop active 0x0217 (0x0617 once stopped), fault reaction active 0x021F,
+fault 0x0218; bit 13 (CSP following error) stays set from a 0x8611 fault until the reset.
+Every fault queues an emergency (code, error register 0x01); a successful reset queues the
+CiA 301 "error reset" emergency (0x0000).
+
 Positions, velocities and torques are in encoder increments, increments/s and per-mille of the
 rated torque. 0x6064/0x607A are 32-bit and wrap; the drive follows target differences modulo
 2**32, so long moves work. 0x6080 is in rev/min and 0x6085 in rev/min per second (the drive has
@@ -26,7 +35,7 @@ from __future__ import annotations
 from enum import IntEnum
 from typing import Optional
 
-from ..od import (ABORT_NOT_MAPPABLE, ABORT_PDO_TOO_LONG, ABORT_VALUE_RANGE)
+from ..od import ABORT_NOT_MAPPABLE, ABORT_PDO_TOO_LONG, ABORT_VALUE_RANGE, DTYPES
 from ..pdo import CIA402_RX, CIA402_TX
 from .base import Device
 from .motor import CSP, CST, CSV, MotorModel, MotorParams
@@ -39,7 +48,6 @@ FAULT_FOLLOWING_ERROR = 0x8611
 FAULT_UNDERVOLTAGE = 0x3220      # DC link under-voltage (mains lost while the power stage was on)
 FAULT_GENERIC = 0x7500           # communication, the default of inject_fault
 
-MODE_NAMES = {CSP: "CSP", CSV: "CSV", CST: "CST"}
 
 
 class State(IntEnum):
@@ -96,9 +104,14 @@ class CiA402Drive(Device):
 
     def __init__(self, name: str = "", *, vendor_id: Optional[int] = None, product_code: Optional[int] = None,
                  revision: Optional[int] = None, serial: Optional[int] = None,
-                 motor_params: Optional[MotorParams] = None, encoder_bits: Optional[int] = None,
-                 rx: Optional[list] = None, tx: Optional[list] = None, enable_delay: float = 0.0,
-                 substep: float = 62.5e-6, modes: tuple = (CSP, CSV, CST)):
+                 motor: Optional[MotorParams] = None, encoder_bits: Optional[int] = None,
+                 rx_mapping: Optional[list] = None, tx_mapping: Optional[list] = None,
+                 enable_delay: float = 0.0, substep: float = 125e-6, modes: tuple = (CSP, CSV, CST)):
+        """`motor`: the motor's parameters (the model itself is `self.motor`); `encoder_bits`
+        overrides theirs. `rx_mapping` / `tx_mapping`: the default contents of 0x1600 / 0x1A00 as
+        [(index, sub, bits, dtype, name)] (index 0 = padding), CIA402_RX / CIA402_TX if None.
+        Objects the drive does not implement (e.g. touch probe, from an ESI file) are created as
+        plain process data that the drive carries but ignores."""
         if vendor_id is not None:
             self.vendor_id = vendor_id
         if product_code is not None:
@@ -108,7 +121,7 @@ class CiA402Drive(Device):
         if serial is not None:
             self.serial = serial
         super().__init__(name)
-        params = motor_params or MotorParams()
+        params = motor or MotorParams()
         if encoder_bits is not None and encoder_bits != params.encoder_bits:
             from dataclasses import replace
             params = replace(params, encoder_bits=encoder_bits)
@@ -130,12 +143,14 @@ class CiA402Drive(Device):
         self._reset_edge = False
         self._enable_req_t = None
         self._fra_steps = 0
+        self._in_step = False
         self._last_t32 = None           # last 0x607A seen while following (CSP)
         self._target = 0                # the unwrapped CSP target (increments)
         self._last_outputs_t = None
         self._cycle = None              # measured interval between on_outputs() calls
         self._ip_written = False
-        self._build_od(rx if rx is not None else CIA402_RX, tx if tx is not None else CIA402_TX)
+        self._build_od(CIA402_RX if rx_mapping is None else rx_mapping,
+                       CIA402_TX if tx_mapping is None else tx_mapping)
         self._publish()
 
     # ------------------------------------------------------------------ object dictionary
@@ -191,18 +206,24 @@ class CiA402Drive(Device):
                sum(1 << (m - 1) for m in self.modes), "ro")
         for index, name, mapped in ((RX_MAPPING, "RxPDO mapping", rx), (TX_MAPPING, "TxPDO mapping", tx)):
             words = []
-            for ix, sx, bits, _dtype, ename in mapped:
+            for ix, sx, bits, dtype, ename in mapped:
+                if ix and not od.has(ix, sx):
+                    if dtype not in DTYPES or DTYPES[dtype][1] != bits:
+                        dtype = {1: "BOOL", 8: "USINT", 16: "UINT", 32: "UDINT", 64: "ULINT"}.get(bits)
+                        if dtype is None:
+                            raise ValueError(f"{name}: {ix:#06x}:{sx} ({ename}): no data type of {bits} bits")
+                    od.add(ix, sx, ename or f"object {ix:#06x}:{sx}", dtype, 0,
+                           "rw" if index == RX_MAPPING else "ro", pdo=True)
                 if ix and self._check_word(index, (ix << 16) | (sx << 8) | bits):
                     raise ValueError(f"{name}: {ix:#06x}:{sx} ({ename}) cannot be mapped with {bits} bits")
                 words.append((ix, sx, bits))
-            if len(words) > PDO_CAPACITY:
-                raise ValueError(f"{name}: more than {PDO_CAPACITY} entries")
+            capacity = max(PDO_CAPACITY, len(words))
             od.add_pdo_mapping(index, name, words)
-            for k in range(len(words) + 1, PDO_CAPACITY + 1):
+            for k in range(len(words) + 1, capacity + 1):
                 od.add(index, k, f"entry {k}", "UDINT", 0, "rw", writable_in=("PREOP",))
             count = od.entry(index, 0)
             count.on_write = self._mapping_count_check(index, count.on_write)
-            for k in range(1, PDO_CAPACITY + 1):
+            for k in range(1, capacity + 1):
                 od.entry(index, k).on_write = (lambda i: lambda e, v: self._check_word(i, v))(index)
         od.add_assignment(self.rx_assign, "RxPDO assign", [RX_MAPPING])
         od.add_assignment(self.tx_assign, "TxPDO assign", [TX_MAPPING])
@@ -330,12 +351,16 @@ class CiA402Drive(Device):
         self._take_outputs()
 
     def step(self, t: float, dt: float) -> None:
-        self._take_outputs()
-        self._transition(t, dt)
-        self._apply_setpoints()
-        self.motor.step(dt)
-        self.t = t
-        self._supervise(dt)
+        self._in_step = True
+        try:
+            self._take_outputs()
+            self._transition(t, dt)
+            self._apply_setpoints()
+            self.motor.step(dt)
+            self.t = t
+            self._supervise(dt)
+        finally:
+            self._in_step = False
         self._publish()
 
     # ------------------------------------------------------------------ internals
@@ -414,7 +439,9 @@ class CiA402Drive(Device):
         if self.state not in (State.FAULT, State.FAULT_REACTION_ACTIVE):
             self.state = State.FAULT_REACTION_ACTIVE
             self._enable_req_t = None
-            self._fra_steps = 0
+            # the reaction is shown for at least one published step: a fault found during a
+            # step counts that step, an injected one waits for the next
+            self._fra_steps = 1 if self._in_step else 0
             mo = self.motor
             option = int(self.od[0x605E])
             if mo.enabled and option in (1, 2):
@@ -441,6 +468,8 @@ class CiA402Drive(Device):
             if self._fra_steps >= 1 and (not mo.enabled or mo.stopped):
                 mo.disable()
                 self._set_state(State.FAULT)                              # 14
+            else:
+                self._fra_steps += 1
             return
         if s == State.FAULT:
             if reset and not self._persistent:                           # 15
@@ -498,8 +527,6 @@ class CiA402Drive(Device):
 
     def _supervise(self, dt: float) -> None:
         """After the physics: following error, DC link, fault reaction progress."""
-        if self.state == State.FAULT_REACTION_ACTIVE:
-            self._fra_steps += 1
         if not self.mains_on and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED,
                                                 State.QUICK_STOP_ACTIVE):
             self._fault(FAULT_UNDERVOLTAGE)

@@ -274,13 +274,16 @@ class MotorModel:
                         vref = (self.target_velocity + self.velocity_offset) / k
                     else:                   # _STOP: ramp the reference to zero
                         d = self._stop_decel
+                        v0 = self._stop_v
                         if d is None:
                             self._stop_v = 0.0
-                        elif self._stop_v > 0:
-                            self._stop_v = max(0.0, self._stop_v - d * h)
+                        elif v0 > 0:
+                            self._stop_v = max(0.0, v0 - d * h)
                         else:
-                            self._stop_v = min(0.0, self._stop_v + d * h)
+                            self._stop_v = min(0.0, v0 + d * h)
                         vref = self._stop_v
+                        if d is not None:   # torque feed-forward of the ramp: no overshoot at its end
+                            toff += (self._stop_v - v0) / h * J
                         if vref == 0.0 and abs(w) <= standstill:
                             self._stop_done = True
                             self.mode = _HOLD
