@@ -366,12 +366,13 @@ class CiA402Drive(Device):
     # ------------------------------------------------------------------ internals
     def _take_outputs(self) -> None:
         """Latch the fault-reset edge, the mode and (when following) the setpoints."""
-        cw = int(self.od[0x6040])
+        E = self.od._by_key
+        cw = int(E[0x6040].value)
         bit7 = bool(cw & 0x80)
         if bit7 and not self._prev_bit7:
             self._reset_edge = True
         self._prev_bit7 = bit7
-        m = self.od[0x6060]
+        m = E[0x6060].value
         if m in self.modes and m != self.mode:
             self.mode = m
             if self.state == State.OPERATION_ENABLED:
@@ -379,23 +380,24 @@ class CiA402Drive(Device):
         self._apply_setpoints()
 
     def _apply_setpoints(self) -> None:
-        od, mo = self.od, self.motor
-        mo.torque_limit = od[0x6072]
-        mo.speed_limit = od[0x6080] * 6.283185307179586 / 60.0
+        E = self.od._by_key
+        mo = self.motor
+        mo.torque_limit = E[0x6072].value
+        mo.speed_limit = E[0x6080].value * 6.283185307179586 / 60.0
         if self.state != State.OPERATION_ENABLED or not mo.enabled:
             return
-        mo.velocity_offset = od[0x60B1]
-        mo.torque_offset = od[0x60B2]
+        mo.velocity_offset = E[0x60B1].value
+        mo.torque_offset = E[0x60B2].value
         if self.mode == CSP:
-            t32 = int(od[0x607A])
+            t32 = int(E[0x607A].value)
             if self._last_t32 is not None and t32 != self._last_t32:
                 self._target += wrap32(t32 - self._last_t32)
                 self._last_t32 = t32
                 mo.command_position(self._target, self.interpolation_period)
         elif self.mode == CSV:
-            mo.target_velocity = od[0x60FF]
+            mo.target_velocity = E[0x60FF].value
         else:
-            mo.target_torque = od[0x6071]
+            mo.target_torque = E[0x6071].value
 
     def _start_mode(self) -> bool:
         """Close the loop of the current mode in Operation enabled; in CSP refuse (fault 0x8611)
@@ -454,10 +456,12 @@ class CiA402Drive(Device):
 
     def _qs_decel(self) -> float:
         """Quick stop deceleration in increments/s² (0x6085 is in rev/min per second)."""
-        return self.od[0x6085] * self.motor.cpr / 60.0
+        E = self.od._by_key
+        return E[0x6085].value * self.motor.cpr / 60.0
 
     def _transition(self, t: float, dt: float) -> None:
         """At most one state transition, at the start of a step."""
+        E = self.od._by_key
         s = self.state
         reset, self._reset_edge = self._reset_edge, False
         mo = self.motor
@@ -478,8 +482,8 @@ class CiA402Drive(Device):
                 self.emergency(0x0000, 0x00)                              # CiA 301: error reset
                 self._set_state(State.SWITCH_ON_DISABLED)
             return
-        cmd = decode_command(int(self.od[0x6040]))
-        qs_option = int(self.od[0x605A])
+        cmd = decode_command(int(E[0x6040].value))
+        qs_option = int(E[0x605A].value)
         if s == State.SWITCH_ON_DISABLED:
             if cmd == CMD_SHUTDOWN:
                 self._set_state(State.READY_TO_SWITCH_ON)                 # 2
@@ -527,21 +531,23 @@ class CiA402Drive(Device):
 
     def _supervise(self, dt: float) -> None:
         """After the physics: following error, DC link, fault reaction progress."""
+        E = self.od._by_key
         if not self.mains_on and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED,
                                                 State.QUICK_STOP_ACTIVE):
             self._fault(FAULT_UNDERVOLTAGE)
             return
         if self.state == State.OPERATION_ENABLED and self.mode == CSP and self.motor.enabled:
-            window = int(self.od[0x6065])
+            window = int(E[0x6065].value)
             if window != 0xFFFFFFFF and abs(self.motor.following_error) > window:
                 self._fe_time += dt
-                if self._fe_time > self.od[0x6066] / 1000.0 + 1e-12:
+                if self._fe_time > E[0x6066].value / 1000.0 + 1e-12:
                     self._fault(FAULT_FOLLOWING_ERROR, following=True)
             else:
                 self._fe_time = 0.0
 
     def _publish(self) -> None:
-        od, mo, s = self.od, self.motor, self.state
+        E = self.od._by_key
+        mo, s = self.motor, self.state
         sw = STATE_BITS[s] | SW_REMOTE
         if self.mains_on:
             sw |= SW_VOLTAGE
@@ -557,22 +563,23 @@ class CiA402Drive(Device):
             sw |= SW_INTERNAL_LIMIT
         if self._fe_latched and self.mode == CSP:
             sw |= SW_FOLLOWING_ERROR
-        od[0x6041] = sw
-        od[0x6061] = self.mode
+        E[0x6041].value = sw
+        E[0x6061].value = self.mode
         pos = mo.position
-        od[0x6064] = wrap32(pos)
-        od[0x6062] = wrap32(int(round(mo.position_demand)))
-        od[0x606C] = max(-0x80000000, min(0x7FFFFFFF, mo.velocity))
-        od[0x6077] = max(-0x8000, min(0x7FFF, mo.torque))
-        od[0x60F4] = max(-0x80000000, min(0x7FFFFFFF, mo.following_error))
-        od[0x603F] = self.error_code
-        od[0x1001] = 0x01 if s in (State.FAULT, State.FAULT_REACTION_ACTIVE) else 0x00
+        E[0x6064].value = wrap32(pos)
+        E[0x6062].value = wrap32(int(round(mo.position_demand)))
+        E[0x606C].value = max(-0x80000000, min(0x7FFFFFFF, mo.velocity))
+        E[0x6077].value = max(-0x8000, min(0x7FFF, mo.torque))
+        E[0x60F4].value = max(-0x80000000, min(0x7FFFFFFF, mo.following_error))
+        E[0x603F].value = self.error_code
+        E[0x1001].value = 0x01 if s in (State.FAULT, State.FAULT_REACTION_ACTIVE) else 0x00
 
     def _target_reached(self) -> bool:
-        mo, od = self.motor, self.od
+        E = self.od._by_key
+        mo = self.motor
         if self.mode == CSP:
-            return abs(self._target - mo.position) <= od[0x6067]
+            return abs(self._target - mo.position) <= E[0x6067].value
         if self.mode == CSV:
-            goal = max(-mo.max_speed * mo.k, min(mo.max_speed * mo.k, od[0x60FF]))
+            goal = max(-mo.max_speed * mo.k, min(mo.max_speed * mo.k, E[0x60FF].value))
             return abs(goal - mo.velocity) <= self.velocity_window
-        return abs(od[0x6071] - mo.torque) <= self.torque_window
+        return abs(E[0x6071].value - mo.torque) <= self.torque_window

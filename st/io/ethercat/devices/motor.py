@@ -56,6 +56,22 @@ class MotorParams:
         return 1 << self.encoder_bits
 
 
+def _coulomb_step(w: float, drive: float, tc: float, J: float, h: float) -> float:
+    """One semi-implicit Euler step of the shaft speed under `drive` torque and Coulomb friction
+    tc, which never reverses the motion and holds a shaft at rest while |drive| <= tc."""
+    if w > 0.0:
+        w_new = w + (drive - tc) / J * h
+        return 0.0 if w_new < 0.0 and abs(drive) <= tc else w_new
+    if w < 0.0:
+        w_new = w + (drive + tc) / J * h
+        return 0.0 if w_new > 0.0 and abs(drive) <= tc else w_new
+    if drive > tc:
+        return (drive - tc) / J * h
+    if drive < -tc:
+        return (drive + tc) / J * h
+    return 0.0                          # sticking
+
+
 class MotorModel:
     """Inputs: `enabled`, `mode` (CSP / CSV / CST), `command_position()`, `target_velocity`,
     `target_torque`, offsets and limits. Outputs: `position`, `velocity`, `torque` (drive units)
@@ -242,6 +258,10 @@ class MotorModel:
             tmax = min(tmax, max(0.0, self.torque_limit) * p.rated_torque / 1000.0)
         rated = p.rated_torque
         alpha = 1.0 if p.current_tau <= 0 else 1.0 - math.exp(-h / p.current_tau)
+        if self.enabled and self._rng is None and self.mode in (CSP, CSV):
+            self._step_following(n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha)
+            self.time += dt
+            return
         standstill = TWO_PI / 60.0       # 1 rev/min
         for _ in range(n):
             w = self.omega
@@ -317,20 +337,66 @@ class MotorModel:
             drive = self.torque_nm + self.load_torque - b * w
             if self._rng is not None:
                 drive += self._rng.gauss(0.0, p.torque_noise)
-            if w > 0.0:
-                w_new = w + (drive - tc) / J * h
-                if w_new < 0.0 and abs(drive) <= tc:
-                    w_new = 0.0
-            elif w < 0.0:
-                w_new = w + (drive + tc) / J * h
-                if w_new > 0.0 and abs(drive) <= tc:
-                    w_new = 0.0
-            elif drive > tc:
-                w_new = (drive - tc) / J * h
-            elif drive < -tc:
-                w_new = (drive + tc) / J * h
-            else:
-                w_new = 0.0                 # sticking
+            w_new = _coulomb_step(w, drive, tc, J, h)
             self.omega = w_new
             self.turns += w_new * h / TWO_PI
         self.time += dt
+
+    def _step_following(self, n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha) -> None:
+        """The loop of `step` for an enabled motor in CSP or CSV without noise, with the state in
+        locals (the common case of a running axis; the same arithmetic, about twice as fast)."""
+        csp = self.mode == CSP
+        w, turns, torque, integ0 = self.omega, self.turns, self.torque_nm, self._integ
+        demand, ip_start, ip_target = self._demand, self._ip_start, self._ip_target
+        ip_period, ip_elapsed = self._ip_period, self._ip_elapsed
+        toff = self.torque_offset * rated / 1000.0
+        voff = self.velocity_offset
+        load = self.load_torque
+        vtarget = (self.target_velocity + voff) / k
+        limited = False
+        u = self._torque_ref
+        floor = math.floor
+        for _ in range(n):
+            if csp:
+                err = demand - floor(turns * cpr)
+                ff = 0.0
+                if ip_period > 0.0 and ip_elapsed < ip_period:
+                    span = ip_target - ip_start
+                    before = ip_elapsed
+                    ip_elapsed = before + h
+                    frac = ip_elapsed / ip_period
+                    demand = ip_start + span * (frac if frac < 1.0 else 1.0)
+                    rest = ip_period - before
+                    ff = span / ip_period * ((h if h < rest else rest) / h)
+                else:
+                    demand = ip_target
+                vref = (ff + kp * err + voff) / k
+            else:
+                vref = vtarget
+            if vref > vmax:
+                vref = vmax
+                limited = True
+            elif vref < -vmax:
+                vref = -vmax
+                limited = True
+            e = vref - w
+            integ = integ0 + ki * e * h
+            u = kv * e + integ + toff
+            if (u > tmax and e > 0) or (u < -tmax and e < 0):
+                integ = integ0
+            integ0 = -tmax if integ < -tmax else (tmax if integ > tmax else integ)
+            u = kv * e + integ0 + toff
+            if u > tmax:
+                u = tmax
+                limited = True
+            elif u < -tmax:
+                u = -tmax
+                limited = True
+            torque += (u - torque) * alpha
+            drive = torque + load - b * w
+            w_new = _coulomb_step(w, drive, tc, J, h)
+            w = w_new
+            turns += w_new * h / TWO_PI
+        self.omega, self.turns, self.torque_nm, self._integ, self._torque_ref = w, turns, torque, integ0, u
+        self._demand, self._ip_elapsed = demand, ip_elapsed
+        self.limited = limited
