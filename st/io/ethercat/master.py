@@ -74,7 +74,8 @@ class Master:
     def open(self) -> None: ...
     def close(self) -> None: ...
     def scan(self) -> list: ...
-    def configure(self, pdo_assign: Optional[dict] = None, dc_cycle_ns: int = 0) -> None: ...
+    def configure(self, pdo_assign: Optional[dict] = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
+                  preop_hook: Optional[Callable] = None) -> None: ...
     def set_state(self, state: str, timeout: float = 2.0) -> str: ...
     def exchange(self) -> int: ...
     def sdo_read(self, slave: int, index: int, sub: int, complete: bool = False) -> bytes: ...
@@ -297,15 +298,19 @@ class FrameMaster(Master):
         return out
 
     # ------------------------------------------------------------------ configuration
-    def configure(self, pdo_assign: Optional[dict] = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0) -> None:
+    def configure(self, pdo_assign: Optional[dict] = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
+                  preop_hook: Optional[Callable] = None) -> None:
         """INIT → PREOP → PDO mapping, SyncManagers, FMMUs, DC → SAFEOP.
 
-        pdo_assign: {slave: (rx_pdos, tx_pdos)} written to 0x1C12/0x1C13 before mapping."""
+        pdo_assign: {slave: (rx_pdos, tx_pdos)} written to 0x1C12/0x1C13 before mapping;
+        preop_hook(master): called in PREOP before the mapping is read (SDO setup, remapping)."""
         for s in self.slaves:
             if s.mailbox:
                 self._fpwr(s.station, 0x0800, _sm_bytes(s.mbx_out[0], s.mbx_out[1], 0x26, 1))
                 self._fpwr(s.station, 0x0808, _sm_bytes(s.mbx_in[0], s.mbx_in[1], 0x22, 1))
         self.set_state("PREOP")
+        if preop_hook is not None:
+            preop_hook(self)
         for s in self.slaves:
             if pdo_assign and s.position in pdo_assign and s.mailbox:
                 rx, tx = pdo_assign[s.position]

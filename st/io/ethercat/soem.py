@@ -76,8 +76,11 @@ class SoemMaster(Master):
             out.append(info.state)
         return out
 
-    def configure(self, pdo_assign: Optional[dict] = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0) -> None:
+    def configure(self, pdo_assign: Optional[dict] = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
+                  preop_hook=None) -> None:
         assign = pdo_assign or {}
+        if preop_hook is not None:                  # config_init left the slaves in PREOP
+            preop_hook(self)
         for i, s in enumerate(self.m.slaves):
             if i in assign:
                 rx, tx = assign[i]
