@@ -12,6 +12,9 @@ policy runs every missed release late, back to back, and records each one's late
 stall at 1 ms adds ten samples between 10 and 1 ms. Under load that moves st's p99, not its max. Needs root for SCHED_FIFO (without it both run as SCHED_OTHER and the
 numbers say so) and the Debian packages rt-tests and stress-ng.
 
+The measuring code lives in st/experiments/latency.py (`st experiment latency` runs the thesis's
+1/2/3/10-axis tables with it); `cpu` is the share of one core while scanning, start-up excluded.
+
     python bench/bench_latency.py                      # 1 ms and 4 ms, idle and loaded, 20 s each (~3 min)
     python bench/bench_latency.py --seconds 60 --cycles 1ms --loads idle
 """
@@ -20,84 +23,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
-import resource
 import shutil
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-
-
-def percentile_from_histogram(hist: dict, total: int, q: float, overflow_max: int) -> float:
-    """The q-quantile (µs) of a cyclictest histogram {µs: count}; overflows sit at the max."""
-    need = q * total
-    seen = 0
-    for us in sorted(hist):
-        seen += hist[us]
-        if seen >= need:
-            return float(us)
-    return float(overflow_max)
-
-
-def run_cyclictest(interval_us: int, seconds: int, prio: int) -> dict:
-    limit = 20000
-    cmd = ["cyclictest", "-m", "-p", str(prio), "-i", str(interval_us), "-D", str(seconds), "-q",
-           "-h", str(limit), "--policy=fifo" if prio else "--policy=other"]
-    out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
-    hist, total = {}, 0
-    fields = {}
-    for line in out.splitlines():
-        m = re.match(r"^(\d+)\s+(\d+)\s*$", line)
-        if m:
-            us, n = int(m.group(1)), int(m.group(2))
-            if n:
-                hist[us] = n
-                total += n
-            continue
-        m = re.match(r"^# (Min|Avg|Max) Latencies:\s+(\d+)", line)
-        if m:
-            fields[m.group(1).lower()] = float(m.group(2))
-        m = re.match(r"^# Histogram Overflows:\s+(\d+)", line)
-        if m:
-            total += int(m.group(1))
-    mx = fields.get("max", 0.0)
-    return {"min": fields.get("min", 0.0), "avg": fields.get("avg", 0.0),
-            "p99": percentile_from_histogram(hist, total, 0.99, mx),
-            "p99.9": percentile_from_histogram(hist, total, 0.999, mx), "max": mx, "samples": total,
-            # a wake-up later than the next period skips the missed periods: one sample per stall
-            "overruns": max(0, seconds * 1_000_000 // interval_us - total)}
-
-
-def run_st(program: Path, cycle: str, seconds: int, prio: int) -> dict:
-    src = program.read_text()
-    src = re.sub(r"INTERVAL\s*:=\s*T#\w+", f"INTERVAL := T#{cycle}", src)
-    with tempfile.TemporaryDirectory() as d:
-        prog = Path(d) / program.name
-        prog.write_text(src)
-        stats = Path(d) / "stats.json"
-        before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cmd = [sys.executable, "-m", "st.cli", "run", str(prog), "--duration", f"{seconds}s", "--no-retain",
-               "--rt-priority", str(prio or 30), "--stats-json", str(stats), "-q"]
-        subprocess.run(cmd, check=True, cwd=ROOT)
-        after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        d = json.loads(stats.read_text())
-    t = d["tasks"][0]
-    lat = t["latency_us"]
-    cpu = (after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime) / seconds
-    return {"min": lat["min"], "avg": lat["avg"], "p99": lat["p99"], "p99.9": lat["p99.9"], "max": lat["max"],
-            "samples": t["jobs"], "overruns": t["overruns"] + t["skipped"], "exec_avg": t["exec_us"]["avg"],
-            "cpu": cpu}
-
-
-def start_load() -> subprocess.Popen:
-    # every CPU busy with arithmetic, plus memory and file-system pressure, at normal priority
-    return subprocess.Popen(["stress-ng", "--cpu", str(os.cpu_count() or 2), "--vm", "1", "--vm-bytes", "256M",
-                             "--hdd", "1", "--hdd-bytes", "64M", "--timeout", "3600s", "-q"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+sys.path.insert(0, str(ROOT))
+from st.experiments.latency import run_cyclictest, run_st, start_load  # noqa: E402
 
 
 def fmt(r: dict) -> str:
@@ -131,7 +64,7 @@ def main() -> int:
             for cycle in a.cycles.split(","):
                 us = int(float(cycle.removesuffix("ms")) * 1000)
                 ct = run_cyclictest(us, a.seconds, prio)
-                st = run_st(Path(a.program), cycle, a.seconds, prio)
+                st = run_st(Path(a.program), a.seconds, prio, cycle=cycle)
                 print(f"{load:6} {cycle:5} {'cyclictest':10} {fmt(ct)}  {ct['samples']:>7} {ct['overruns']:>8}")
                 print(f"{'':6} {'':5} {'st run':10} {fmt(st)}  {st['samples']:>7} {st['overruns']:>8} "
                       f"{st['cpu'] * 100:>4.0f}%")

@@ -1,7 +1,9 @@
 """The `st` command line: check, compile, run, test, explain."""
 from __future__ import annotations
 
+import os
 import sys
+import time
 
 import click
 
@@ -263,6 +265,35 @@ def modbus_map(files, map_file, time_unit, f_trig_first_scan):
         click.echo("  ".join(c.ljust(w) for c, w in zip(line, widths)).rstrip())
     click.echo("other addresses in OpenPLC's ranges (coils and discrete inputs 0-8191, input registers "
                "0-1023, holding registers 0-8191) read 0 and keep what is written; beyond them: exception 02")
+
+
+@main.command("experiment")
+@click.argument("name", required=False)
+@click.option("--out", "out_dir", type=click.Path(), default=None,
+              help="Where the CSV, PNG and summary.md go (default: experiments/NAME).")
+@click.option("--quick", is_flag=True, help="A shortened run (fewer cycles, shorter holds) for a first look.")
+@click.option("--seed", type=int, default=1, show_default=True)
+def experiment(name, out_dir, quick, seed):
+    """Run one of the thesis's experiments (programs/thesis/README.md); without NAME, list them."""
+    from .experiments import EXPERIMENTS, run as run_experiment
+    if not name:
+        for key, (_mod, what) in EXPERIMENTS.items():
+            click.echo(f"{key:<12}  {what}")
+        return
+    if name not in EXPERIMENTS:
+        click.echo(f"error: unknown experiment '{name}' (known: {', '.join(EXPERIMENTS)})", err=True)
+        sys.exit(2)
+    out = out_dir or os.path.join("experiments", name)
+    t0 = time.monotonic()
+    try:
+        rep = run_experiment(name, out, quick=quick, seed=seed)
+    except FileNotFoundError as e:
+        click.echo(f"error: {e}", err=True)
+        sys.exit(2)
+    summary = rep.dir / "summary.md"
+    click.echo(summary.read_text())
+    click.echo(f"{name}: {len(rep.files)} file(s) and summary.md in {rep.dir} ({time.monotonic() - t0:.0f} s)",
+               err=True)
 
 
 @main.group()
