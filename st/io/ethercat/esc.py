@@ -84,6 +84,7 @@ class SlaveController:
         self.pending_outputs = None       # (apply_at, bytes) when DC SYNC0 defers outputs
         self.stats = {"frames": 0, "commits": 0}
         self._sm_cache = self._fmmu_cache = None
+        self._plans: dict = {}            # (read, write, address, length) → a logical datagram's plan
         self._grid = False                # SYNC0 pulse grid cache (False: to be computed)
         self._wd_limit = self._watchdog_limit()
 
@@ -372,8 +373,10 @@ class SlaveController:
 
         if hit(REG_SM, 0x80):
             self._sm_cache = None
+            self._plans.clear()
         if hit(REG_FMMU, 0x100):
             self._fmmu_cache = None
+            self._plans.clear()
         if hit(REG_WDDIV) or hit(REG_WDSM):
             self._wd_limit = self._watchdog_limit()
         if hit(REG_DCOFS, 8) or hit(REG_DCCUC, 0x28):
@@ -429,6 +432,57 @@ class SlaveController:
 
     def logical(self, cmd_read: bool, cmd_write: bool, addr: int, data: bytearray, t: float) -> int:
         """Apply an LRD/LWR/LRW to this slave: returns the working-counter increment."""
+        key = (cmd_read, cmd_write, addr, len(data))
+        plan = self._plans.get(key)
+        if plan is None:
+            plan = self._plans[key] = self._plan(cmd_read, cmd_write, addr, len(data))
+        if plan is False:
+            return self._logical(cmd_read, cmd_write, addr, data, t)
+        # the cyclic case: FMMUs that map whole buffered SyncManagers (the same effects as the
+        # generic path, without looking every register up again)
+        inc = 0
+        original = bytes(data) if cmd_read and cmd_write else data
+        mem = self.mem
+        for out, off, start, stop in plan:
+            n = stop - start
+            if out:
+                chunk = bytes(original[off:off + n])
+                mem[start:stop] = chunk
+                if mem[REG_ALSTAT] & 0x0F == OP:
+                    self.last_commit = t
+                    self.stats["commits"] += 1
+                    self._outputs(chunk, t)
+                inc |= 2
+            else:
+                self.advance(t)
+                inp = self.device.read_inputs()[:n]
+                mem[start:stop] = inp
+                data[off:off + n] = inp
+                inc |= 1
+        return (1 if inc & 1 else 0) + (2 if inc & 2 else 0) if cmd_read and cmd_write else (1 if inc else 0)
+
+    def _plan(self, cmd_read: bool, cmd_write: bool, addr: int, length: int):
+        """[(is output, offset in the datagram, SM start, SM end)] when every FMMU the datagram touches
+        maps one whole buffered SyncManager byte for byte inside it; else False (the generic path)."""
+        plan = []
+        end = addr + length
+        sms = self._sms()
+        for lstart, ln, lsb, leb, pstart, psb, typ in self.fmmus():
+            if max(addr, lstart) >= min(end, lstart + ln):
+                continue
+            if lsb or leb != 7 or psb or lstart < addr or lstart + ln > end:
+                return False
+            sm = next((x for x in sms if x[1] == pstart and x[2] - x[1] == ln), None)
+            if sm is None or sm[3] & 0x03 == 0x02 or typ not in (1, 2):
+                return False
+            out = typ == 2
+            if out != bool(sm[3] & 0x04):
+                return False
+            if (out and cmd_write) or (not out and cmd_read):
+                plan.append((out, lstart - addr, sm[1], sm[2]))
+        return plan
+
+    def _logical(self, cmd_read: bool, cmd_write: bool, addr: int, data: bytearray, t: float) -> int:
         inc = 0
         end = addr + len(data)
         original = bytes(data) if cmd_read and cmd_write else data
