@@ -44,6 +44,7 @@ EXPLANATIONS = {
     "W003": "A string literal is longer than the variable and will be truncated.",
     "W004": "A user POU replaces a standard library POU of the same name.",
     "W005": "Negating an unsigned value wraps around.",
+    "W006": "A variable of a METHOD has the name of a variable of its function block and hides it inside the method.",
 }
 
 

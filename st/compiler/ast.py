@@ -347,6 +347,21 @@ class ActionDecl:
 
 
 @dataclass(slots=True, eq=False)
+class Method:
+    span: Span
+    name: str
+    modifiers: list = field(default_factory=list)
+    return_type: Optional[TypeSpec] = None
+    var_blocks: list = field(default_factory=list)
+    body: list = field(default_factory=list)
+    end_span: Optional[Span] = None
+    kind: str = "FUNCTION"          # checked and generated as a function with the instance as `self`
+    steps: list = field(default_factory=list)
+    transitions: list = field(default_factory=list)
+    actions: list = field(default_factory=list)
+
+
+@dataclass(slots=True, eq=False)
 class POU:
     span: Span
     kind: str               # FUNCTION, FUNCTION_BLOCK, PROGRAM
@@ -361,6 +376,7 @@ class POU:
     extends: str = ""
     implements: list = field(default_factory=list)
     end_span: Optional[Span] = None
+    methods: list = field(default_factory=list)
 
 
 @dataclass(slots=True, eq=False)

@@ -26,7 +26,7 @@ END_PROGRAM EXTENDS IMPLEMENTS INITIAL_STEP END_STEP END_TRANSITION END_ACTION C
 END_CONFIGURATION RESOURCE END_RESOURCE IF THEN ELSIF ELSE END_IF CASE END_CASE FOR DO END_FOR WHILE
 END_WHILE REPEAT UNTIL END_REPEAT EXIT CONTINUE RETURN OR XOR AND NOT MOD TRUE FALSE VAR VAR_INPUT
 VAR_OUTPUT VAR_IN_OUT VAR_TEMP VAR_GLOBAL VAR_EXTERNAL VAR_CONFIG VAR_ACCESS END_TEST END_SETUP
-END_TEARDOWN PUBLIC PRIVATE PROTECTED INTERNAL ABSTRACT FINAL
+END_TEARDOWN PUBLIC PRIVATE PROTECTED INTERNAL ABSTRACT FINAL END_METHOD
 """.split())
 _QUALIFIERS = frozenset(("CONSTANT", "RETAIN", "NON_RETAIN", "PERSISTENT"))
 
@@ -225,6 +225,8 @@ class AstBuilder(Transformer):
                 pou.transitions.append(p)
             elif isinstance(p, A.ActionDecl):
                 pou.actions.append(p)
+            elif isinstance(p, A.Method):
+                pou.methods.append(p)
             elif isinstance(p, A.Stmt):
                 pou.body.append(p)
         return pou
@@ -262,6 +264,29 @@ class AstBuilder(Transformer):
         pou.extends = extends
         pou.implements = implements
         return pou
+
+    def method_decl(self, c):
+        mods = []
+        i = 1
+        while isinstance(c[i], tuple) and c[i][0] == "mod":
+            mods.append(c[i][1])
+            i += 1
+        name = c[i]
+        self._not_reserved(name)
+        rest = c[i + 1:-1]
+        m = A.Method(self.sp(name), str(name), mods)
+        if rest and isinstance(rest[0], A.TypeSpec):
+            m.return_type, rest = rest[0], rest[1:]
+        for p in rest:
+            if isinstance(p, A.VarBlock):
+                m.var_blocks.append(p)
+            elif isinstance(p, A.Stmt):
+                m.body.append(p)
+        m.end_span = self.sp(c[-1])
+        return m
+
+    def method_modifier(self, c):
+        return ("mod", str(c[0]).upper())
 
     def program_decl(self, c):
         return self._pou("PROGRAM", c[0], c[1], c[2:-1], c[-1])

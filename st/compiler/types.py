@@ -283,6 +283,10 @@ class POUType(Type):
     native: Any = None      # a native implementation (Python) for library POUs
     actions: dict = field(default_factory=dict)   # lower → ast.ActionDecl
     resolved: bool = False
+    methods: dict = field(default_factory=dict)   # lower → POUType (pou_kind FUNCTION, owner_fb set)
+    owner_fb: Any = None    # a METHOD: the function block it belongs to
+    base: Any = None        # FUNCTION_BLOCK … EXTENDS base
+    modifiers: tuple = ()   # ABSTRACT, FINAL, OVERRIDE, PUBLIC, …
 
     @property
     def kind(self) -> str:  # type: ignore[override]

@@ -234,6 +234,26 @@ class _AttrRef:
     __hash__ = None
 
 
+class _ObjRef:
+    """A reference to an instance itself (THIS): dereferencing gives the object."""
+
+    __slots__ = ("obj",)
+
+    def __init__(self, obj):
+        self.obj = obj
+
+    def get(self):
+        return self.obj
+
+    def set(self, v):
+        raise TypeError("THIS cannot be assigned")
+
+    def __eq__(self, other):
+        return isinstance(other, _ObjRef) and other.obj is self.obj
+
+    __hash__ = None
+
+
 class _ItemRef:
     """A reference to a list element or a namespace (global) entry."""
 
@@ -276,7 +296,7 @@ BASE_NAMESPACE = {
     "_round": _round, "_trunc": _trunc, "_ix": _ix, "_subrange": _subrange, "_setbit": _setbit,
     "_setbits": _setbits,
     "_for_dir": _for_dir, "_Struct": _Struct, "_FB": _FB, "_copy": _copy, "_assign": _assign,
-    "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
+    "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ObjRef": _ObjRef, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
     "_float": float, "_int": int, "_range": range, "_abs": abs, "_min": min, "_max": max, "_len": len,
     "_str": str, "_bool": bool, "_PLCFault": PLCFault,
 }

@@ -7,7 +7,7 @@ from typing import Optional
 from .. import ast as A
 from .. import types as T
 from ..library import FuncSig
-from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies
+from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies, method_of
 from .tests import TEST_CALLS
 
 
@@ -26,6 +26,9 @@ class CallsMixin:
                 callee.sym = sym
                 callee.ty = sym.type
                 return self._fb_call(c, sym.type, scope, statement)
+            mt = method_of(scope.fb, key) if not isinstance(sym, T.VarSym) else None
+            if mt is not None:                     # a method of this instance: THIS^.M(...)
+                return self._method_call(c, mt, scope, None)
             if key == "ref" and sym is None and key not in self.p.pous:
                 return self._ref_call(c, scope)
             if key in TEST_CALLS and sym is None and key not in self.p.pous:
@@ -55,6 +58,15 @@ class CallsMixin:
                 if not a.output:
                     self.expr(a.value, scope)
             return None
+        # a method: inst.M(...), THIS^.M(...)
+        if isinstance(callee, A.Field):
+            bt = self.expr(callee.base, scope)
+            b = T.unalias(bt) if bt is not None else None
+            if isinstance(b, T.POUType) and b.pou_kind != "FUNCTION":
+                self._resolve_interface(b)
+                mt = method_of(b, callee.name.lower())
+                if mt is not None:
+                    return self._method_call(c, mt, scope, callee.base)
         # a call through a path: inst.sub(...), arr[i](...)
         t = self.expr(callee, scope)
         if t is None:
@@ -91,6 +103,12 @@ class CallsMixin:
         bind = self._bind_args(c, fb, scope, is_fb=True)
         c.target = CallTarget("fb", pou=fb, bind=bind)
         return None
+
+    def _method_call(self, c: A.Call, mt: T.POUType, scope: Scope, obj):
+        """A METHOD call; obj is the instance expression (None: this instance)."""
+        bind = self._bind_args(c, mt, scope, is_fb=False)
+        c.target = CallTarget("method", pou=mt, bind=bind, obj=obj)
+        return mt.return_type
 
     def _function_call(self, c: A.Call, pou: T.POUType, scope: Scope):
         if scope.pou is not None:

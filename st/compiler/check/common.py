@@ -39,6 +39,7 @@ class Scope:
         self.actions: dict = {}
         self.library = library
         self.test = False           # inside TEST/SETUP/TEARDOWN: test statements allowed
+        self.fb = None              # the function block whose body or METHOD this is (THIS, implicit calls)
 
 
 def _names_in(body):
@@ -70,6 +71,29 @@ class _NullType(T.Type):
 
 
 _NULL = _NullType()
+
+
+class _ThisSym:
+    """The symbol of THIS: a reference to the instance a function block body or method runs on."""
+    kind = "this"
+    name = "THIS"
+
+
+THIS = _ThisSym()
+
+
+class _SuperSym:
+    """SUPER: the instance seen as its base function block (calls are not virtual)."""
+    kind = "super"
+    name = "SUPER"
+
+
+SUPER = _SuperSym()
+
+
+def method_of(fb, key: str):
+    """The METHOD `key` of a function block (None when it has none by that name)."""
+    return fb.methods.get(key) if fb is not None else None
 
 
 def _satisfies(t: T.Type, constraint: str) -> bool:

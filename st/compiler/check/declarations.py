@@ -220,6 +220,12 @@ class DeclarationsMixin:
         if d.kind == "FUNCTION":
             if d.return_type is not None:
                 pou.return_type = self.resolve_type(d.return_type, scope)
+        base = self._base_of(pou) if d.kind == "FUNCTION_BLOCK" and d.extends else None
+        if base is not None:                       # inherited variables come first, as declared there
+            pou.base = base
+            for k, v in base.vars.items():
+                if k not in ("en", "eno"):
+                    pou.vars[k] = v
         for block in d.var_blocks:
             self._declare_block(block, pou.vars, scope, pou)
         if d.kind in ("FUNCTION", "FUNCTION_BLOCK"):
@@ -234,6 +240,74 @@ class DeclarationsMixin:
             if act.name.lower() in pou.actions:
                 self.err("E011", act.span, f"action '{act.name}' is declared twice")
             pou.actions[act.name.lower()] = act
+        for m in getattr(d, "methods", ()):
+            self._declare_method(pou, m)
+        if base is not None:
+            for k, bm in base.methods.items():
+                mine = pou.methods.get(k)
+                if mine is None:
+                    pou.methods[k] = bm
+                else:
+                    self._check_override(pou, mine, bm)
+
+    def _base_of(self, pou: T.POUType):
+        """The function block `pou` EXTENDS, resolved and checked (None after an error)."""
+        d = pou.decl
+        base = self.p.pous.get(d.extends.lower())
+        if base is None:
+            self.err("E010", d.span, f"{pou.name} extends '{d.extends}', which is not declared")
+            return None
+        if base.pou_kind != "FUNCTION_BLOCK":
+            self.err("E012", d.span, f"{pou.name} can only extend a FUNCTION_BLOCK; '{base.name}' is a "
+                     f"{base.pou_kind.replace('_', ' ')}")
+            return None
+        chain, b = {pou.name.lower()}, base
+        while b is not None:
+            if b.name.lower() in chain:
+                self.err("E012", d.span, f"{pou.name} extends itself through '{b.name}'")
+                return None
+            chain.add(b.name.lower())
+            nxt = b.decl.extends if b.decl is not None else ""
+            b = self.p.pous.get(nxt.lower()) if nxt else None
+        if "FINAL" in (base.decl.modifiers if base.decl is not None else ()):
+            self.err("E012", d.span, f"'{base.name}' is FINAL and cannot be extended")
+            return None
+        self._resolve_interface(base)
+        return base
+
+    def _check_override(self, fb: T.POUType, mine: T.POUType, theirs: T.POUType) -> None:
+        """A method that replaces an inherited one must keep its signature; FINAL ones cannot be replaced."""
+        m = mine.decl
+        if "FINAL" in theirs.decl.modifiers:
+            self.err("E012", m.span, f"method {m.name} of {theirs.owner_fb.name} is FINAL and cannot be overridden")
+            return
+
+        def sig(mt):
+            return ([(v.name.lower(), v.section, str(v.type)) for v in mt.params()],
+                    str(mt.return_type) if mt.return_type is not None else None)
+        if sig(mine) != sig(theirs):
+            self.err("E012", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a different "
+                     f"signature (parameters and return type must be the same)")
+
+    def _declare_method(self, fb: T.POUType, m) -> None:
+        """A METHOD: a function whose body also sees the instance's variables (and THIS)."""
+        key = m.name.lower()
+        if (key in fb.methods and fb.methods[key].owner_fb is fb) or key in fb.vars or key in fb.actions:
+            self.err("E011", m.span, f"'{m.name}' is declared twice in {fb.name}")
+            return
+        mt = T.POUType(m.name, "FUNCTION", decl=m, library=fb.library)
+        mt.pyname = "_m_" + mangle(m.name)
+        mt.owner_fb = fb
+        mt.resolved = True
+        scope = Scope(mt, mt.vars)
+        if m.return_type is not None:
+            mt.return_type = self.resolve_type(m.return_type, scope)
+        for block in m.var_blocks:
+            self._declare_block(block, mt.vars, scope, mt)
+        for v in mt.vars.values():
+            if v.name.lower() in fb.vars and v.section != "VAR_EXTERNAL":
+                self.warn("W006", v.span, f"'{v.name}' in method {m.name} hides the variable of {fb.name}")
+        fb.methods[key] = mt
 
     def _declare_block(self, block: A.VarBlock, table: dict, scope: Optional[Scope], owner) -> None:
         kind = block.kind

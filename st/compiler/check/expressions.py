@@ -6,7 +6,7 @@ from typing import Optional
 from .. import ast as A
 from .. import types as T
 from ..library import FuncSig
-from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, Scope
+from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, SUPER, THIS, Scope
 
 
 class ExpressionsMixin:
@@ -139,6 +139,10 @@ class ExpressionsMixin:
             return "RESULT"
         if key in scope.steps:
             return "STEP"
+        if key == "this" and scope.fb is not None:
+            return THIS
+        if key == "super" and scope.fb is not None and scope.fb.base is not None:
+            return SUPER
         gs = self.p.global_names.get(key)
         if gs:
             return gs[0]
@@ -155,6 +159,12 @@ class ExpressionsMixin:
             e.sym = STEP
             e.const = scope.steps[key]
             return STEP
+        if sym is THIS:
+            e.sym = THIS
+            return T.RefType(scope.fb)
+        if sym is SUPER:
+            e.sym = SUPER
+            return T.RefType(scope.fb.base)
         if isinstance(sym, T.VarSym) and expected is not None and isinstance(T.base_of(expected), T.EnumType) \
                 and key in T.base_of(expected).members and not isinstance(T.base_of(sym.type), T.EnumType):
             sym = None      # an enum value of the expected type wins over a same-named variable
@@ -356,8 +366,9 @@ class ExpressionsMixin:
             self._resolve_interface(b)
             v = b.vars.get(key)
             if v is None:
-                if key in b.actions:
-                    self.err("E026", e.name_span, f"'{e.name}' is an action; call it: {e.name}()")
+                if key in b.actions or key in b.methods:
+                    kind = "an action" if key in b.actions else "a method"
+                    self.err("E026", e.name_span, f"'{e.name}' is {kind}; call it: {e.name}()")
                     return None
                 self.err("E023", e.name_span, f"{b.name} has no variable '{e.name}'")
                 return None

@@ -15,6 +15,10 @@ class StatementsMixin:
     def _check_body(self, pou: T.POUType) -> None:
         d = pou.decl
         scope = Scope(pou, pou.vars, library=pou.library)
+        if pou.pou_kind in ("FUNCTION_BLOCK", "PROGRAM"):
+            scope.fb = pou
+        for mt in pou.methods.values():
+            self._check_method(pou, mt)
         if d.steps or d.transitions:
             self._check_sfc(pou, scope)
         for act in d.actions:
@@ -24,6 +28,16 @@ class StatementsMixin:
             self.stmts(act.body, scope)
         if pou.pou_kind == "FUNCTION" and pou.return_type is None and self._assigns_name(d.body, pou.name):
             self.err("E013", d.span, f"FUNCTION {pou.name} has no return type but assigns a result")
+
+    def _check_method(self, fb: T.POUType, mt: T.POUType) -> None:
+        """A METHOD's body: its own variables first, then the instance's."""
+        names = dict(fb.vars)
+        names.update(mt.vars)
+        scope = Scope(mt, names, library=fb.library)
+        scope.fb = fb
+        self.stmts(mt.decl.body, scope)
+        if mt.return_type is None and self._assigns_name(mt.decl.body, mt.name):
+            self.err("E013", mt.decl.span, f"METHOD {mt.name} has no return type but assigns a result")
 
     def _assigns_name(self, body, name) -> bool:
         key = name.lower()

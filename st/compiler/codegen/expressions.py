@@ -193,7 +193,7 @@ class ExprGen:
             return T.base_of(e.ty) is T.REAL if e.ty is not None else False
         if isinstance(e, A.Literal):
             return True
-        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "function":
+        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method"):
             return T.base_of(e.ty) is T.REAL if e.ty is not None else False
         return False
 
@@ -222,7 +222,7 @@ class ExprGen:
         declared = (sub.lo, sub.hi) if isinstance(sub, T.SubrangeType) else (
             (t.lo, t.hi) if t.is_intlike else None)
         if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit)) or (
-                isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "function"):
+                isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method")):
             return declared
         if isinstance(e, A.Binary):
             op = e.op
@@ -310,6 +310,8 @@ class ExprGen:
             return _const(e.const)
         if getattr(sym, "kind", "") == "null":
             return _const(None)
+        if getattr(sym, "kind", "") == "this":
+            return _call("_ObjRef", _name(self.self_name))
         raise Unsupported(e.span, f"cannot use '{e.name}' here")
 
     def x_Direct(self, e: A.Direct) -> py.expr:
@@ -387,6 +389,8 @@ class ExprGen:
         return False
 
     def x_Deref(self, e: A.Deref) -> py.expr:
+        if isinstance(e.base, A.Name) and getattr(e.base.sym, "kind", "") in ("this", "super"):
+            return _name(self.self_name)            # THIS^ (and SUPER^): the instance itself
         return _call(_attr(self.expr(e.base), "get"))
 
     def x_Unary(self, e: A.Unary) -> py.expr:
@@ -464,7 +468,19 @@ class ExprGen:
             return self.native_call(e, tgt)
         if tgt.kind == "ref":
             return self.ref_to(tgt.arg)
+        if tgt.kind == "method":
+            return self.method_call(e, tgt)
         raise Unsupported(e.span, "a function block call has no value")
+
+    def method_call(self, e: A.Call, tgt) -> py.expr:
+        """inst.M(...): a Python method call on the instance, so a derived block's override runs;
+        SUPER^.M(...): the base block's method on this instance (not virtual)."""
+        if _is_super(tgt.obj):
+            base = tgt.obj.base.ty.target
+            return self.function_call(e, tgt, fn=_attr(_name(base.pyname), tgt.pou.pyname),
+                                      first=_name(self.self_name))
+        obj = _name(self.self_name) if tgt.obj is None else self.expr(tgt.obj)
+        return self.function_call(e, tgt, fn=_attr(obj, tgt.pou.pyname))
 
     def native_call(self, e: A.Call, tgt) -> py.expr:
         sig = tgt.sig
@@ -494,10 +510,10 @@ class ExprGen:
             node = py.IfExp(self.expr(tgt.en.value), node, _const(default_value(e.ty) if e.ty is not None else None))
         return node
 
-    def function_call(self, e: A.Call, tgt) -> py.expr:
+    def function_call(self, e: A.Call, tgt, fn=None, first=None) -> py.expr:
         pou: T.POUType = tgt.pou
         bind = tgt.bind["params"]
-        args = []
+        args = [] if first is None else [first]
         for p in pou.params():
             a = bind.get(p.name.lower())
             if p.section == "VAR_INPUT":
@@ -516,7 +532,7 @@ class ExprGen:
                     args.append(_const(None))
                 else:
                     args.append(self.ref_to(a.value, negated=a.negated))
-        node = _call(pou.pyname, *args)
+        node = _call(fn if fn is not None else pou.pyname, *args)
         en = tgt.bind.get("en")
         if en is not None:
             rt = pou.return_type
@@ -587,3 +603,8 @@ def wrap(node: py.expr, d) -> py.expr:
         h = 1 << (d.bits - 1)
         return py.BinOp(py.BinOp(py.BinOp(node, py.Add(), _const(h)), py.BitAnd(), _const(mask)), py.Sub(), _const(h))
     return py.BinOp(node, py.BitAnd(), _const(mask))
+
+
+def _is_super(e) -> bool:
+    """SUPER^ (the instance as its base block)."""
+    return isinstance(e, A.Deref) and isinstance(e.base, A.Name) and getattr(e.base.sym, "kind", "") == "super"

@@ -74,6 +74,30 @@ class FuncGen(StmtGen):
         return _set_lines(fn, d.span.line)
 
 
+class MethodGen(FuncGen):
+    """A METHOD: a function of the instance (`self`); its own variables are Python locals, the
+    instance's are attributes."""
+
+    def __init__(self, mod: ModuleGen, mt: T.POUType):
+        super().__init__(mod, mt)
+        self.self_name = "self"
+
+    def function(self) -> py.FunctionDef:
+        mt = self.pou
+        by_ref = _by_ref_names(mt.decl.body)
+        boxed = {v for v in by_ref if v.owner is mt and not T.unalias(v.type).is_aggregate}
+        self.cached = {v for v in mt.vars.values() if v not in boxed and v.section != "VAR_EXTERNAL"}
+        fn = super().function()
+        fn.args.args.insert(0, _set_lines(py.arg("self"), mt.decl.span.line))
+        return fn
+
+
+def _mentions_this(body) -> bool:
+    """THIS or SUPER in a body: other code then works on the instance while it runs."""
+    return any(isinstance(e, A.Name) and getattr(e.sym, "kind", "") in ("this", "super")
+               for e in _walk_exprs_in(body))
+
+
 def _lines(nodes, line):
     for n in nodes:
         _set_lines(n, line)
@@ -116,8 +140,9 @@ class BodyGen(StmtGen):
                                                   _attr(_attr(_name("self"), "_sfc"), "x")), d.span.line))
         members = [py.Assign([_name("__slots__", py.Store())], py.Tuple([_const(s) for s in slots], py.Load())),
                    py.FunctionDef("__init__", _args(["self"]), init_body or [py.Pass()], [], None, None)]
-        # caching policy: with actions or SFC other methods touch the variables: keep attributes
-        can_cache = not d.actions and sfc is None
+        # caching policy: with actions, methods, THIS or SFC other code touches the variables during
+        # the body: keep them attributes
+        can_cache = not d.actions and sfc is None and not pou.methods and not _mentions_this(d.body)
         if sfc is not None:
             run = py.Expr(_call(_attr(_attr(_name("self"), "_sfc"), "run"), _name("self"), _name("_now")))
             members.append(_set_lines(py.FunctionDef("_body", _args(["self"]), [run], [], None, None),
@@ -128,6 +153,8 @@ class BodyGen(StmtGen):
         for act in d.actions:
             g = BodyGen(self.mod, pou)
             members.append(g.method("_act_" + act.name.lower(), act.body, False, [], act.span.line, act.span.line))
+        for mt in pou.methods.values():
+            members.append(MethodGen(self.mod, mt).function())
         if sfc is not None:
             members.extend(self.sfc_methods(sfc))
         cls = py.ClassDef(pou.pyname, [_name("_FB")], [], members, [])

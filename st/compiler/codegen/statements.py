@@ -6,7 +6,7 @@ import ast as py
 from .. import ast as A
 from .. import types as T
 from ..check import CallTarget
-from .expressions import ExprGen, wrap
+from .expressions import _is_super, ExprGen, wrap
 from .pyast import (Unsupported, _attr, _call, _const, _name, _set_lines)
 
 
@@ -148,6 +148,8 @@ class StmtGen(ExprGen):
             return self.fb_call(c, tgt)
         if tgt.kind == "action":
             return [py.Expr(_call(_attr(_name(self.self_name), "_act_" + tgt.name)))]
+        if tgt.kind == "method":
+            return [py.Expr(self.method_call(c, tgt))]
         if tgt.kind == "test":
             return self.test_call(tgt)
         if tgt.kind == "function":
@@ -189,7 +191,10 @@ class StmtGen(ExprGen):
                 out.append(py.Expr(_call("_assign", _attr(inst, p.pyname), self.expr(a.value))))
             else:
                 out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.coerce(self.expr(a.value), a.value, p.type)))
-        out.append(py.Expr(_call(_attr(inst, "_body"))))
+        if _is_super(c.callee):                    # SUPER^(): the base block's body on this instance
+            out.append(py.Expr(_call(_attr(_name(fb.pyname), "_body"), inst)))
+        else:
+            out.append(py.Expr(_call(_attr(inst, "_body"))))
         out.extend(after)
         for key, a in bind.items():
             p = fb.vars[key]
@@ -473,7 +478,7 @@ def _by_ref_names(body) -> set:
     """Variables passed to functions as outputs / in-outs: they must stay attributes."""
     names = set()
     for e in _walk_exprs_in(body):
-        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "function":
+        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method"):
             pou = e.target.pou
             for key, a in e.target.bind["params"].items():
                 p = pou.vars[key]

@@ -1,0 +1,184 @@
+"""Object-oriented ST (IEC 61131-3 3rd edition), first part: METHODs of function blocks, THIS^,
+EXTENDS with inherited variables and methods, overriding with virtual dispatch, SUPER^."""
+import pytest
+
+from st import PLC
+from st.api import compile_text
+from st.diagnostics import CompileError
+
+
+def run(src: str, scans: int = 1) -> PLC:
+    plc = PLC(compile_text(src, "oop.st"))
+    plc.scan(scans)
+    return plc
+
+
+def errors(src: str) -> str:
+    with pytest.raises(CompileError) as e:
+        compile_text(src, "oop.st")
+    return str(e.value)
+
+
+COUNTER = """
+FUNCTION_BLOCK Counter
+  VAR_INPUT step : INT := 1; END_VAR
+  VAR_OUTPUT count : INT; END_VAR
+  METHOD Add : INT
+    VAR_INPUT n : INT; END_VAR
+    VAR_OUTPUT was : INT; END_VAR
+    VAR tmp : INT; calls : INT; END_VAR
+    calls := calls + 1;           (* a method's VAR starts afresh in every call *)
+    was := count;
+    tmp := n * step * calls;
+    count := count + tmp;
+    Add := count;
+  END_METHOD
+  METHOD Swap
+    VAR_IN_OUT a, b : INT; END_VAR
+    VAR t : INT; END_VAR
+    t := a; a := b; b := t;
+  END_METHOD
+  METHOD Reset
+    count := 0;
+  END_METHOD
+  count := count + step;
+  IF count > 100 THEN Reset(); END_IF;         (* this instance's method, without THIS^ *)
+END_FUNCTION_BLOCK
+"""
+
+
+def test_methods_with_inputs_outputs_in_outs_and_a_result():
+    plc = run(COUNTER + """
+PROGRAM main
+  VAR c : Counter; r1, r2, before : INT; x : INT := 1; y : INT := 2; END_VAR
+  c(step := 2);                          (* count 2 *)
+  r1 := c.Add(n := 5, was => before);    (* 2 + 10 *)
+  r2 := r1 + c.Add(1);                   (* 12 + (12 + 2) *)
+  c.Swap(x, y);
+END_PROGRAM
+""")
+    assert (plc["main.r1"], plc["main.before"], plc["main.r2"], plc["main.c.count"]) == (12, 2, 26, 14)
+    assert (plc["main.x"], plc["main.y"]) == (2, 1)
+
+
+def test_a_method_called_from_the_body_sees_the_values_the_body_just_wrote():
+    plc = run(COUNTER + """
+PROGRAM main
+  VAR c : Counter; END_VAR
+  c(step := 60);
+END_PROGRAM
+""", 2)
+    assert plc["main.c.count"] == 0                  # 60, then 120 > 100: Reset() in the same call
+
+
+def test_this_reaches_the_instance_and_its_methods():
+    plc = run("""
+FUNCTION_BLOCK Acc
+  VAR_OUTPUT total : DINT; END_VAR
+  VAR_INPUT x : DINT; END_VAR
+  METHOD Double : DINT
+    Double := THIS^.total * 2;
+  END_METHOD
+  THIS^.total := THIS^.total + x;
+  total := THIS^.Double();
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR a : Acc; END_VAR
+  a(x := 3);
+END_PROGRAM
+""", 2)
+    assert plc["main.a.total"] == 18                 # (0 + 3) * 2 = 6, then (6 + 3) * 2
+
+
+ANIMALS = """
+FUNCTION_BLOCK Animal
+  VAR_OUTPUT legs : INT := 4; calls : INT; END_VAR
+  METHOD Speak : STRING
+    Speak := 'generic';
+  END_METHOD
+  METHOD Describe : STRING
+    Describe := CONCAT(THIS^.Speak(), '!');   (* virtual: a derived block's Speak *)
+  END_METHOD
+  calls := calls + 1;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Dog EXTENDS Animal
+  VAR barks : INT; END_VAR
+  METHOD Speak : STRING
+    barks := barks + 1;
+    Speak := CONCAT('woof/', SUPER^.Speak());
+  END_METHOD
+  SUPER^();                                  (* the base body: calls + 1 *)
+  calls := calls + 10;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Puppy EXTENDS Dog
+  METHOD Speak : STRING
+    Speak := CONCAT('yip+', SUPER^.Speak());
+  END_METHOD
+  SUPER^();
+  legs := 3;
+END_FUNCTION_BLOCK
+"""
+
+
+def test_inheritance_overrides_virtual_dispatch_and_super():
+    plc = run(ANIMALS + """
+PROGRAM main
+  VAR a : Animal; d : Dog; p : Puppy; s1, s2, s3, s4 : STRING; END_VAR
+  a(); d(); p();
+  s1 := a.Describe();
+  s2 := d.Describe();
+  s3 := p.Describe();
+  s4 := d.Speak();
+END_PROGRAM
+""")
+    assert [plc[f"main.s{i}"] for i in (1, 2, 3, 4)] == ["generic!", "woof/generic!", "yip+woof/generic!",
+                                                         "woof/generic"]
+    assert (plc["main.d.calls"], plc["main.d.barks"], plc["main.p.calls"], plc["main.p.legs"],
+            plc["main.p.barks"]) == (11, 2, 11, 3, 1)
+    assert plc["main.a.legs"] == 4 and plc["main.a.calls"] == 1
+
+
+@pytest.mark.parametrize("src, message", [
+    ("FUNCTION_BLOCK B EXTENDS Nope END_FUNCTION_BLOCK",
+     "B extends 'Nope', which is not declared"),
+    ("FUNCTION_BLOCK A EXTENDS B END_FUNCTION_BLOCK FUNCTION_BLOCK B EXTENDS A END_FUNCTION_BLOCK",
+     "extends itself through"),
+    ("FUNCTION_BLOCK FINAL A END_FUNCTION_BLOCK FUNCTION_BLOCK B EXTENDS A END_FUNCTION_BLOCK",
+     "'A' is FINAL and cannot be extended"),
+    ("FUNCTION F : INT F := 1; END_FUNCTION FUNCTION_BLOCK B EXTENDS F END_FUNCTION_BLOCK",
+     "B can only extend a FUNCTION_BLOCK; 'F' is a FUNCTION"),
+    ("""FUNCTION_BLOCK A METHOD FINAL M : INT M := 1; END_METHOD END_FUNCTION_BLOCK
+        FUNCTION_BLOCK B EXTENDS A METHOD M : INT M := 2; END_METHOD END_FUNCTION_BLOCK""",
+     "method M of A is FINAL and cannot be overridden"),
+    ("""FUNCTION_BLOCK A METHOD M : INT VAR_INPUT x : INT; END_VAR M := x; END_METHOD END_FUNCTION_BLOCK
+        FUNCTION_BLOCK B EXTENDS A METHOD M : DINT VAR_INPUT x : INT; END_VAR M := x; END_METHOD
+        END_FUNCTION_BLOCK""",
+     "method M overrides A.M with a different signature"),
+    ("""FUNCTION_BLOCK A VAR x : INT; END_VAR METHOD x : INT x := 1; END_METHOD END_FUNCTION_BLOCK""",
+     "'x' is declared twice in A"),
+    ("""FUNCTION_BLOCK A VAR_OUTPUT q : INT; END_VAR METHOD M : INT M := 1; END_METHOD END_FUNCTION_BLOCK
+        PROGRAM main VAR a : A; v : INT; END_VAR v := a.M; END_PROGRAM""",
+     "'M' is a method; call it: M()"),
+    ("""FUNCTION_BLOCK A METHOD M M := 1; END_METHOD END_FUNCTION_BLOCK""",
+     "METHOD M has no return type but assigns a result"),
+    ("""FUNCTION_BLOCK A VAR_OUTPUT q : INT; END_VAR END_FUNCTION_BLOCK
+        PROGRAM main VAR a : A; END_VAR a.Nope(); END_PROGRAM""",
+     "A has no variable 'Nope'"),
+    ("""PROGRAM main VAR x : INT; END_VAR x := SUPER^.x; END_PROGRAM""",
+     "undeclared"),
+])
+def test_object_oriented_errors_are_located(src, message):
+    text = errors(src)
+    assert message in text and "oop.st:" in text
+
+
+def test_a_method_variable_hiding_an_instance_variable_is_a_warning():
+    cp = compile_text("""FUNCTION_BLOCK A VAR_OUTPUT x : INT; END_VAR
+      METHOD M : INT VAR x : INT; END_VAR x := 5; M := x; END_METHOD
+      x := M() + 1;
+      END_FUNCTION_BLOCK
+      PROGRAM main VAR a : A; END_VAR a(); END_PROGRAM""", "oop.st", use_cache=False)
+    assert [(d.code, d.span.line) for d in cp.diagnostics] == [("W006", 2)]
+    plc = PLC(cp)
+    plc.scan()
+    assert plc["main.a.x"] == 6                       # the method's own x, the instance's untouched by it
