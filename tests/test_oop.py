@@ -182,3 +182,124 @@ def test_a_method_variable_hiding_an_instance_variable_is_a_warning():
     plc = PLC(cp)
     plc.scan()
     assert plc["main.a.x"] == 6                       # the method's own x, the instance's untouched by it
+
+
+SHAPES = """
+INTERFACE I_Shape
+  METHOD Area : REAL
+  END_METHOD
+  METHOD Scale
+    VAR_INPUT k : REAL; END_VAR
+  END_METHOD
+END_INTERFACE
+INTERFACE I_Named EXTENDS I_Shape
+  METHOD Name : STRING
+  END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK Square IMPLEMENTS I_Named
+  VAR_INPUT side : REAL := 1.0; END_VAR
+  METHOD Area : REAL
+    Area := side * side;
+  END_METHOD
+  METHOD Scale
+    VAR_INPUT k : REAL; END_VAR
+    side := side * k;
+  END_METHOD
+  METHOD Name : STRING
+    Name := 'square';
+  END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Circle IMPLEMENTS I_Shape
+  VAR_INPUT r : REAL := 1.0; END_VAR
+  METHOD Area : REAL
+    Area := 3.0 * r * r;
+  END_METHOD
+  METHOD Scale
+    VAR_INPUT k : REAL; END_VAR
+    r := r * k;
+  END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Ring EXTENDS Circle          (* implements I_Shape through its base *)
+  METHOD Area : REAL
+    Area := 3.0 * r * r - 3.0;
+  END_METHOD
+END_FUNCTION_BLOCK
+"""
+
+
+def test_polymorphic_dispatch_through_an_interface_array():
+    plc = run(SHAPES + """
+PROGRAM main
+  VAR
+    sq : Square := (side := 2.0);
+    c : Circle;
+    rg : Ring := (r := 2.0);
+    shapes : ARRAY[1..4] OF I_Shape;
+    named : I_Named;
+    total : REAL;
+    i : INT;
+    nm : STRING;
+    unset : BOOL;
+    same : BOOL;
+  END_VAR
+  shapes[1] := sq;
+  shapes[2] := c;
+  shapes[3] := rg;
+  named := sq;
+  total := 0.0;
+  FOR i := 1 TO 4 DO
+    IF shapes[i] <> NULL THEN
+      shapes[i].Scale(k := 2.0);
+      total := total + shapes[i].Area();
+    END_IF;
+  END_FOR;
+  nm := named.Name();
+  unset := shapes[4] = NULL;
+  same := shapes[1] = named;
+END_PROGRAM
+""")
+    # square 2 → 4: 16; circle 1 → 2: 12; ring 2 → 4: 48 − 3 = 45
+    assert plc["main.total"] == 73.0 and plc["main.nm"] == "square"
+    assert plc["main.sq.side"] == 4.0 and plc["main.rg.r"] == 4.0        # the instances themselves changed
+    assert plc["main.unset"] is True and plc["main.same"] is True
+    assert plc.variables()["main.shapes"] == ["Square", "Circle", "Ring", None]
+
+
+def test_a_call_through_a_null_interface_is_a_null_fault_with_the_line():
+    from st.runtime.plc import PLCFaultError
+    plc = PLC(compile_text(SHAPES + """
+PROGRAM main
+  VAR s : I_Shape; a : REAL; END_VAR
+  a := s.Area();
+END_PROGRAM
+""", "oop.st"))
+    with pytest.raises(PLCFaultError) as e:
+        plc.scan()
+    assert e.value.fault.kind == "NULL" and e.value.fault.line == SHAPES.count("\n") + 4
+    assert plc.state == "FAULT"
+
+
+@pytest.mark.parametrize("src, message", [
+    (SHAPES + "PROGRAM main VAR s : I_Named; c : Circle; END_VAR s := c; END_PROGRAM",
+     "cannot assign Circle to I_Named: Circle does not implement I_Named"),
+    ("""INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
+        FUNCTION_BLOCK B IMPLEMENTS I VAR x : INT; END_VAR END_FUNCTION_BLOCK""",
+     "B does not implement method M of interface I"),
+    ("""INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
+        FUNCTION_BLOCK B IMPLEMENTS I METHOD M : DINT M := 1; END_METHOD END_FUNCTION_BLOCK""",
+     "method M of B does not match I.M"),
+    ("""FUNCTION_BLOCK A END_FUNCTION_BLOCK FUNCTION_BLOCK B IMPLEMENTS A END_FUNCTION_BLOCK""",
+     "B IMPLEMENTS: 'A' is a FUNCTION BLOCK, not an INTERFACE"),
+    ("""FUNCTION_BLOCK B IMPLEMENTS Nope END_FUNCTION_BLOCK""",
+     "B IMPLEMENTS: 'Nope' is not declared"),
+    ("""INTERFACE I METHOD M : INT M := 1; END_METHOD END_INTERFACE""",
+     "a method of INTERFACE I has no body"),
+    ("""INTERFACE I EXTENDS J END_INTERFACE INTERFACE J EXTENDS I END_INTERFACE""",
+     "extends itself"),
+    ("""INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
+        PROGRAM main VAR s : I; x : INT; END_VAR x := s.Nope(); END_PROGRAM""",
+     "I has no variable 'Nope'"),
+])
+def test_interface_errors_are_located(src, message):
+    text = errors(src)
+    assert message in text and "oop.st:" in text

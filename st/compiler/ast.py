@@ -362,6 +362,24 @@ class Method:
 
 
 @dataclass(slots=True, eq=False)
+class Interface:
+    span: Span
+    name: str
+    extends: list = field(default_factory=list)
+    methods: list = field(default_factory=list)      # Method prototypes (no body)
+    end_span: Optional[Span] = None
+    kind: str = "INTERFACE"
+    var_blocks: list = field(default_factory=list)
+    body: list = field(default_factory=list)
+    steps: list = field(default_factory=list)
+    transitions: list = field(default_factory=list)
+    actions: list = field(default_factory=list)
+    modifiers: list = field(default_factory=list)
+    implements: list = field(default_factory=list)
+    return_type: Optional[TypeSpec] = None
+
+
+@dataclass(slots=True, eq=False)
 class POU:
     span: Span
     kind: str               # FUNCTION, FUNCTION_BLOCK, PROGRAM

@@ -26,7 +26,7 @@ END_PROGRAM EXTENDS IMPLEMENTS INITIAL_STEP END_STEP END_TRANSITION END_ACTION C
 END_CONFIGURATION RESOURCE END_RESOURCE IF THEN ELSIF ELSE END_IF CASE END_CASE FOR DO END_FOR WHILE
 END_WHILE REPEAT UNTIL END_REPEAT EXIT CONTINUE RETURN OR XOR AND NOT MOD TRUE FALSE VAR VAR_INPUT
 VAR_OUTPUT VAR_IN_OUT VAR_TEMP VAR_GLOBAL VAR_EXTERNAL VAR_CONFIG VAR_ACCESS END_TEST END_SETUP
-END_TEARDOWN PUBLIC PRIVATE PROTECTED INTERNAL ABSTRACT FINAL END_METHOD
+END_TEARDOWN PUBLIC PRIVATE PROTECTED INTERNAL ABSTRACT FINAL END_METHOD END_INTERFACE
 """.split())
 _QUALIFIERS = frozenset(("CONSTANT", "RETAIN", "NON_RETAIN", "PERSISTENT"))
 
@@ -284,6 +284,21 @@ class AstBuilder(Transformer):
                 m.body.append(p)
         m.end_span = self.sp(c[-1])
         return m
+
+    def interface_decl(self, c):
+        name = c[1]
+        self._not_reserved(name)
+        itf = A.Interface(self.sp(name), str(name))
+        itf.end_span = self.sp(c[-1])
+        after_extends = False
+        for x in c[2:-1]:
+            if isinstance(x, A.Method):
+                itf.methods.append(x)
+            elif hasattr(x, "type") and str(getattr(x, "type", "")) == "EXTENDS":
+                after_extends = True
+            elif after_extends and not isinstance(x, A.Method):
+                itf.extends.append(str(x))
+        return itf
 
     def method_modifier(self, c):
         return ("mod", str(c[0]).upper())

@@ -286,11 +286,13 @@ class POUType(Type):
     methods: dict = field(default_factory=dict)   # lower → POUType (pou_kind FUNCTION, owner_fb set)
     owner_fb: Any = None    # a METHOD: the function block it belongs to
     base: Any = None        # FUNCTION_BLOCK … EXTENDS base
+    interfaces: list = field(default_factory=list)   # INTERFACEs implemented (FB) or extended (INTERFACE)
     modifiers: tuple = ()   # ABSTRACT, FINAL, OVERRIDE, PUBLIC, …
 
     @property
     def kind(self) -> str:  # type: ignore[override]
-        return {"FUNCTION": "function", "FUNCTION_BLOCK": "fb", "PROGRAM": "fb", "TEST": "test"}[self.pou_kind]
+        return {"FUNCTION": "function", "FUNCTION_BLOCK": "fb", "PROGRAM": "fb", "TEST": "test",
+                "INTERFACE": "interface"}[self.pou_kind]
 
     def inputs(self):
         return [v for v in self.vars.values() if v.section == "VAR_INPUT"]
@@ -303,6 +305,24 @@ class POUType(Type):
 
     def params(self):
         return [v for v in self.vars.values() if v.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]
+
+
+def implements(t: Type, itf: "POUType") -> bool:
+    """Does a function block or interface type provide interface `itf` (directly, through its
+    base blocks, or through interfaces that extend it)?"""
+    seen = set()
+    todo = [t]
+    while todo:
+        x = todo.pop()
+        if x is None or id(x) in seen:
+            continue
+        seen.add(id(x))
+        if x is itf:
+            return True
+        if isinstance(x, POUType):
+            todo.extend(x.interfaces)
+            todo.append(x.base)
+    return False
 
 
 def unalias(t: Type) -> Type:

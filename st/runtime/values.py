@@ -22,6 +22,9 @@ def _convert(v, t: T.Type, leaf):
         return _nest([_convert(x, t.element, leaf) for x in v], t.dims)
     if isinstance(t, T.StructType):
         return {m.name: _convert(getattr(v, m.pyname), m.type, leaf) for m in t.members.values()}
+    if isinstance(t, T.POUType) and t.pou_kind == "INTERFACE":
+        # an interface variable: which block type it refers to (the instance is shown where it is declared)
+        return None if v is None else type(v).__name__.removeprefix("_fb_")
     if isinstance(t, T.POUType):
         return {s.name: _convert(getattr(v, s.pyname), s.type, leaf) for s in t.vars.values()
                 if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP")}

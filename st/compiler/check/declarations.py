@@ -28,7 +28,7 @@ class DeclarationsMixin:
                         continue
                     self._pending_types[key] = (td, self._lib_of(td.span))
                     self._decl_span[key] = td.span
-            elif isinstance(item, A.POU):
+            elif isinstance(item, (A.POU, A.Interface)):
                 key = item.name.lower()
                 if key in self.p.pous or key in self._pending_types:
                     old = self.p.pous.get(key)
@@ -39,8 +39,8 @@ class DeclarationsMixin:
                         self._dup(item.name, item.span)
                         continue
                 pt = T.POUType(item.name, item.kind, decl=item, library=self._lib_of(item.span))
-                pt.pyname = {"FUNCTION": "_fn_", "FUNCTION_BLOCK": "_fb_", "PROGRAM": "_prg_"}[item.kind] + \
-                    mangle(item.name)
+                pt.pyname = {"FUNCTION": "_fn_", "FUNCTION_BLOCK": "_fb_", "PROGRAM": "_prg_",
+                             "INTERFACE": "_itf_"}[item.kind] + mangle(item.name)
                 self.p.pous[key] = pt
                 self._decl_span[key] = item.span
             elif isinstance(item, A.Configuration):
@@ -217,6 +217,8 @@ class DeclarationsMixin:
         pou.resolved = True
         d = pou.decl
         scope = Scope(pou, pou.vars)
+        if d.kind == "INTERFACE":
+            return self._resolve_itf(pou)
         if d.kind == "FUNCTION":
             if d.return_type is not None:
                 pou.return_type = self.resolve_type(d.return_type, scope)
@@ -249,6 +251,66 @@ class DeclarationsMixin:
                     pou.methods[k] = bm
                 else:
                     self._check_override(pou, mine, bm)
+        if d.kind == "FUNCTION_BLOCK" and d.implements:
+            self._check_implements(pou)
+
+    def _interface_named(self, name: str, span, who: str):
+        itf = self.p.pous.get(name.lower())
+        if itf is None or itf.pou_kind != "INTERFACE":
+            what = "not declared" if itf is None else f"a {itf.pou_kind.replace('_', ' ')}, not an INTERFACE"
+            self.err("E012" if itf is not None else "E010", span, f"{who}: '{name}' is {what}")
+            return None
+        self._resolve_interface(itf)
+        return itf
+
+    def _resolve_itf(self, itf: T.POUType) -> None:
+        """An INTERFACE: its method prototypes and those of the interfaces it EXTENDS."""
+        d = itf.decl
+        for name in d.extends:
+            base = self._interface_named(name, d.span, f"INTERFACE {itf.name} EXTENDS")
+            if base is None:
+                continue
+            if T.implements(base, itf):
+                self.err("E012", d.span, f"INTERFACE {itf.name} extends itself through '{base.name}'")
+                continue
+            itf.interfaces.append(base)
+        for m in d.methods:
+            if m.body:
+                self.err("E012", m.span, f"a method of INTERFACE {itf.name} has no body; implement it in a "
+                         f"FUNCTION_BLOCK that IMPLEMENTS {itf.name}")
+            self._declare_method(itf, m)
+        for base in itf.interfaces:
+            for k, bm in base.methods.items():
+                mine = itf.methods.get(k)
+                if mine is None:
+                    itf.methods[k] = bm
+                elif self._signature(mine) != self._signature(bm):
+                    self.err("E012", mine.decl.span, f"method {mine.name} of {itf.name} differs from "
+                             f"{base.name}.{bm.name}")
+
+    def _check_implements(self, fb: T.POUType) -> None:
+        """FUNCTION_BLOCK … IMPLEMENTS I1, I2: every method of each interface, with its signature."""
+        d = fb.decl
+        abstract = "ABSTRACT" in d.modifiers
+        for name in d.implements:
+            itf = self._interface_named(name, d.span, f"{fb.name} IMPLEMENTS")
+            if itf is None:
+                continue
+            fb.interfaces.append(itf)
+            for k, im in itf.methods.items():
+                mine = fb.methods.get(k)
+                if mine is None:
+                    if not abstract:
+                        self.err("E012", d.span, f"{fb.name} does not implement method {im.name} of interface "
+                                 f"{itf.name}")
+                elif self._signature(mine) != self._signature(im):
+                    self.err("E012", mine.decl.span, f"method {mine.name} of {fb.name} does not match "
+                             f"{itf.name}.{im.name} (parameters and return type must be the same)")
+
+    @staticmethod
+    def _signature(mt: T.POUType):
+        return ([(v.name.lower(), v.section, str(v.type)) for v in mt.params()],
+                str(mt.return_type) if mt.return_type is not None else None)
 
     def _base_of(self, pou: T.POUType):
         """The function block `pou` EXTENDS, resolved and checked (None after an error)."""
@@ -282,10 +344,7 @@ class DeclarationsMixin:
             self.err("E012", m.span, f"method {m.name} of {theirs.owner_fb.name} is FINAL and cannot be overridden")
             return
 
-        def sig(mt):
-            return ([(v.name.lower(), v.section, str(v.type)) for v in mt.params()],
-                    str(mt.return_type) if mt.return_type is not None else None)
-        if sig(mine) != sig(theirs):
+        if self._signature(mine) != self._signature(theirs):
             self.err("E012", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a different "
                      f"signature (parameters and return type must be the same)")
 

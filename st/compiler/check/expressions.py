@@ -248,6 +248,9 @@ class ExpressionsMixin:
                 return T.BOOL
             if isinstance(a, T.RefType) and (isinstance(b, T.RefType) or b is _NULL) or a is _NULL:
                 return T.BOOL
+            if op in ("=", "<>") and any(isinstance(x, T.POUType) and x.pou_kind == "INTERFACE" for x in (a, b)) \
+                    and all(x is _NULL or isinstance(x, T.POUType) and x.pou_kind != "FUNCTION" for x in (a, b)):
+                return T.BOOL                      # the same instance (or NULL) behind both?
             c = T.common_type(a, b)
             if c is None or isinstance(c, (T.ArrayType, T.StructType, T.POUType)):
                 return self._bad_operands(e, lt, rt)

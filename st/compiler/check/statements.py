@@ -14,6 +14,8 @@ class StatementsMixin:
     # ================================================================ bodies
     def _check_body(self, pou: T.POUType) -> None:
         d = pou.decl
+        if pou.pou_kind == "INTERFACE":
+            return
         scope = Scope(pou, pou.vars, library=pou.library)
         if pou.pou_kind in ("FUNCTION_BLOCK", "PROGRAM"):
             scope.fb = pou
@@ -285,6 +287,12 @@ class StatementsMixin:
                 return True
         if s is _NULL and isinstance(d, T.RefType):
             return True
+        if isinstance(d, T.POUType) and d.pou_kind == "INTERFACE":
+            # an interface variable holds an instance that provides it, or NULL
+            if s is _NULL or (isinstance(s, T.POUType) and T.implements(s, d)):
+                return True
+            self.err("E013", span, f"cannot {what} {src} to {dst}: {src} does not implement {dst}")
+            return False
         if isinstance(s, T.ElemType) and isinstance(d, T.ElemType) and (
                 s.kind in ("int", "real", "bit") and d.kind in ("int", "real", "bit")
                 or s.kind == d.kind and s.kind in ("time", "date", "tod", "dt") and s.long and not d.long):

@@ -35,6 +35,8 @@ class InitGen:
             if isinstance(init, A.StructInit):
                 return self._with_fields(obj, init, lambda n: ut.members.get(n.lower()))
             return obj
+        if isinstance(ut, T.POUType) and ut.pou_kind == "INTERFACE":
+            return _const(None)                     # an interface variable: no instance yet (NULL)
         if isinstance(ut, T.POUType):
             obj = _call(ut.pyname)
             if isinstance(init, A.StructInit):

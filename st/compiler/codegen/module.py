@@ -59,7 +59,7 @@ class ModuleGen:
                 add(path, self.struct_class(t))
         for pou in self.p.pous.values():
             d = pou.decl
-            if d is None:
+            if d is None or pou.pou_kind == "INTERFACE":
                 continue
             try:
                 if pou.pou_kind == "FUNCTION":
