@@ -303,3 +303,86 @@ END_PROGRAM
 def test_interface_errors_are_located(src, message):
     text = errors(src)
     assert message in text and "oop.st:" in text
+
+
+MOTOR = """
+FUNCTION_BLOCK Motor
+  VAR _speed : REAL; sets : INT; END_VAR
+  PROPERTY Speed : REAL
+    GET
+      Speed := _speed;
+    END_GET
+    SET
+      VAR lim : REAL := 100.0; END_VAR        (* fresh in every call, as a method's *)
+      sets := sets + 1;
+      IF Speed > lim THEN _speed := lim; ELSE _speed := Speed; END_IF;
+    END_SET
+  END_PROPERTY
+  PROPERTY Running : BOOL
+    GET
+      Running := _speed > 0.0;
+    END_GET
+  END_PROPERTY
+  Speed := Speed + 1.0;                         (* this instance's property, GET then SET *)
+END_FUNCTION_BLOCK
+"""
+
+
+def test_properties_get_and_set():
+    plc = run(MOTOR + """
+PROGRAM main
+  VAR m : Motor; v, w : REAL; r0, r1 : BOOL; END_VAR
+  r0 := m.Running;
+  m.Speed := 50.0;
+  m();
+  v := m.Speed;
+  m.Speed := 150.0;                           (* limited to 100 by the SET *)
+  w := m.Speed;
+  r1 := m.Running;
+END_PROGRAM
+""")
+    assert (plc["main.r0"], plc["main.v"], plc["main.w"], plc["main.r1"]) == (False, 51.0, 100.0, True)
+    assert plc["main.m.sets"] == 3
+
+
+def test_properties_through_an_interface():
+    plc = run("""
+INTERFACE I_Level
+  PROPERTY Level : INT
+    GET END_GET
+    SET END_SET
+  END_PROPERTY
+END_INTERFACE
+FUNCTION_BLOCK Tank IMPLEMENTS I_Level
+  VAR v : INT; END_VAR
+  PROPERTY Level : INT
+    GET Level := v; END_GET
+    SET v := LIMIT(0, Level, 100); END_SET
+  END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR t : Tank; i : I_Level; a : INT; END_VAR
+  i := t;
+  i.Level := 130;
+  a := i.Level;
+END_PROGRAM
+""")
+    assert plc["main.a"] == 100 and plc["main.t.v"] == 100
+
+
+@pytest.mark.parametrize("src, message", [
+    (MOTOR + "PROGRAM main VAR m : Motor; END_VAR m.Running := TRUE; END_PROGRAM",
+     "property Running has no SET: it cannot be written"),
+    ("""FUNCTION_BLOCK A VAR x : INT; END_VAR PROPERTY P : INT SET x := P; END_SET END_PROPERTY
+        END_FUNCTION_BLOCK PROGRAM main VAR a : A; y : INT; END_VAR y := a.P; END_PROGRAM""",
+     "property P has no GET: it cannot be read"),
+    ("""INTERFACE I PROPERTY P : INT GET END_GET END_PROPERTY END_INTERFACE
+        FUNCTION_BLOCK B IMPLEMENTS I PROPERTY P : DINT GET P := 1; END_GET END_PROPERTY END_FUNCTION_BLOCK""",
+     "B does not implement property P of interface I"),
+    ("""FUNCTION_BLOCK A VAR P : INT; END_VAR PROPERTY P : INT GET P := 1; END_GET END_PROPERTY
+        END_FUNCTION_BLOCK""",
+     "'P' is declared twice in A"),
+])
+def test_property_errors_are_located(src, message):
+    text = errors(src)
+    assert message in text and "oop.st:" in text

@@ -362,6 +362,17 @@ class Method:
 
 
 @dataclass(slots=True, eq=False)
+class Property:
+    span: Span
+    name: str
+    modifiers: list = field(default_factory=list)
+    type: Optional[TypeSpec] = None
+    get: Optional["Method"] = None       # the accessors, as methods (GET: result = the property's name;
+    set: Optional["Method"] = None       # SET: an input with the property's name)
+    end_span: Optional[Span] = None
+
+
+@dataclass(slots=True, eq=False)
 class Interface:
     span: Span
     name: str
@@ -369,6 +380,7 @@ class Interface:
     methods: list = field(default_factory=list)      # Method prototypes (no body)
     end_span: Optional[Span] = None
     kind: str = "INTERFACE"
+    properties: list = field(default_factory=list)
     var_blocks: list = field(default_factory=list)
     body: list = field(default_factory=list)
     steps: list = field(default_factory=list)
@@ -395,6 +407,7 @@ class POU:
     implements: list = field(default_factory=list)
     end_span: Optional[Span] = None
     methods: list = field(default_factory=list)
+    properties: list = field(default_factory=list)
 
 
 @dataclass(slots=True, eq=False)

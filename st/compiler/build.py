@@ -26,7 +26,7 @@ END_PROGRAM EXTENDS IMPLEMENTS INITIAL_STEP END_STEP END_TRANSITION END_ACTION C
 END_CONFIGURATION RESOURCE END_RESOURCE IF THEN ELSIF ELSE END_IF CASE END_CASE FOR DO END_FOR WHILE
 END_WHILE REPEAT UNTIL END_REPEAT EXIT CONTINUE RETURN OR XOR AND NOT MOD TRUE FALSE VAR VAR_INPUT
 VAR_OUTPUT VAR_IN_OUT VAR_TEMP VAR_GLOBAL VAR_EXTERNAL VAR_CONFIG VAR_ACCESS END_TEST END_SETUP
-END_TEARDOWN PUBLIC PRIVATE PROTECTED INTERNAL ABSTRACT FINAL END_METHOD END_INTERFACE
+END_TEARDOWN PUBLIC PRIVATE PROTECTED INTERNAL ABSTRACT FINAL END_METHOD END_INTERFACE END_PROPERTY END_GET END_SET
 """.split())
 _QUALIFIERS = frozenset(("CONSTANT", "RETAIN", "NON_RETAIN", "PERSISTENT"))
 
@@ -227,6 +227,8 @@ class AstBuilder(Transformer):
                 pou.actions.append(p)
             elif isinstance(p, A.Method):
                 pou.methods.append(p)
+            elif isinstance(p, A.Property):
+                pou.properties.append(p)
             elif isinstance(p, A.Stmt):
                 pou.body.append(p)
         return pou
@@ -294,11 +296,44 @@ class AstBuilder(Transformer):
         for x in c[2:-1]:
             if isinstance(x, A.Method):
                 itf.methods.append(x)
+            elif isinstance(x, A.Property):
+                itf.properties.append(x)
             elif hasattr(x, "type") and str(getattr(x, "type", "")) == "EXTENDS":
                 after_extends = True
-            elif after_extends and not isinstance(x, A.Method):
+            elif after_extends and not isinstance(x, (A.Method, A.Property)):
                 itf.extends.append(str(x))
         return itf
+
+    def property_decl(self, c):
+        mods = []
+        i = 1
+        while isinstance(c[i], tuple) and c[i][0] == "mod":
+            mods.append(c[i][1])
+            i += 1
+        name = c[i]
+        self._not_reserved(name)
+        prop = A.Property(self.sp(name), str(name), mods, c[i + 1])
+        for acc in c[i + 2:-1]:
+            kind, span, parts = acc
+            m = A.Method(span, str(name), mods)
+            for p in parts:
+                if isinstance(p, A.VarBlock):
+                    m.var_blocks.append(p)
+                elif isinstance(p, A.Stmt):
+                    m.body.append(p)
+            if kind == "GET":
+                m.return_type = prop.type
+                prop.get = m
+            else:
+                prop.set = m
+        prop.end_span = self.sp(c[-1])
+        return prop
+
+    def property_get(self, c):
+        return ("GET", self.sp(c[0]), c[1:-1])
+
+    def property_set(self, c):
+        return ("SET", self.sp(c[0]), c[1:-1])
 
     def method_modifier(self, c):
         return ("mod", str(c[0]).upper())

@@ -287,6 +287,7 @@ class POUType(Type):
     owner_fb: Any = None    # a METHOD: the function block it belongs to
     base: Any = None        # FUNCTION_BLOCK … EXTENDS base
     interfaces: list = field(default_factory=list)   # INTERFACEs implemented (FB) or extended (INTERFACE)
+    properties: dict = field(default_factory=dict)   # lower → PropSym
     modifiers: tuple = ()   # ABSTRACT, FINAL, OVERRIDE, PUBLIC, …
 
     @property
@@ -305,6 +306,17 @@ class POUType(Type):
 
     def params(self):
         return [v for v in self.vars.values() if v.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]
+
+
+@dataclass(eq=False)
+class PropSym:
+    """A PROPERTY of a function block or interface: its type and accessor methods (None if absent)."""
+    name: str
+    type: Type
+    get: Any = None         # POUType (FUNCTION returning `type`), pyname _pg_<name>
+    set: Any = None         # POUType with one VAR_INPUT named like the property, pyname _ps_<name>
+    owner: Any = None
+    span: Any = None
 
 
 def implements(t: Type, itf: "POUType") -> bool:

@@ -244,7 +244,16 @@ class DeclarationsMixin:
             pou.actions[act.name.lower()] = act
         for m in getattr(d, "methods", ()):
             self._declare_method(pou, m)
+        for pr in getattr(d, "properties", ()):
+            self._declare_property(pou, pr)
         if base is not None:
+            for k, bp in base.properties.items():
+                mine = pou.properties.get(k)
+                if mine is None:
+                    pou.properties[k] = bp
+                elif str(mine.type) != str(bp.type):
+                    self.err("E012", mine.span, f"property {mine.name} overrides {base.name}.{bp.name} with "
+                             f"another type")
             for k, bm in base.methods.items():
                 mine = pou.methods.get(k)
                 if mine is None:
@@ -279,7 +288,14 @@ class DeclarationsMixin:
                 self.err("E012", m.span, f"a method of INTERFACE {itf.name} has no body; implement it in a "
                          f"FUNCTION_BLOCK that IMPLEMENTS {itf.name}")
             self._declare_method(itf, m)
+        for pr in d.properties:
+            if pr.get is None and pr.set is None:      # a bare prototype: both accessors
+                pr.get = A.Method(pr.span, pr.name, [], pr.type)
+                pr.set = A.Method(pr.span, pr.name, [])
+            self._declare_property(itf, pr)
         for base in itf.interfaces:
+            for k, bp in base.properties.items():
+                itf.properties.setdefault(k, bp)
             for k, bm in base.methods.items():
                 mine = itf.methods.get(k)
                 if mine is None:
@@ -297,6 +313,14 @@ class DeclarationsMixin:
             if itf is None:
                 continue
             fb.interfaces.append(itf)
+            for k, ip in itf.properties.items():
+                mine = fb.properties.get(k)
+                if mine is None or str(mine.type) != str(ip.type) or (ip.get and not mine.get) \
+                        or (ip.set and not mine.set):
+                    if mine is None and abstract:
+                        continue
+                    self.err("E012", d.span, f"{fb.name} does not implement property {ip.name} of interface "
+                             f"{itf.name} (same type, GET and SET as declared there)")
             for k, im in itf.methods.items():
                 mine = fb.methods.get(k)
                 if mine is None:
@@ -311,6 +335,40 @@ class DeclarationsMixin:
     def _signature(mt: T.POUType):
         return ([(v.name.lower(), v.section, str(v.type)) for v in mt.params()],
                 str(mt.return_type) if mt.return_type is not None else None)
+
+    def _declare_property(self, owner: T.POUType, pr) -> None:
+        """PROPERTY: GET is a method returning the property's type under its name; SET a method whose
+        input has the property's name."""
+        key = pr.name.lower()
+        if key in owner.vars or key in owner.methods or (key in owner.properties
+                                                         and owner.properties[key].owner is owner):
+            self.err("E011", pr.span, f"'{pr.name}' is declared twice in {owner.name}")
+            return
+        t = self.resolve_type(pr.type, Scope(owner, owner.vars))
+        ps = T.PropSym(pr.name, t, owner=owner, span=pr.span)
+        if pr.get is not None:
+            pr.get.return_type = pr.type
+            ps.get = self._accessor(owner, pr.get, "_pg_")
+        if pr.set is not None:
+            value = A.VarDecl(pr.span, [(pr.name, pr.span)], pr.type)
+            pr.set.var_blocks.insert(0, A.VarBlock(pr.span, "VAR_INPUT", [], [value]))
+            ps.set = self._accessor(owner, pr.set, "_ps_")
+        if ps.get is None and ps.set is None:
+            self.err("E012", pr.span, f"property {pr.name} has neither GET nor SET")
+        owner.properties[key] = ps
+
+    def _accessor(self, owner: T.POUType, m, prefix: str) -> T.POUType:
+        # the getter is named like the property (its result); the setter's input carries that name
+        mt = T.POUType(m.name if prefix == "_pg_" else f"{m.name}.SET", "FUNCTION", decl=m, library=owner.library)
+        mt.pyname = prefix + mangle(m.name)
+        mt.owner_fb = owner
+        mt.resolved = True
+        scope = Scope(mt, mt.vars)
+        if m.return_type is not None:
+            mt.return_type = self.resolve_type(m.return_type, scope)
+        for block in m.var_blocks:
+            self._declare_block(block, mt.vars, scope, mt)
+        return mt
 
     def _base_of(self, pou: T.POUType):
         """The function block `pou` EXTENDS, resolved and checked (None after an error)."""

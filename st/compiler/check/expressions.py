@@ -21,7 +21,9 @@ class ExpressionsMixin:
         if isinstance(e, A.Literal):
             return self._literal(e, expected)
         if isinstance(e, A.Name):
-            return self._name(e, scope, expected)
+            t = self._name(e, scope, expected)
+            self._property_read(e, lvalue)
+            return t
         if isinstance(e, A.Binary):
             return self._binary(e, scope, expected)
         if isinstance(e, A.Unary):
@@ -29,7 +31,9 @@ class ExpressionsMixin:
         if isinstance(e, A.Call):
             return self.call(e, scope, expected=expected)
         if isinstance(e, A.Field):
-            return self._field(e, scope)
+            t = self._field(e, scope)
+            self._property_read(e, lvalue)
+            return t
         if isinstance(e, A.Index):
             return self._index(e, scope)
         if isinstance(e, A.Bit):
@@ -76,6 +80,10 @@ class ExpressionsMixin:
             e.const = None
             return t
         raise AssertionError(e)
+
+    def _property_read(self, e, lvalue: bool) -> None:
+        if isinstance(e.sym, T.PropSym) and not lvalue and e.sym.get is None:
+            self.err("E023", e.span, f"property {e.sym.name} has no GET: it cannot be read")
 
     def _literal(self, e: A.Literal, expected):
         k = e.kind
@@ -141,6 +149,8 @@ class ExpressionsMixin:
             return "STEP"
         if key == "this" and scope.fb is not None:
             return THIS
+        if scope.fb is not None and key in scope.fb.properties:
+            return scope.fb.properties[key]
         if key == "super" and scope.fb is not None and scope.fb.base is not None:
             return SUPER
         gs = self.p.global_names.get(key)
@@ -162,6 +172,9 @@ class ExpressionsMixin:
         if sym is THIS:
             e.sym = THIS
             return T.RefType(scope.fb)
+        if isinstance(sym, T.PropSym):
+            e.sym = sym
+            return sym.type
         if sym is SUPER:
             e.sym = SUPER
             return T.RefType(scope.fb.base)
@@ -368,6 +381,9 @@ class ExpressionsMixin:
         if isinstance(b, T.POUType) and b.pou_kind != "FUNCTION":
             self._resolve_interface(b)
             v = b.vars.get(key)
+            if v is None and key in b.properties:
+                e.sym = b.properties[key]
+                return e.sym.type
             if v is None:
                 if key in b.actions or key in b.methods:
                     kind = "an action" if key in b.actions else "a method"

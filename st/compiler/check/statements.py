@@ -20,7 +20,13 @@ class StatementsMixin:
         if pou.pou_kind in ("FUNCTION_BLOCK", "PROGRAM"):
             scope.fb = pou
         for mt in pou.methods.values():
-            self._check_method(pou, mt)
+            if mt.owner_fb is pou:
+                self._check_method(pou, mt)
+        for ps in pou.properties.values():
+            if ps.owner is pou:
+                for acc in (ps.get, ps.set):
+                    if acc is not None:
+                        self._check_method(pou, acc)
         if d.steps or d.transitions:
             self._check_sfc(pou, scope)
         for act in d.actions:
@@ -38,7 +44,7 @@ class StatementsMixin:
         scope = Scope(mt, names, library=fb.library)
         scope.fb = fb
         self.stmts(mt.decl.body, scope)
-        if mt.return_type is None and self._assigns_name(mt.decl.body, mt.name):
+        if mt.pyname.startswith("_m_") and mt.return_type is None and self._assigns_name(mt.decl.body, mt.name):
             self.err("E013", mt.decl.span, f"METHOD {mt.name} has no return type but assigns a result")
 
     def _assigns_name(self, body, name) -> bool:
@@ -309,6 +315,10 @@ class StatementsMixin:
         root = e
         while isinstance(root, (A.Field, A.Index, A.Bit)):
             root = root.base
+        if isinstance(e.sym if isinstance(e, (A.Name, A.Field)) else None, T.PropSym):
+            if e.sym.set is None:
+                self.err("E018", e.span, f"property {e.sym.name} has no SET: it cannot be written")
+            return t
         if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym) or isinstance(root, A.Name) \
                 and isinstance(root.sym, T.VarSym):
             sym = e.sym if isinstance(e, A.Name) else root.sym

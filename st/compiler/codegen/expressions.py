@@ -314,6 +314,8 @@ class ExprGen:
             return _const(None)
         if getattr(sym, "kind", "") == "this":
             return _call("_ObjRef", _name(self.self_name))
+        if isinstance(sym, T.PropSym):                  # this instance's property: its GET
+            return _call(_attr(_name(self.self_name), sym.get.pyname))
         raise Unsupported(e.span, f"cannot use '{e.name}' here")
 
     def x_Direct(self, e: A.Direct) -> py.expr:
@@ -336,6 +338,8 @@ class ExprGen:
         if isinstance(bt, T.ElemType) and bt.is_intlike:
             return self._bit_read(base, int(e.name), bt)
         sym = e.sym
+        if isinstance(sym, T.PropSym):                  # inst.Prop: its GET
+            return _call(_attr(base, sym.get.pyname))
         return _attr(base, sym.pyname)
 
     def _bit_read(self, base: py.expr, n: int, t) -> py.expr:

@@ -142,7 +142,8 @@ class BodyGen(StmtGen):
                    py.FunctionDef("__init__", _args(["self"]), init_body or [py.Pass()], [], None, None)]
         # caching policy: with actions, methods, THIS or SFC other code touches the variables during
         # the body: keep them attributes
-        can_cache = not d.actions and sfc is None and not pou.methods and not _mentions_this(d.body)
+        can_cache = not d.actions and sfc is None and not pou.methods and not pou.properties \
+            and not _mentions_this(d.body)
         if sfc is not None:
             run = py.Expr(_call(_attr(_attr(_name("self"), "_sfc"), "run"), _name("self"), _name("_now")))
             members.append(_set_lines(py.FunctionDef("_body", _args(["self"]), [run], [], None, None),
@@ -155,6 +156,10 @@ class BodyGen(StmtGen):
             members.append(g.method("_act_" + act.name.lower(), act.body, False, [], act.span.line, act.span.line))
         for mt in pou.methods.values():
             members.append(MethodGen(self.mod, mt).function())
+        for ps in pou.properties.values():
+            for acc in (ps.get, ps.set):
+                if acc is not None:
+                    members.append(MethodGen(self.mod, acc).function())
         if sfc is not None:
             members.extend(self.sfc_methods(sfc))
         cls = py.ClassDef(pou.pyname, [_name("_FB")], [], members, [])

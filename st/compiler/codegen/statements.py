@@ -68,6 +68,15 @@ class StmtGen(ExprGen):
     def s_Assign(self, s: A.Assign) -> list:
         tgt = s.target
         tt = tgt.ty
+        if isinstance(tgt, (A.Name, A.Field)) and isinstance(tgt.sym, T.PropSym):
+            # a property: its SET with the value (S=/R= only when the condition holds)
+            obj = self.expr(tgt.base) if isinstance(tgt, A.Field) else _name(self.self_name)
+            if s.kind in ("S=", "R="):
+                value = _const(s.kind == "S=")
+                call = py.Expr(_call(_attr(obj, tgt.sym.set.pyname), value))
+                return [py.If(self.expr(s.value), [call], [])]
+            value = self.coerce(self.expr(s.value), s.value, tt)
+            return [py.Expr(_call(_attr(obj, tgt.sym.set.pyname), value))]
         if s.kind in ("S=", "R="):
             return [py.If(self.expr(s.value), self.assign(tgt, _const(s.kind == "S="), None), [])]
         # a call with EN: assign only when enabled
