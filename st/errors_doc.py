@@ -38,6 +38,7 @@ EXPLANATIONS = {
     "E041": "Code nested too deeply to compile: an expression of tens of thousands of terms, or more than "
             "about 20 nested loops.",
     "E042": "An array is too large (more than 50,000,000 elements).",
+    "E043": "An object-oriented rule is broken: a PRIVATE or PROTECTED method or property used from outside, an ABSTRACT function block instantiated or an ABSTRACT method called or left unimplemented, an OVERRIDE that overrides nothing.",
     "E099": "An internal compiler error (a bug in st): please report it with the source file.",
     "W001": "A pragma { ... } is ignored.",
     "W002": "A variable is declared but never used.",

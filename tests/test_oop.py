@@ -386,3 +386,66 @@ END_PROGRAM
 def test_property_errors_are_located(src, message):
     text = errors(src)
     assert message in text and "oop.st:" in text
+
+
+ABSTRACT_BASE = """
+FUNCTION_BLOCK ABSTRACT Base
+  VAR_OUTPUT n : INT; END_VAR
+  METHOD ABSTRACT Step : INT
+  END_METHOD
+  METHOD PRIVATE Secret : INT
+    Secret := 42;
+  END_METHOD
+  METHOD PROTECTED Helper : INT
+    Helper := Secret() + 1;
+  END_METHOD
+  METHOD Run : INT
+    Run := Step() + Helper();
+  END_METHOD
+END_FUNCTION_BLOCK
+"""
+IMPL = """
+FUNCTION_BLOCK Impl EXTENDS Base
+  METHOD OVERRIDE Step : INT
+    Step := Helper() * 2;              (* PROTECTED: usable in a derived block *)
+  END_METHOD
+END_FUNCTION_BLOCK
+"""
+
+
+def test_abstract_base_protected_and_private_methods():
+    plc = run(ABSTRACT_BASE + IMPL + """
+PROGRAM main
+  VAR i : Impl; r : INT; END_VAR
+  r := i.Run();
+END_PROGRAM
+""")
+    assert plc["main.r"] == 129                        # (42 + 1) * 2 + (42 + 1)
+
+
+@pytest.mark.parametrize("src, message", [
+    (ABSTRACT_BASE + "PROGRAM main VAR b : Base; END_VAR END_PROGRAM",
+     "'Base' is ABSTRACT and cannot be instantiated"),
+    (ABSTRACT_BASE + "FUNCTION_BLOCK Lazy EXTENDS Base END_FUNCTION_BLOCK",
+     "Lazy does not implement the ABSTRACT method Step of Base"),
+    (ABSTRACT_BASE + IMPL + "PROGRAM main VAR i : Impl; r : INT; END_VAR r := i.Secret(); END_PROGRAM",
+     "method Secret of Base is PRIVATE"),
+    (ABSTRACT_BASE + IMPL + "PROGRAM main VAR i : Impl; r : INT; END_VAR r := i.Helper(); END_PROGRAM",
+     "method Helper of Base is PROTECTED"),
+    (ABSTRACT_BASE + """FUNCTION_BLOCK Impl2 EXTENDS Base
+        METHOD Step : INT Step := Secret(); END_METHOD END_FUNCTION_BLOCK""",
+     "method Secret of Base is PRIVATE"),
+    (ABSTRACT_BASE + """FUNCTION_BLOCK Impl3 EXTENDS Base
+        METHOD Step : INT Step := SUPER^.Step(); END_METHOD END_FUNCTION_BLOCK""",
+     "method Step of Base is ABSTRACT: it has no implementation to call"),
+    ("""FUNCTION_BLOCK A METHOD OVERRIDE M : INT M := 1; END_METHOD END_FUNCTION_BLOCK""",
+     "method M is marked OVERRIDE but A inherits no method of that name"),
+    ("""FUNCTION_BLOCK A METHOD ABSTRACT M : INT END_METHOD END_FUNCTION_BLOCK""",
+     "ABSTRACT method M in A, which is not ABSTRACT"),
+    ("""FUNCTION_BLOCK A VAR x : INT; END_VAR PROPERTY PRIVATE P : INT GET P := x; END_GET END_PROPERTY
+        END_FUNCTION_BLOCK PROGRAM main VAR a : A; y : INT; END_VAR y := a.P; END_PROGRAM""",
+     "property P of A is PRIVATE"),
+])
+def test_access_and_abstract_errors(src, message):
+    text = errors(src)
+    assert message in text and "E043" in text and "oop.st:" in text

@@ -73,6 +73,14 @@ class CallsMixin:
             return None
         return self._fb_call(c, t, scope, statement)
 
+    def check_access(self, mods, owner, what: str, scope: Scope, span) -> None:
+        """PRIVATE: only inside its own block; PROTECTED: there and in blocks that extend it."""
+        if "PRIVATE" in mods and scope.fb is not owner:
+            self.err("E043", span, f"{what} of {owner.name} is PRIVATE: only {owner.name} itself may use it")
+        elif "PROTECTED" in mods and (scope.fb is None or not T.implements(scope.fb, owner)):
+            self.err("E043", span, f"{what} of {owner.name} is PROTECTED: only {owner.name} and the blocks that "
+                     f"extend it may use it")
+
     def _ref_call(self, c: A.Call, scope: Scope):
         """REF(x): a reference to a variable (IEC 61131-3 3rd edition)."""
         if len(c.args) != 1 or c.args[0].name:
@@ -106,6 +114,11 @@ class CallsMixin:
 
     def _method_call(self, c: A.Call, mt: T.POUType, scope: Scope, obj):
         """A METHOD call; obj is the instance expression (None: this instance)."""
+        self.check_access(mt.decl.modifiers, mt.owner_fb, f"method {mt.name}", scope, c.span)
+        if "ABSTRACT" in mt.decl.modifiers and isinstance(obj, A.Deref) and isinstance(obj.base, A.Name) \
+                and getattr(obj.base.sym, "kind", "") == "super":
+            self.err("E043", c.span, f"method {mt.name} of {mt.owner_fb.name} is ABSTRACT: it has no "
+                     f"implementation to call")
         bind = self._bind_args(c, mt, scope, is_fb=False)
         c.target = CallTarget("method", pou=mt, bind=bind, obj=obj)
         return mt.return_type

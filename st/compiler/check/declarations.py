@@ -262,6 +262,25 @@ class DeclarationsMixin:
                     self._check_override(pou, mine, bm)
         if d.kind == "FUNCTION_BLOCK" and d.implements:
             self._check_implements(pou)
+        if d.kind == "FUNCTION_BLOCK":
+            self._check_abstract_and_override(pou, base)
+
+    def _check_abstract_and_override(self, fb: T.POUType, base) -> None:
+        d = fb.decl
+        abstract_fb = "ABSTRACT" in d.modifiers
+        for mt in fb.methods.values():
+            mods = mt.decl.modifiers
+            if mt.owner_fb is fb:
+                if "OVERRIDE" in mods and (base is None or mt.name.lower() not in base.methods):
+                    self.err("E043", mt.decl.span, f"method {mt.name} is marked OVERRIDE but {fb.name} inherits "
+                             f"no method of that name")
+                if "ABSTRACT" in mods and not abstract_fb:
+                    self.err("E043", mt.decl.span, f"ABSTRACT method {mt.name} in {fb.name}, which is not ABSTRACT")
+                if "ABSTRACT" in mods and mt.decl.body:
+                    self.err("E043", mt.decl.span, f"ABSTRACT method {mt.name} has a body")
+            elif "ABSTRACT" in mods and not abstract_fb:
+                self.err("E043", d.span, f"{fb.name} does not implement the ABSTRACT method {mt.name} of "
+                         f"{mt.owner_fb.name}")
 
     def _interface_named(self, name: str, span, who: str):
         itf = self.p.pous.get(name.lower())
@@ -446,6 +465,10 @@ class DeclarationsMixin:
                 return
         for decl in block.decls:
             t = self.resolve_type(decl.type, scope)
+            if isinstance(t, T.POUType) and t.pou_kind == "FUNCTION_BLOCK" and t.decl is not None \
+                    and "ABSTRACT" in t.decl.modifiers and kind not in ("VAR_IN_OUT", "VAR_EXTERNAL"):
+                self.err("E043", decl.type.span, f"'{t.name}' is ABSTRACT and cannot be instantiated; declare "
+                         f"an instance of a block that EXTENDS it")
             if isinstance(t, T.POUType) and t.pou_kind == "PROGRAM" and owner is not None \
                     and owner.pou_kind != "TEST":
                 self.err("E012", decl.type.span, f"a PROGRAM ('{t.name}') cannot be instantiated inside a POU")

@@ -383,6 +383,10 @@ class ExpressionsMixin:
             v = b.vars.get(key)
             if v is None and key in b.properties:
                 e.sym = b.properties[key]
+                ps = e.sym
+                acc = ps.get or ps.set
+                if acc is not None and acc.decl is not None:
+                    self.check_access(acc.decl.modifiers, ps.owner, f"property {ps.name}", scope, e.name_span)
                 return e.sym.type
             if v is None:
                 if key in b.actions or key in b.methods:
