@@ -449,3 +449,41 @@ END_PROGRAM
 def test_access_and_abstract_errors(src, message):
     text = errors(src)
     assert message in text and "E043" in text and "oop.st:" in text
+
+
+def test_classes_and_query_interface():
+    plc = run("""
+INTERFACE I_A METHOD A : INT END_METHOD END_INTERFACE
+INTERFACE I_B METHOD B : INT END_METHOD END_INTERFACE
+CLASS Both IMPLEMENTS I_A, I_B
+  VAR k : INT := 7; END_VAR
+  METHOD A : INT A := k; END_METHOD
+  METHOD B : INT B := k * 2; END_METHOD
+END_CLASS
+FUNCTION_BLOCK OnlyA IMPLEMENTS I_A
+  METHOD A : INT A := 1; END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR both : Both; oa : OnlyA; a1, a2, none : I_A; b : I_B; ok1, ok2, ok3 : BOOL; r : INT; END_VAR
+  a1 := both; a2 := oa;
+  ok1 := __QUERYINTERFACE(a1, b);
+  IF ok1 THEN r := b.B() + a1.A(); END_IF;
+  ok2 := __QUERYINTERFACE(a2, b);          (* OnlyA has no I_B: b keeps the instance it had *)
+  ok3 := __QUERYINTERFACE(none, b);
+END_PROGRAM
+""")
+    assert (plc["main.ok1"], plc["main.r"], plc["main.ok2"], plc["main.ok3"]) == (True, 21, False, False)
+    assert plc.variables()["main.b"] == "Both"
+
+
+@pytest.mark.parametrize("src, message", [
+    ("CLASS C VAR x : INT; END_VAR x := 1; END_CLASS", "a CLASS has no body; put the code in a METHOD of C"),
+    ("CLASS C METHOD M : INT M := 1; END_METHOD END_CLASS PROGRAM main VAR c : C; END_VAR c(); END_PROGRAM",
+     "an instance of the CLASS C has no body; call its methods"),
+    ("""INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
+        PROGRAM main VAR i : I; x : INT; ok : BOOL; END_VAR ok := __QUERYINTERFACE(i, x); END_PROGRAM""",
+     "__QUERYINTERFACE needs an interface variable to fill, not INT"),
+])
+def test_class_errors(src, message):
+    text = errors(src)
+    assert message in text and "oop.st:" in text

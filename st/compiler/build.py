@@ -26,7 +26,7 @@ END_PROGRAM EXTENDS IMPLEMENTS INITIAL_STEP END_STEP END_TRANSITION END_ACTION C
 END_CONFIGURATION RESOURCE END_RESOURCE IF THEN ELSIF ELSE END_IF CASE END_CASE FOR DO END_FOR WHILE
 END_WHILE REPEAT UNTIL END_REPEAT EXIT CONTINUE RETURN OR XOR AND NOT MOD TRUE FALSE VAR VAR_INPUT
 VAR_OUTPUT VAR_IN_OUT VAR_TEMP VAR_GLOBAL VAR_EXTERNAL VAR_CONFIG VAR_ACCESS END_TEST END_SETUP
-END_TEARDOWN PUBLIC PRIVATE PROTECTED INTERNAL ABSTRACT FINAL END_METHOD END_INTERFACE END_PROPERTY END_GET END_SET
+END_TEARDOWN PUBLIC PRIVATE PROTECTED INTERNAL ABSTRACT FINAL END_METHOD END_INTERFACE END_PROPERTY END_GET END_SET END_CLASS
 """.split())
 _QUALIFIERS = frozenset(("CONSTANT", "RETAIN", "NON_RETAIN", "PERSISTENT"))
 
@@ -337,6 +337,12 @@ class AstBuilder(Transformer):
 
     def method_modifier(self, c):
         return ("mod", str(c[0]).upper())
+
+    def class_decl(self, c):
+        """CLASS: a function block without a body of its own (methods and properties only)."""
+        pou = self.fb_decl(c)
+        pou.modifiers = pou.modifiers + ["CLASS"]
+        return pou
 
     def program_decl(self, c):
         return self._pou("PROGRAM", c[0], c[1], c[2:-1], c[-1])

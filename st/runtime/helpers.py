@@ -254,6 +254,14 @@ class _ObjRef:
     __hash__ = None
 
 
+def _query_itf(obj, itf: str, dest) -> bool:
+    """__QUERYINTERFACE: store obj in dest when its block provides interface `itf`."""
+    if obj is not None and itf in getattr(type(obj), "_itfs", ()):
+        dest.set(obj)
+        return True
+    return False
+
+
 class _ItemRef:
     """A reference to a list element or a namespace (global) entry."""
 
@@ -296,7 +304,7 @@ BASE_NAMESPACE = {
     "_round": _round, "_trunc": _trunc, "_ix": _ix, "_subrange": _subrange, "_setbit": _setbit,
     "_setbits": _setbits,
     "_for_dir": _for_dir, "_Struct": _Struct, "_FB": _FB, "_copy": _copy, "_assign": _assign,
-    "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ObjRef": _ObjRef, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
+    "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ObjRef": _ObjRef, "_query_itf": _query_itf, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
     "_float": float, "_int": int, "_range": range, "_abs": abs, "_min": min, "_max": max, "_len": len,
     "_str": str, "_bool": bool, "_PLCFault": PLCFault,
 }

@@ -31,6 +31,8 @@ class CallsMixin:
                 return self._method_call(c, mt, scope, None)
             if key == "ref" and sym is None and key not in self.p.pous:
                 return self._ref_call(c, scope)
+            if key == "__queryinterface" and sym is None:
+                return self._query_interface(c, scope)
             if key in TEST_CALLS and sym is None and key not in self.p.pous:
                 return self._test_call(c, key, scope, statement)
             if key in scope.actions or (scope.pou is not None and key in scope.pou.actions):
@@ -81,6 +83,24 @@ class CallsMixin:
             self.err("E043", span, f"{what} of {owner.name} is PROTECTED: only {owner.name} and the blocks that "
                      f"extend it may use it")
 
+    def _query_interface(self, c: A.Call, scope: Scope):
+        """__QUERYINTERFACE(source, dest): does the instance behind `source` provide dest's
+        interface? If so dest refers to it and the result is TRUE (CODESYS)."""
+        if len(c.args) != 2 or any(a.name for a in c.args):
+            self.err("E017", c.span, "__QUERYINTERFACE takes two arguments: an interface (or instance) and an "
+                     "interface variable")
+            return T.BOOL
+        st = self.expr(c.args[0].value, scope)
+        dt = self.lvalue(c.args[1].value, scope)
+        s, d = (T.unalias(x) if x is not None else None for x in (st, dt))
+        if not (isinstance(s, T.POUType) and s.pou_kind in ("INTERFACE", "FUNCTION_BLOCK")):
+            self.err("E013", c.args[0].span, f"__QUERYINTERFACE needs an interface or an instance, not {st}")
+        if not (isinstance(d, T.POUType) and d.pou_kind == "INTERFACE"):
+            self.err("E013", c.args[1].span, f"__QUERYINTERFACE needs an interface variable to fill, not {dt}")
+            return T.BOOL
+        c.target = CallTarget("queryitf", src=c.args[0].value, dst=c.args[1].value, itf=d)
+        return T.BOOL
+
     def _ref_call(self, c: A.Call, scope: Scope):
         """REF(x): a reference to a variable (IEC 61131-3 3rd edition)."""
         if len(c.args) != 1 or c.args[0].name:
@@ -101,8 +121,11 @@ class CallsMixin:
 
     def _fb_call(self, c: A.Call, t: T.Type, scope: Scope, statement: bool):
         fb = T.unalias(t)
-        if not isinstance(fb, T.POUType) or fb.pou_kind == "FUNCTION":
-            self.err("E020", c.span, f"a {t} is not callable")
+        if not isinstance(fb, T.POUType) or fb.pou_kind in ("FUNCTION", "INTERFACE") or (
+                fb.decl is not None and "CLASS" in fb.decl.modifiers):
+            what = "an instance of the CLASS " + fb.name + " has no body; call its methods" if isinstance(
+                fb, T.POUType) and fb.decl is not None and "CLASS" in fb.decl.modifiers else f"a {t} is not callable"
+            self.err("E020", c.span, what)
             return None
         self._resolve_interface(fb)
         if not statement:

@@ -16,6 +16,8 @@ class StatementsMixin:
         d = pou.decl
         if pou.pou_kind == "INTERFACE":
             return
+        if "CLASS" in getattr(d, "modifiers", ()) and d.body:
+            self.err("E003", d.body[0].span, f"a CLASS has no body; put the code in a METHOD of {pou.name}")
         scope = Scope(pou, pou.vars, library=pou.library)
         if pou.pou_kind in ("FUNCTION_BLOCK", "PROGRAM"):
             scope.fb = pou

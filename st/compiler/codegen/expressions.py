@@ -476,6 +476,8 @@ class ExprGen:
             return self.ref_to(tgt.arg)
         if tgt.kind == "method":
             return self.method_call(e, tgt)
+        if tgt.kind == "queryitf":
+            return _call("_query_itf", self.expr(tgt.src), _const(tgt.itf.name.lower()), self.ref_to(tgt.dst))
         raise Unsupported(e.span, "a function block call has no value")
 
     def method_call(self, e: A.Call, tgt) -> py.expr:

@@ -92,6 +92,20 @@ class MethodGen(FuncGen):
         return fn
 
 
+def _interfaces_of(pou: T.POUType) -> set:
+    out, todo = set(), [pou]
+    while todo:
+        x = todo.pop()
+        if x is None:
+            continue
+        for i in x.interfaces:
+            if i.name.lower() not in out:
+                out.add(i.name.lower())
+                todo.append(i)
+        todo.append(x.base)
+    return out
+
+
 def _mentions_this(body) -> bool:
     """THIS or SUPER in a body: other code then works on the instance while it runs."""
     return any(isinstance(e, A.Name) and getattr(e.sym, "kind", "") in ("this", "super")
@@ -138,7 +152,10 @@ class BodyGen(StmtGen):
                                                   _call("_SfcState", _name("_sfc_" + pou.pyname))), d.span.line))
             init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_sfc_x", py.Store())],
                                                   _attr(_attr(_name("self"), "_sfc"), "x")), d.span.line))
+        itfs = sorted(_interfaces_of(pou))
         members = [py.Assign([_name("__slots__", py.Store())], py.Tuple([_const(s) for s in slots], py.Load())),
+                   # the interfaces an instance provides (lower-case names), for __QUERYINTERFACE
+                   py.Assign([_name("_itfs", py.Store())], _const(tuple(itfs))),
                    py.FunctionDef("__init__", _args(["self"]), init_body or [py.Pass()], [], None, None)]
         # caching policy: with actions, methods, THIS or SFC other code touches the variables during
         # the body: keep them attributes

@@ -497,6 +497,12 @@ def _by_ref_names(body) -> set:
                         root = root.base
                     if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
                         names.add(root.sym)
+        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "queryitf":
+            root = e.target.dst
+            while isinstance(root, (A.Field, A.Index, A.Bit)):
+                root = root.base
+            if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
+                names.add(root.sym)
         if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "native" \
                 and e.target.sig.name.upper() in ("REF", "ADR"):
             for a in e.target.args:
