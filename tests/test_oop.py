@@ -487,3 +487,66 @@ END_PROGRAM
 def test_class_errors(src, message):
     text = errors(src)
     assert message in text and "oop.st:" in text
+
+
+def test_references_pointers_adr_sizeof():
+    plc = run("""
+TYPE Pt : STRUCT x : SINT; y : DINT; END_STRUCT; END_TYPE
+PROGRAM main
+  VAR
+    a : INT := 5; b : INT := 9;
+    r : REFERENCE TO INT;
+    p : Pt;
+    rx : REFERENCE TO DINT;
+    ptr : POINTER TO INT;
+    v1, v2, v3 : INT;
+    arr : ARRAY[1..3] OF INT;
+    valid0, valid1 : BOOL;
+    s_arr, s_pt, s_str, s_lreal : DINT;
+  END_VAR
+  valid0 := __ISVALIDREF(r);
+  r REF= a;
+  valid1 := __ISVALIDREF(r);
+  r := r + 1;                  (* writes a *)
+  v1 := r * 10;
+  r REF= b;
+  r := 0;                      (* writes b *)
+  rx REF= p.y;
+  rx := 42;
+  ptr := ADR(arr[2]);
+  ptr^ := 7;
+  v2 := arr[2];
+  v3 := DINT_TO_INT(p.y);
+  s_arr := SIZEOF(arr);
+  s_pt := SIZEOF(Pt);          (* SINT, 3 bytes of padding, DINT *)
+  s_str := SIZEOF(STRING);
+  s_lreal := SIZEOF(LREAL);
+END_PROGRAM
+""")
+    assert (plc["main.a"], plc["main.b"], plc["main.v1"], plc["main.v2"], plc["main.v3"]) == (6, 0, 60, 7, 42)
+    assert (plc["main.valid0"], plc["main.valid1"]) == (False, True)
+    assert (plc["main.s_arr"], plc["main.s_pt"], plc["main.s_str"], plc["main.s_lreal"]) == (6, 8, 81, 8)
+
+
+def test_an_unbound_reference_is_a_null_fault_with_the_line():
+    from st.runtime.plc import PLCFaultError
+    plc = PLC(compile_text("""PROGRAM main
+  VAR r : REFERENCE TO INT; x : INT; END_VAR
+  x := r + 1;
+END_PROGRAM""", "oop.st"))
+    with pytest.raises(PLCFaultError) as e:
+        plc.scan()
+    assert e.value.fault.kind == "NULL" and e.value.fault.line == 3
+
+
+@pytest.mark.parametrize("src, message", [
+    ("PROGRAM main VAR x : INT; y : INT; END_VAR x REF= y; END_PROGRAM", "REF= binds a REFERENCE TO variable"),
+    ("PROGRAM main VAR r : REFERENCE TO INT; y : REAL; END_VAR r REF= y; END_PROGRAM",
+     "REF= needs a INT variable, not REAL"),
+    ("PROGRAM main VAR r : REFERENCE TO INT; END_VAR r REF= 3; END_PROGRAM", "REF= needs a variable to refer to"),
+    ("PROGRAM main VAR x : INT; ok : BOOL; END_VAR ok := __ISVALIDREF(x); END_PROGRAM",
+     "__ISVALIDREF needs a reference, not INT"),
+])
+def test_reference_errors(src, message):
+    text = errors(src)
+    assert message in text and "oop.st:" in text

@@ -469,6 +469,9 @@ class AstBuilder(Transformer):
     def attempt_assignment(self, c):
         return A.Assign(c[0].span, c[0], c[2], "?=")
 
+    def ref_assignment(self, c):
+        return A.Assign(c[0].span, c[0], c[2], "REF=")
+
     def call_stmt(self, c):
         return A.CallStmt(c[0].span, c[0])
 

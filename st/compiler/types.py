@@ -237,7 +237,13 @@ class RefType(Type):
 
     @property
     def name(self) -> str:  # type: ignore[override]
-        return f"REF_TO {self.target}"
+        return f"{'REF_TO' if self.ref_kind == 'REF_TO' else self.ref_kind + ' TO'} {self.target}"
+
+
+def is_reference(t) -> bool:
+    """REFERENCE TO: a reference used as the variable it refers to (bound with REF=)."""
+    u = unalias(t) if t is not None else None
+    return isinstance(u, RefType) and u.ref_kind == "REFERENCE"
 
 
 @dataclass(eq=False)

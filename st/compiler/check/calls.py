@@ -29,8 +29,22 @@ class CallsMixin:
             mt = method_of(scope.fb, key) if not isinstance(sym, T.VarSym) else None
             if mt is not None:                     # a method of this instance: THIS^.M(...)
                 return self._method_call(c, mt, scope, None)
-            if key == "ref" and sym is None and key not in self.p.pous:
-                return self._ref_call(c, scope)
+            if key in ("ref", "adr") and sym is None and key not in self.p.pous:
+                return self._ref_call(c, scope)          # ADR: a POINTER TO the variable (no arithmetic)
+            if key == "sizeof" and sym is None and key not in self.p.pous:
+                return self._sizeof(c, scope)
+            if key == "__isvalidref" and sym is None:
+                if len(c.args) != 1 or c.args[0].name:
+                    self.err("E017", c.span, "__ISVALIDREF takes one reference")
+                    return T.BOOL
+                t = self.expr(c.args[0].value, scope)
+                arg = c.args[0].value
+                is_ref = isinstance(arg, A.Name) and isinstance(arg.sym, T.VarSym) and T.is_reference(arg.sym.type)
+                if not is_ref and not isinstance(T.unalias(t) if t is not None else None, T.RefType):
+                    self.err("E013", arg.span, f"__ISVALIDREF needs a reference, not {t}")
+                    return T.BOOL
+                c.target = CallTarget("isvalidref", arg=arg)
+                return T.BOOL
             if key == "__queryinterface" and sym is None:
                 return self._query_interface(c, scope)
             if key in TEST_CALLS and sym is None and key not in self.p.pous:
@@ -82,6 +96,28 @@ class CallsMixin:
         elif "PROTECTED" in mods and (scope.fb is None or not T.implements(scope.fb, owner)):
             self.err("E043", span, f"{what} of {owner.name} is PROTECTED: only {owner.name} and the blocks that "
                      f"extend it may use it")
+
+    def _sizeof(self, c: A.Call, scope: Scope):
+        """SIZEOF(variable or type): its size in bytes, a constant (natural alignment, as a 64-bit target)."""
+        if len(c.args) != 1 or c.args[0].name:
+            self.err("E017", c.span, "SIZEOF takes one variable or type")
+            return T.LIT_INT
+        arg = c.args[0].value
+        t = None
+        if isinstance(arg, A.Name) and self._lookup(arg.name.lower(), scope) is None:
+            t = T.ELEMENTARY.get(arg.name.upper()) or self._resolve_named_type(arg.name.lower(), arg.span) \
+                or self.p.pous.get(arg.name.lower())
+            if t is None:
+                self.err("E010", arg.span, f"'{arg.name}' is neither a variable nor a type")
+                return T.LIT_INT
+        else:
+            t = self.expr(arg, scope)
+        if t is None:
+            return T.LIT_INT
+        size, _align = _size_of(t)
+        c.target = CallTarget("sizeof", value=size)
+        c.const = size
+        return T.LIT_INT
 
     def _query_interface(self, c: A.Call, scope: Scope):
         """__QUERYINTERFACE(source, dest): does the instance behind `source` provide dest's
@@ -374,3 +410,36 @@ class CallsMixin:
             self.lvalue(eno.value, scope)
         c.target = CallTarget("native", sig=sig, args=args, arg_types=arg_types, en=en, eno=eno)
         return rt
+
+
+def _size_of(t: T.Type):
+    """(bytes, alignment) of a value of type t, laid out as a C compiler does on a 64-bit target."""
+    u = T.unalias(t)
+    if isinstance(u, T.SubrangeType):
+        u = u.base
+    if isinstance(u, T.EnumType):
+        u = u.base if getattr(u, "base", None) is not None else T.INT
+    if isinstance(u, T.StringType):
+        n = (u.length + 1) * (2 if u.wide else 1)
+        return n, 2 if u.wide else 1
+    if isinstance(u, T.ArrayType):
+        es, ea = _size_of(u.element)
+        return es * u.size, ea
+    if isinstance(u, (T.RefType, T.POUType)) and not (isinstance(u, T.POUType) and u.pou_kind != "INTERFACE"):
+        return 8, 8
+    if isinstance(u, (T.StructType, T.POUType)):
+        members = [m.type for m in u.members.values()] if isinstance(u, T.StructType) else \
+            [v.type for v in u.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP")]
+        off, align = 0, 1
+        for mt in members:
+            ms, ma = _size_of(mt)
+            off = (off + ma - 1) // ma * ma + ms
+            align = max(align, ma)
+        return max(1, (off + align - 1) // align * align), align
+    bits = getattr(u, "bits", 0) or 8
+    if u is T.BOOL:
+        bits = 8
+    if getattr(u, "kind", "") in ("time", "date", "tod", "dt"):
+        bits = 64 if getattr(u, "long", False) else 32
+    n = max(1, bits // 8)
+    return n, n

@@ -181,6 +181,10 @@ class ExpressionsMixin:
         if isinstance(sym, T.VarSym) and expected is not None and isinstance(T.base_of(expected), T.EnumType) \
                 and key in T.base_of(expected).members and not isinstance(T.base_of(sym.type), T.EnumType):
             sym = None      # an enum value of the expected type wins over a same-named variable
+        if isinstance(sym, T.VarSym) and T.is_reference(sym.type):
+            sym.used = True
+            e.sym = sym
+            return T.unalias(sym.type).target          # REFERENCE TO: the variable it refers to
         if isinstance(sym, T.VarSym):
             sym.used = True
             e.sym = sym

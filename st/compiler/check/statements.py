@@ -39,6 +39,34 @@ class StatementsMixin:
         if pou.pou_kind == "FUNCTION" and pou.return_type is None and self._assigns_name(d.body, pou.name):
             self.err("E013", d.span, f"FUNCTION {pou.name} has no return type but assigns a result")
 
+    def _ref_assign(self, s: A.Assign, scope: Scope) -> None:
+        """r REF= x: bind the REFERENCE TO variable r to the variable x."""
+        tgt = s.target
+        sym = self._lookup(tgt.name.lower(), scope) if isinstance(tgt, A.Name) else None
+        if not (isinstance(sym, T.VarSym) and T.is_reference(sym.type)):
+            self.err("E013", tgt.span, "REF= binds a REFERENCE TO variable; this is not one")
+            return
+        sym.used = sym.written = True
+        tgt.sym = sym
+        tgt.ty = sym.type
+        want = T.unalias(sym.type).target
+        v = s.value
+        if isinstance(v, A.Name) and v.name.upper() == "NULL":
+            self.expr(v, scope)
+            return
+        if not isinstance(v, (A.Name, A.Field, A.Index, A.Deref)):
+            self.err("E031", v.span, "REF= needs a variable to refer to")
+            self.expr(v, scope)
+            return
+        vt = self.lvalue(v, scope)
+        root = v
+        while isinstance(root, (A.Field, A.Index)):
+            root = root.base
+        if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
+            root.sym.address_taken = True
+        if vt is not None and want is not None and not self._same_type(vt, want):
+            self.err("E013", v.span, f"REF= needs a {want} variable, not {vt}")
+
     def _check_method(self, fb: T.POUType, mt: T.POUType) -> None:
         """A METHOD's body: its own variables first, then the instance's."""
         names = dict(fb.vars)
@@ -138,6 +166,8 @@ class StatementsMixin:
                 raise
 
     def stmt(self, s: A.Stmt, scope: Scope) -> None:
+        if isinstance(s, A.Assign) and s.kind == "REF=":
+            return self._ref_assign(s, scope)
         if isinstance(s, A.Assign):
             tt = self.lvalue(s.target, scope)
             if s.kind in ("S=", "R="):

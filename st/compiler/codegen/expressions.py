@@ -303,6 +303,8 @@ class ExprGen:
                     if t is T.REAL:
                         v = f32(v)
                 return _const(v)
+            if T.is_reference(sym.type):              # REFERENCE TO: through the reference
+                return _call(_attr(self.var_load(sym), "get"))
             return self.var_load(sym)
         if isinstance(sym, T.POUType):      # a function's own result variable
             return _name(self.result_name)
@@ -476,6 +478,13 @@ class ExprGen:
             return self.ref_to(tgt.arg)
         if tgt.kind == "method":
             return self.method_call(e, tgt)
+        if tgt.kind == "sizeof":
+            return _const(tgt.value)
+        if tgt.kind == "isvalidref":
+            a = tgt.arg
+            raw = self.var_load(a.sym) if isinstance(a, A.Name) and isinstance(a.sym, T.VarSym) \
+                and T.is_reference(a.sym.type) else self.expr(a)
+            return py.Compare(raw, [py.IsNot()], [_const(None)])
         if tgt.kind == "queryitf":
             return _call("_query_itf", self.expr(tgt.src), _const(tgt.itf.name.lower()), self.ref_to(tgt.dst))
         raise Unsupported(e.span, "a function block call has no value")
@@ -551,6 +560,8 @@ class ExprGen:
         """A reference object for an output or in-out argument, or REF(x) (runtime.helpers)."""
         if negated:
             return _call("_NegRef", self.ref_to(e))
+        if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym) and T.is_reference(e.sym.type):
+            return self.var_load(e.sym)                # the reference a REFERENCE TO variable holds
         if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym):
             sym = e.sym
             t = sym.type

@@ -68,6 +68,10 @@ class StmtGen(ExprGen):
     def s_Assign(self, s: A.Assign) -> list:
         tgt = s.target
         tt = tgt.ty
+        if s.kind == "REF=":                           # bind a REFERENCE TO variable
+            v = s.value
+            ref = _const(None) if isinstance(v, A.Name) and getattr(v.sym, "kind", "") == "null" else self.ref_to(v)
+            return [py.Assign([self.var_store(tgt.sym)], ref)]
         if isinstance(tgt, (A.Name, A.Field)) and isinstance(tgt.sym, T.PropSym):
             # a property: its SET with the value (S=/R= only when the condition holds)
             obj = self.expr(tgt.base) if isinstance(tgt, A.Field) else _name(self.self_name)
@@ -115,6 +119,8 @@ class StmtGen(ExprGen):
         return self._en_wrap(en, eno, body, "eno" in bind["params"])
 
     def assign(self, tgt, value: py.expr, src_expr) -> list:
+        if isinstance(tgt, A.Name) and isinstance(tgt.sym, T.VarSym) and T.is_reference(tgt.sym.type):
+            return [py.Expr(_call(_attr(self.var_load(tgt.sym), "set"), value))]   # through the reference
         if isinstance(tgt, A.Name):
             sym = tgt.sym
             if isinstance(sym, T.POUType):
