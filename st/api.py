@@ -11,22 +11,38 @@ from .source import SourceFile
 from .stdlib.iec import default_library
 
 
-def libraries(f_trig_first_scan: bool = False, time_unit: str = "ms") -> list:
+def libraries(f_trig_first_scan: bool = False, time_unit: str = "ms", dialect=None) -> list:
+    """The libraries of a compilation; a dialect preset (st.compiler.dialect) sets the time unit and
+    F_TRIG behaviour and travels with the standard library to the checker."""
     from .stdlib.plcopen import library as plcopen_library
-    return [default_library(f_trig_first_scan, time_unit), plcopen_library()]
+    if dialect is not None:
+        time_unit, f_trig_first_scan = dialect.time_unit, dialect.f_trig_first_scan
+    std = default_library(f_trig_first_scan, time_unit)
+    if dialect is not None:
+        std.dialect = dialect
+        std.version = f"{std.version}+{dialect.name}"
+    return [std, plcopen_library()]
+
+
+def _dialect_for(sources, dialect):
+    from .compiler.dialect import from_sources, preset
+    name = dialect if dialect is not None else from_sources(s.text for s in sources)
+    return preset(name)
 
 
 def compile_text(text: str, name: str = "<source>.st", *, f_trig_first_scan: bool = False,
                  time_unit: str = "ms", use_cache: bool = True, emit_python: bool = False,
-                 raise_on_error: bool = True, coverage: bool = False) -> CompiledProgram:
+                 raise_on_error: bool = True, coverage: bool = False, dialect: str | None = None) -> CompiledProgram:
     src = SourceFile(name, text.replace("\r\n", "\n"))
-    return compile_sources([src], libraries(f_trig_first_scan, time_unit), use_cache=use_cache,
-                           emit_python=emit_python, raise_on_error=raise_on_error, coverage=coverage)
+    return compile_sources([src], libraries(f_trig_first_scan, time_unit, _dialect_for([src], dialect)),
+                           use_cache=use_cache, emit_python=emit_python, raise_on_error=raise_on_error,
+                           coverage=coverage)
 
 
 def compile_paths(paths: list, *, f_trig_first_scan: bool = False, time_unit: str = "ms",
                   use_cache: bool = True, emit_python: bool = False, raise_on_error: bool = True,
-                  coverage: bool = False) -> CompiledProgram:
-    return compile_sources(load_files([str(p) for p in paths]), libraries(f_trig_first_scan, time_unit),
+                  coverage: bool = False, dialect: str | None = None) -> CompiledProgram:
+    sources = load_files([str(p) for p in paths])
+    return compile_sources(sources, libraries(f_trig_first_scan, time_unit, _dialect_for(sources, dialect)),
                            use_cache=use_cache, emit_python=emit_python, raise_on_error=raise_on_error,
                            coverage=coverage)

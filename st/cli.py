@@ -1,6 +1,7 @@
 """The `st` command line: check, compile, run, test, explain."""
 from __future__ import annotations
 
+import functools
 import os
 import sys
 import time
@@ -11,10 +12,14 @@ from .diagnostics import CompileError, render_all
 from .errors_doc import EXPLANATIONS
 
 
+_DIALECT = None          # the --dialect of this command line (set by the @dialect decorator)
+
+
 def _compile(files, emit_python=False, time_unit="ms", f_trig_first_scan=False, use_cache=True):
     from .api import compile_paths
     return compile_paths(list(files), emit_python=emit_python, time_unit=time_unit,
-                         f_trig_first_scan=f_trig_first_scan, use_cache=use_cache, raise_on_error=False)
+                         f_trig_first_scan=f_trig_first_scan, use_cache=use_cache, raise_on_error=False,
+                         dialect=_DIALECT)
 
 
 def _compile_or_exit(files, **kw):
@@ -39,6 +44,9 @@ def _report(result) -> bool:
 
 
 _dialect_options = [
+    click.option("--dialect", "dialect_name", type=click.Choice(["openplc", "iec", "codesys", "twincat"]),
+                 default=None, help="A preset of the switches below and of the accepted constructs "
+                 "(docs/semantics.md); default: everything accepted, or a {dialect '…'} pragma in a file."),
     click.option("--time-unit", type=click.Choice(["ms", "s"]), default="ms", show_default=True,
                  help="What TIME_TO_<int>/<int>_TO_TIME count: ms (IEC, CODESYS) or s (MatIEC)."),
     click.option("--f-trig-first-scan/--no-f-trig-first-scan", default=False,
@@ -47,9 +55,14 @@ _dialect_options = [
 
 
 def dialect(f):
+    @functools.wraps(f)
+    def with_dialect(*args, dialect_name=None, **kw):
+        global _DIALECT
+        _DIALECT = dialect_name
+        return f(*args, **kw)
     for opt in reversed(_dialect_options):
-        f = opt(f)
-    return f
+        with_dialect = opt(with_dialect)
+    return with_dialect
 
 
 @click.group()
@@ -185,7 +198,7 @@ def test_cmd(files, keyword, exitfirst, quiet, timeout, cov, cov_html, time_unit
     try:
         from .api import compile_paths
         result = compile_paths(paths, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan,
-                               raise_on_error=False, coverage=measure)
+                               raise_on_error=False, coverage=measure, dialect=_DIALECT)
     except CompileError as e:
         click.echo(e.render(), err=True)
         sys.exit(2)

@@ -39,6 +39,7 @@ EXPLANATIONS = {
             "about 20 nested loops.",
     "E042": "An array is too large (more than 50,000,000 elements).",
     "E043": "An object-oriented rule is broken: a PRIVATE or PROTECTED method or property used from outside, an ABSTRACT function block instantiated or an ABSTRACT method called or left unimplemented, an OVERRIDE that overrides nothing.",
+    "E044": "A construct is not part of the chosen dialect preset (--dialect or a {dialect '…'} pragma): object-oriented ST in openplc, vendor extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF) in iec or openplc.",
     "E099": "An internal compiler error (a bug in st): please report it with the source file.",
     "W001": "A pragma { ... } is ignored.",
     "W002": "A variable is declared but never used.",

@@ -550,3 +550,48 @@ END_PROGRAM""", "oop.st"))
 def test_reference_errors(src, message):
     text = errors(src)
     assert message in text and "oop.st:" in text
+
+
+# ---------------------------------------------------------------------------- dialect presets
+
+def test_dialect_presets_accept_and_refuse_constructs():
+    oop = """FUNCTION_BLOCK A METHOD M : INT M := 1; END_METHOD END_FUNCTION_BLOCK
+PROGRAM main VAR a : A; x : INT; END_VAR x := a.M(); END_PROGRAM"""
+    vendor = """PROGRAM main VAR x : INT; r : REFERENCE TO INT; p : POINTER TO INT; n : DINT; END_VAR
+r REF= x; p := ADR(x); n := SIZEOF(x); END_PROGRAM"""
+    for d in ("iec", "codesys", "twincat", None):
+        plc = PLC(compile_text(oop, "oop.st", dialect=d))
+        plc.scan()
+        assert plc["main.x"] == 1
+    for d in ("codesys", "twincat", None):
+        plc = PLC(compile_text(vendor, "oop.st", dialect=d))
+        plc.scan()
+        assert plc["main.n"] == 2
+    with pytest.raises(CompileError) as e:
+        compile_text(oop, "oop.st", dialect="openplc")
+    assert "E044" in str(e.value) and "METHOD is not part of the openplc dialect" in str(e.value)
+    with pytest.raises(CompileError) as e:
+        compile_text(vendor, "oop.st", dialect="iec")
+    text = str(e.value)
+    for what in ("REFERENCE TO", "POINTER TO", "REF=", "ADR", "SIZEOF"):
+        assert f"{what} is not part of the iec dialect" in text
+
+
+def test_a_dialect_pragma_in_the_file_and_the_openplc_switches():
+    src = """{dialect 'openplc'}
+PROGRAM main VAR t : DINT; END_VAR t := TIME_TO_DINT(T#2500ms); END_PROGRAM"""
+    cp = compile_text(src, "oop.st", use_cache=False)
+    assert [d.code for d in cp.diagnostics] == []            # the dialect pragma is not an "ignored pragma"
+    plc = PLC(cp)
+    plc.scan()
+    assert plc["main.t"] == 2                                  # MatIEC counts seconds
+    plc = PLC(compile_text(src, "oop.st", dialect="iec"))       # the explicit choice wins
+    plc.scan()
+    assert plc["main.t"] == 2500
+
+
+def test_attribute_pragmas_are_quiet_in_codesys_and_twincat():
+    src = """{attribute 'qualified_only'}
+PROGRAM main VAR x : INT; END_VAR x := 1; END_PROGRAM"""
+    assert [d.code for d in compile_text(src, "oop.st", use_cache=False, dialect="codesys").diagnostics] == []
+    assert [d.code for d in compile_text(src, "oop.st", use_cache=False, dialect="iec").diagnostics] == ["W001"]

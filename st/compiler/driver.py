@@ -158,6 +158,11 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
         u = parse_source(s, sink)
         if u is not None:
             units.append(u)
+    dialect = next((lib.dialect for lib in libraries if getattr(lib, "dialect", None)), None)
+    # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat
+    sink.items = [d for d in sink.items if not (d.code == "W001" and (
+        "{dialect" in d.message.lower().replace(" ", "") or
+        (dialect is not None and dialect.attribute_pragmas and "{attribute" in d.message.lower())))]
     checker = Checker(sink, libraries)
     modules = []
     test_modules = []

@@ -36,6 +36,7 @@ class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, 
         self._calls: dict = {}         # caller lower name → [(callee lower name, span)]
         self._configs: list = []
         self._global_blocks: list = []
+        self.dialect = next((lib.dialect for lib in libraries if getattr(lib, "dialect", None)), None)
 
     # ================================================================ entry
     def run(self, units: list[A.Unit], library_units: set[str]) -> Project:
@@ -67,6 +68,19 @@ class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, 
         if span is not None and span.file in self.library_units:
             return
         self.sink.warning(code, span, msg, hint)
+
+    def feature(self, kind: str, span: Span, what: str) -> bool:
+        """Is this construct part of the chosen dialect? (No preset: everything is.) Reports E044 if not."""
+        d = self.dialect
+        if d is None or (span is not None and span.file in self.library_units):
+            return True
+        if (kind == "oop" and d.oop) or (kind == "vendor" and d.vendor_extensions):
+            return True
+        others = [n for n, p in __import__("st.compiler.dialect", fromlist=["PRESETS"]).PRESETS.items()
+                  if (p.oop if kind == "oop" else p.vendor_extensions)]
+        self.err("E044", span, f"{what} is not part of the {d.name} dialect",
+                 f"choose --dialect {' or '.join(others)} (or a {{dialect '…'}} pragma) to use it")
+        return False
 
     def _lib_of(self, span: Span) -> str:
         return "lib" if span is not None and span.file in self.library_units else ""

@@ -29,6 +29,9 @@ class CallsMixin:
             mt = method_of(scope.fb, key) if not isinstance(sym, T.VarSym) else None
             if mt is not None:                     # a method of this instance: THIS^.M(...)
                 return self._method_call(c, mt, scope, None)
+            if key in ("adr", "sizeof", "__isvalidref", "__queryinterface") and sym is None \
+                    and key not in self.p.pous:
+                self.feature("vendor", callee.span, key.upper())
             if key in ("ref", "adr") and sym is None and key not in self.p.pous:
                 return self._ref_call(c, scope)          # ADR: a POINTER TO the variable (no arithmetic)
             if key == "sizeof" and sym is None and key not in self.p.pous:

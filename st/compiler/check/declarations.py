@@ -29,6 +29,7 @@ class DeclarationsMixin:
                     self._pending_types[key] = (td, self._lib_of(td.span))
                     self._decl_span[key] = td.span
             elif isinstance(item, (A.POU, A.Interface)):
+                self._oop_features(item)
                 key = item.name.lower()
                 if key in self.p.pous or key in self._pending_types:
                     old = self.p.pous.get(key)
@@ -52,6 +53,21 @@ class DeclarationsMixin:
                 self._global_blocks.append(("", item))
             elif isinstance(item, A.TestBlock):
                 self.p.test_blocks.append(item)
+
+    def _oop_features(self, item) -> None:
+        if isinstance(item, A.Interface):
+            self.feature("oop", item.span, "INTERFACE")
+            return
+        if "CLASS" in item.modifiers:
+            self.feature("oop", item.span, "CLASS")
+        if item.extends:
+            self.feature("oop", item.span, "EXTENDS")
+        if item.implements:
+            self.feature("oop", item.span, "IMPLEMENTS")
+        for m in item.methods:
+            self.feature("oop", m.span, "METHOD")
+        for pr in item.properties:
+            self.feature("oop", pr.span, "PROPERTY")
 
     def _dup(self, name: str, span: Span) -> None:
         prev = self._decl_span.get(name.lower())
@@ -192,6 +208,8 @@ class DeclarationsMixin:
                          f"(at most {MAX_ARRAY_ELEMENTS:,})")
             return at
         if isinstance(spec, A.RefType):
+            if spec.kind != "REF_TO":
+                self.feature("vendor", spec.span, f"{spec.kind} TO")
             return T.RefType(self.resolve_type(spec.target, scope), spec.kind)
         if isinstance(spec, A.SubrangeType):
             base = T.ELEMENTARY.get(spec.base.upper())

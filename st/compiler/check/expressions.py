@@ -81,6 +81,10 @@ class ExpressionsMixin:
             return t
         raise AssertionError(e)
 
+    def feature_quiet(self, kind: str) -> bool:
+        d = self.dialect
+        return d is None or (d.oop if kind == "oop" else d.vendor_extensions)
+
     def _property_read(self, e, lvalue: bool) -> None:
         if isinstance(e.sym, T.PropSym) and not lvalue and e.sym.get is None:
             self.err("E023", e.span, f"property {e.sym.name} has no GET: it cannot be read")
@@ -147,11 +151,11 @@ class ExpressionsMixin:
             return "RESULT"
         if key in scope.steps:
             return "STEP"
-        if key == "this" and scope.fb is not None:
+        if key == "this" and scope.fb is not None and self.feature_quiet("oop"):
             return THIS
         if scope.fb is not None and key in scope.fb.properties:
             return scope.fb.properties[key]
-        if key == "super" and scope.fb is not None and scope.fb.base is not None:
+        if key == "super" and scope.fb is not None and scope.fb.base is not None and self.feature_quiet("oop"):
             return SUPER
         gs = self.p.global_names.get(key)
         if gs:

@@ -41,6 +41,7 @@ class StatementsMixin:
 
     def _ref_assign(self, s: A.Assign, scope: Scope) -> None:
         """r REF= x: bind the REFERENCE TO variable r to the variable x."""
+        self.feature("vendor", s.span, "REF=")
         tgt = s.target
         sym = self._lookup(tgt.name.lower(), scope) if isinstance(tgt, A.Name) else None
         if not (isinstance(sym, T.VarSym) and T.is_reference(sym.type)):

@@ -1,0 +1,56 @@
+"""Dialect presets: named sets of switches, never forks of the grammar.
+
+    openplc   what MatIEC (OpenPLC v3) accepts: TIME_TO_<int> counts seconds, F_TRIG pulses on the
+              first scan; no object-oriented ST and no vendor extensions
+    iec       IEC 61131-3 3rd edition, strict: object-oriented ST, REF_TO/REF()/NULL; no vendor
+              extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF)
+    codesys   the 3rd edition plus CODESYS's extensions; {attribute '…'} pragmas accepted silently
+    twincat   as codesys (TwinCAT 3 is CODESYS-based)
+
+Without a preset everything is accepted and only --time-unit / --f-trig-first-scan apply (the
+behaviour before presets existed). A preset is chosen with `--dialect NAME` (API: dialect=…)
+or with a pragma `{dialect 'NAME'}` in a source file; an explicit flag wins.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Optional
+
+
+@dataclass(frozen=True)
+class Dialect:
+    name: str
+    time_unit: str = "ms"
+    f_trig_first_scan: bool = False
+    oop: bool = True                   # METHOD, PROPERTY, INTERFACE, CLASS, EXTENDS, IMPLEMENTS, THIS, SUPER
+    vendor_extensions: bool = True     # POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF
+    attribute_pragmas: bool = False    # {attribute '…'} without a warning
+
+
+PRESETS = {
+    "openplc": Dialect("openplc", time_unit="s", f_trig_first_scan=True, oop=False, vendor_extensions=False),
+    "iec": Dialect("iec", vendor_extensions=False),
+    "codesys": Dialect("codesys", attribute_pragmas=True),
+    "twincat": Dialect("twincat", attribute_pragmas=True),
+}
+
+_PRAGMA = re.compile(r"\{\s*dialect\s+'([A-Za-z]+)'\s*\}", re.I)
+
+
+def from_sources(texts) -> Optional[str]:
+    """The preset named by a `{dialect '…'}` pragma in the sources (the first one), if any."""
+    for text in texts:
+        m = _PRAGMA.search(text)
+        if m:
+            return m.group(1).lower()
+    return None
+
+
+def preset(name: Optional[str]) -> Optional[Dialect]:
+    if name is None:
+        return None
+    d = PRESETS.get(name.lower())
+    if d is None:
+        raise ValueError(f"unknown dialect '{name}' (known: {', '.join(PRESETS)})")
+    return d
