@@ -18,9 +18,9 @@ def libraries(f_trig_first_scan: bool = False, time_unit: str = "ms", dialect=No
     if dialect is not None:
         time_unit, f_trig_first_scan = dialect.time_unit, dialect.f_trig_first_scan
     std = default_library(f_trig_first_scan, time_unit)
-    if dialect is not None:
-        std.dialect = dialect
-        std.version = f"{std.version}+{dialect.name}"
+    if dialect is not None:                     # a copy: the standard library object is shared (cached)
+        import dataclasses
+        std = dataclasses.replace(std, dialect=dialect, version=f"{std.version}+{dialect.name}")
     return [std, plcopen_library()]
 
 

@@ -595,3 +595,122 @@ def test_attribute_pragmas_are_quiet_in_codesys_and_twincat():
 PROGRAM main VAR x : INT; END_VAR x := 1; END_PROGRAM"""
     assert [d.code for d in compile_text(src, "oop.st", use_cache=False, dialect="codesys").diagnostics] == []
     assert [d.code for d in compile_text(src, "oop.st", use_cache=False, dialect="iec").diagnostics] == ["W001"]
+
+
+def test_method_var_inst_and_new_delete():
+    plc = run("""
+FUNCTION_BLOCK Tally
+  METHOD Next : INT
+    VAR_INST n : INT; END_VAR          (* kept in the instance between calls *)
+    VAR tmp : INT; END_VAR             (* fresh in every call *)
+    n := n + 1;
+    tmp := tmp + 1;
+    Next := n * 10 + tmp;
+  END_METHOD
+END_FUNCTION_BLOCK
+TYPE Pt : STRUCT x, y : INT; END_STRUCT; END_TYPE
+PROGRAM main
+  VAR a, b : Tally; r1, r2, r3 : INT; p : POINTER TO Pt; q : POINTER TO INT; t : POINTER TO Tally;
+      px, qv, tv : INT; gone : BOOL; END_VAR
+  r1 := a.Next(); r2 := a.Next(); r3 := b.Next();
+  p := __NEW(Pt); p^.x := 3; px := p^.x;
+  q := __NEW(INT); q^ := 41; q^ := q^ + 1; qv := q^;
+  t := __NEW(Tally); tv := t^.Next();
+  __DELETE(p);
+  gone := p = NULL;
+END_PROGRAM
+""")
+    assert [plc[f"main.{k}"] for k in ("r1", "r2", "r3", "px", "qv", "tv", "gone")] == [11, 21, 11, 3, 42, 11, True]
+
+
+CODESYS_STYLE = """
+{attribute 'qualified_only'}
+{attribute 'strict'}
+TYPE E_State : (IDLE := 0, RUNNING := 1, FAULTED := 2); END_TYPE
+
+INTERFACE I_Axis
+  METHOD MoveTo : BOOL
+    VAR_INPUT fTarget : LREAL; END_VAR
+  END_METHOD
+  PROPERTY fPosition : LREAL
+    GET END_GET
+  END_PROPERTY
+END_INTERFACE
+
+{attribute 'no_explicit_call' := 'do not call this POU directly'}
+FUNCTION_BLOCK ABSTRACT FB_AxisBase IMPLEMENTS I_Axis
+  VAR
+    _fPos : LREAL;
+    _eState : E_State := E_State.IDLE;
+  END_VAR
+  VAR_OUTPUT
+    nMoves : UDINT;
+  END_VAR
+  METHOD PUBLIC MoveTo : BOOL
+    VAR_INPUT fTarget : LREAL; END_VAR
+    IF THIS^._eState = E_State.FAULTED THEN
+      MoveTo := FALSE;
+      RETURN;
+    END_IF
+    _fPos := THIS^.Clamp(fTarget);
+    nMoves := nMoves + 1;
+    MoveTo := TRUE;
+  END_METHOD
+  METHOD PROTECTED ABSTRACT Clamp : LREAL
+    VAR_INPUT f : LREAL; END_VAR
+  END_METHOD
+  PROPERTY PUBLIC fPosition : LREAL
+    GET
+      fPosition := _fPos;
+    END_GET
+  END_PROPERTY
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_LinearAxis EXTENDS FB_AxisBase
+  VAR_INPUT fMin : LREAL := 0.0; fMax : LREAL := 100.0; END_VAR
+  METHOD PROTECTED Clamp : LREAL
+    VAR_INPUT f : LREAL; END_VAR
+    Clamp := LIMIT(fMin, f, fMax);
+  END_METHOD
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_RotaryAxis EXTENDS FB_AxisBase
+  METHOD PROTECTED Clamp : LREAL
+    VAR_INPUT f : LREAL; END_VAR
+    Clamp := f - 360.0 * DINT_TO_LREAL(LREAL_TO_DINT(f / 360.0 - 0.5));
+  END_METHOD
+  METHOD PUBLIC MoveTo : BOOL
+    VAR_INPUT fTarget : LREAL; END_VAR
+    MoveTo := SUPER^.MoveTo(fTarget := fTarget);
+  END_METHOD
+END_FUNCTION_BLOCK
+
+PROGRAM MAIN
+  VAR
+    fbX : FB_LinearAxis := (fMax := 50.0);
+    fbC : FB_RotaryAxis;
+    aAxes : ARRAY[0..1] OF I_Axis;
+    i : INT;
+    bOk : BOOL := TRUE;
+    fSum : LREAL;
+  END_VAR
+  aAxes[0] := fbX;
+  aAxes[1] := fbC;
+  fSum := 0;
+  FOR i := 0 TO 1 DO
+    bOk := bOk AND aAxes[i].MoveTo(fTarget := 725.0);
+    fSum := fSum + aAxes[i].fPosition;
+  END_FOR
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", ["codesys", "twincat"])
+def test_a_codesys_style_source_with_methods_properties_and_interfaces(dialect):
+    cp = compile_text(CODESYS_STYLE, "oop.st", dialect=dialect, use_cache=False)
+    assert cp.diagnostics == []
+    plc = PLC(cp)
+    plc.scan(2)
+    assert plc["MAIN.bOk"] is True
+    assert plc["MAIN.fbX.nMoves"] == 2 and plc["MAIN.fbC.nMoves"] == 2
+    assert plc["MAIN.fSum"] == 50.0 + 5.0                        # 725 limited to 50; 725 mod 360 = 5

@@ -24,7 +24,8 @@ class Dialect:
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
     oop: bool = True                   # METHOD, PROPERTY, INTERFACE, CLASS, EXTENDS, IMPLEMENTS, THIS, SUPER
-    vendor_extensions: bool = True     # POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF
+    vendor_extensions: bool = True     # POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
+    #                                    __NEW, __DELETE, VAR_INST in methods
     attribute_pragmas: bool = False    # {attribute '…'} without a warning
 
 

@@ -29,6 +29,9 @@ class CallsMixin:
             mt = method_of(scope.fb, key) if not isinstance(sym, T.VarSym) else None
             if mt is not None:                     # a method of this instance: THIS^.M(...)
                 return self._method_call(c, mt, scope, None)
+            if key in ("__new", "__delete") and sym is None:
+                self.feature("vendor", callee.span, key.upper())
+                return self._new_delete(c, key, scope, statement)
             if key in ("adr", "sizeof", "__isvalidref", "__queryinterface") and sym is None \
                     and key not in self.p.pous:
                 self.feature("vendor", callee.span, key.upper())
@@ -99,6 +102,32 @@ class CallsMixin:
         elif "PROTECTED" in mods and (scope.fb is None or not T.implements(scope.fb, owner)):
             self.err("E043", span, f"{what} of {owner.name} is PROTECTED: only {owner.name} and the blocks that "
                      f"extend it may use it")
+
+    def _new_delete(self, c: A.Call, key: str, scope: Scope, statement: bool):
+        """__NEW(type): a POINTER TO a fresh value of that type; __DELETE(p): p becomes NULL (the value
+        is freed when nothing refers to it any more, so a dangling pointer cannot happen)."""
+        if len(c.args) != 1 or c.args[0].name:
+            self.err("E017", c.span, f"{key.upper()} takes one argument")
+            return None
+        arg = c.args[0].value
+        if key == "__delete":
+            if not statement:
+                self.err("E020", c.span, "__DELETE(p) is a statement; it has no value")
+            t = self.lvalue(arg, scope)
+            if t is not None and not (isinstance(T.unalias(t), T.RefType) and T.unalias(t).ref_kind == "POINTER"):
+                self.err("E013", arg.span, f"__DELETE needs a POINTER, not {t}")
+            c.target = CallTarget("delete", arg=arg)
+            return None
+        name = arg.name if isinstance(arg, A.Name) else ""
+        t = (T.ELEMENTARY.get(name.upper()) or self._resolve_named_type(name.lower(), arg.span)
+             or self.p.pous.get(name.lower())) if name else None
+        if t is None or (isinstance(t, T.POUType) and t.pou_kind not in ("FUNCTION_BLOCK",)):
+            self.err("E012", arg.span, "__NEW needs a data type or a FUNCTION_BLOCK type")
+            return None
+        if isinstance(t, T.POUType) and t.decl is not None and "ABSTRACT" in t.decl.modifiers:
+            self.err("E043", arg.span, f"'{t.name}' is ABSTRACT and cannot be instantiated")
+        c.target = CallTarget("new", type=t)
+        return T.RefType(t, "POINTER")
 
     def _sizeof(self, c: A.Call, scope: Scope):
         """SIZEOF(variable or type): its size in bytes, a constant (natural alignment, as a 64-bit target)."""

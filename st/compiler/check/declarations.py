@@ -461,6 +461,9 @@ class DeclarationsMixin:
         for v in mt.vars.values():
             if v.name.lower() in fb.vars and v.section != "VAR_EXTERNAL":
                 self.warn("W006", v.span, f"'{v.name}' in method {m.name} hides the variable of {fb.name}")
+            if v.section == "VAR_INST":               # kept in the instance between calls
+                self.feature("vendor", v.span, "VAR_INST")
+                v.pyname = f"_mi_{mangle(m.name)}_{v.pyname}"
         fb.methods[key] = mt
 
     def _declare_block(self, block: A.VarBlock, table: dict, scope: Optional[Scope], owner) -> None:
@@ -475,6 +478,8 @@ class DeclarationsMixin:
                             "VAR_GLOBAL"},
                 "TEST": {"VAR", "VAR_TEMP"},
             }[owner.pou_kind]
+            if getattr(owner, "owner_fb", None) is not None:
+                allowed = allowed | {"VAR_INST"}      # a METHOD's variables that live in the instance
             if kind not in allowed:
                 self.err("E003", block.span, f"{kind} is not allowed in a {owner.pou_kind}")
                 return

@@ -480,6 +480,9 @@ class ExprGen:
             return self.method_call(e, tgt)
         if tgt.kind == "sizeof":
             return _const(tgt.value)
+        if tgt.kind == "new":                          # a one-element box the pointer refers to
+            return _call("_ItemRef", py.List([InitGen(self.mod).initial(tgt.type, None)], py.Load()), _const(0),
+                         _const(_wrap_spec(tgt.type)))
         if tgt.kind == "isvalidref":
             a = tgt.arg
             raw = self.var_load(a.sym) if isinstance(a, A.Name) and isinstance(a.sym, T.VarSym) \

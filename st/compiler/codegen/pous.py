@@ -86,7 +86,8 @@ class MethodGen(FuncGen):
         mt = self.pou
         by_ref = _by_ref_names(mt.decl.body)
         boxed = {v for v in by_ref if v.owner is mt and not T.unalias(v.type).is_aggregate}
-        self.cached = {v for v in mt.vars.values() if v not in boxed and v.section != "VAR_EXTERNAL"}
+        self.cached = {v for v in mt.vars.values() if v not in boxed and v.section not in ("VAR_EXTERNAL",
+                                                                                            "VAR_INST")}
         fn = super().function()
         fn.args.args.insert(0, _set_lines(py.arg("self"), mt.decl.span.line))
         return fn
@@ -146,6 +147,12 @@ class BodyGen(StmtGen):
         for v in edges:
             init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_e_" + v.pyname, py.Store())],
                                                   _const(v.edge == "F_EDGE")), v.span.line))
+        for mt in pou.methods.values():               # METHOD VAR_INST: attributes of the instance
+            for v in mt.vars.values():
+                if v.section == "VAR_INST":
+                    slots.append(v.pyname)
+                    init_body.append(_set_lines(py.Assign([_attr(_name("self"), v.pyname, py.Store())],
+                                                          init.initial(v.type, v.init)), v.span.line))
         if sfc is not None:
             slots += ["_sfc", "_sfc_x"]
             init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_sfc", py.Store())],

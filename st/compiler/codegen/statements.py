@@ -165,6 +165,8 @@ class StmtGen(ExprGen):
             return [py.Expr(_call(_attr(_name(self.self_name), "_act_" + tgt.name)))]
         if tgt.kind == "method":
             return [py.Expr(self.method_call(c, tgt))]
+        if tgt.kind == "delete":
+            return self.assign(tgt.arg, _const(None), None)
         if tgt.kind == "test":
             return self.test_call(tgt)
         if tgt.kind == "function":
