@@ -1,5 +1,6 @@
-"""Object-oriented ST (IEC 61131-3 3rd edition), first part: METHODs of function blocks, THIS^,
-EXTENDS with inherited variables and methods, overriding with virtual dispatch, SUPER^."""
+"""Object-oriented ST (IEC 61131-3 3rd edition) and its CODESYS/TwinCAT extensions: METHODs, THIS^,
+EXTENDS with virtual dispatch, SUPER^, interfaces, properties, access, ABSTRACT/FINAL/OVERRIDE,
+CLASS, references and pointers, VAR_INST, VAR_STAT, __NEW/__DELETE, dialect presets."""
 import pytest
 
 from st import PLC
@@ -714,3 +715,54 @@ def test_a_codesys_style_source_with_methods_properties_and_interfaces(dialect):
     assert plc["MAIN.bOk"] is True
     assert plc["MAIN.fbX.nMoves"] == 2 and plc["MAIN.fbC.nMoves"] == 2
     assert plc["MAIN.fSum"] == 50.0 + 5.0                        # 725 limited to 50; 725 mod 360 = 5
+
+
+def test_var_stat_is_shared_by_every_instance_and_call():
+    plc = run("""
+FUNCTION_BLOCK Widget
+  VAR_STAT created : INT; END_VAR
+  VAR_OUTPUT id : INT; END_VAR
+  IF id = 0 THEN created := created + 1; id := created; END_IF;
+END_FUNCTION_BLOCK
+FUNCTION NextTicket : INT
+  VAR_STAT counter : INT := 100; END_VAR
+  counter := counter + 1;
+  NextTicket := counter;
+END_FUNCTION
+PROGRAM main
+  VAR a, b, c : Widget; t1, t2 : INT; END_VAR
+  a(); b(); c(); a();
+  t1 := NextTicket(); t2 := NextTicket();
+END_PROGRAM
+""", 2)
+    assert [plc[f"main.{k}"] for k in ("a.id", "b.id", "c.id", "t1", "t2")] == [1, 2, 3, 103, 104]
+    assert "id" in plc.variables()["main.a"] and "created" not in plc.variables()["main.a"]
+    assert plc.globals() == {"Widget.created": 3, "NextTicket.counter": 104}
+
+
+def test_var_stat_in_a_method_is_shared_by_instances():
+    plc = run("""
+FUNCTION_BLOCK Widget
+  METHOD Next : INT
+    VAR_STAT n : INT; END_VAR
+    n := n + 1; Next := n;
+  END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR a, b : Widget; x, y : INT; END_VAR
+  x := a.Next(); y := b.Next();
+END_PROGRAM
+""", 2)
+    assert (plc["main.x"], plc["main.y"]) == (3, 4)
+    assert plc.globals() == {"Widget.Next.n": 4}
+
+
+def test_var_stat_in_a_program_is_one_located_error_without_a_cascade():
+    msg = errors("""
+PROGRAM main
+  VAR_STAT g : INT; END_VAR
+  g := g + 1;
+END_PROGRAM
+""")
+    assert "oop.st:3:3: error[E003]: VAR_STAT is not allowed in a PROGRAM" in msg
+    assert msg.count("error[") == 1

@@ -539,7 +539,7 @@ class PLC:
         if problems:
             raise ValueError("online change refused, the old program keeps running:\n  " + "\n  ".join(problems))
         old_instances = {k: (n, o, p) for k, (n, o, p) in self.instances.items()}
-        old_globals = {g.name.lower(): (g, self.ns[g.pyname]) for g in self.project.globals.values()}
+        old_globals = {g.pyname: (g, self.ns[g.pyname]) for g in self.project.globals.values()}
         old_ns = self.ns
         self._load(compiled)
         for key, (name, obj, pou) in self.instances.items():
@@ -547,7 +547,7 @@ class PLC:
             if old is not None:
                 _restore_into(_Holder(obj), "v", pou, to_python(old[1], old[2]))
         for g in self.project.globals.values():
-            og = old_globals.get(g.name.lower())
+            og = old_globals.get(g.pyname)
             if og is not None and str(og[0].type) == str(g.type):
                 _restore_into(self.ns, g.pyname, g.type, to_python(og[1], og[0].type))
         self.ns["_now"] = old_ns.get("_now", 0)
@@ -571,9 +571,9 @@ class PLC:
         for key, (name, obj, pou) in self.instances.items():
             if key in new_pous:
                 _type_changes(pou, new_pous[key], name, out)
-        new_globals = {g.name.lower(): g for g in compiled.project.globals.values()}
+        new_globals = {g.pyname: g for g in compiled.project.globals.values()}
         for g in self.project.globals.values():
-            ng = new_globals.get(g.name.lower())
+            ng = new_globals.get(g.pyname)
             if ng is not None:
                 _type_changes(g.type, ng.type, g.name, out)
         return out
@@ -745,7 +745,13 @@ class PLC:
         return out
 
     def globals(self) -> dict:
-        return {g.name: to_json(self.ns[g.pyname], g.type) for g in self.project.globals.values()}
+        """Global variables, and static ones (VAR_STAT) as 'POU.name' or 'FB.Method.name'."""
+        def name(g):
+            if g.section != "VAR_STAT" or g.owner is None:
+                return g.name
+            fb = getattr(g.owner, "owner_fb", None)
+            return f"{fb.name + '.' if fb is not None else ''}{g.owner.name}.{g.name}"
+        return {name(g): to_json(self.ns[g.pyname], g.type) for g in self.project.globals.values()}
 
 
 def _restore_into(container, key, t, value) -> None:

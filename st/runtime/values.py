@@ -27,7 +27,7 @@ def _convert(v, t: T.Type, leaf):
         return None if v is None else type(v).__name__.removeprefix("_fb_")
     if isinstance(t, T.POUType):
         return {s.name: _convert(getattr(v, s.pyname), s.type, leaf) for s in t.vars.values()
-                if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP")}
+                if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT")}
     if isinstance(t, T.RefType):
         return None
     return leaf(v, t)

@@ -471,7 +471,7 @@ class DeclarationsMixin:
         quals = set(block.qualifiers)
         if owner is not None:
             allowed = {
-                "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL"},
+                "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL", "VAR_STAT"},
                 "FUNCTION_BLOCK": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL",
                                    "VAR_INST", "VAR_STAT"},
                 "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL",
@@ -482,7 +482,9 @@ class DeclarationsMixin:
                 allowed = allowed | {"VAR_INST"}      # a METHOD's variables that live in the instance
             if kind not in allowed:
                 self.err("E003", block.span, f"{kind} is not allowed in a {owner.pou_kind}")
-                return
+                if kind in ("VAR_GLOBAL", "VAR_ACCESS", "VAR_CONFIG"):
+                    return
+                kind = "VAR"                   # still declare the names: no cascade of 'undeclared' errors
             if kind == "VAR_GLOBAL":
                 self._global_blocks.append((owner.name, block))
                 return
@@ -508,6 +510,14 @@ class DeclarationsMixin:
                                persistent="PERSISTENT" in quals, edge=decl.edge, pyname=mangle(n), owner=owner)
                 if kind == "VAR_EXTERNAL":
                     sym.is_global = True
+                if kind == "VAR_STAT" and owner is not None:
+                    # static: one variable shared by every instance and call, kept as a module global
+                    self.feature("vendor", sp, "VAR_STAT")
+                    sym.is_global = True
+                    where = owner.name if getattr(owner, "owner_fb", None) is None else \
+                        f"{owner.owner_fb.name}_{owner.name}"
+                    sym.pyname = f"_gs_{mangle(where)}_{mangle(n)}"
+                    self.p.globals[sym.pyname] = sym
                 table[key] = sym
                 if decl.location:
                     self._check_location(decl.location, t, sp)

@@ -135,12 +135,12 @@ class BodyGen(StmtGen):
         d = pou.decl
         init = InitGen(self.mod)
         sfc = self.mod.p.sfc.get(pou.name.lower())
-        slots = [v.pyname for v in pou.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP")]
+        slots = [v.pyname for v in pou.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP", "VAR_STAT")]
         edges = [v for v in pou.vars.values() if v.edge]
         slots += ["_e_" + v.pyname for v in edges]
         init_body = []
         for v in pou.vars.values():
-            if v.section in ("VAR_EXTERNAL", "VAR_TEMP"):
+            if v.section in ("VAR_EXTERNAL", "VAR_TEMP", "VAR_STAT"):
                 continue
             init_body.append(_set_lines(py.Assign([_attr(_name("self"), v.pyname, py.Store())],
                                                   init.initial(v.type, v.init)), v.span.line))
