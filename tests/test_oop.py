@@ -766,3 +766,86 @@ END_PROGRAM
 """)
     assert "oop.st:3:3: error[E003]: VAR_STAT is not allowed in a PROGRAM" in msg
     assert msg.count("error[") == 1
+
+
+ATTEMPT = """
+INTERFACE I_Move METHOD Go : INT END_METHOD END_INTERFACE
+INTERFACE I_Light METHOD On : BOOL END_METHOD END_INTERFACE
+FUNCTION_BLOCK Base IMPLEMENTS I_Move
+  METHOD Go : INT Go := 1; END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Lamp EXTENDS Base IMPLEMENTS I_Light
+  METHOD Go : INT Go := 2; END_METHOD
+  METHOD On : BOOL On := TRUE; END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR
+    b : Base; l : Lamp;
+    mv : I_Move; li : I_Light;
+    rb : REF_TO Base; rl : REF_TO Lamp;
+    found : ARRAY[0..3] OF BOOL; got : INT;
+  END_VAR
+  mv := b;  li ?= mv; found[0] := li <> NULL;       (* Base is no I_Light: NULL *)
+  mv := l;  li ?= mv; found[1] := li <> NULL;       (* Lamp is *)
+  rb := REF(l);                                     (* a reference to a derived block is one to its base *)
+  rl ?= rb; found[2] := rl <> NULL; got := rl^.Go();
+  rb := REF(b); rl ?= rb; found[3] := rl <> NULL;   (* a Base is no Lamp: NULL *)
+  rl ?= li;                                         (* interface to reference: the Lamp behind it *)
+  IF rl <> NULL THEN got := got * 10 + rl^.Go(); END_IF;
+END_PROGRAM
+"""
+
+
+def test_assignment_attempt_casts_interfaces_and_references_at_run_time():
+    plc = run(ATTEMPT)
+    assert [plc[f"main.found[{i}]"] for i in range(4)] == [False, True, True, False]
+    assert plc["main.got"] == 22
+    assert plc["main.li"] == "Lamp"
+
+
+def test_assignment_attempt_needs_an_interface_or_reference_on_the_left():
+    msg = errors(ATTEMPT.replace("found[3] := rl <> NULL;", "found[3] := rl <> NULL; got ?= mv;"))
+    assert "?= needs an interface or a REF_TO a function block on the left, not INT" in msg
+    assert "error[E013]" in msg
+
+
+def test_a_reference_to_a_base_block_is_not_one_to_a_derived_block():
+    msg = errors(ATTEMPT.replace("rl ?= rb; found[2]", "rl := rb; found[2]"))
+    assert "oop.st:21:9: error[E013]: type mismatch: cannot assign REF_TO Base to REF_TO Lamp" in msg
+
+
+VAR_ACCESS = """
+FUNCTION_BLOCK Tank
+  VAR PRIVATE secret : INT := 7; END_VAR
+  VAR PROTECTED level : INT := 3; END_VAR
+  VAR PUBLIC shown : INT := 1; END_VAR
+  METHOD Peek : INT Peek := secret + level; END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK BigTank EXTENDS Tank
+  METHOD Twice : INT Twice := level * 2; END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR t : BigTank; a, b, c : INT; END_VAR
+  a := t.Peek(); b := t.Twice(); c := t.shown;
+END_PROGRAM
+"""
+
+
+def test_var_sections_with_access_specifiers():
+    plc = run(VAR_ACCESS)
+    assert (plc["main.a"], plc["main.b"], plc["main.c"]) == (10, 6, 1)
+
+
+@pytest.mark.parametrize("change, where, message", [
+    ("c := t.shown;", "13:41", "variable level of Tank is PROTECTED: only Tank and the blocks that extend it may use it"),
+    ("Twice := level * 2;", "9:31", "variable secret of Tank is PRIVATE: only Tank itself may use it"),
+])
+def test_var_access_violations_are_located(change, where, message):
+    replacement = {"c := t.shown;": "c := t.level;", "Twice := level * 2;": "Twice := secret * 2;"}[change]
+    msg = errors(VAR_ACCESS.replace(change, replacement))
+    assert f"oop.st:{where}: error[E043]: {message}" in msg
+
+
+def test_access_specifiers_belong_to_var_sections_of_blocks():
+    msg = errors("PROGRAM main VAR PRIVATE x : INT; END_VAR x := 1; END_PROGRAM")
+    assert "error[E003]: PRIVATE applies to the VAR sections of function blocks and classes" in msg

@@ -136,7 +136,8 @@ class Stmt:
 class Assign(Stmt):
     target: Expr = None
     value: Expr = None
-    kind: str = ":="        # ":=", "S=", "R=", "?="
+    kind: str = ":="        # ":=", "S=", "R=", "?=", "REF="
+    attempt: tuple = None   # for "?=": (kind name, source is a reference, destination is a reference)
 
 
 @dataclass(slots=True, eq=False)
@@ -294,7 +295,7 @@ class VarDecl:
 class VarBlock:
     span: Span
     kind: str               # VAR, VAR_INPUT, ... (upper case)
-    qualifiers: list        # CONSTANT, RETAIN, NON_RETAIN, PERSISTENT
+    qualifiers: list        # CONSTANT, RETAIN, NON_RETAIN, PERSISTENT, PUBLIC, PRIVATE, PROTECTED, INTERNAL
     decls: list
 
 

@@ -275,6 +275,7 @@ class VarSym:
     const_value: Any = None
     is_global: bool = False
     global_ref: Any = None  # VAR_EXTERNAL → the VAR_GLOBAL symbol
+    access: str = ""        # PUBLIC, PRIVATE, PROTECTED or INTERNAL from `VAR PRIVATE`; "" = unrestricted
 
 
 @dataclass(eq=False)

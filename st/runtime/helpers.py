@@ -256,10 +256,23 @@ class _ObjRef:
 
 def _query_itf(obj, itf: str, dest) -> bool:
     """__QUERYINTERFACE: store obj in dest when its block provides interface `itf`."""
-    if obj is not None and itf in getattr(type(obj), "_itfs", ()):
+    if obj is not None and itf in getattr(type(obj), "_kinds", ()):
         dest.set(obj)
         return True
     return False
+
+
+def _attempt(src, kind: str, src_is_ref: bool, dest_is_ref: bool):
+    """`dest ?= src`: what dest receives, the instance (or a reference to it) when it is a `kind`
+    (that block, a block extending it, or a provider of that interface), else NULL (None)."""
+    if src is None:
+        return None
+    obj = src.get() if src_is_ref else src
+    if kind not in getattr(type(obj), "_kinds", ()):
+        return None
+    if dest_is_ref:
+        return src if src_is_ref else _ObjRef(obj)
+    return obj
 
 
 class _ItemRef:
@@ -304,7 +317,7 @@ BASE_NAMESPACE = {
     "_round": _round, "_trunc": _trunc, "_ix": _ix, "_subrange": _subrange, "_setbit": _setbit,
     "_setbits": _setbits,
     "_for_dir": _for_dir, "_Struct": _Struct, "_FB": _FB, "_copy": _copy, "_assign": _assign,
-    "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ObjRef": _ObjRef, "_query_itf": _query_itf, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
+    "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ObjRef": _ObjRef, "_query_itf": _query_itf, "_attempt": _attempt, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
     "_float": float, "_int": int, "_range": range, "_abs": abs, "_min": min, "_max": max, "_len": len,
     "_str": str, "_bool": bool, "_PLCFault": PLCFault,
 }

@@ -488,6 +488,16 @@ class DeclarationsMixin:
             if kind == "VAR_GLOBAL":
                 self._global_blocks.append((owner.name, block))
                 return
+        access = [q for q in block.qualifiers if q in ("PUBLIC", "PRIVATE", "PROTECTED", "INTERNAL")]
+        if access:
+            if owner is None or owner.pou_kind != "FUNCTION_BLOCK" or kind != "VAR" \
+                    or getattr(owner, "owner_fb", None) is not None:
+                self.err("E003", block.span, f"{access[0]} applies to the VAR sections of function blocks and "
+                         f"classes (inputs and outputs are always public)")
+            else:
+                self.feature("oop", block.span, f"VAR {access[0]}")
+            if len(access) > 1:
+                self.err("E003", block.span, f"a VAR section has one access specifier, not {' and '.join(access)}")
         for decl in block.decls:
             t = self.resolve_type(decl.type, scope)
             if isinstance(t, T.POUType) and t.pou_kind == "FUNCTION_BLOCK" and t.decl is not None \
@@ -510,6 +520,8 @@ class DeclarationsMixin:
                                persistent="PERSISTENT" in quals, edge=decl.edge, pyname=mangle(n), owner=owner)
                 if kind == "VAR_EXTERNAL":
                     sym.is_global = True
+                if access:
+                    sym.access = access[0]
                 if kind == "VAR_STAT" and owner is not None:
                     # static: one variable shared by every instance and call, kept as a module global
                     self.feature("vendor", sp, "VAR_STAT")

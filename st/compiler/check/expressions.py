@@ -185,6 +185,8 @@ class ExpressionsMixin:
         if isinstance(sym, T.VarSym) and expected is not None and isinstance(T.base_of(expected), T.EnumType) \
                 and key in T.base_of(expected).members and not isinstance(T.base_of(sym.type), T.EnumType):
             sym = None      # an enum value of the expected type wins over a same-named variable
+        if isinstance(sym, T.VarSym) and sym.access:
+            self.check_access((sym.access,), sym.owner, f"variable {sym.name}", scope, e.span)
         if isinstance(sym, T.VarSym) and T.is_reference(sym.type):
             sym.used = True
             e.sym = sym
@@ -403,10 +405,10 @@ class ExpressionsMixin:
                     return None
                 self.err("E023", e.name_span, f"{b.name} has no variable '{e.name}'")
                 return None
-            if v.section in ("VAR", "VAR_TEMP") and b.pou_kind == "FUNCTION_BLOCK" and not b.library and \
-                    scope.pou is not b:
-                # IEC hides an FB's internal variables; most dialects let you read them
-                pass
+            # IEC hides an FB's internal variables; most dialects let you read them, so only an
+            # explicit `VAR PRIVATE` / `VAR PROTECTED` section restricts them
+            if v.access:
+                self.check_access((v.access,), v.owner, f"variable {v.name}", scope, e.name_span)
             v.used = True
             e.sym = v
             return v.type

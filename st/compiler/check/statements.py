@@ -78,6 +78,39 @@ class StatementsMixin:
         if mt.pyname.startswith("_m_") and mt.return_type is None and self._assigns_name(mt.decl.body, mt.name):
             self.err("E013", mt.decl.span, f"METHOD {mt.name} has no return type but assigns a result")
 
+    def _attempt_assign(self, s: A.Assign, scope: Scope) -> None:
+        """dest ?= src (assignment attempt): dest, an interface or a REF_TO a block, receives src's
+        instance when it is of dest's kind at run time, else NULL."""
+        self.feature("oop", s.span, "?= (assignment attempt)")
+        tt = self.lvalue(s.target, scope)
+        vt = self.expr(s.value, scope)
+        if tt is None or vt is None:
+            return
+
+        def classify(t):
+            u = T.unalias(t)
+            if isinstance(u, T.RefType) and isinstance(T.unalias(u.target), T.POUType) \
+                    and T.unalias(u.target).pou_kind in ("FUNCTION_BLOCK", "INTERFACE"):
+                return T.unalias(u.target), True
+            if isinstance(u, T.POUType) and u.pou_kind in ("FUNCTION_BLOCK", "INTERFACE"):
+                return u, False
+            return None, False
+
+        kind, dest_ref = classify(tt)
+        if kind is None or (not dest_ref and kind.pou_kind != "INTERFACE"):
+            self.err("E013", s.target.span, f"?= needs an interface or a REF_TO a function block on the left, "
+                     f"not {tt}")
+            return
+        if vt is _NULL:
+            s.attempt = (kind.name.lower(), False, dest_ref)
+            return
+        src, src_ref = classify(vt)
+        if src is None:
+            self.err("E013", s.value.span, f"?= needs an interface, a function block instance or a reference to "
+                     f"one on the right, not {vt}")
+            return
+        s.attempt = (kind.name.lower(), src_ref, dest_ref)
+
     def _assigns_name(self, body, name) -> bool:
         key = name.lower()
         for s in body:
@@ -169,6 +202,8 @@ class StatementsMixin:
     def stmt(self, s: A.Stmt, scope: Scope) -> None:
         if isinstance(s, A.Assign) and s.kind == "REF=":
             return self._ref_assign(s, scope)
+        if isinstance(s, A.Assign) and s.kind == "?=":
+            return self._attempt_assign(s, scope)
         if isinstance(s, A.Assign):
             tt = self.lvalue(s.target, scope)
             if s.kind in ("S=", "R="):
@@ -324,6 +359,9 @@ class StatementsMixin:
         if isinstance(s, T.RefType) and isinstance(d, T.RefType):
             if self._same_type(s.target, d.target) or s.target is None:
                 return True
+            st_, dt_ = T.unalias(s.target), T.unalias(d.target)
+            if isinstance(st_, T.POUType) and isinstance(dt_, T.POUType) and T.implements(st_, dt_):
+                return True            # a reference to a derived block is a reference to its base
         if s is _NULL and isinstance(d, T.RefType):
             return True
         if isinstance(d, T.POUType) and d.pou_kind == "INTERFACE":

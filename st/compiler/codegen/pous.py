@@ -93,16 +93,16 @@ class MethodGen(FuncGen):
         return fn
 
 
-def _interfaces_of(pou: T.POUType) -> set:
+def _kinds_of(pou: T.POUType) -> set:
+    """Lower-case names of what an instance is: its block, the blocks it extends and every
+    interface they provide (for __QUERYINTERFACE and ?=)."""
     out, todo = set(), [pou]
     while todo:
         x = todo.pop()
-        if x is None:
+        if x is None or x.name.lower() in out:
             continue
-        for i in x.interfaces:
-            if i.name.lower() not in out:
-                out.add(i.name.lower())
-                todo.append(i)
+        out.add(x.name.lower())
+        todo.extend(x.interfaces)
         todo.append(x.base)
     return out
 
@@ -159,10 +159,8 @@ class BodyGen(StmtGen):
                                                   _call("_SfcState", _name("_sfc_" + pou.pyname))), d.span.line))
             init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_sfc_x", py.Store())],
                                                   _attr(_attr(_name("self"), "_sfc"), "x")), d.span.line))
-        itfs = sorted(_interfaces_of(pou))
         members = [py.Assign([_name("__slots__", py.Store())], py.Tuple([_const(s) for s in slots], py.Load())),
-                   # the interfaces an instance provides (lower-case names), for __QUERYINTERFACE
-                   py.Assign([_name("_itfs", py.Store())], _const(tuple(itfs))),
+                   py.Assign([_name("_kinds", py.Store())], _const(tuple(sorted(_kinds_of(pou))))),
                    py.FunctionDef("__init__", _args(["self"]), init_body or [py.Pass()], [], None, None)]
         # caching policy: with actions, methods, THIS or SFC other code touches the variables during
         # the body: keep them attributes

@@ -83,6 +83,10 @@ class StmtGen(ExprGen):
             return [py.Expr(_call(_attr(obj, tgt.sym.set.pyname), value))]
         if s.kind in ("S=", "R="):
             return [py.If(self.expr(s.value), self.assign(tgt, _const(s.kind == "S="), None), [])]
+        if s.kind == "?=":
+            kind, src_ref, dest_ref = s.attempt
+            return self.assign(tgt, _call("_attempt", self.expr(s.value), _const(kind), _const(src_ref),
+                                          _const(dest_ref)), None)
         # a call with EN: assign only when enabled
         v = s.value
         if isinstance(v, A.Call) and isinstance(v.target, CallTarget) and v.target.kind == "function" \
