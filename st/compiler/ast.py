@@ -275,6 +275,7 @@ class EnumType(TypeSpec):
 @dataclass(slots=True, eq=False)
 class StructType(TypeSpec):
     members: list = None    # [VarDecl]
+    extends: Any = None     # NamedType of the base structure (CODESYS `TYPE B EXTENDS A : STRUCT`)
 
 
 # --------------------------------------------------------------------------- declarations

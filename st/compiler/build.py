@@ -68,7 +68,25 @@ class AstBuilder(Transformer):
 
     # ---------------------------------------------------------------- file
     def start(self, items):
-        return A.Unit(self.path, [i for i in items if i is not None])
+        out = []
+        for i in items:
+            if isinstance(i, (A.Method, A.Property, A.ActionDecl)):
+                self._attach(i, out)
+            elif i is not None:
+                out.append(i)
+        return A.Unit(self.path, out)
+
+    def _attach(self, part, items) -> None:
+        """A METHOD, PROPERTY or ACTION after END_FUNCTION_BLOCK / END_PROGRAM (the layout of TwinCAT
+        and CODESYS text exports) belongs to the block just before it in the file."""
+        owner = items[-1] if items and isinstance(items[-1], A.POU) and \
+            items[-1].kind in ("FUNCTION_BLOCK", "PROGRAM") else None
+        what = {A.Method: "METHOD", A.Property: "PROPERTY", A.ActionDecl: "ACTION"}[type(part)]
+        if owner is None:
+            self.errors.append(BuildError(part.span, f"this {what} is outside any FUNCTION_BLOCK or PROGRAM: "
+                                          f"declare it inside the block, or right after its END_FUNCTION_BLOCK"))
+            return
+        {A.Method: owner.methods, A.Property: owner.properties, A.ActionDecl: owner.actions}[type(part)].append(part)
 
     def name(self, c):
         return c[0]
@@ -86,6 +104,12 @@ class AstBuilder(Transformer):
     def type_item(self, c):
         name, (spec, init) = c
         self._not_reserved(name)
+        return A.TypeDecl(self.sp(name), str(name), spec, init)
+
+    def struct_extends_item(self, c):
+        name, base, (spec, init) = c[0], c[2], c[3]
+        self._not_reserved(name)
+        spec.extends = A.NamedType(self.sp(base), str(base))
         return A.TypeDecl(self.sp(name), str(name), spec, init)
 
     def alias_type(self, c):

@@ -4,7 +4,7 @@
               first scan; no object-oriented ST and no vendor extensions
     iec       IEC 61131-3 3rd edition, strict: object-oriented ST, REF_TO/REF()/NULL; no vendor
               extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
-              __NEW, __DELETE, VAR_INST, VAR_STAT)
+              __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of programs)
     codesys   the 3rd edition plus CODESYS's extensions; {attribute '…'} pragmas accepted silently
     twincat   as codesys (TwinCAT 3 is CODESYS-based)
 
@@ -26,7 +26,8 @@ class Dialect:
     f_trig_first_scan: bool = False
     oop: bool = True                   # METHOD, PROPERTY, INTERFACE, CLASS, EXTENDS, IMPLEMENTS, THIS, SUPER
     vendor_extensions: bool = True     # POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
-    #                                    __NEW, __DELETE, VAR_INST in methods, VAR_STAT
+    #                                    __NEW, __DELETE, VAR_INST in methods, VAR_STAT, STRUCT EXTENDS,
+    #                                    METHODs of a PROGRAM
     attribute_pragmas: bool = False    # {attribute '…'} without a warning
 
 

@@ -89,6 +89,11 @@ class CallsMixin:
                 mt = method_of(b, callee.name.lower())
                 if mt is not None:
                     return self._method_call(c, mt, scope, callee.base)
+                if callee.name.lower() in b.actions and b.pou_kind == "FUNCTION_BLOCK":
+                    if c.args:                     # inst.Action(): CODESYS and TwinCAT call actions so
+                        self.err("E017", c.span, "an action takes no arguments")
+                    c.target = CallTarget("action", name=callee.name.lower(), inst=callee.base)
+                    return None
         # a call through a path: inst.sub(...), arr[i](...)
         t = self.expr(callee, scope)
         if t is None:

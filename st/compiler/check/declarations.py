@@ -103,6 +103,13 @@ class DeclarationsMixin:
         if isinstance(spec, A.StructType):
             st = T.StructType(td.name, pyname="_st_" + mangle(td.name))
             self.p.types[td.name.lower()] = st     # allow references to itself through REF_TO
+            if spec.extends is not None:           # the base's fields come first, as declared there
+                self.feature("vendor", spec.extends.span, "STRUCT EXTENDS")
+                bt = T.unalias(self.resolve_type(spec.extends, None))
+                if isinstance(bt, T.StructType):
+                    st.members.update(bt.members)
+                else:
+                    self.err("E012", spec.extends.span, f"a structure can only extend a structure, not {bt}")
             for d in spec.members:
                 mt = self.resolve_type(d.type, None)
                 for n, sp in d.names:
@@ -265,6 +272,8 @@ class DeclarationsMixin:
         for pr in getattr(d, "properties", ()):
             self._declare_property(pou, pr)
         if base is not None:
+            for k, ba in base.actions.items():
+                pou.actions.setdefault(k, ba)        # actions are inherited; a same-named one replaces it
             for k, bp in base.properties.items():
                 mine = pou.properties.get(k)
                 if mine is None:
@@ -449,6 +458,8 @@ class DeclarationsMixin:
         if (key in fb.methods and fb.methods[key].owner_fb is fb) or key in fb.vars or key in fb.actions:
             self.err("E011", m.span, f"'{m.name}' is declared twice in {fb.name}")
             return
+        if fb.pou_kind == "PROGRAM":
+            self.feature("vendor", m.span, "a METHOD of a PROGRAM")
         mt = T.POUType(m.name, "FUNCTION", decl=m, library=fb.library)
         mt.pyname = "_m_" + mangle(m.name)
         mt.owner_fb = fb

@@ -164,7 +164,7 @@ class BodyGen(StmtGen):
                    py.FunctionDef("__init__", _args(["self"]), init_body or [py.Pass()], [], None, None)]
         # caching policy: with actions, methods, THIS or SFC other code touches the variables during
         # the body: keep them attributes
-        can_cache = not d.actions and sfc is None and not pou.methods and not pou.properties \
+        can_cache = not pou.actions and sfc is None and not pou.methods and not pou.properties \
             and not _mentions_this(d.body)
         if sfc is not None:
             run = py.Expr(_call(_attr(_attr(_name("self"), "_sfc"), "run"), _name("self"), _name("_now")))
@@ -173,7 +173,7 @@ class BodyGen(StmtGen):
         else:
             members.append(self.method("_body", d.body, can_cache, edges, d.span.line,
                                        d.end_span.line if d.end_span else d.span.line))
-        for act in d.actions:
+        for act in pou.actions.values():              # its own and inherited ones
             g = BodyGen(self.mod, pou)
             members.append(g.method("_act_" + act.name.lower(), act.body, False, [], act.span.line, act.span.line))
         for mt in pou.methods.values():

@@ -166,7 +166,8 @@ class StmtGen(ExprGen):
         if tgt.kind == "fb":
             return self.fb_call(c, tgt)
         if tgt.kind == "action":
-            return [py.Expr(_call(_attr(_name(self.self_name), "_act_" + tgt.name)))]
+            inst = self.expr(tgt.inst) if getattr(tgt, "inst", None) is not None else _name(self.self_name)
+            return [py.Expr(_call(_attr(inst, "_act_" + tgt.name)))]
         if tgt.kind == "method":
             return [py.Expr(self.method_call(c, tgt))]
         if tgt.kind == "delete":

@@ -1,0 +1,197 @@
+"""Sources laid out as CODESYS and TwinCAT write them: DUTs without ';' after END_STRUCT,
+STRUCT EXTENDS, methods/properties/actions after END_FUNCTION_BLOCK, methods of programs,
+qualified enums, calls chained on call results."""
+import pytest
+
+from st import PLC
+from st.api import compile_text
+from st.diagnostics import CompileError
+from st.runtime.plc import PLCFaultError
+
+
+def run(src: str, scans: int = 1, dialect=None) -> PLC:
+    plc = PLC(compile_text(src, "tc.st", dialect=dialect))
+    plc.scan(scans)
+    return plc
+
+
+def errors(src: str) -> str:
+    with pytest.raises(CompileError) as e:
+        compile_text(src, "tc.st")
+    return str(e.value)
+
+
+TWINCAT = """
+{attribute 'qualified_only'}
+{attribute 'strict'}
+TYPE E_State :
+(
+    IDLE := 0,
+    RUNNING,
+    DONE
+) UINT;
+END_TYPE
+
+TYPE ST_Base :
+STRUCT
+    id : INT;
+END_STRUCT
+END_TYPE
+
+TYPE ST_Sample EXTENDS ST_Base :
+STRUCT
+    value : REAL := 0.5;
+END_STRUCT
+END_TYPE
+
+FUNCTION_BLOCK FB_Axis
+VAR_INPUT
+    bEnable : BOOL;
+END_VAR
+VAR
+    _eState : E_State := E_State.IDLE;
+    _fPos : LREAL;
+    _nMoves : INT;
+END_VAR
+IF bEnable AND _eState = E_State.IDLE THEN
+    _eState := E_State.RUNNING;
+END_IF
+END_FUNCTION_BLOCK
+
+METHOD PUBLIC MoveTo : BOOL
+VAR_INPUT
+    fTarget : LREAL;
+END_VAR
+IF _eState <> E_State.RUNNING THEN
+    RETURN;
+END_IF
+_fPos := fTarget;
+_nMoves := _nMoves + 1;
+MoveTo := TRUE;
+END_METHOD
+
+PROPERTY PUBLIC Position : LREAL
+GET
+    Position := _fPos;
+END_GET
+SET
+    _fPos := Position;
+END_SET
+END_PROPERTY
+
+ACTION Park:
+    _fPos := 0;
+    _eState := E_State.DONE;
+END_ACTION
+
+PROGRAM MAIN
+VAR
+    fbAxis : FB_Axis;
+    stS : ST_Sample;
+    bMoved, bBefore : BOOL;
+    fPos, fParked : LREAL;
+    nTotal : INT;
+END_VAR
+bBefore := fbAxis.MoveTo(5.0);          (* not running yet: FALSE *)
+fbAxis(bEnable := TRUE);
+bMoved := fbAxis.MoveTo(12.5);
+fPos := fbAxis.Position;
+fbAxis.Position := 3.0;
+fbAxis.Park();
+fParked := fbAxis.Position;
+stS.id := 7;
+nTotal := Count(stS.id);
+END_PROGRAM
+
+METHOD Count : INT
+VAR_INPUT n : INT; END_VAR
+nTotal := nTotal + n;
+Count := nTotal;
+END_METHOD
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_a_twincat_layout_compiles_and_runs(dialect):
+    plc = run(TWINCAT, 1, dialect)
+    assert plc["MAIN.bBefore"] is False and plc["MAIN.bMoved"] is True
+    assert plc["MAIN.fPos"] == 12.5 and plc["MAIN.fParked"] == 0.0
+    assert plc["MAIN.fbAxis._eState"] == "DONE" and plc["MAIN.fbAxis._nMoves"] == 1
+    assert plc["MAIN.stS.id"] == 7 and plc["MAIN.stS.value"] == 0.5      # inherited and own field
+    assert plc["MAIN.nTotal"] == 7                                        # a PROGRAM's method
+    plc.scan()
+    assert plc["MAIN.bMoved"] is False and plc["MAIN.nTotal"] == 14       # parked: DONE, not RUNNING
+
+
+def test_struct_extends_needs_a_structure_and_a_vendor_dialect():
+    src = "TYPE A : STRUCT x : INT; END_STRUCT END_TYPE\nTYPE B EXTENDS INT : STRUCT y : INT; END_STRUCT END_TYPE\n"
+    assert "tc.st:2:16: error[E012]: a structure can only extend a structure, not INT" in errors(src)
+    with pytest.raises(CompileError) as e:
+        compile_text(src.replace("EXTENDS INT", "EXTENDS A"), "tc.st", dialect="iec")
+    assert "tc.st:2:16: error[E044]: STRUCT EXTENDS is not part of the iec dialect" in str(e.value)
+
+
+def test_a_method_outside_any_block_is_a_located_error():
+    msg = errors("METHOD M : INT\nM := 1;\nEND_METHOD\nPROGRAM p VAR x : INT; END_VAR x := 1; END_PROGRAM\n")
+    assert "tc.st:1:8: error[E003]: this METHOD is outside any FUNCTION_BLOCK or PROGRAM" in msg
+
+
+CHAIN = """
+TYPE P : STRUCT x, y : INT; END_STRUCT END_TYPE
+INTERFACE I METHOD Val : INT END_METHOD END_INTERFACE
+FUNCTION MkP : P
+  VAR_INPUT a : INT; END_VAR
+  MkP.x := a; MkP.y := a * 2;
+END_FUNCTION
+FUNCTION_BLOCK Node IMPLEMENTS I
+  VAR_INPUT v : INT; END_VAR
+  VAR nxt : I; cell : INT; END_VAR
+  METHOD Val : INT Val := v; END_METHOD
+  METHOD Next : I Next := nxt; END_METHOD
+  METHOD Link : I VAR_INPUT n : I; END_VAR nxt := n; Link := THIS^; END_METHOD
+  METHOD GetCell : REF_TO INT GetCell := REF(cell); END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR a, b : Node; r1, r2, r3 : INT; END_VAR
+  a.v := 1; b.v := 2;
+  r1 := MkP(3).y;
+  r2 := a.Link(b).Val() * 10 + a.Next().Val();
+  a.GetCell()^ := 42;
+  r3 := a.GetCell()^ + b.Next().Val();
+END_PROGRAM
+"""
+
+
+def test_calls_chained_on_call_results():
+    plc = run(CHAIN.replace("b.Next().Val()", "1"))
+    assert (plc["main.r1"], plc["main.r2"], plc["main.r3"]) == (6, 12, 43)
+    assert plc["main.a.cell"] == 42
+
+
+def test_a_chained_call_through_null_is_a_null_fault_at_its_line():
+    plc = PLC(compile_text(CHAIN, "tc.st"))
+    with pytest.raises(PLCFaultError) as e:
+        plc.scan()
+    assert e.value.fault.kind == "NULL" and e.value.fault.line == 22 and plc.state == "FAULT"
+
+
+def test_actions_are_inherited_and_callable_on_an_instance():
+    plc = run("""
+FUNCTION_BLOCK Base
+  VAR_OUTPUT n : INT; END_VAR
+  ACTION Inc: n := n + 1; END_ACTION
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Derived EXTENDS Base
+  Inc(); Inc();
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR d : Derived; END_VAR
+  d(); d.Inc();
+END_PROGRAM
+""")
+    assert plc["main.d.n"] == 3
+    msg = errors("""
+FUNCTION_BLOCK Base ACTION Inc: ; END_ACTION END_FUNCTION_BLOCK
+PROGRAM main VAR b : Base; END_VAR b.Inc(1); END_PROGRAM
+""")
+    assert "tc.st:3:36: error[E017]: an action takes no arguments" in msg
