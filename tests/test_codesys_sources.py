@@ -195,3 +195,67 @@ FUNCTION_BLOCK Base ACTION Inc: ; END_ACTION END_FUNCTION_BLOCK
 PROGRAM main VAR b : Base; END_VAR b.Inc(1); END_PROGRAM
 """)
     assert "tc.st:3:36: error[E017]: an action takes no arguments" in msg
+
+
+FB_INIT = """
+FUNCTION_BLOCK Base
+  VAR_OUTPUT log : STRING; id : INT; END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; nId : INT := 9; END_VAR
+    id := nId;
+    log := CONCAT(log, 'B');
+    IF bInitRetains AND NOT bInCopyCode THEN log := CONCAT(log, '+'); END_IF;
+  END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Derived EXTENDS Base
+  VAR_INPUT gain : REAL := 1.0; END_VAR
+  VAR scale : REAL; inner : Base(nId := 4); END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; nId : INT; fScale : REAL := 2.0; END_VAR
+    scale := fScale * gain;
+    log := CONCAT(log, 'D');
+  END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR
+    a : Base;
+    b : Base(nId := 5);
+    d : Derived(nId := 7, fScale := 3.0) := (gain := 10.0);
+    arr : ARRAY[0..1] OF Derived;
+    calls : INT;
+  END_VAR
+  calls := calls + 1;
+END_PROGRAM
+"""
+
+
+def test_fb_init_runs_once_per_instance_with_declaration_arguments_base_first():
+    plc = run(FB_INIT, 3)
+    assert (plc["main.a.id"], plc["main.a.log"]) == (9, "B+")
+    assert (plc["main.b.id"], plc["main.b.log"]) == (5, "B+")
+    # the base's FB_init gets the inputs it declares (nId), then the derived one runs; the
+    # declared initial values (gain := 10.0) are in place before either
+    assert (plc["main.d.id"], plc["main.d.log"], plc["main.d.scale"]) == (7, "B+D", 30.0)
+    assert (plc["main.d.inner.id"], plc["main.d.inner.log"]) == (4, "B+")
+    assert [plc[f"main.arr[{i}].scale"] for i in range(2)] == [2.0, 2.0]
+    assert plc["main.arr[1].id"] == 9 and plc["main.calls"] == 3
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ("b : Base(nId := 5);", "b : Base(nSize := 5);",
+     "tc.st:23:14: error[E017]: FB_init of Base has no input 'nSize' to set here"),
+    ("calls : INT;", "calls : INT(n := 1);",
+     "tc.st:26:13: error[E013]: arguments in a declaration go to a function block's FB_init; INT is not a function block"),
+    ("nId : INT := 9; END_VAR", "nId : INT := 9; END_VAR VAR_OUTPUT o : INT; END_VAR",
+     "tc.st:5:91: error[E017]: FB_init runs when the instance is created: it takes inputs only"),
+    ("b : Base(nId := 5);", "b : Base(nId := 'abc');",
+     "tc.st:23:21: error[E013]: type mismatch: cannot assign STRING[3] to INT"),
+])
+def test_fb_init_errors_are_located(old, new, message):
+    assert message in errors(FB_INIT.replace(old, new))
+
+
+def test_fb_init_arguments_are_a_vendor_extension():
+    with pytest.raises(CompileError) as e:
+        compile_text(FB_INIT, "tc.st", dialect="iec")
+    assert "tc.st:13:29: error[E044]: FB_init arguments in a declaration is not part of the iec dialect" in str(e.value)

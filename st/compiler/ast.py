@@ -124,6 +124,15 @@ class StructInit:
     fields: list            # of (name, span, initializer)
 
 
+@dataclass(slots=True, eq=False)
+class CtorInit:
+    """`inst : FB(a := 1)` (CODESYS): arguments for the block's FB_init, plus an ordinary
+    initializer (`:= (x := 2)`) if one is given too."""
+    span: Span
+    args: list              # of (name, span, expression)
+    inner: Any = None
+
+
 # --------------------------------------------------------------------------- statements
 
 
@@ -231,6 +240,7 @@ class TypeSpec:
 @dataclass(slots=True, eq=False)
 class NamedType(TypeSpec):
     name: str = ""
+    ctor_args: list = None  # `FB(a := 1)`: FB_init arguments, moved to the declaration's CtorInit
 
 
 @dataclass(slots=True, eq=False)

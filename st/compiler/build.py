@@ -141,6 +141,9 @@ class AstBuilder(Transformer):
     def named_type(self, c):
         return A.NamedType(self.sp(c[0]), str(c[0]))
 
+    def ctor_type(self, c):
+        return A.NamedType(self.sp(c[0]), str(c[0]), [(n, sp, v) for n, sp, v in c[1:]])
+
     def string_type(self, c):
         kw = str(c[0]).upper()
         return A.StringType(self.sp(c[0]), kw == "WSTRING", c[1] if len(c) > 1 else None)
@@ -196,6 +199,9 @@ class AstBuilder(Transformer):
                 edge = x[1]
             else:
                 init = x
+        if isinstance(spec, A.NamedType) and spec.ctor_args:
+            init = A.CtorInit(spec.span, spec.ctor_args, init)
+            spec.ctor_args = None
         return A.VarDecl(self.sp(names[0]), [(str(n), self.sp(n)) for n in names], spec, init,
                          location, edge)
 

@@ -326,6 +326,19 @@ class PropSym:
     span: Any = None
 
 
+def fb_init_chain(pou: "POUType") -> list:
+    """The FB_init methods that construct an instance of `pou` (CODESYS): its bases' first, then
+    its own; each block's own one only (an inherited entry is its base's)."""
+    chain = []
+    x = pou
+    while isinstance(x, POUType):
+        own = x.methods.get("fb_init")
+        if own is not None and own.owner_fb is x:
+            chain.append(own)
+        x = x.base
+    return chain[::-1]
+
+
 def implements(t: Type, itf: "POUType") -> bool:
     """Does a function block or interface type provide interface `itf` (directly, through its
     base blocks, or through interfaces that extend it)?"""

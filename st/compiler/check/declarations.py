@@ -9,6 +9,9 @@ from .. import types as T
 from ..names import mangle
 from .common import _DIRECT, _DIRECT_TYPES, Scope, _names_in
 
+# CODESYS's implicit methods: FB_init runs when an instance is created (before the first scan)
+_CONSTRUCTION = ("fb_init", "fb_reinit", "fb_exit")
+
 
 MAX_ARRAY_ELEMENTS = 50_000_000
 
@@ -170,6 +173,9 @@ class DeclarationsMixin:
 
     def resolve_type(self, spec: A.TypeSpec, scope: Optional[Scope]) -> T.Type:
         if isinstance(spec, A.NamedType):
+            if spec.ctor_args:
+                self.err("E013", spec.span, "FB_init arguments belong where an instance is declared "
+                         "(`inst : FB(a := 1);`), not in a type")
             key = spec.name.lower()
             up = spec.name.upper()
             if up in T.ELEMENTARY:
@@ -235,6 +241,33 @@ class DeclarationsMixin:
             return T.INT
         raise AssertionError(spec)
 
+    def _check_ctor_args(self, init: A.CtorInit, t: T.Type, scope: Optional[Scope]) -> None:
+        """`inst : FB(a := 1)`: the arguments go to the inputs of FB's FB_init (CODESYS)."""
+        self.feature("vendor", init.span, "FB_init arguments in a declaration")
+        bt = T.unalias(t)
+        if not (isinstance(bt, T.POUType) and bt.pou_kind == "FUNCTION_BLOCK"):
+            self.err("E013", init.span, f"arguments in a declaration go to a function block's FB_init; "
+                     f"{t} is not a function block")
+            return
+        self._resolve_interface(bt)
+        mt = bt.methods.get("fb_init")
+        if mt is None:
+            self.err("E017", init.span, f"{bt.name} has no FB_init method to take these arguments")
+            return
+        inputs = {p.name.lower(): p for p in mt.params() if p.section == "VAR_INPUT"}
+        seen = set()
+        for name, sp, val in init.args:
+            p = inputs.get(name.lower())
+            if p is None or name.lower() in ("binitretains", "bincopycode"):
+                self.err("E017", sp, f"FB_init of {bt.name} has no input '{name}' to set here")
+                continue
+            if name.lower() in seen:
+                self.err("E017", sp, f"'{name}' is given twice")
+            seen.add(name.lower())
+            self.check_initializer(val, p.type, scope)
+        if init.inner is not None:
+            self.check_initializer(init.inner, t, scope)
+
     # ================================================================ interfaces
     def _resolve_interface(self, pou: T.POUType) -> None:
         if pou.resolved or pou.decl is None:
@@ -285,7 +318,7 @@ class DeclarationsMixin:
                 mine = pou.methods.get(k)
                 if mine is None:
                     pou.methods[k] = bm
-                else:
+                elif k not in _CONSTRUCTION:           # each block's FB_init has its own inputs
                     self._check_override(pou, mine, bm)
         if d.kind == "FUNCTION_BLOCK" and d.implements:
             self._check_implements(pou)
@@ -475,6 +508,8 @@ class DeclarationsMixin:
             if v.section == "VAR_INST":               # kept in the instance between calls
                 self.feature("vendor", v.span, "VAR_INST")
                 v.pyname = f"_mi_{mangle(m.name)}_{v.pyname}"
+            if key in _CONSTRUCTION and v.section in ("VAR_IN_OUT", "VAR_OUTPUT"):
+                self.err("E017", v.span, f"{m.name} runs when the instance is created: it takes inputs only")
         fb.methods[key] = mt
 
     def _declare_block(self, block: A.VarBlock, table: dict, scope: Optional[Scope], owner) -> None:
@@ -724,6 +759,8 @@ class DeclarationsMixin:
     # ================================================================ initializers
     def check_initializer(self, init, t: T.Type, scope: Optional[Scope]) -> None:
         bt = T.unalias(t)
+        if isinstance(init, A.CtorInit):
+            return self._check_ctor_args(init, t, scope)
         if isinstance(init, A.ArrayInit):
             if not isinstance(bt, T.ArrayType):
                 self.err("E013", init.span, f"an array initializer cannot initialize a {t}")

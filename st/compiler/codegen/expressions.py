@@ -38,9 +38,20 @@ class InitGen:
         if isinstance(ut, T.POUType) and ut.pou_kind == "INTERFACE":
             return _const(None)                     # an interface variable: no instance yet (NULL)
         if isinstance(ut, T.POUType):
+            ctor = init if isinstance(init, A.CtorInit) else None
+            if ctor is not None:
+                init = ctor.inner
             obj = _call(ut.pyname)
             if isinstance(init, A.StructInit):
-                return self._with_fields(obj, init, lambda n: _member_of_pou(ut, n))
+                obj = self._with_fields(obj, init, lambda n: _member_of_pou(ut, n))
+            if T.fb_init_chain(ut):                 # CODESYS: FB_init runs once the values are set
+                keys, values = [], []
+                if ctor is not None:
+                    inputs = {p.name.lower(): p for p in ut.methods["fb_init"].params()}
+                    for name, sp, val in ctor.args:
+                        keys.append(_const(name.lower()))
+                        values.append(self.initial(inputs[name.lower()].type, val))
+                obj = _call(_attr(obj, "_ctor"), py.Dict(keys, values))
             return obj
         if init is None:
             return _const(default_value(t))

@@ -93,6 +93,21 @@ class MethodGen(FuncGen):
         return fn
 
 
+def _fb_init_args(mt: T.POUType, init: InitGen) -> list:
+    """Arguments of an implicit FB_init call: bInitRetains TRUE (a cold start: retained values are
+    restored afterwards), bInCopyCode FALSE, the others from the declaration or their defaults."""
+    args = []
+    for p in mt.params():
+        key = p.name.lower()
+        if key == "binitretains":
+            args.append(_const(True))
+        elif key == "bincopycode":
+            args.append(_const(False))
+        else:
+            args.append(_call(_attr(_name("a"), "get"), _const(key), init.initial(p.type, p.init)))
+    return args
+
+
 def _kinds_of(pou: T.POUType) -> set:
     """Lower-case names of what an instance is: its block, the blocks it extends and every
     interface they provide (for __QUERYINTERFACE and ?=)."""
@@ -173,6 +188,9 @@ class BodyGen(StmtGen):
         else:
             members.append(self.method("_body", d.body, can_cache, edges, d.span.line,
                                        d.end_span.line if d.end_span else d.span.line))
+        chain = T.fb_init_chain(pou)
+        if chain:
+            members.append(self._constructor(chain, d.span.line))
         for act in pou.actions.values():              # its own and inherited ones
             g = BodyGen(self.mod, pou)
             members.append(g.method("_act_" + act.name.lower(), act.body, False, [], act.span.line, act.span.line))
@@ -209,6 +227,15 @@ class BodyGen(StmtGen):
         desc = _call("_SfcDesc", _const(len(sfc.steps)), _const(initial), _const(trans), _const(tuple(steps)),
                      _const(tuple(actions)))
         return _set_lines(py.Assign([_name("_sfc_" + pou.pyname, py.Store())], desc), pou.decl.span.line)
+
+    def _constructor(self, chain: list, line: int) -> py.FunctionDef:
+        """_ctor(self, a): run every FB_init of the chain, base first (a: the declaration's
+        arguments by lower-case name); returns the instance."""
+        init = InitGen(self.mod)
+        body = [py.Expr(_call(_attr(_name(mt.owner_fb.pyname), mt.pyname), _name("self"), *_fb_init_args(mt, init)))
+                for mt in chain]
+        body.append(py.Return(_name("self")))
+        return _set_lines(py.FunctionDef("_ctor", _args(["self", "a"]), body, [], None, None), line)
 
     def method(self, name, body, can_cache, edges, line, end_line) -> py.FunctionDef:
         pou = self.pou
