@@ -849,3 +849,36 @@ def test_var_access_violations_are_located(change, where, message):
 def test_access_specifiers_belong_to_var_sections_of_blocks():
     msg = errors("PROGRAM main VAR PRIVATE x : INT; END_VAR x := 1; END_PROGRAM")
     assert "error[E003]: PRIVATE applies to the VAR sections of function blocks and classes" in msg
+
+
+ABSTRACT_PROPERTY = """
+FUNCTION_BLOCK ABSTRACT Sensor
+  PROPERTY ABSTRACT Value : REAL
+    GET END_GET
+  END_PROPERTY
+  METHOD Scaled : REAL
+    Scaled := Value * 2.0;
+  END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Temp EXTENDS Sensor
+  VAR raw : REAL := 21.5; END_VAR
+  PROPERTY Value : REAL
+    GET Value := raw; END_GET
+  END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR t : Temp; r : REAL; END_VAR
+  r := t.Scaled();
+END_PROGRAM
+"""
+
+
+def test_an_abstract_property_is_provided_by_the_derived_block():
+    assert run(ABSTRACT_PROPERTY)["main.r"] == 43.0
+
+
+def test_an_abstract_property_must_be_implemented():
+    msg = errors(ABSTRACT_PROPERTY + "FUNCTION_BLOCK Bad EXTENDS Sensor\nEND_FUNCTION_BLOCK\n")
+    assert "oop.st:20:16: error[E043]: Bad does not implement the ABSTRACT property Value of Sensor" in msg
+    msg = errors(ABSTRACT_PROPERTY.replace("    GET END_GET", "    GET Value := 1.0; END_GET"))
+    assert "oop.st:3:21: error[E043]: ABSTRACT property Value has a body" in msg

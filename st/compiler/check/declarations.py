@@ -341,6 +341,18 @@ class DeclarationsMixin:
             elif "ABSTRACT" in mods and not abstract_fb:
                 self.err("E043", d.span, f"{fb.name} does not implement the ABSTRACT method {mt.name} of "
                          f"{mt.owner_fb.name}")
+        for ps in fb.properties.values():
+            acc = ps.get or ps.set
+            if acc is None or acc.decl is None or "ABSTRACT" not in acc.decl.modifiers:
+                continue
+            if ps.owner is fb:
+                if not abstract_fb:
+                    self.err("E043", ps.span, f"ABSTRACT property {ps.name} in {fb.name}, which is not ABSTRACT")
+                if any(a is not None and a.decl.body for a in (ps.get, ps.set)):
+                    self.err("E043", ps.span, f"ABSTRACT property {ps.name} has a body")
+            elif not abstract_fb:
+                self.err("E043", d.span, f"{fb.name} does not implement the ABSTRACT property {ps.name} of "
+                         f"{ps.owner.name}")
 
     def _interface_named(self, name: str, span, who: str):
         itf = self.p.pous.get(name.lower())
