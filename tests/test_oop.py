@@ -882,3 +882,43 @@ def test_an_abstract_property_must_be_implemented():
     assert "oop.st:20:16: error[E043]: Bad does not implement the ABSTRACT property Value of Sensor" in msg
     msg = errors(ABSTRACT_PROPERTY.replace("    GET END_GET", "    GET Value := 1.0; END_GET"))
     assert "oop.st:3:21: error[E043]: ABSTRACT property Value has a body" in msg
+
+
+RELINK = """
+INTERFACE I_Count METHOD Bump : INT END_METHOD END_INTERFACE
+FUNCTION_BLOCK Counter IMPLEMENTS I_Count
+  VAR_OUTPUT n : INT; END_VAR
+  METHOD Bump : INT n := n + 1; Bump := n; END_METHOD
+END_FUNCTION_BLOCK
+TYPE Box : STRUCT v : INT; END_STRUCT END_TYPE
+VAR_GLOBAL gc : Counter; gi : I_Count; gr : REF_TO INT; END_VAR
+PROGRAM main
+  VAR_EXTERNAL gc : Counter; gi : I_Count; gr : REF_TO INT; END_VAR
+  VAR
+    c : Counter; arr : ARRAY[0..1] OF Counter; b : Box;
+    it : I_Count; its : ARRAY[0..1] OF I_Count;
+    rb : REF_TO INT; pc : POINTER TO Counter; rr : REFERENCE TO INT;
+    init : BOOL; last : INT;
+  END_VAR
+  IF NOT init THEN
+    it := c; its[0] := arr[1]; its[1] := gc; gi := c;
+    rb := REF(b.v); pc := ADR(arr[0]); rr REF= b.v; gr := REF(c.n);
+    init := TRUE;
+  END_IF
+  last := it.Bump() + its[0].Bump() + its[1].Bump() + gi.Bump();
+  rb^ := rb^ + 1; pc^.Bump(); rr := rr + 1; gr^ := gr^ + 100;
+END_PROGRAM
+"""
+
+
+def test_online_change_points_interfaces_and_references_at_the_new_instances():
+    plc = PLC(compile_text(RELINK, "v1.st"))
+    plc.scan(2)
+    before = (plc["main.c.n"], plc["main.arr[1].n"], plc["main.arr[0].n"], plc["gc.n"], plc["main.b.v"])
+    assert before == (204, 2, 2, 2, 4)       # c: it and gi bump it (2 per scan), gr adds 100
+    plc.online_change(compile_text(RELINK.replace("n := n + 1;", "n := n + 10;"), "v2.st"))
+    plc.scan()
+    # every link now reaches the new objects: the new code (+10) changes the carried-over values
+    assert (plc["main.c.n"], plc["main.arr[1].n"], plc["main.arr[0].n"], plc["gc.n"], plc["main.b.v"]) == \
+        (204 + 20 + 100, 12, 12, 12, 6)
+    assert plc["main.last"] == 214 + 12 + 12 + 224

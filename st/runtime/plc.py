@@ -21,6 +21,7 @@ from .clock import RealClock, VirtualClock
 from .faults import FaultInfo, fault_from_exception
 from .namespace import build_namespace
 from .process_image import AddressError, Binding, ProcessImage, from_raw, parse_address, to_raw
+from .relink import relink
 from .retain import RetainStore
 from .scheduler import Task, make_policy
 from .stats import TaskStats
@@ -550,6 +551,12 @@ class PLC:
             og = old_globals.get(g.pyname)
             if og is not None and str(og[0].type) == str(g.type):
                 _restore_into(self.ns, g.pyname, g.type, to_python(og[1], og[0].type))
+        # interface variables and references still point into the old objects: re-aim them
+        relink([(old_instances[k][1], obj, old_instances[k][2], pou)
+                for k, (name, obj, pou) in self.instances.items() if k in old_instances],
+               [(g.pyname, g.pyname, old_globals[g.pyname][0].type, g.type)
+                for g in self.project.globals.values() if g.pyname in old_globals],
+               old_ns, self.ns)
         self.ns["_now"] = old_ns.get("_now", 0)
         for t in self.tasks:
             for b in t.outs:
@@ -764,14 +771,14 @@ def _restore_into(container, key, t, value) -> None:
             raise ValueError("array size changed")
         for i, v in enumerate(flat):
             _restore_into(arr, i, ut.element, v)
+    elif isinstance(ut, T.RefType) or (isinstance(ut, T.POUType) and ut.pou_kind == "INTERFACE"):
+        return                                   # references: re-aimed by relink()
     elif isinstance(ut, (T.StructType, T.POUType)):
         obj = _get(container, key)
         members = ut.members if isinstance(ut, T.StructType) else ut.vars
         for m in members.values():
             if m.name in value and getattr(m, "section", "") not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
                 _restore_into(obj, m.pyname, m.type, value[m.name])
-    elif isinstance(ut, T.RefType):
-        return
     else:
         _set(container, key, from_python(value, t, ""))
 

@@ -1,0 +1,145 @@
+"""Online change for references: after the values of the old program are copied into the new one,
+interface variables, REF_TO / POINTER TO / REFERENCE TO values still point into the OLD objects.
+`relink` walks the old and the new variables side by side (by name and type, as the copy did),
+pairs every old instance, structure and array with its new counterpart, and then points each
+reference at the new object in the same place. What has no counterpart any more becomes NULL;
+values made by __NEW (outside every variable) are kept as they are."""
+from __future__ import annotations
+
+from ..compiler import types as T
+from .helpers import _AttrRef, _ItemRef, _NegRef, _ObjRef
+
+_SKIP = ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT")
+
+
+def _members(t):
+    if isinstance(t, T.StructType):
+        return {k: m for k, m in t.members.items()}
+    return {k: s for k, s in t.vars.items() if s.section not in _SKIP}
+
+
+def _walk(old, new, ot, nt, visit_leaf, seen, pairs):
+    """Visit (old, new) values of types (ot, nt); aggregates are paired in `pairs` and recursed."""
+    ou, nu = T.unalias(ot), T.unalias(nt)
+    if old is None or new is None or str(ou) != str(nu):
+        return
+    if isinstance(nu, T.ArrayType):
+        if not isinstance(old, list) or not isinstance(new, list) or len(old) != len(new):
+            return
+        pairs[id(old)] = new
+        if id(new) in seen:
+            return
+        seen.add(id(new))
+        for i in range(len(new)):
+            if _is_link(nu.element):
+                visit_leaf(old, new, i, nu.element)
+            else:
+                _walk(old[i], new[i], ou.element, nu.element, visit_leaf, seen, pairs)
+    elif isinstance(nu, T.StructType) or (isinstance(nu, T.POUType) and nu.pou_kind != "INTERFACE"):
+        pairs[id(old)] = new
+        if id(new) in seen:
+            return
+        seen.add(id(new))
+        om = _members(ou)
+        for k, m in _members(nu).items():
+            o = om.get(k)
+            if o is None or str(T.unalias(o.type)) != str(T.unalias(m.type)):
+                continue
+            if not hasattr(old, o.pyname) or not hasattr(new, m.pyname):
+                continue
+            if _is_link(m.type):
+                visit_leaf(_Attr(old, o.pyname), _Attr(new, m.pyname), None, m.type)
+            else:
+                _walk(getattr(old, o.pyname), getattr(new, m.pyname), o.type, m.type, visit_leaf, seen, pairs)
+
+
+def _is_link(t) -> bool:
+    u = T.unalias(t)
+    return isinstance(u, T.RefType) or (isinstance(u, T.POUType) and u.pou_kind == "INTERFACE")
+
+
+class _Attr:
+    """An attribute as an indexable slot, so that leaves of objects and lists are handled alike."""
+
+    __slots__ = ("obj", "name")
+
+    def __init__(self, obj, name):
+        self.obj, self.name = obj, name
+
+    def get(self):
+        return getattr(self.obj, self.name)
+
+    def put(self, v):
+        setattr(self.obj, self.name, v)
+
+
+class _Item(_Attr):
+    """A namespace entry (a global) as a slot."""
+
+    __slots__ = ()
+
+    def get(self):
+        return self.obj[self.name]
+
+    def put(self, v):
+        self.obj[self.name] = v
+
+
+def _read(container, key):
+    return container.get() if isinstance(container, _Attr) else container[key]
+
+
+def _write(container, key, v):
+    if isinstance(container, _Attr):
+        container.put(v)
+    else:
+        container[key] = v
+
+
+def relink(instances, globals_, old_ns: dict, new_ns: dict) -> int:
+    """instances: (old object, new object, old type, new type) of every program instance;
+    globals_: (old pyname, new pyname, old type, new type). Returns how many references now
+    point at new objects."""
+    pairs: dict = {id(old_ns): new_ns}
+    leaves = []
+
+    def collect(oc, nc, key, t):
+        leaves.append((oc, nc, key, t))
+
+    seen: set = set()
+    for old, new, ot, nt in instances:
+        _walk(old, new, ot, nt, collect, seen, pairs)
+    for op, np_, ot, nt in globals_:
+        if str(T.unalias(ot)) != str(T.unalias(nt)):
+            continue
+        if _is_link(nt):
+            leaves.append((_Item(old_ns, op), _Item(new_ns, np_), None, nt))
+        else:
+            _walk(old_ns.get(op), new_ns.get(np_), ot, nt, collect, seen, pairs)
+    moved = 0
+    for oc, nc, key, t in leaves:
+        v = _read(oc, key)
+        nv = _moved(v, pairs)
+        if nv is not None:
+            moved += 1
+        _write(nc, key, nv)
+    return moved
+
+
+def _moved(v, pairs):
+    if v is None:
+        return None
+    if isinstance(v, _AttrRef):
+        o = pairs.get(id(v.obj))
+        return _AttrRef(o, v.name, v.spec) if o is not None else None
+    if isinstance(v, _ItemRef):
+        o = pairs.get(id(v.obj))
+        if o is not None:
+            return _ItemRef(o, v.key, v.spec)
+        return v                      # a value of its own (__NEW): nothing to point it at
+    if isinstance(v, _ObjRef):
+        o = pairs.get(id(v.obj))
+        return _ObjRef(o) if o is not None else None
+    if isinstance(v, _NegRef):
+        return v
+    return pairs.get(id(v))           # an interface variable: the instance itself
