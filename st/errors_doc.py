@@ -38,8 +38,8 @@ EXPLANATIONS = {
     "E041": "Code nested too deeply to compile: an expression of tens of thousands of terms, or more than "
             "about 20 nested loops.",
     "E042": "An array is too large (more than 50,000,000 elements).",
-    "E043": "An object-oriented rule is broken: a PRIVATE or PROTECTED method or property used from outside, an ABSTRACT function block instantiated or an ABSTRACT method called or left unimplemented, an OVERRIDE that overrides nothing.",
-    "E044": "A construct is not part of the chosen dialect preset (--dialect or a {dialect '…'} pragma): object-oriented ST in openplc, vendor extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF) in iec or openplc.",
+    "E043": "An object-oriented rule is broken: a PRIVATE or PROTECTED method, property or variable used from outside, an ABSTRACT function block instantiated or an ABSTRACT method or property called or left unimplemented, an OVERRIDE that overrides nothing.",
+    "E044": "A construct is not part of the chosen dialect preset (--dialect or a {dialect '…'} pragma): object-oriented ST in openplc, vendor extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF, __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of programs, FB_init arguments) in iec or openplc.",
     "E099": "An internal compiler error (a bug in st): please report it with the source file.",
     "W001": "A pragma { ... } is ignored.",
     "W002": "A variable is declared but never used.",
@@ -47,6 +47,7 @@ EXPLANATIONS = {
     "W004": "A user POU replaces a standard library POU of the same name.",
     "W005": "Negating an unsigned value wraps around.",
     "W006": "A variable of a METHOD has the name of a variable of its function block and hides it inside the method.",
+    "W007": "A call without an instance inside a function block reaches one of its METHODs although a standard or global function has the same name (write THIS^.M() to say so, or rename the method).",
 }
 
 

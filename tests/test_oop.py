@@ -922,3 +922,32 @@ def test_online_change_points_interfaces_and_references_at_the_new_instances():
     assert (plc["main.c.n"], plc["main.arr[1].n"], plc["main.arr[0].n"], plc["gc.n"], plc["main.b.v"]) == \
         (204 + 20 + 100, 12, 12, 12, 6)
     assert plc["main.last"] == 214 + 12 + 12 + 224
+
+
+def test_a_method_named_like_a_standard_function():
+    src = """
+FUNCTION_BLOCK S
+  VAR_INPUT txt : STRING(50); END_VAR
+  METHOD Len : INT
+    Len := LEN(txt) * 2;          (* arguments the method does not take: the standard LEN *)
+  END_METHOD
+  METHOD Abs : INT
+    VAR_INPUT v : INT; END_VAR
+    Abs := v + 1;
+  END_METHOD
+  METHOD Twice : INT
+    VAR_INPUT v : INT; END_VAR
+    Twice := ABS(v) * 2;          (* the method Abs: W007 *)
+  END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR s : S; a, b : INT; END_VAR
+  s.txt := 'abc';
+  a := s.Len(); b := s.Twice(-4);
+END_PROGRAM
+"""
+    plc = run(src)
+    assert (plc["main.a"], plc["main.b"]) == (6, -6)
+    d = compile_text(src, "oop.st").diagnostics[0]
+    assert (d.code, d.span.line, d.span.col) == ("W007", 13, 14)
+    assert d.message == "'ABS' calls the method Abs of S, not the function of that name"

@@ -27,7 +27,15 @@ class CallsMixin:
                 callee.ty = sym.type
                 return self._fb_call(c, sym.type, scope, statement)
             mt = method_of(scope.fb, key) if not isinstance(sym, T.VarSym) else None
+            if mt is not None and len(c.args) > len(mt.params()) and (
+                    self._native(key) is not None or key in self.p.pous):
+                mt = None       # LEN(s) inside a block with a method Len(): the arguments say which
             if mt is not None:                     # a method of this instance: THIS^.M(...)
+                fn = self.p.pous.get(key)
+                if self._native(key) is not None or (fn is not None and fn.pou_kind == "FUNCTION"):
+                    self.warn("W007", callee.span, f"'{callee.name}' calls the method {mt.name} of "
+                              f"{mt.owner_fb.name}, not the function of that name",
+                              f"write THIS^.{mt.name}(...) to say so, or rename the method")
                 return self._method_call(c, mt, scope, None)
             if key in ("__new", "__delete") and sym is None:
                 self.feature("vendor", callee.span, key.upper())
