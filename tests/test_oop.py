@@ -951,3 +951,25 @@ END_PROGRAM
     d = compile_text(src, "oop.st").diagnostics[0]
     assert (d.code, d.span.line, d.span.col) == ("W007", 13, 14)
     assert d.message == "'ABS' calls the method Abs of S, not the function of that name"
+
+
+def test_references_read_and_dump_as_the_path_they_designate():
+    plc = run("""
+TYPE Pt : STRUCT x, y : INT; END_STRUCT END_TYPE
+VAR_GLOBAL g : INT; END_VAR
+FUNCTION_BLOCK F VAR_OUTPUT q : INT; END_VAR END_FUNCTION_BLOCK
+PROGRAM main
+  VAR_EXTERNAL g : INT; END_VAR
+  VAR
+    m : ARRAY[1..2, 0..2] OF INT; pts : ARRAY[1..2] OF Pt; f : F;
+    r1, r2, r4 : REF_TO INT; r3 : REF_TO Pt; p : POINTER TO INT; rr : REF_TO REF_TO INT; none : REF_TO INT;
+    fresh : POINTER TO INT;
+  END_VAR
+  r1 := REF(m[2, 1]); r2 := REF(f.q); r3 := REF(pts[2]); r4 := REF(g); p := ADR(pts[1].y); rr := REF(r1);
+  fresh := __NEW(INT);
+END_PROGRAM
+""")
+    assert [plc[f"main.{n}"] for n in ("r1", "r2", "r3", "r4", "p", "rr", "none", "fresh")] == [
+        "REF(main.m[2, 1])", "REF(main.f.q)", "REF(main.pts[2])", "REF(g)", "REF(main.pts[1].y)",
+        "REF(main.r1)", None, "REF(__NEW)"]
+    assert plc.variables()["main.r1"] == "REF(main.m[2, 1])"

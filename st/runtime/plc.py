@@ -21,6 +21,7 @@ from .clock import RealClock, VirtualClock
 from .faults import FaultInfo, fault_from_exception
 from .namespace import build_namespace
 from .process_image import AddressError, Binding, ProcessImage, from_raw, parse_address, to_raw
+from . import refnames
 from .relink import relink
 from .retain import RetainStore
 from .scheduler import Task, make_policy
@@ -595,7 +596,7 @@ class PLC:
         if path.strip().startswith("%"):
             return self._image_read(path)
         container, key, t = self._resolve(path)
-        return to_python(_get(container, key), t)
+        return to_python(_get(container, key), t, refnames.namer(self))
 
     def force(self, path: str, value) -> None:
         """Force a variable (or a located variable by its %address): it holds `value` when every job
@@ -740,15 +741,16 @@ class PLC:
     def variables(self) -> dict:
         """Every variable of every program instance, as JSON values keyed "instance.var"."""
         out = {}
+        ref = refnames.namer(self)
         for lname, (name, obj, pou) in self.instances.items():
             for sym in pou.vars.values():
                 if sym.section == "VAR_TEMP":
                     continue
                 if sym.section == "VAR_EXTERNAL":
                     if sym.global_ref is not None:
-                        out[f"{name}.{sym.name}"] = to_json(self.ns[sym.global_ref.pyname], sym.global_ref.type)
+                        out[f"{name}.{sym.name}"] = to_json(self.ns[sym.global_ref.pyname], sym.global_ref.type, ref)
                     continue
-                out[f"{name}.{sym.name}"] = to_json(getattr(obj, sym.pyname), sym.type)
+                out[f"{name}.{sym.name}"] = to_json(getattr(obj, sym.pyname), sym.type, ref)
         return out
 
     def globals(self) -> dict:
@@ -758,7 +760,8 @@ class PLC:
                 return g.name
             fb = getattr(g.owner, "owner_fb", None)
             return f"{fb.name + '.' if fb is not None else ''}{g.owner.name}.{g.name}"
-        return {name(g): to_json(self.ns[g.pyname], g.type) for g in self.project.globals.values()}
+        ref = refnames.namer(self)
+        return {name(g): to_json(self.ns[g.pyname], g.type, ref) for g in self.project.globals.values()}
 
 
 def _restore_into(container, key, t, value) -> None:

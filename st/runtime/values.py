@@ -13,29 +13,30 @@ class ValueError_(ValueError):
     pass
 
 
-def _convert(v, t: T.Type, leaf):
-    """Walk a value by its type: aggregates become lists/dicts, scalars go through `leaf`."""
+def _convert(v, t: T.Type, leaf, ref=None):
+    """Walk a value by its type: aggregates become lists/dicts, scalars go through `leaf`,
+    references through `ref` (None when not given: a reference is shown as null)."""
     t = T.unalias(t)
     if isinstance(t, T.EnumType):
         return t.names_by_value.get(v, v)
     if isinstance(t, T.ArrayType):
-        return _nest([_convert(x, t.element, leaf) for x in v], t.dims)
+        return _nest([_convert(x, t.element, leaf, ref) for x in v], t.dims)
     if isinstance(t, T.StructType):
-        return {m.name: _convert(getattr(v, m.pyname), m.type, leaf) for m in t.members.values()}
+        return {m.name: _convert(getattr(v, m.pyname), m.type, leaf, ref) for m in t.members.values()}
     if isinstance(t, T.POUType) and t.pou_kind == "INTERFACE":
         # an interface variable: which block type it refers to (the instance is shown where it is declared)
         return None if v is None else type(v).__name__.removeprefix("_fb_")
     if isinstance(t, T.POUType):
-        return {s.name: _convert(getattr(v, s.pyname), s.type, leaf) for s in t.vars.values()
+        return {s.name: _convert(getattr(v, s.pyname), s.type, leaf, ref) for s in t.vars.values()
                 if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT")}
     if isinstance(t, T.RefType):
-        return None
+        return None if v is None or ref is None else ref(v)
     return leaf(v, t)
 
 
-def to_python(v, t: T.Type):
+def to_python(v, t: T.Type, ref=None):
     """A runtime value as a plain Python value (API reads). TIME etc. stay ns integers."""
-    return _convert(v, t, lambda v, t: v)
+    return _convert(v, t, lambda v, t: v, ref)
 
 
 def _json_leaf(v, t):
@@ -54,9 +55,9 @@ def _json_leaf(v, t):
     return v
 
 
-def to_json(v, t: T.Type):
+def to_json(v, t: T.Type, ref=None):
     """A runtime value as JSON: times and dates as IEC literal text, enums by name."""
-    return _convert(v, t, _json_leaf)
+    return _convert(v, t, _json_leaf, ref)
 
 
 def to_st_literal(v, t) -> str:
