@@ -1583,3 +1583,165 @@ PROGRAM main VAR f : F; g : G; x, y : INT; END_VAR
 END_PROGRAM
 """)
     assert (plc["main.x"], plc["main.y"], plc["gCount"]) == (1, 11, 11)
+
+
+# --------------------------------------------------------------------------- found by these probes, fixed
+
+def test_super_property_in_an_overriding_property_reaches_the_base_accessors():
+    plc = run("""
+FUNCTION_BLOCK Tank
+  VAR _level : REAL := 5.0; END_VAR
+  PROPERTY Level : REAL
+  GET Level := _level; END_GET
+  SET _level := Level; END_SET
+  END_PROPERTY
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK BigTank EXTENDS Tank
+  PROPERTY Level : REAL
+  GET Level := SUPER^.Level * 2.0; END_GET
+  SET SUPER^.Level := Level * 3.0; END_SET
+  END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM main VAR bt : BigTank; e, f : REAL; END_VAR
+  e := bt.Level; bt.Level := 10.0; f := bt.Level;
+END_PROGRAM
+""")
+    assert (plc["main.e"], plc["main.f"], plc["main.bt._level"]) == (10.0, 60.0, 30.0)
+
+
+def test_a_derived_instance_binds_to_a_base_in_out_and_reference():
+    plc = run("""
+FUNCTION_BLOCK ABSTRACT Shape  METHOD ABSTRACT Area : REAL END_METHOD  END_FUNCTION_BLOCK
+FUNCTION_BLOCK Circle EXTENDS Shape
+  METHOD Area : REAL Area := 12.0; END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION AreaOf : REAL  VAR_IN_OUT s : Shape; END_VAR  AreaOf := s.Area();  END_FUNCTION
+FUNCTION_BLOCK User VAR_IN_OUT s : Shape; END_VAR VAR_OUTPUT a : REAL; END_VAR a := s.Area(); END_FUNCTION_BLOCK
+PROGRAM main VAR c : Circle; u : User; a, b, d : REAL; r : REFERENCE TO Shape; END_VAR
+  a := AreaOf(c);
+  r REF= c;  b := r.Area();
+  u(s := c); d := u.a;
+END_PROGRAM
+""")
+    assert (plc["main.a"], plc["main.b"], plc["main.d"], plc["main.r"]) == (12.0, 12.0, 12.0, "REF(main.c)")
+
+
+def test_var_external_in_a_method_and_a_property_accessor():
+    plc = run("""
+VAR_GLOBAL gCount : INT; END_VAR
+FUNCTION_BLOCK F
+  METHOD Bump : INT
+    VAR_EXTERNAL gCount : INT; END_VAR
+    gCount := gCount + 1; Bump := gCount;
+  END_METHOD
+  PROPERTY P : INT
+    GET
+      VAR_EXTERNAL gCount : INT; END_VAR
+      P := gCount * 10;
+    END_GET
+  END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM main VAR f : F; x, y : INT; END_VAR  x := f.Bump(); y := f.P; END_PROGRAM
+""", 2)
+    assert (plc["main.x"], plc["main.y"], plc.globals()["gCount"]) == (2, 20, 2)
+
+
+def test_an_instance_passed_to_a_function_input_is_a_copy():
+    plc = run("""
+FUNCTION_BLOCK Cnt  VAR_OUTPUT n : INT; END_VAR  METHOD Inc n := n + 1; END_METHOD  END_FUNCTION_BLOCK
+FUNCTION UseCopy : INT  VAR_INPUT c : Cnt; END_VAR  c.Inc(); UseCopy := c.n;  END_FUNCTION
+FUNCTION_BLOCK Holder METHOD Use : INT VAR_INPUT c : Cnt; END_VAR c(); c.Inc(); Use := c.n; END_METHOD END_FUNCTION_BLOCK
+PROGRAM main VAR a : Cnt; h : Holder; r, s : INT; END_VAR
+  a.Inc(); a.Inc();  r := UseCopy(a); s := h.Use(a);
+END_PROGRAM
+""")
+    assert (plc["main.a.n"], plc["main.r"], plc["main.s"]) == (2, 3, 3)
+
+
+def test_en_eno_on_method_calls():
+    plc = run("""
+FUNCTION_BLOCK F  VAR_OUTPUT k : INT; END_VAR
+  METHOD M : INT VAR_INPUT x : INT; END_VAR M := x * 2; END_METHOD
+  METHOD N VAR_INPUT x : INT; END_VAR k := x; END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main VAR f : F; r1 : INT; r2 : INT := -1; e1, e2, e3, e4 : BOOL; END_VAR
+  r1 := f.M(EN := TRUE, x := 4, ENO => e1);
+  r2 := f.M(EN := FALSE, x := 5, ENO => e2);
+  f.N(EN := TRUE, x := 3, ENO => e3);
+  f.N(EN := FALSE, x := 9, ENO => e4);
+END_PROGRAM
+""")
+    assert [plc[f"main.{n}"] for n in ("r1", "r2", "e1", "e2", "e3", "e4", "f.k")] == [8, -1, True, False, True, False, 3]
+
+
+def test_reference_to_inputs_are_bound_to_the_argument():
+    plc = run("""
+FUNCTION AddTo : INT
+  VAR_INPUT r : REFERENCE TO INT; n : INT; END_VAR
+  r := r + n; AddTo := r;
+END_FUNCTION
+FUNCTION_BLOCK Inc VAR_INPUT r : REFERENCE TO INT; END_VAR r := r + 1; END_FUNCTION_BLOCK
+PROGRAM main VAR x : INT := 1; y, v : INT; f, g : Inc; arr : ARRAY[0..1] OF INT; END_VAR
+  y := AddTo(x, 5);
+  f(r := x); f(r := arr[1]);
+  g.r REF= v; g(); g();
+END_PROGRAM
+""")
+    assert [plc[f"main.{n}"] for n in ("x", "y", "arr", "v", "f.r")] == [7, 6, [0, 1], 2, "REF(main.arr[1])"]
+    msg = errors("""
+FUNCTION AddTo : INT VAR_INPUT r : REFERENCE TO INT; END_VAR AddTo := r; END_FUNCTION
+PROGRAM main VAR y : INT; z : REAL; END_VAR y := AddTo(y + 1); y := AddTo(z); END_PROGRAM
+""")
+    assert "conf.st:3:56: error[E031]: 'r' is a REFERENCE TO INT: pass a variable" in msg
+    assert "conf.st:3:75: error[E013]: 'r' is a REFERENCE TO INT; REAL cannot be bound to it" in msg
+
+
+def test_an_action_called_from_a_method():
+    plc = run("""
+FUNCTION_BLOCK F
+  VAR_OUTPUT acted : INT; END_VAR
+  ACTION Act: acted := acted + 1; END_ACTION
+  METHOD CallAct Act(); Act(); END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main VAR f : F; END_VAR  f.CallAct();  END_PROGRAM
+""")
+    assert plc["main.f.acted"] == 2
+
+
+def test_interfaces_extending_system_iqueryinterface():
+    src = """
+INTERFACE I EXTENDS __SYSTEM.IQueryInterface METHOD M : INT END_METHOD END_INTERFACE
+INTERFACE J EXTENDS __SYSTEM.IQueryInterface, I METHOD K : INT END_METHOD END_INTERFACE
+FUNCTION_BLOCK F IMPLEMENTS J METHOD M : INT M := 1; END_METHOD METHOD K : INT K := 2; END_METHOD END_FUNCTION_BLOCK
+PROGRAM main VAR f : F; i : I; j : J; ok : BOOL; x : INT; END_VAR
+  i := f; ok := __QUERYINTERFACE(i, j); x := j.K() + j.M();
+END_PROGRAM
+"""
+    plc = run(src, dialect="codesys")
+    assert (plc["main.ok"], plc["main.x"]) == (True, 3)
+    assert "conf.st:2:11: error[E044]: __SYSTEM.IQueryInterface is not part of the iec dialect" in errors(src, "iec")
+
+
+@pytest.mark.parametrize("dialect, ok", [("codesys", True), ("twincat", True), ("iec", False), (None, False)])
+def test_writing_an_own_input_is_a_dialect_switch(dialect, ok):
+    src = """
+FUNCTION Clamp : INT VAR_INPUT v : INT; END_VAR
+  IF v > 10 THEN v := 10; END_IF;  Clamp := v;
+END_FUNCTION
+PROGRAM main VAR a, b : INT; END_VAR a := Clamp(42); b := Clamp(3); END_PROGRAM
+"""
+    if ok:
+        plc = run(src, dialect=dialect)
+        assert (plc["main.a"], plc["main.b"]) == (10, 3)
+    else:
+        assert "conf.st:3:18: error[E018]: 'v' is an input of Clamp and cannot be written here" in errors(src, dialect)
+
+
+def test_a_pointer_compared_with_and_assigned_zero_is_null():
+    plc = run("""
+PROGRAM main VAR p : POINTER TO INT; x : INT; b1, b2, b3 : BOOL; END_VAR
+  p := 0;  b1 := p = 0;
+  p := ADR(x); b2 := p <> 0; b3 := 0 = p;
+END_PROGRAM
+""")
+    assert [plc[f"main.{n}"] for n in ("b1", "b2", "b3")] == [True, True, False]

@@ -317,6 +317,9 @@ class AstBuilder(Transformer):
         m.end_span = self.sp(c[-1])
         return m
 
+    def itf_name(self, c):
+        return Token.new_borrow_pos("IDENT", ".".join(str(x) for x in c), c[0])
+
     def interface_decl(self, c):
         name = c[1]
         self._not_reserved(name)

@@ -5,7 +5,8 @@
     iec       IEC 61131-3 3rd edition, strict: object-oriented ST, REF_TO/REF()/NULL; no vendor
               extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
               __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of programs)
-    codesys   the 3rd edition plus CODESYS's extensions; {attribute '…'} pragmas accepted silently
+    codesys   the 3rd edition plus CODESYS's extensions; {attribute '…'} pragmas accepted silently;
+              a POU may assign its own inputs
     twincat   as codesys (TwinCAT 3 is CODESYS-based)
 
 Without a preset everything is accepted and only --time-unit / --f-trig-first-scan apply (the
@@ -29,13 +30,14 @@ class Dialect:
     #                                    __NEW, __DELETE, VAR_INST in methods, VAR_STAT, STRUCT EXTENDS,
     #                                    METHODs of a PROGRAM
     attribute_pragmas: bool = False    # {attribute '…'} without a warning
+    writable_inputs: bool = False      # a POU may assign its own VAR_INPUT (a local copy); else E018
 
 
 PRESETS = {
     "openplc": Dialect("openplc", time_unit="s", f_trig_first_scan=True, oop=False, vendor_extensions=False),
     "iec": Dialect("iec", vendor_extensions=False),
-    "codesys": Dialect("codesys", attribute_pragmas=True),
-    "twincat": Dialect("twincat", attribute_pragmas=True),
+    "codesys": Dialect("codesys", attribute_pragmas=True, writable_inputs=True),
+    "twincat": Dialect("twincat", attribute_pragmas=True, writable_inputs=True),
 }
 
 _PRAGMA = re.compile(r"\{\s*dialect\s+'([A-Za-z]+)'\s*\}", re.I)

@@ -326,6 +326,20 @@ class PropSym:
     span: Any = None
 
 
+def extends(t: Type, base: Type) -> bool:
+    """Is `t` a function block that EXTENDS `base` (directly or further up)? A derived instance
+    may stand where its base is expected: VAR_IN_OUT, REFERENCE TO, REF_TO."""
+    t, base = unalias(t), unalias(base)
+    if not (isinstance(t, POUType) and isinstance(base, POUType) and base.pou_kind == "FUNCTION_BLOCK"):
+        return False
+    x = t.base
+    while isinstance(x, POUType):
+        if x is base:
+            return True
+        x = x.base
+    return False
+
+
 def fb_init_chain(pou: "POUType") -> list:
     """The FB_init methods that construct an instance of `pou` (CODESYS): its bases' first, then
     its own; each block's own one only (an inherited entry is its base's)."""

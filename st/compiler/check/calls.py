@@ -63,7 +63,8 @@ class CallsMixin:
                 return self._query_interface(c, scope)
             if key in TEST_CALLS and sym is None and key not in self.p.pous:
                 return self._test_call(c, key, scope, statement)
-            if key in scope.actions or (scope.pou is not None and key in scope.pou.actions):
+            if key in scope.actions or (scope.pou is not None and key in scope.pou.actions) or \
+                    (scope.fb is not None and key in scope.fb.actions):     # from a method too
                 if c.args:
                     self.err("E017", c.span, "an action takes no arguments")
                 c.target = CallTarget("action", name=key)
@@ -289,10 +290,24 @@ class CallsMixin:
                     self.err("E031", a.value.span, f"VAR_IN_OUT '{p.name}' needs a variable, not an expression")
                     continue
                 vt = self.lvalue(a.value, scope)
-                if vt is not None and not self._same_type(vt, p.type) and not (
+                if vt is not None and not self._same_type(vt, p.type) and not T.extends(vt, p.type) and not (
                         isinstance(T.unalias(p.type), T.ArrayType) and T.unalias(p.type).dims[0] == (0, -1)):
                     if not (isinstance(T.base_of(vt), T.StringType) and isinstance(T.base_of(p.type), T.StringType)):
                         self.err("E013", a.value.span, f"VAR_IN_OUT '{p.name}' is {p.type}; {vt} cannot be passed")
+            elif T.is_reference(p.type):        # an input REFERENCE TO is bound to the argument
+                want = T.unalias(p.type).target
+                if not isinstance(a.value, (A.Name, A.Field, A.Index, A.Deref)):
+                    self.err("E031", a.value.span, f"'{p.name}' is a REFERENCE TO {want}: pass a variable")
+                    self.expr(a.value, scope)
+                    continue
+                vt = self.lvalue(a.value, scope)
+                root = a.value
+                while isinstance(root, (A.Field, A.Index)):
+                    root = root.base
+                if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
+                    root.sym.address_taken = True
+                if vt is not None and not self._same_type(vt, want) and not T.extends(vt, want):
+                    self.err("E013", a.value.span, f"'{p.name}' is a REFERENCE TO {want}; {vt} cannot be bound to it")
             else:
                 vt = self.expr(a.value, scope, p.type)
                 self.assignable(a.value, vt, p.type, a.value.span, "pass")

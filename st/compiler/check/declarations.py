@@ -355,6 +355,10 @@ class DeclarationsMixin:
                          f"{ps.owner.name}")
 
     def _interface_named(self, name: str, span, who: str):
+        if name.lower() == "__system.iqueryinterface":
+            # CODESYS's root interface for __QUERYINTERFACE: every interface here can be queried
+            self.feature("vendor", span, "__SYSTEM.IQueryInterface")
+            return None
         itf = self.p.pous.get(name.lower())
         if itf is None or itf.pou_kind != "INTERFACE":
             what = "not declared" if itf is None else f"a {itf.pou_kind.replace('_', ' ')}, not an INTERFACE"
@@ -645,8 +649,13 @@ class DeclarationsMixin:
         for decl, t in self._deferred_inits:
             self.check_initializer(decl.init, t, None)
         self._deferred_inits = []
-        # bind VAR_EXTERNAL declarations
+        # bind VAR_EXTERNAL declarations (of POUs, their methods and property accessors)
+        owners = []
         for pou in self.p.pous.values():
+            owners.append(pou)
+            owners += [m for m in pou.methods.values() if m.owner_fb is pou]
+            owners += [a for ps in pou.properties.values() if ps.owner is pou for a in (ps.get, ps.set) if a]
+        for pou in owners:
             for sym in pou.vars.values():
                 if sym.section == "VAR_EXTERNAL":
                     cands = self.p.global_names.get(sym.name.lower())

@@ -248,6 +248,11 @@ class ExpressionsMixin:
             lt = self.expr(e.left, scope, rt)
         if lt is None or rt is None:
             return T.BOOL if op in _CMP else (lt or rt)
+        if op in ("=", "<>"):                   # CODESYS: p = 0 tests a POINTER for NULL
+            if _zero_pointer(self, e.right, lt):
+                e.right, rt = _null_at(e.right), _NULL
+            elif _zero_pointer(self, e.left, rt):
+                e.left, lt = _null_at(e.left), _NULL
         a, b = T.base_of(lt), T.base_of(rt)
         if op in _LOGIC:
             if a.is_bool and b.is_bool:
@@ -441,3 +446,17 @@ class ExpressionsMixin:
             if isinstance(c, int) and hi >= lo and not (lo <= c <= hi):
                 self.err("E022", i.span, f"index {c} is outside the bounds {lo}..{hi}")
         return b.element
+
+
+def _zero_pointer(chk, e, other) -> bool:
+    """The literal 0 where a POINTER is compared or assigned: NULL (a vendor extension)."""
+    u = T.unalias(other) if other is not None else None
+    return isinstance(e, A.Literal) and e.value == 0 and e.kind == "int" and isinstance(u, T.RefType) \
+        and u.ref_kind == "POINTER" and chk.feature_quiet("vendor")
+
+
+def _null_at(e) -> A.Name:
+    n = A.Name(e.span, "NULL")
+    n.sym = _NULL
+    n.ty = _NULL
+    return n

@@ -8,6 +8,7 @@ from .. import ast as A
 from .. import types as T
 from ..model import SfcModel, StepModel, TransitionModel
 from .common import _NULL, STEP, Scope
+from .expressions import _null_at, _zero_pointer
 
 
 class StatementsMixin:
@@ -44,6 +45,13 @@ class StatementsMixin:
         self.feature("vendor", s.span, "REF=")
         tgt = s.target
         sym = self._lookup(tgt.name.lower(), scope) if isinstance(tgt, A.Name) else None
+        if isinstance(tgt, A.Field):                  # inst.r REF= x: an instance's REFERENCE TO
+            bt = self.expr(tgt.base, scope)
+            b = T.unalias(bt) if bt is not None else None
+            if isinstance(b, T.POUType):
+                sym = b.vars.get(tgt.name.lower())
+                if isinstance(sym, T.VarSym) and sym.access:
+                    self.check_access((sym.access,), sym.owner, f"variable {sym.name}", scope, tgt.name_span)
         if not (isinstance(sym, T.VarSym) and T.is_reference(sym.type)):
             self.err("E013", tgt.span, "REF= binds a REFERENCE TO variable; this is not one")
             return
@@ -65,7 +73,7 @@ class StatementsMixin:
             root = root.base
         if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
             root.sym.address_taken = True
-        if vt is not None and want is not None and not self._same_type(vt, want):
+        if vt is not None and want is not None and not self._same_type(vt, want) and not T.extends(vt, want):
             self.err("E013", v.span, f"REF= needs a {want} variable, not {vt}")
 
     def _check_method(self, fb: T.POUType, mt: T.POUType) -> None:
@@ -212,6 +220,8 @@ class StatementsMixin:
                     self.err("E013", s.span, f"'{s.kind}' needs BOOL operands")
                 return
             vt = self.expr(s.value, scope, tt)
+            if _zero_pointer(self, s.value, tt):
+                s.value, vt = _null_at(s.value), _NULL       # p := 0 (CODESYS): NULL
             if tt is not None:
                 self.assignable(s.value, vt, tt, s.value.span)
         elif isinstance(s, A.CallStmt):
@@ -399,7 +409,8 @@ class StatementsMixin:
                 self.err("E018", e.span, f"'{sym.name}' is a CONSTANT")
                 return t
             if sym.section == "VAR_INPUT" and scope.pou is not None and sym.owner is scope.pou \
-                    and not isinstance(T.unalias(sym.type), (T.POUType,)) and isinstance(e, A.Name):
+                    and not isinstance(T.unalias(sym.type), (T.POUType,)) and isinstance(e, A.Name) \
+                    and not T.is_reference(sym.type) and not (self.dialect and self.dialect.writable_inputs):
                 self.err("E018", e.span, f"'{sym.name}' is an input of {scope.pou.name} and cannot be written here",
                          "copy it into a local variable first")
                 return t

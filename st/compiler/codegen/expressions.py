@@ -352,8 +352,14 @@ class ExprGen:
             return self._bit_read(base, int(e.name), bt)
         sym = e.sym
         if isinstance(sym, T.PropSym):                  # inst.Prop: its GET
-            return _call(_attr(base, sym.get.pyname))
+            return self.accessor_call(e, sym.get)
         return _attr(base, sym.pyname)
+
+    def accessor_call(self, e: A.Field, acc: T.POUType, *args) -> py.expr:
+        """A property accessor of inst.Prop; SUPER^.Prop runs the base's one (not virtual)."""
+        if _is_super(e.base):
+            return _call(_attr(_name(acc.owner_fb.pyname), acc.pyname), _name(self.self_name), *args)
+        return _call(_attr(self.expr(e.base), acc.pyname), *args)
 
     def _bit_read(self, base: py.expr, n: int, t) -> py.expr:
         return py.Compare(py.BinOp(base, py.BitAnd(), _const(1 << n)), [py.NotEq()], [_const(0)])
@@ -550,10 +556,13 @@ class ExprGen:
             if p.section == "VAR_INPUT":
                 if a is None:
                     args.append(InitGen(self.mod).initial(p.type, p.init))
+                elif T.is_reference(p.type):               # bound to the argument
+                    args.append(self.ref_to(a.value))
                 else:
                     v = self.expr(a.value)
                     ut = T.unalias(p.type)
-                    if ut.is_aggregate and p.written:
+                    # inputs are copies: an FB instance too, since calling it (or its methods) changes it
+                    if ut.is_aggregate and (p.written or isinstance(ut, T.POUType)):
                         v = _call("_copy", v)
                     args.append(self.coerce(v, a.value, p.type))
             elif p.section == "VAR_IN_OUT":

@@ -71,16 +71,18 @@ class StmtGen(ExprGen):
         if s.kind == "REF=":                           # bind a REFERENCE TO variable
             v = s.value
             ref = _const(None) if isinstance(v, A.Name) and getattr(v.sym, "kind", "") == "null" else self.ref_to(v)
+            if isinstance(tgt, A.Field):
+                return [py.Assign([_attr(self.expr(tgt.base), tgt.sym.pyname, py.Store())], ref)]
             return [py.Assign([self.var_store(tgt.sym)], ref)]
         if isinstance(tgt, (A.Name, A.Field)) and isinstance(tgt.sym, T.PropSym):
             # a property: its SET with the value (S=/R= only when the condition holds)
-            obj = self.expr(tgt.base) if isinstance(tgt, A.Field) else _name(self.self_name)
+            def setter(value):
+                if isinstance(tgt, A.Field):
+                    return py.Expr(self.accessor_call(tgt, tgt.sym.set, value))
+                return py.Expr(_call(_attr(_name(self.self_name), tgt.sym.set.pyname), value))
             if s.kind in ("S=", "R="):
-                value = _const(s.kind == "S=")
-                call = py.Expr(_call(_attr(obj, tgt.sym.set.pyname), value))
-                return [py.If(self.expr(s.value), [call], [])]
-            value = self.coerce(self.expr(s.value), s.value, tt)
-            return [py.Expr(_call(_attr(obj, tgt.sym.set.pyname), value))]
+                return [py.If(self.expr(s.value), [setter(_const(s.kind == "S="))], [])]
+            return [setter(self.coerce(self.expr(s.value), s.value, tt))]
         if s.kind in ("S=", "R="):
             return [py.If(self.expr(s.value), self.assign(tgt, _const(s.kind == "S="), None), [])]
         if s.kind == "?=":
@@ -89,7 +91,7 @@ class StmtGen(ExprGen):
                                           _const(dest_ref)), None)
         # a call with EN: assign only when enabled
         v = s.value
-        if isinstance(v, A.Call) and isinstance(v.target, CallTarget) and v.target.kind == "function" \
+        if isinstance(v, A.Call) and isinstance(v.target, CallTarget) and v.target.kind in ("function", "method") \
                 and (v.target.bind.get("en") is not None or v.target.bind.get("eno") is not None):
             return self._en_call_assign(s, v)
         if isinstance(v, A.Call) and isinstance(v.target, CallTarget) and v.target.kind == "native" \
@@ -168,18 +170,17 @@ class StmtGen(ExprGen):
         if tgt.kind == "action":
             inst = self.expr(tgt.inst) if getattr(tgt, "inst", None) is not None else _name(self.self_name)
             return [py.Expr(_call(_attr(inst, "_act_" + tgt.name)))]
-        if tgt.kind == "method":
-            return [py.Expr(self.method_call(c, tgt))]
+        if tgt.kind in ("function", "method"):
+            en, eno = tgt.bind.get("en"), tgt.bind.get("eno")
+            tgt.bind["en"] = None
+            call = self.method_call(c, tgt) if tgt.kind == "method" else self.function_call(c, tgt)
+            body = [py.Expr(call)]
+            tgt.bind["en"] = en
+            return self._en_wrap(en, eno, body, "eno" in tgt.bind["params"])
         if tgt.kind == "delete":
             return self.assign(tgt.arg, _const(None), None)
         if tgt.kind == "test":
             return self.test_call(tgt)
-        if tgt.kind == "function":
-            en, eno = tgt.bind.get("en"), tgt.bind.get("eno")
-            tgt.bind["en"] = None
-            body = [py.Expr(self.function_call(c, tgt))]
-            tgt.bind["en"] = en
-            return self._en_wrap(en, eno, body, "eno" in tgt.bind["params"])
         if tgt.kind == "native":
             en, eno = tgt.en, tgt.eno
             tgt.en = None
@@ -209,6 +210,8 @@ class StmtGen(ExprGen):
                 else:
                     out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.expr(a.value)))
                     after.extend(self.assign(a.value, self.coerce(_attr(inst, p.pyname), _Typed(p.type), a.value.ty), None))
+            elif T.is_reference(p.type):                  # an input REFERENCE TO: bound to the argument
+                out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.ref_to(a.value)))
             elif ut.is_aggregate:
                 out.append(py.Expr(_call("_assign", _attr(inst, p.pyname), self.expr(a.value))))
             else:
