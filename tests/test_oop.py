@@ -164,9 +164,9 @@ END_PROGRAM
      "METHOD M has no return type but assigns a result"),
     ("""FUNCTION_BLOCK A VAR_OUTPUT q : INT; END_VAR END_FUNCTION_BLOCK
         PROGRAM main VAR a : A; END_VAR a.Nope(); END_PROGRAM""",
-     "A has no variable 'Nope'"),
+     "A has no method, action or instance 'Nope'"),
     ("""PROGRAM main VAR x : INT; END_VAR x := SUPER^.x; END_PROGRAM""",
-     "undeclared"),
+     "SUPER exists only inside a function block that EXTENDS another"),
 ])
 def test_object_oriented_errors_are_located(src, message):
     text = errors(src)
@@ -299,7 +299,7 @@ END_PROGRAM
      "extends itself"),
     ("""INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
         PROGRAM main VAR s : I; x : INT; END_VAR x := s.Nope(); END_PROGRAM""",
-     "I has no variable 'Nope'"),
+     "I has no method 'Nope'"),
 ])
 def test_interface_errors_are_located(src, message):
     text = errors(src)

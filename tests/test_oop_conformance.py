@@ -1745,3 +1745,33 @@ PROGRAM main VAR p : POINTER TO INT; x : INT; b1, b2, b3 : BOOL; END_VAR
 END_PROGRAM
 """)
     assert [plc[f"main.{n}"] for n in ("b1", "b2", "b3")] == [True, True, False]
+
+
+@pytest.mark.parametrize("src, diagnostic", [
+    ("FUNCTION Fn : INT Fn := THIS^.y; END_FUNCTION",
+     "conf.st:1:25: error[E010]: THIS exists only inside a function block or one of its methods"),
+    ("INTERFACE I METHOD M : INT END_METHOD END_INTERFACE\nFUNCTION_BLOCK F EXTENDS I END_FUNCTION_BLOCK",
+     "conf.st:2:16: error[E012]: F can only extend a FUNCTION_BLOCK; 'I' is an INTERFACE"),
+    ("FUNCTION_BLOCK F VAR_INST n : INT; END_VAR END_FUNCTION_BLOCK",
+     "conf.st:1:18: error[E003]: VAR_INST is not allowed in a FUNCTION_BLOCK"),
+    ("INTERFACE I METHOD M : INT END_METHOD END_INTERFACE\n"
+     "FUNCTION_BLOCK F IMPLEMENTS I METHOD PRIVATE M : INT M := 1; END_METHOD END_FUNCTION_BLOCK",
+     "conf.st:2:46: error[E043]: method M of F implements I.M: it must be PUBLIC"),
+    ("FUNCTION_BLOCK B METHOD PUBLIC M : INT M := 1; END_METHOD END_FUNCTION_BLOCK\n"
+     "FUNCTION_BLOCK D EXTENDS B METHOD PROTECTED M : INT M := 2; END_METHOD END_FUNCTION_BLOCK",
+     "conf.st:2:45: error[E043]: method M overrides B.M with a narrower access"),
+])
+def test_object_oriented_diagnostics_after_qa(src, diagnostic):
+    msg = errors(src)
+    assert diagnostic in msg and "None" not in msg
+
+
+def test_a_bare_interface_property_accepts_a_read_only_implementation():
+    plc = run("""
+INTERFACE I PROPERTY Name : STRING END_PROPERTY END_INTERFACE
+FUNCTION_BLOCK F IMPLEMENTS I
+  PROPERTY Name : STRING GET Name := 'f'; END_GET END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM main VAR f : F; i : I; s : STRING; END_VAR i := f; s := i.Name; END_PROGRAM
+""")
+    assert plc["main.s"] == "f"

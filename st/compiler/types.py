@@ -324,6 +324,7 @@ class PropSym:
     set: Any = None         # POUType with one VAR_INPUT named like the property, pyname _ps_<name>
     owner: Any = None
     span: Any = None
+    bare: bool = False      # an interface prototype without accessors: GET, SET or both satisfy it
 
 
 def extends(t: Type, base: Type) -> bool:

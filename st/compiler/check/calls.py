@@ -103,6 +103,14 @@ class CallsMixin:
                         self.err("E017", c.span, "an action takes no arguments")
                     c.target = CallTarget("action", name=callee.name.lower(), inst=callee.base)
                     return None
+                key = callee.name.lower()
+                if key not in b.vars and key not in b.properties:
+                    what = "method" if b.pou_kind == "INTERFACE" else "method, action or instance"
+                    self.err("E023", callee.name_span, f"{b.name} has no {what} '{callee.name}'")
+                    for a in c.args:
+                        if not a.output:
+                            self.expr(a.value, scope)
+                    return None
         # a call through a path: inst.sub(...), arr[i](...)
         t = self.expr(callee, scope)
         if t is None:

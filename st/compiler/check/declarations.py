@@ -9,6 +9,11 @@ from .. import types as T
 from ..names import mangle
 from .common import _DIRECT, _DIRECT_TYPES, Scope, _names_in
 
+def _access_rank(mods) -> int:
+    """PUBLIC/INTERNAL 0 < PROTECTED 1 < PRIVATE 2."""
+    return 2 if "PRIVATE" in mods else 1 if "PROTECTED" in mods else 0
+
+
 # CODESYS's implicit methods: FB_init runs when an instance is created (before the first scan)
 _CONSTRUCTION = ("fb_init", "fb_reinit", "fb_exit")
 
@@ -384,10 +389,13 @@ class DeclarationsMixin:
                          f"FUNCTION_BLOCK that IMPLEMENTS {itf.name}")
             self._declare_method(itf, m)
         for pr in d.properties:
-            if pr.get is None and pr.set is None:      # a bare prototype: both accessors
+            bare = pr.get is None and pr.set is None
+            if bare:                                   # a bare prototype: both accessors
                 pr.get = A.Method(pr.span, pr.name, [], pr.type)
                 pr.set = A.Method(pr.span, pr.name, [])
             self._declare_property(itf, pr)
+            if bare and pr.name.lower() in itf.properties:
+                itf.properties[pr.name.lower()].bare = True
         for base in itf.interfaces:
             for k, bp in base.properties.items():
                 itf.properties.setdefault(k, bp)
@@ -410,8 +418,8 @@ class DeclarationsMixin:
             fb.interfaces.append(itf)
             for k, ip in itf.properties.items():
                 mine = fb.properties.get(k)
-                if mine is None or str(mine.type) != str(ip.type) or (ip.get and not mine.get) \
-                        or (ip.set and not mine.set):
+                if mine is None or str(mine.type) != str(ip.type) or (not ip.bare and (
+                        (ip.get and not mine.get) or (ip.set and not mine.set))):
                     if mine is None and abstract:
                         continue
                     self.err("E012", d.span, f"{fb.name} does not implement property {ip.name} of interface "
@@ -425,6 +433,9 @@ class DeclarationsMixin:
                 elif self._signature(mine) != self._signature(im):
                     self.err("E012", mine.decl.span, f"method {mine.name} of {fb.name} does not match "
                              f"{itf.name}.{im.name} (parameters and return type must be the same)")
+                elif {"PRIVATE", "PROTECTED"} & set(mine.decl.modifiers):
+                    self.err("E043", mine.decl.span, f"method {mine.name} of {fb.name} implements "
+                             f"{itf.name}.{im.name}: it must be PUBLIC")
 
     @staticmethod
     def _signature(mt: T.POUType):
@@ -473,8 +484,9 @@ class DeclarationsMixin:
             self.err("E010", d.span, f"{pou.name} extends '{d.extends}', which is not declared")
             return None
         if base.pou_kind != "FUNCTION_BLOCK":
-            self.err("E012", d.span, f"{pou.name} can only extend a FUNCTION_BLOCK; '{base.name}' is a "
-                     f"{base.pou_kind.replace('_', ' ')}")
+            kind = base.pou_kind.replace('_', ' ')
+            self.err("E012", d.span, f"{pou.name} can only extend a FUNCTION_BLOCK; '{base.name}' is "
+                     f"{'an' if kind[0] in 'AEIOU' else 'a'} {kind}")
             return None
         chain, b = {pou.name.lower()}, base
         while b is not None:
@@ -500,6 +512,9 @@ class DeclarationsMixin:
         if self._signature(mine) != self._signature(theirs):
             self.err("E012", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a different "
                      f"signature (parameters and return type must be the same)")
+        if _access_rank(m.modifiers) > _access_rank(theirs.decl.modifiers):
+            self.err("E043", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a narrower "
+                     f"access (an override keeps the base's access or widens it)")
 
     def _declare_method(self, fb: T.POUType, m) -> None:
         """A METHOD: a function whose body also sees the instance's variables (and THIS)."""
@@ -535,7 +550,7 @@ class DeclarationsMixin:
             allowed = {
                 "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL", "VAR_STAT"},
                 "FUNCTION_BLOCK": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL",
-                                   "VAR_INST", "VAR_STAT"},
+                                   "VAR_STAT"},
                 "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL",
                             "VAR_GLOBAL"},
                 "TEST": {"VAR", "VAR_TEMP"},

@@ -54,7 +54,8 @@ class ExpressionsMixin:
             bt = self.expr(e.base, scope)
             b = T.unalias(bt) if bt is not None else None
             if not isinstance(b, T.RefType):
-                self.err("E023", e.span, f"'^' needs a reference, not {bt}")
+                if bt is not None:                 # else the base already has its error
+                    self.err("E023", e.span, f"'^' needs a reference, not {bt}")
                 return None
             return b.target
         if isinstance(e, A.EnumLit):
@@ -218,6 +219,11 @@ class ExpressionsMixin:
             return pick[0]
         if key in self.p.pous or self._native(key) is not None:
             self.err("E026", e.span, f"'{e.name}' is a POU, not a value")
+            return None
+        if key in ("this", "super") and self.feature_quiet("oop"):
+            where = "a function block or one of its methods" if key == "this" else \
+                "a function block that EXTENDS another (or one of its methods)"
+            self.err("E010", e.span, f"{e.name.upper()} exists only inside {where}")
             return None
         self.err("E010", e.span, f"undeclared identifier '{e.name}'", self._suggest(key, scope))
         return None
@@ -408,7 +414,8 @@ class ExpressionsMixin:
                     kind = "an action" if key in b.actions else "a method"
                     self.err("E026", e.name_span, f"'{e.name}' is {kind}; call it: {e.name}()")
                     return None
-                self.err("E023", e.name_span, f"{b.name} has no variable '{e.name}'")
+                what = "method or property" if b.pou_kind == "INTERFACE" else "variable"
+                self.err("E023", e.name_span, f"{b.name} has no {what} '{e.name}'")
                 return None
             # IEC hides an FB's internal variables; most dialects let you read them, so only an
             # explicit `VAR PRIVATE` / `VAR PROTECTED` section restricts them
