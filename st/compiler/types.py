@@ -171,7 +171,7 @@ class ArrayType(Type):
 
     @property
     def name(self) -> str:  # type: ignore[override]
-        return "ARRAY[" + ", ".join(f"{lo}..{hi}" for lo, hi in self.dims) + f"] OF {self.element}"
+        return "ARRAY[" + ", ".join("*" if hi < lo else f"{lo}..{hi}" for lo, hi in self.dims) + f"] OF {self.element}"
 
     @property
     def size(self) -> int:
@@ -325,6 +325,12 @@ class PropSym:
     owner: Any = None
     span: Any = None
     bare: bool = False      # an interface prototype without accessors: GET, SET or both satisfy it
+
+
+def is_conformant(t) -> bool:
+    """ARRAY[*] (a VAR_IN_OUT whose bounds come from the argument: a runtime `_Conf`)."""
+    u = unalias(t) if t is not None else None
+    return isinstance(u, ArrayType) and any(hi < lo for lo, hi in u.dims)
 
 
 def extends(t: Type, base: Type) -> bool:

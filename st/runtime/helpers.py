@@ -214,6 +214,30 @@ def _wrap_to(v, spec):
     return v & m
 
 
+class _Conf:
+    """An ARRAY[*] argument: the caller's (flat, row-major) list and its actual bounds."""
+
+    __slots__ = ("data", "dims")
+
+    def __init__(self, data, dims):
+        self.data, self.dims = data, dims
+
+
+def _conf(arr, dims):
+    """Bind an array to an ARRAY[*] parameter (one already bound is passed on as it is)."""
+    return arr if isinstance(arr, _Conf) else _Conf(arr, dims)
+
+
+def _cix(a, *idx):
+    """Flat index into a conformant array, checked against the bounds the caller's array has."""
+    flat = 0
+    for i, (lo, hi) in zip(idx, a.dims):
+        if not lo <= i <= hi:
+            raise IndexError(f"index {i} outside {lo}..{hi}")
+        flat = flat * (hi - lo + 1) + (i - lo)
+    return flat
+
+
 class _AttrRef:
     """A reference to an attribute (a variable of an instance or a struct field)."""
 
@@ -317,7 +341,7 @@ BASE_NAMESPACE = {
     "_round": _round, "_trunc": _trunc, "_ix": _ix, "_subrange": _subrange, "_setbit": _setbit,
     "_setbits": _setbits,
     "_for_dir": _for_dir, "_Struct": _Struct, "_FB": _FB, "_copy": _copy, "_assign": _assign,
-    "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ObjRef": _ObjRef, "_query_itf": _query_itf, "_attempt": _attempt, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
+    "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ObjRef": _ObjRef, "_query_itf": _query_itf, "_conf": _conf, "_cix": _cix, "_attempt": _attempt, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
     "_float": float, "_int": int, "_range": range, "_abs": abs, "_min": min, "_max": max, "_len": len,
     "_str": str, "_bool": bool, "_PLCFault": PLCFault,
 }

@@ -47,6 +47,8 @@ class CallsMixin:
                 return self._ref_call(c, scope)          # ADR: a POINTER TO the variable (no arithmetic)
             if key == "sizeof" and sym is None and key not in self.p.pous:
                 return self._sizeof(c, scope)
+            if key in ("lower_bound", "upper_bound") and sym is None and key not in self.p.pous:
+                return self._bound(c, key, scope)
             if key == "__isvalidref" and sym is None:
                 if len(c.args) != 1 or c.args[0].name:
                     self.err("E017", c.span, "__ISVALIDREF takes one reference")
@@ -116,6 +118,29 @@ class CallsMixin:
         if t is None:
             return None
         return self._fb_call(c, t, scope, statement)
+
+    def _bound(self, c: A.Call, key: str, scope: Scope):
+        """LOWER_BOUND(arr, dim) / UPPER_BOUND(arr, dim): a DINT; a constant unless arr is ARRAY[*]."""
+        what = key.upper()
+        if len(c.args) != 2 or any(a.name or a.output for a in c.args):
+            self.err("E017", c.span, f"{what} takes an array and a dimension: {what}(arr, 1)")
+            return T.DINT
+        at = self.expr(c.args[0].value, scope)
+        dim = self.const_value(c.args[1].value, scope)
+        self.expr(c.args[1].value, scope, T.DINT)
+        u = T.unalias(at) if at is not None else None
+        if at is None:
+            return T.DINT
+        if not isinstance(u, T.ArrayType):
+            self.err("E013", c.args[0].value.span, f"{what} needs an array, not {at}")
+            return T.DINT
+        if not isinstance(dim, int) or not 1 <= dim <= len(u.dims):
+            self.err("E029", c.args[1].value.span, f"the dimension must be a constant from 1 to {len(u.dims)}")
+            return T.DINT
+        lo, hi = u.dims[dim - 1]
+        value = None if T.is_conformant(u) else (hi if key == "upper_bound" else lo)
+        c.target = CallTarget("bound", arg=c.args[0].value, dim=dim, upper=key == "upper_bound", value=value)
+        return T.DINT
 
     def check_access(self, mods, owner, what: str, scope: Scope, span) -> None:
         """PRIVATE: only inside its own block; PROTECTED: there and in blocks that extend it."""
@@ -299,7 +324,7 @@ class CallsMixin:
                     continue
                 vt = self.lvalue(a.value, scope)
                 if vt is not None and not self._same_type(vt, p.type) and not T.extends(vt, p.type) and not (
-                        isinstance(T.unalias(p.type), T.ArrayType) and T.unalias(p.type).dims[0] == (0, -1)):
+                        T.is_conformant(p.type) and _fits_conformant(self, vt, p.type)):
                     if not (isinstance(T.base_of(vt), T.StringType) and isinstance(T.base_of(p.type), T.StringType)):
                         self.err("E013", a.value.span, f"VAR_IN_OUT '{p.name}' is {p.type}; {vt} cannot be passed")
             elif T.is_reference(p.type):        # an input REFERENCE TO is bound to the argument
@@ -511,3 +536,8 @@ def _size_of(t: T.Type):
         bits = 64 if getattr(u, "long", False) else 32
     n = max(1, bits // 8)
     return n, n
+
+def _fits_conformant(chk, arg, param) -> bool:
+    """An array for an ARRAY[*] parameter: as many dimensions, the same element type."""
+    a, p = T.unalias(arg), T.unalias(param)
+    return isinstance(a, T.ArrayType) and len(a.dims) == len(p.dims) and chk._same_type(a.element, p.element)

@@ -577,6 +577,9 @@ class DeclarationsMixin:
                 self.err("E003", block.span, f"a VAR section has one access specifier, not {' and '.join(access)}")
         for decl in block.decls:
             t = self.resolve_type(decl.type, scope)
+            if T.is_conformant(t) and kind != "VAR_IN_OUT":
+                self.err("E012", decl.type.span, "ARRAY[*] takes its bounds from an argument: it is only allowed "
+                         "for a VAR_IN_OUT")
             if isinstance(t, T.POUType) and t.pou_kind == "FUNCTION_BLOCK" and t.decl is not None \
                     and "ABSTRACT" in t.decl.modifiers and kind not in ("VAR_IN_OUT", "VAR_EXTERNAL"):
                 self.err("E043", decl.type.span, f"'{t.name}' is ABSTRACT and cannot be instantiated; declare "

@@ -364,7 +364,7 @@ class StatementsMixin:
         if T.widens_to(s, d):
             return True
         if isinstance(s, T.ArrayType) and isinstance(d, T.ArrayType):
-            if self._same_type(s, d) or (d.dims and d.dims[0] == (0, -1)):
+            if self._same_type(s, d):
                 return True
         if isinstance(s, T.RefType) and isinstance(d, T.RefType):
             if self._same_type(s.target, d.target) or s.target is None:

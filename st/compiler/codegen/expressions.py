@@ -373,11 +373,24 @@ class ExprGen:
         return py.BinOp(py.BinOp(base, py.RShift(), _const(e.index * width)), py.BitAnd(), _const((1 << width) - 1))
 
     def x_Index(self, e: A.Index) -> py.expr:
-        return py.Subscript(self.expr(e.base), self.index_of(e), py.Load())
+        return py.Subscript(self.array_of(e), self.index_of(e), py.Load())
+
+    def array_of(self, e: A.Index) -> py.expr:
+        """The list an index goes into: an ARRAY[*] parameter's is the caller's list."""
+        base = self.expr(e.base)
+        return _attr(base, "data") if T.is_conformant(e.base.ty) else base
+
+    def conformant_arg(self, value: py.expr, arg_type, param_type) -> py.expr:
+        """An array passed to an ARRAY[*] parameter carries its bounds along."""
+        if not T.is_conformant(param_type) or T.is_conformant(arg_type):
+            return value
+        return _call("_conf", value, _const(tuple(T.unalias(arg_type).dims)))
 
     def index_of(self, e: A.Index) -> py.expr:
         at = T.unalias(e.base.ty)
         dims = at.dims
+        if T.is_conformant(at):
+            return _call("_cix", self.expr(e.base), *[self.expr(i) for i in e.indices])
         flat: Optional[py.expr] = None
         parts = []
         for i, (lo, hi) in zip(e.indices, dims):
@@ -497,6 +510,12 @@ class ExprGen:
             return self.method_call(e, tgt)
         if tgt.kind == "sizeof":
             return _const(tgt.value)
+        if tgt.kind == "bound":                        # LOWER_BOUND / UPPER_BOUND
+            if tgt.value is not None:
+                return _const(tgt.value)
+            dims = _attr(self.expr(tgt.arg), "dims")
+            return py.Subscript(py.Subscript(dims, _const(tgt.dim - 1), py.Load()), _const(1 if tgt.upper else 0),
+                                py.Load())
         if tgt.kind == "new":                          # a one-element box the pointer refers to
             return _call("_ItemRef", py.List([InitGen(self.mod).initial(tgt.type, None)], py.Load()), _const(0),
                          _const(_wrap_spec(tgt.type)))
@@ -566,7 +585,8 @@ class ExprGen:
                         v = _call("_copy", v)
                     args.append(self.coerce(v, a.value, p.type))
             elif p.section == "VAR_IN_OUT":
-                args.append(self.ref_to(a.value) if not T.unalias(p.type).is_aggregate else self.expr(a.value))
+                args.append(self.ref_to(a.value) if not T.unalias(p.type).is_aggregate else
+                            self.conformant_arg(self.expr(a.value), a.value.ty, p.type))
             else:  # VAR_OUTPUT
                 if a is None:
                     args.append(_const(None))
@@ -599,7 +619,7 @@ class ExprGen:
         if isinstance(e, A.Field):
             return _call("_AttrRef", self.expr(e.base), _const(e.sym.pyname), _const(_wrap_spec(e.ty)))
         if isinstance(e, A.Index):
-            return _call("_ItemRef", self.expr(e.base), self.index_of(e), _const(_wrap_spec(e.ty)))
+            return _call("_ItemRef", self.array_of(e), self.index_of(e), _const(_wrap_spec(e.ty)))
         if isinstance(e, A.Deref):
             return self.expr(e.base)
         if isinstance(e, A.Direct):

@@ -138,7 +138,7 @@ class StmtGen(ExprGen):
                 return self._bit_write(tgt.base, int(tgt.name), value)
             return [py.Assign([_attr(self.expr(tgt.base), tgt.sym.pyname, py.Store())], value)]
         if isinstance(tgt, A.Index):
-            return [py.Assign([py.Subscript(self.expr(tgt.base), self.index_of(tgt), py.Store())], value)]
+            return [py.Assign([py.Subscript(self.array_of(tgt), self.index_of(tgt), py.Store())], value)]
         if isinstance(tgt, A.Bit):
             if tgt.size != "X":
                 width = {"B": 8, "W": 16, "D": 32, "L": 64}[tgt.size]
@@ -206,7 +206,8 @@ class StmtGen(ExprGen):
             ut = T.unalias(p.type)
             if p.section == "VAR_IN_OUT":
                 if ut.is_aggregate:
-                    out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.expr(a.value)))
+                    out.append(py.Assign([_attr(inst, p.pyname, py.Store())],
+                                         self.conformant_arg(self.expr(a.value), a.value.ty, p.type)))
                 else:
                     out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.expr(a.value)))
                     after.extend(self.assign(a.value, self.coerce(_attr(inst, p.pyname), _Typed(p.type), a.value.ty), None))
