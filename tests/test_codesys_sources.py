@@ -259,3 +259,15 @@ def test_fb_init_arguments_are_a_vendor_extension():
     with pytest.raises(CompileError) as e:
         compile_text(FB_INIT, "tc.st", dialect="iec")
     assert "tc.st:13:29: error[E044]: FB_init arguments in a declaration is not part of the iec dialect" in str(e.value)
+
+
+def test_a_call_result_can_be_indexed():
+    plc = run("""
+TYPE A3 : ARRAY[0..2] OF INT; END_TYPE
+FUNCTION_BLOCK G
+  METHOD MkArr : A3 VAR_INPUT k : INT; END_VAR MkArr[0] := k; MkArr[1] := k * 2; MkArr[2] := k * 3; END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION Mk : A3 VAR_INPUT k : INT; END_VAR Mk[2] := k; END_FUNCTION
+PROGRAM main VAR g : G; a, b : INT; END_VAR a := g.MkArr(5)[2]; b := Mk(7)[2] + Mk(1)[0]; END_PROGRAM
+""")
+    assert (plc["main.a"], plc["main.b"]) == (15, 7)
