@@ -7,7 +7,7 @@ from typing import Optional
 from .. import ast as A
 from .. import types as T
 from ..library import FuncSig
-from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies, method_of
+from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies, method_of, take_address
 from .tests import TEST_CALLS
 
 
@@ -226,11 +226,7 @@ class CallsMixin:
             self.err("E031", arg.span, "REF needs a variable")
             return None
         t = self.lvalue(arg, scope)
-        root = arg
-        while isinstance(root, (A.Field, A.Index)):
-            root = root.base
-        if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
-            root.sym.address_taken = True
+        take_address(arg)
         c.target = CallTarget("ref", arg=arg)
         return T.RefType(t) if t is not None else None
 
@@ -334,11 +330,7 @@ class CallsMixin:
                     self.expr(a.value, scope)
                     continue
                 vt = self.lvalue(a.value, scope)
-                root = a.value
-                while isinstance(root, (A.Field, A.Index)):
-                    root = root.base
-                if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
-                    root.sym.address_taken = True
+                take_address(a.value)
                 if vt is not None and not self._same_type(vt, want) and not T.extends(vt, want):
                     self.err("E013", a.value.span, f"'{p.name}' is a REFERENCE TO {want}; {vt} cannot be bound to it")
             else:
@@ -536,6 +528,7 @@ def _size_of(t: T.Type):
         bits = 64 if getattr(u, "long", False) else 32
     n = max(1, bits // 8)
     return n, n
+
 
 def _fits_conformant(chk, arg, param) -> bool:
     """An array for an ARRAY[*] parameter: as many dimensions, the same element type."""

@@ -91,6 +91,16 @@ class _SuperSym:
 SUPER = _SuperSym()
 
 
+def take_address(e) -> None:
+    """The variable under `e` (x, x.f, x[i]) is referred to: it must stay reachable (not a cached
+    local) while a reference to it exists."""
+    root = e
+    while isinstance(root, (A.Field, A.Index)):
+        root = root.base
+    if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
+        root.sym.address_taken = True
+
+
 def method_of(fb, key: str):
     """The METHOD `key` of a function block (None when it has none by that name)."""
     return fb.methods.get(key) if fb is not None else None

@@ -7,7 +7,7 @@ from ...source import Span
 from .. import ast as A
 from .. import types as T
 from ..model import SfcModel, StepModel, TransitionModel
-from .common import _NULL, STEP, Scope
+from .common import _NULL, STEP, Scope, take_address
 from .expressions import _null_at, _zero_pointer
 
 
@@ -68,11 +68,7 @@ class StatementsMixin:
             self.expr(v, scope)
             return
         vt = self.lvalue(v, scope)
-        root = v
-        while isinstance(root, (A.Field, A.Index)):
-            root = root.base
-        if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
-            root.sym.address_taken = True
+        take_address(v)
         if vt is not None and want is not None and not self._same_type(vt, want) and not T.extends(vt, want):
             self.err("E013", v.span, f"REF= needs a {want} variable, not {vt}")
 
