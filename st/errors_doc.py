@@ -47,7 +47,7 @@ EXPLANATIONS = {
     "W004": "A user POU replaces a standard library POU of the same name.",
     "W005": "Negating an unsigned value wraps around.",
     "W006": "A variable of a METHOD has the name of a variable of its function block and hides it inside the method.",
-    "W007": "A call without an instance inside a function block reaches one of its METHODs although a standard or global function has the same name (write THIS^.M() to say so, or rename the method).",
+    "W007": "A call without an instance inside a function block reaches one of its METHODs although a standard or global function of the same name would take the same arguments (write THIS^.M() to say so, or rename the method).",
 }
 
 

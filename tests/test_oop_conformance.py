@@ -1775,3 +1775,93 @@ END_FUNCTION_BLOCK
 PROGRAM main VAR f : F; i : I; s : STRING; END_VAR i := f; s := i.Name; END_PROGRAM
 """)
     assert plc["main.s"] == "f"
+
+
+def test_return_in_a_method_without_result_and_in_a_property_set():
+    plc = run("""
+FUNCTION_BLOCK FB
+  VAR_OUTPUT n : INT; END_VAR
+  METHOD Bump
+    IF n >= 2 THEN RETURN; END_IF
+    n := n + 1;
+  END_METHOD
+  PROPERTY P : INT
+    GET P := n; END_GET
+    SET IF P < 0 THEN RETURN; END_IF n := P; END_SET
+  END_PROPERTY
+END_FUNCTION_BLOCK
+FUNCTION NoResult VAR_IN_OUT x : INT; END_VAR IF x > 5 THEN RETURN; END_IF x := x + 10; END_FUNCTION
+PROGRAM main VAR f, g : FB; a : INT := 3; END_VAR f.Bump(); g.P := -1; g.P := 4; NoResult(a); END_PROGRAM
+""", 4)
+    assert (plc["main.f.n"], plc["main.g.n"], plc["main.a"], plc.state) == (2, 4, 13, "RUN")
+
+
+def test_a_reference_to_an_in_out_outlives_the_call():
+    plc = run("""
+FUNCTION_BLOCK FB
+  VAR r : REFERENCE TO DINT; p : POINTER TO DINT; END_VAR
+  VAR_OUTPUT seen : DINT; END_VAR
+  METHOD Bind
+    VAR_IN_OUT target : DINT; END_VAR
+    r REF= target; p := ADR(target);
+    target := target + 1;
+  END_METHOD
+  METHOD Local : DINT
+    VAR tmp : DINT := 5; q : REF_TO DINT; END_VAR
+    q := REF(tmp); q^ := q^ * 3; Local := tmp;
+  END_METHOD
+  METHOD Touch r := r + 100; p^ := p^ + 1000; seen := r; END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION Inc2 VAR_IN_OUT v : DINT; END_VAR VAR q : REF_TO DINT; END_VAR q := REF(v); q^ := q^ + 2; v := v + 1; END_FUNCTION
+PROGRAM main VAR f : FB; x, y, z : DINT; END_VAR f.Bind(x); f.Touch(); y := f.Local(); Inc2(z); END_PROGRAM
+""", dialect="codesys")
+    assert [plc[f"main.{n}"] for n in ("x", "f.seen", "y", "z", "f.r", "f.p")] == \
+        [1101, 1101, 15, 3, "REF(main.x)", "REF(main.x)"]
+
+
+def test_interfaces_and_references_compared_with_and_assigned_zero():
+    plc = run("""
+INTERFACE I METHOD M END_METHOD END_INTERFACE
+FUNCTION_BLOCK F IMPLEMENTS I METHOD M END_METHOD END_FUNCTION_BLOCK
+PROGRAM main VAR i : I; f : F; r : REF_TO INT; b1, b2, b3, b4 : BOOL; END_VAR
+  b1 := i = 0;
+  i := f; b2 := i <> 0;
+  i := 0; b3 := i = 0;
+  r := 0; b4 := r = 0;
+END_PROGRAM
+""", dialect="codesys")
+    assert [plc[f"main.b{k}"] for k in range(1, 5)] == [True, True, True, True]
+
+
+def test_an_instances_reference_member_is_used_as_its_target():
+    plc = run("""
+FUNCTION_BLOCK FB VAR_OUTPUT r : REFERENCE TO DINT; END_VAR END_FUNCTION_BLOCK
+FUNCTION Twice VAR_IN_OUT v : DINT; END_VAR v := v * 2; END_FUNCTION
+PROGRAM main VAR f : FB; x, y : DINT; END_VAR
+  f.r REF= x; f.r := 5; y := f.r + 1; Twice(f.r);
+END_PROGRAM
+""", dialect="codesys")
+    assert (plc["main.x"], plc["main.y"], plc["main.f.r"]) == (10, 6, "REF(main.x)")
+
+
+def test_enumerations_as_integers_in_codesys_only():
+    src = """
+TYPE E : (A := 0, B := 1, C := 5); END_TYPE
+PROGRAM main VAR e : E := B; n : INT; d : DINT; ok : BOOL; END_VAR
+  n := e; n := n * 10 + e; d := C; ok := e > 0 AND e = B;
+END_PROGRAM
+"""
+    plc = run(src, dialect="twincat")
+    assert (plc["main.n"], plc["main.d"], plc["main.ok"]) == (11, 5, True)
+    assert "conf.st:4:8: error[E013]: type mismatch: cannot assign E to INT" in errors(src, "iec")
+
+
+def test_w007_only_when_the_function_would_take_the_same_arguments():
+    d = compile_text("""
+FUNCTION_BLOCK Store
+  VAR_INPUT s : STRING; END_VAR
+  METHOD Find : INT VAR_INPUT what : STRING; END_VAR Find := 7; END_METHOD
+  METHOD Use : INT Use := Find('x') + FIND(s, 'x'); END_METHOD
+END_FUNCTION_BLOCK
+""", "conf.st").diagnostics
+    assert [x.code for x in d if x.code == "W007"] == []

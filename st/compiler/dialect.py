@@ -6,7 +6,8 @@
               extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
               __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of programs)
     codesys   the 3rd edition plus CODESYS's extensions; {attribute '…'} pragmas accepted silently;
-              a POU may assign its own inputs
+              a POU may assign its own inputs; enumeration values read as integers where one is
+              expected (CODESYS's non-strict enumerations)
     twincat   as codesys (TwinCAT 3 is CODESYS-based)
 
 Without a preset everything is accepted and only --time-unit / --f-trig-first-scan apply (the
@@ -31,13 +32,14 @@ class Dialect:
     #                                    METHODs of a PROGRAM
     attribute_pragmas: bool = False    # {attribute '…'} without a warning
     writable_inputs: bool = False      # a POU may assign its own VAR_INPUT (a local copy); else E018
+    enum_as_int: bool = False          # an enumeration value is usable as its integer (not {attribute 'strict'})
 
 
 PRESETS = {
     "openplc": Dialect("openplc", time_unit="s", f_trig_first_scan=True, oop=False, vendor_extensions=False),
     "iec": Dialect("iec", vendor_extensions=False),
-    "codesys": Dialect("codesys", attribute_pragmas=True, writable_inputs=True),
-    "twincat": Dialect("twincat", attribute_pragmas=True, writable_inputs=True),
+    "codesys": Dialect("codesys", attribute_pragmas=True, writable_inputs=True, enum_as_int=True),
+    "twincat": Dialect("twincat", attribute_pragmas=True, writable_inputs=True, enum_as_int=True),
 }
 
 _PRAGMA = re.compile(r"\{\s*dialect\s+'([A-Za-z]+)'\s*\}", re.I)

@@ -252,6 +252,13 @@ class _AttrRef:
     def set(self, v):
         setattr(self.obj, self.name, _wrap_to(v, self.spec))
 
+    # a reference can stand for a one-element box: `x[0]` (an in-out whose address is taken)
+    def __getitem__(self, _):
+        return getattr(self.obj, self.name)
+
+    def __setitem__(self, _, v):
+        setattr(self.obj, self.name, _wrap_to(v, self.spec))
+
     def __eq__(self, other):
         return isinstance(other, _AttrRef) and other.obj is self.obj and other.name == self.name
 
@@ -311,6 +318,12 @@ class _ItemRef:
         return self.obj[self.key]
 
     def set(self, v):
+        self.obj[self.key] = _wrap_to(v, self.spec)
+
+    def __getitem__(self, _):
+        return self.obj[self.key]
+
+    def __setitem__(self, _, v):
         self.obj[self.key] = _wrap_to(v, self.spec)
 
     def __eq__(self, other):

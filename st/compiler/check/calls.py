@@ -32,7 +32,12 @@ class CallsMixin:
                 mt = None       # LEN(s) inside a block with a method Len(): the arguments say which
             if mt is not None:                     # a method of this instance: THIS^.M(...)
                 fn = self.p.pous.get(key)
-                if self._native(key) is not None or (fn is not None and fn.pou_kind == "FUNCTION"):
+                sig = self._native(key)
+                n = len([a for a in c.args if not a.name or a.name.lower() not in ("en", "eno")])
+                fits = (sig is not None and (n == len(sig.params) or (sig.extensible and n >= len(sig.params)))) \
+                    or (fn is not None and fn.pou_kind == "FUNCTION"
+                        and n == len([p for p in fn.params() if p.section != "VAR_OUTPUT"]))
+                if fits:                           # the call would fit the function too: say which runs
                     self.warn("W007", callee.span, f"'{callee.name}' calls the method {mt.name} of "
                               f"{mt.owner_fb.name}, not the function of that name",
                               f"write THIS^.{mt.name}(...) to say so, or rename the method")

@@ -254,6 +254,13 @@ class ExpressionsMixin:
             lt = self.expr(e.left, scope, rt)
         if lt is None or rt is None:
             return T.BOOL if op in _CMP else (lt or rt)
+        if self.dialect is not None and self.dialect.enum_as_int:
+            # CODESYS (non-strict enumerations): an enumeration value next to a number is its integer
+            la, rb = T.base_of(lt), T.base_of(rt)
+            if isinstance(la, T.EnumType) and not isinstance(rb, T.EnumType) and (rb.is_num or rb is T.LIT_INT):
+                lt = la.base
+            elif isinstance(rb, T.EnumType) and not isinstance(la, T.EnumType) and (la.is_num or la is T.LIT_INT):
+                rt = rb.base
         if op in ("=", "<>"):                   # CODESYS: p = 0 tests a POINTER for NULL
             if _zero_pointer(self, e.right, lt):
                 e.right, rt = _null_at(e.right), _NULL
@@ -423,6 +430,8 @@ class ExpressionsMixin:
                 self.check_access((v.access,), v.owner, f"variable {v.name}", scope, e.name_span)
             v.used = True
             e.sym = v
+            if T.is_reference(v.type):                 # inst.r of a REFERENCE TO: what it refers to
+                return T.unalias(v.type).target
             return v.type
         if isinstance(b, T.ElemType) and b.is_intlike and e.name.isdigit():
             return T.BOOL
@@ -456,10 +465,12 @@ class ExpressionsMixin:
 
 
 def _zero_pointer(chk, e, other) -> bool:
-    """The literal 0 where a POINTER is compared or assigned: NULL (a vendor extension)."""
+    """The literal 0 where a POINTER, a REF_TO or an interface is compared or assigned: NULL, as
+    CODESYS and TwinCAT write it (a vendor extension)."""
     u = T.unalias(other) if other is not None else None
-    return isinstance(e, A.Literal) and e.value == 0 and e.kind == "int" and isinstance(u, T.RefType) \
-        and u.ref_kind == "POINTER" and chk.feature_quiet("vendor")
+    is_link = isinstance(u, T.RefType) and u.ref_kind in ("POINTER", "REF_TO") or \
+        isinstance(u, T.POUType) and u.pou_kind == "INTERFACE"
+    return isinstance(e, A.Literal) and e.value == 0 and e.kind == "int" and is_link and chk.feature_quiet("vendor")
 
 
 def _null_at(e) -> A.Name:

@@ -115,6 +115,7 @@ class ExprGen:
         self.pou = pou
         self.cached: set = set()        # VarSyms held in Python locals
         self.boxed: set = set()         # VarSyms held in one-element lists (passed by reference)
+        self.through: set = set()       # in-outs used through the caller's reference (their box)
         self.self_name = "self"
         self.globals_written: set = set()
         self.loop_vars: list = []
@@ -353,6 +354,8 @@ class ExprGen:
         sym = e.sym
         if isinstance(sym, T.PropSym):                  # inst.Prop: its GET
             return self.accessor_call(e, sym.get)
+        if isinstance(sym, T.VarSym) and T.is_reference(sym.type):
+            return _call(_attr(_attr(base, sym.pyname), "get"))     # inst.r: through the reference
         return _attr(base, sym.pyname)
 
     def accessor_call(self, e: A.Field, acc: T.POUType, *args) -> py.expr:
@@ -611,11 +614,15 @@ class ExprGen:
             if sym.is_global or sym.section == "VAR_EXTERNAL":
                 name = sym.global_ref.pyname if sym.global_ref else sym.pyname
                 return _call("_ItemRef", _name("_ns"), _const(name), _const(_wrap_spec(t)))
+            if sym in self.through:
+                return _name(sym.pyname)               # the caller's own reference
             if sym in self.boxed:
                 return _call("_ItemRef", _name(sym.pyname), _const(0), _const(_wrap_spec(t)))
             if sym in self.cached or self.self_name is None:
                 raise Unsupported(e.span, f"internal: '{sym.name}' is held in a local but passed by reference")
             return _call("_AttrRef", _name(self.self_name), _const(sym.pyname), _const(_wrap_spec(t)))
+        if isinstance(e, A.Field) and isinstance(e.sym, T.VarSym) and T.is_reference(e.sym.type):
+            return _attr(self.expr(e.base), e.sym.pyname)     # the reference inst.r holds
         if isinstance(e, A.Field):
             return _call("_AttrRef", self.expr(e.base), _const(e.sym.pyname), _const(_wrap_spec(e.ty)))
         if isinstance(e, A.Index):

@@ -26,6 +26,15 @@ class FuncGen(StmtGen):
         d = pou.decl
         by_ref = _by_ref_names(d.body)
         self.boxed = {v for v in by_ref if v.owner is pou and not T.unalias(v.type).is_aggregate}
+        self.boxed |= {v for v in pou.vars.values() if v.address_taken and v.owner is pou
+                       and v.section in ("VAR", "VAR_TEMP", "VAR_INPUT", "VAR_OUTPUT")
+                       and not T.unalias(v.type).is_aggregate}
+        # an in-out whose address is taken (REF=, REF, ADR) is used through the caller's reference
+        # itself (it works as the one-element box), so a reference made here outlives the call
+        through = {p for p in pou.params() if p.section == "VAR_IN_OUT" and p.address_taken
+                   and not T.unalias(p.type).is_aggregate}
+        self.boxed |= through
+        self.through = through
         params = []
         prologue = []
         epilogue = []
@@ -43,6 +52,8 @@ class FuncGen(StmtGen):
                     prologue.append(box(p, _name(p.pyname)))
             elif p.section == "VAR_IN_OUT":
                 if T.unalias(p.type).is_aggregate:
+                    params.append(p.pyname)
+                elif p in through:
                     params.append(p.pyname)
                 else:
                     params.append("_r_" + p.pyname)
@@ -86,6 +97,8 @@ class MethodGen(FuncGen):
         mt = self.pou
         by_ref = _by_ref_names(mt.decl.body)
         boxed = {v for v in by_ref if v.owner is mt and not T.unalias(v.type).is_aggregate}
+        boxed |= {v for v in mt.vars.values() if v.address_taken and v.owner is mt
+                  and not T.unalias(v.type).is_aggregate}
         self.cached = {v for v in mt.vars.values() if v not in boxed and v.section not in ("VAR_EXTERNAL",
                                                                                             "VAR_INST")}
         fn = super().function()

@@ -63,7 +63,8 @@ class StmtGen(ExprGen):
         return [py.Continue()]
 
     def s_Return(self, s):
-        return [py.Return(_name(self.result_name) if self.result_name else None)]
+        has_result = self.result_name and getattr(self.pou, "return_type", None) is not None
+        return [py.Return(_name(self.result_name) if has_result else None)]
 
     def s_Assign(self, s: A.Assign) -> list:
         tgt = s.target
@@ -127,6 +128,8 @@ class StmtGen(ExprGen):
     def assign(self, tgt, value: py.expr, src_expr) -> list:
         if isinstance(tgt, A.Name) and isinstance(tgt.sym, T.VarSym) and T.is_reference(tgt.sym.type):
             return [py.Expr(_call(_attr(self.var_load(tgt.sym), "set"), value))]   # through the reference
+        if isinstance(tgt, A.Field) and isinstance(tgt.sym, T.VarSym) and T.is_reference(tgt.sym.type):
+            return [py.Expr(_call(_attr(_attr(self.expr(tgt.base), tgt.sym.pyname), "set"), value))]
         if isinstance(tgt, A.Name):
             sym = tgt.sym
             if isinstance(sym, T.POUType):
