@@ -1865,3 +1865,20 @@ FUNCTION_BLOCK Store
 END_FUNCTION_BLOCK
 """, "conf.st").diagnostics
     assert [x.code for x in d if x.code == "W007"] == []
+
+
+def test_a_strict_enumeration_is_not_an_integer_even_in_codesys():
+    src = """
+{attribute 'qualified_only'}
+{attribute 'strict'}
+TYPE S : (X := 0, Y := 1); END_TYPE
+TYPE E : (A := 0, B := 1); END_TYPE
+PROGRAM main VAR ve : E := E.B; vs : S := S.Y; n : INT; END_VAR
+  n := ve;
+  n := n + vs;
+END_PROGRAM
+"""
+    msg = errors(src, "codesys")
+    assert "conf.st:8:8: error[E014]: operator + cannot combine INT and S" in msg and msg.count("error[") == 1
+    plc = run(src.replace("n := n + vs;", "n := n + 1;"), dialect="codesys")
+    assert plc["main.n"] == 2

@@ -54,6 +54,20 @@ def from_sources(texts) -> Optional[str]:
     return None
 
 
+_TYPE_AFTER_PRAGMAS = re.compile(r"((?:\{[^{}]*\}\s*)+)TYPE\s+([A-Za-z_][A-Za-z0-9_]*)", re.I)
+
+
+def strict_types(texts) -> set:
+    """Lower-case names of the types declared right after an {attribute 'strict'} pragma: their
+    enumeration values are not integers, even where a preset lets enumerations be read as such."""
+    out = set()
+    for text in texts:
+        for m in _TYPE_AFTER_PRAGMAS.finditer(text):
+            if re.search(r"attribute\s+'strict'", m.group(1), re.I):
+                out.add(m.group(2).lower())
+    return out
+
+
 def preset(name: Optional[str]) -> Optional[Dialect]:
     if name is None:
         return None

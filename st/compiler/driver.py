@@ -22,6 +22,7 @@ from . import ast as A
 from .build import AstBuilder
 from .check import Checker
 from .codegen import ModuleGen
+from .dialect import strict_types
 from .library import Library
 from .model import Project
 
@@ -164,6 +165,7 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
         "{dialect" in d.message.lower().replace(" ", "") or
         (dialect is not None and dialect.attribute_pragmas and "{attribute" in d.message.lower())))]
     checker = Checker(sink, libraries)
+    checker.strict_enums = strict_types(s.text for s in sources)
     modules = []
     test_modules = []
     pysrc = {}

@@ -9,6 +9,7 @@ from __future__ import annotations
 from ...diagnostics import DiagnosticSink
 from ...source import Span
 from .. import ast as A
+from .. import types as T
 from ..library import Library
 from ..model import Project
 from .calls import CallsMixin
@@ -36,6 +37,7 @@ class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, 
         self._calls: dict = {}         # caller lower name → [(callee lower name, span)]
         self._configs: list = []
         self._global_blocks: list = []
+        self.strict_enums: set = set()  # {attribute 'strict'} enumerations (lower-case names)
         self.dialect = next((lib.dialect for lib in libraries if getattr(lib, "dialect", None)), None)
 
     # ================================================================ entry
@@ -68,6 +70,11 @@ class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, 
         if span is not None and span.file in self.library_units:
             return
         self.sink.warning(code, span, msg, hint)
+
+    def enum_as_int(self, t) -> bool:
+        """May this enumeration's values be read as integers (codesys/twincat, not 'strict')?"""
+        return self.dialect is not None and self.dialect.enum_as_int and isinstance(t, T.EnumType) \
+            and t.name.lower() not in self.strict_enums
 
     def feature(self, kind: str, span: Span, what: str) -> bool:
         """Is this construct part of the chosen dialect? (No preset: everything is.) Reports E044 if not."""

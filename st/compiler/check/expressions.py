@@ -254,13 +254,12 @@ class ExpressionsMixin:
             lt = self.expr(e.left, scope, rt)
         if lt is None or rt is None:
             return T.BOOL if op in _CMP else (lt or rt)
-        if self.dialect is not None and self.dialect.enum_as_int:
-            # CODESYS (non-strict enumerations): an enumeration value next to a number is its integer
-            la, rb = T.base_of(lt), T.base_of(rt)
-            if isinstance(la, T.EnumType) and not isinstance(rb, T.EnumType) and (rb.is_num or rb is T.LIT_INT):
-                lt = la.base
-            elif isinstance(rb, T.EnumType) and not isinstance(la, T.EnumType) and (la.is_num or la is T.LIT_INT):
-                rt = rb.base
+        # CODESYS (non-strict enumerations): an enumeration value next to a number is its integer
+        la, rb = T.base_of(lt), T.base_of(rt)
+        if self.enum_as_int(la) and not isinstance(rb, T.EnumType) and (rb.is_num or rb is T.LIT_INT):
+            lt = la.base
+        elif self.enum_as_int(rb) and not isinstance(la, T.EnumType) and (la.is_num or la is T.LIT_INT):
+            rt = rb.base
         if op in ("=", "<>"):                   # CODESYS: p = 0 tests a POINTER for NULL
             if _zero_pointer(self, e.right, lt):
                 e.right, rt = _null_at(e.right), _NULL

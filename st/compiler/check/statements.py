@@ -359,7 +359,7 @@ class StatementsMixin:
             return True
         if T.widens_to(s, d):
             return True
-        if isinstance(s, T.EnumType) and self.dialect is not None and self.dialect.enum_as_int and \
+        if self.enum_as_int(s) and \
                 (d.is_intlike or d.is_real) and (s.base is d or T.widens_to(s.base, d) or d.is_real):
             return True                 # CODESYS: a (non-strict) enumeration value as its integer
         if isinstance(s, T.ArrayType) and isinstance(d, T.ArrayType):
