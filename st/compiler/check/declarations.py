@@ -9,6 +9,7 @@ from .. import types as T
 from ..names import mangle
 from .common import _DIRECT, _DIRECT_TYPES, Scope, _names_in
 
+
 def _access_rank(mods) -> int:
     """PUBLIC/INTERNAL 0 < PROTECTED 1 < PRIVATE 2."""
     return 2 if "PRIVATE" in mods else 1 if "PROTECTED" in mods else 0
@@ -16,7 +17,6 @@ def _access_rank(mods) -> int:
 
 # CODESYS's implicit methods: FB_init runs when an instance is created (before the first scan)
 _CONSTRUCTION = ("fb_init", "fb_reinit", "fb_exit")
-
 
 MAX_ARRAY_ELEMENTS = 50_000_000
 
