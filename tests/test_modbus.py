@@ -7,6 +7,7 @@ import socket
 import struct
 import subprocess
 import textwrap
+import threading
 import time
 
 import pytest
@@ -74,8 +75,9 @@ def slave(plc, tmp_path):
         yield s
 
 
-def connect(slave) -> socket.socket:
-    s = socket.create_connection(("127.0.0.1", slave.port), timeout=5)
+def connect(slave, source: str = "127.0.0.1") -> socket.socket:
+    """A client connection; `source` is its own address (any of 127.0.0.0/8 reaches the server)."""
+    s = socket.create_connection(("127.0.0.1", slave.port), timeout=5, source_address=(source, 0))
     s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
     return s
 
@@ -369,28 +371,142 @@ def test_a_thousand_connections_do_not_lock_out_a_polling_client(plc):
         good.close()
 
 
+def test_a_burst_of_short_connections_never_evicts_a_polling_hmi(plc):
+    # The failure seen in the field: an HMI polls once a second on one long-lived connection; another
+    # client opens short connections in a loop (each one request, some never closed). Between two of
+    # the HMI's polls every burst connection is fresher than the HMI, so "the longest idle goes"
+    # closed the HMI. Here the HMI polls every 0.2 s (idle timeout 2 s) and the burst opens at least 200
+    # connections, one after the other, going on until the HMI has polled twice meanwhile.
+    plc["main.setpoint"] = 1234
+    plc["%IW3"] = -7
+    plc.scan()
+    hmi_reply = bytes([3, 4, 0x04, 0xD2, 0, 0])                     # holding 0-1: 1234, 0
+    with ModbusSlave(plc, port=0, max_connections=4, idle_timeout=2.0) as slave:
+        hmi = connect(slave)
+        polls, errors, stop = [], [], threading.Event()
+
+        def poll():
+            tid = 0
+            try:
+                while not stop.is_set():
+                    tid += 1
+                    polls.append(raw(hmi, bytes([3, 0, 0, 0, 2]), tid=tid))
+                    stop.wait(0.2)
+            except Exception as e:  # noqa: BLE001 - reported below
+                errors.append(f"poll {tid}: {e!r}")
+
+        def wait_polls(n):
+            deadline = time.monotonic() + 10
+            while len(polls) < n and poller.is_alive() and time.monotonic() < deadline:
+                time.sleep(0.02)
+
+        poller = threading.Thread(target=poll, daemon=True)
+        poller.start()
+        wait_polls(2)                                   # the HMI is established, then the burst starts
+        kept, burst_replies, sent = [], [], 0
+        during = len(polls) + 2
+        i = -1
+        while i < 199 or (len(polls) < during and poller.is_alive()):   # 200, and over two HMI polls
+            i += 1
+            c = connect(slave)
+            if len(kept) > 100:                         # long evicted by the server: only file
+                kept.pop(0).close()                     # descriptors here
+            if i % 5 == 4:                              # connects, never sends anything, never closes
+                kept.append(c)
+                continue
+            sent += 1
+            burst_replies.append(raw(c, bytes([4, 0, 3, 0, 1]), tid=i & 0xFFFF))
+            if i % 3 == 0:
+                kept.append(c)                          # one request, then left open
+            else:
+                c.close()
+        wait_polls(len(polls) + 2)                      # and the HMI goes on polling after it
+        stop.set()
+        poller.join(5)
+        assert errors == []
+        assert len(polls) >= 6 and polls == [hmi_reply] * len(polls)     # 2 before, 2 during, 2 after
+        assert raw(hmi, bytes([3, 0, 0, 0, 2]), tid=9999) == hmi_reply      # the same connection, still open
+        assert sent >= 160 and burst_replies == [bytes([4, 2, 0xFF, 0xF9])] * sent   # the burst was served too
+        for c in kept:
+            c.close()
+        hmi.close()
+
+
 def _readable(sock) -> bool:
     import select
     return bool(select.select([sock], [], [], 0)[0])
 
 
-def test_connection_limit_evicts_never_active_then_longest_idle(plc):
-    with ModbusSlave(plc, port=0, max_connections=3) as slave:
-        a, b = connect(slave), connect(slave)
-        raw(a, bytes([3, 0, 0, 0, 1]))
-        raw(b, bytes([3, 0, 0, 0, 1]))
-        silent = connect(slave)
-        time.sleep(0.1)
-        d = connect(slave)                          # 4th: the never-active one goes
-        assert closed_by_peer(silent, 2.0)
-        raw(b, bytes([3, 0, 0, 0, 1]))
-        raw(d, bytes([3, 0, 0, 0, 1]))
-        time.sleep(0.1)
-        e = connect(slave)                          # 5th: a is now the longest idle
-        assert closed_by_peer(a, 2.0)
-        assert raw(e, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
-        for s in (b, d, e):
+def test_connection_limit_evicts_never_active_then_the_busiest_peer_newest_first(plc):
+    # all clients on this host; their source addresses (127.0.0.x) are the peers the policy counts
+    plc["main.setpoint"] = 42
+    plc.scan()
+    ok = bytes([3, 2, 0, 42])
+
+    def served(*socks):
+        return all(raw(s, bytes([3, 0, 0, 0, 1])) == ok for s in socks)
+
+    with ModbusSlave(plc, port=0, max_connections=4) as slave:
+        s1 = connect(slave, "127.0.0.1")                             # s1, s2, s3 never send a request
+        s2, s3 = connect(slave, "127.0.0.2"), connect(slave, "127.0.0.2")
+        b1 = connect(slave, "127.0.0.2")
+        assert served(b1)
+        a = connect(slave, "127.0.0.1")     # never-active first; .2 holds the most (3): its oldest, s2
+        assert closed_by_peer(s2, 2.0)      # (s1 is older, but .1 holds 2 with a)
+        assert not _readable(s1) and not _readable(s3) and served(a, b1)
+        b2 = connect(slave, "127.0.0.2")    # never-active s1 (.1: 2) and s3 (.2: 3 with b1, b2): s3
+        assert closed_by_peer(s3, 2.0)
+        assert not _readable(s1) and served(b2, a, b1)
+        c1 = connect(slave, "127.0.0.3")    # the last never-active one, whatever its peer
+        assert closed_by_peer(s1, 2.0)
+        assert served(c1, a, b1, b2)
+        b3 = connect(slave, "127.0.0.2")    # all active: .2 would hold 3, its newest goes (b2),
+        assert closed_by_peer(b2, 2.0)      # not c1, the newest of all
+        assert served(b3, a, b1, c1)
+        c2 = connect(slave, "127.0.0.3")    # .2 and .3 would hold 2 each: the newest of
+        assert closed_by_peer(b3, 2.0)      # theirs goes (b3, newer than c1 and b1)
+        assert served(c2, a, b1, c1)
+        d1 = connect(slave, "127.0.0.1")    # .1 and .3 would hold 2 each: the newest (c2)
+        assert closed_by_peer(c2, 2.0)
+        assert served(d1, a, b1, c1)
+        for s in (a, b1, c1, d1, s1, s2, s3, b2, b3, c2):
             s.close()
+
+
+def test_regular_clients_are_never_evicted_and_new_connections_are_refused_instead(plc, tmp_path):
+    log = tmp_path / "modbus.log"
+    ok = bytes([3, 2, 0, 0])
+    slave = ModbusSlave(plc, port=0, max_connections=3, log_path=str(log)).start()
+    try:
+        once = connect(slave)
+        assert raw(once, bytes([3, 0, 0, 0, 1])) == ok       # one request, then nothing: not regular
+        h1, h2 = connect(slave), connect(slave)
+        assert raw(h1, bytes([3, 0, 0, 0, 1])) == ok and raw(h2, bytes([3, 0, 0, 0, 1])) == ok
+        time.sleep(1.1)
+        assert raw(h1, bytes([3, 0, 0, 0, 1])) == ok and raw(h2, bytes([3, 0, 0, 0, 1])) == ok   # regular now
+        n = connect(slave)                          # h2 is the newest, but regular: `once` goes
+        assert closed_by_peer(once, 2.0)
+        assert raw(n, bytes([3, 0, 0, 0, 1])) == ok
+        m = connect(slave)                          # n is the only one that is not regular
+        assert closed_by_peer(n, 2.0)
+        assert raw(m, bytes([3, 0, 0, 0, 1])) == ok
+        time.sleep(1.1)
+        assert raw(m, bytes([3, 0, 0, 0, 1])) == ok             # m is regular too: every slot is
+        refused = []
+        for _ in range(5):
+            r = connect(slave)
+            assert closed_by_peer(r, 2.0)
+            refused.append("127.0.0.1:%d" % r.getsockname()[1])
+            r.close()
+        for s in (h1, h2, m):
+            assert raw(s, bytes([3, 0, 0, 0, 1])) == ok
+            s.close()
+    finally:
+        slave.stop()
+    lines = [ln for ln in log.read_text().splitlines() if "refused" in ln]
+    head = "st modbus: WARNING connection limit 3: every connection is a regular client; refused"
+    assert lines == [f"{head} 1 new connection(s), the last from {refused[0]}",      # at once
+                     f"{head} 4 new connection(s), the last from {refused[4]}"]      # the rest: once, at the stop
 
 
 def test_request_rate_is_bounded_per_connection(plc):

@@ -12,9 +12,18 @@ request validation and the access rules live here, around pymodbus's PDU classes
 - exceptions: 01 unsupported function (echoed + 0x80), 02 address outside the map or not
   writable, 03 illegal quantity / byte count / FC5 value, 06 busy (the PLC has not taken the
   queued writes), 0x0B for a unit id the policy does not serve;
-- at most `max_connections` (a new one evicts a connection that never sent a request, else the
-  longest idle one), an idle timeout, a per-connection request rate (excess requests wait:
+- at most `max_connections`, an idle timeout, a per-connection request rate (excess requests wait:
   reading pauses), and flow control: a client that does not read its replies stops being read.
+
+The connection limit protects clients that poll. A connection is *regular* once it has completed
+requests at least REGULAR_AFTER seconds apart (two polls of an HMI, however slow, as long as it
+polls within the idle timeout); a regular connection is never evicted. When a new connection
+finds every slot taken, one that is not regular makes room for it, ranked by: no completed
+request before any, then the peer address holding the most non-regular connections (the new one
+counts for its address), then the oldest of those without a request, the newest of the others.
+So a client opening short connections in a loop churns through its own connections and leaves
+older clients alone. When every other connection is regular the new one is refused (closed);
+refusals are logged at most once per REFUSAL_LOG_INTERVAL, with their count.
 """
 from __future__ import annotations
 
@@ -24,6 +33,7 @@ import os
 import signal
 import struct
 import time
+from collections import Counter
 
 from .exchange import COILS, DISCRETE, HOLDING, INPUT, Exchange
 
@@ -33,6 +43,8 @@ MAX_BITS_READ, MAX_REGS_READ = 2000, 125
 MAX_BITS_WRITE, MAX_REGS_WRITE, MAX_REGS_RW_WRITE = 1968, 123, 121
 ILLEGAL_FUNCTION, ILLEGAL_ADDRESS, ILLEGAL_VALUE, SERVER_FAILURE, BUSY, GATEWAY_NO_RESPONSE = 1, 2, 3, 4, 6, 0x0B
 READ_TABLE = {1: COILS, 2: DISCRETE, 3: HOLDING, 4: INPUT}
+REGULAR_AFTER = 1.0            # s between a connection's first and latest request: it polls, never evicted
+REFUSAL_LOG_INTERVAL = 10.0    # s: refused connections are logged at most this often, with their count
 
 
 class ServerConfig:
@@ -222,16 +234,42 @@ class Server:
         self.handler = Handler(cfg, ex)
         self.conns: set = set()
         self.served = 0
+        self.accepted = 0                  # connections seen: their sequence numbers (newest = highest)
+        self.refused = 0                   # refused since the last report
+        self.refused_last = "?"
+        self.refused_reported = float("-inf")
 
-    def evict_for_new(self, new: "Connection") -> None:
+    def admit(self, new: "Connection") -> bool:
+        """Make room for `new` under the connection limit: evict one connection that is not regular,
+        or refuse `new` (close it, False) when every other connection is regular. O(connections)."""
         others = [c for c in self.conns if c is not new]
         if len(others) < self.cfg.max_connections:
-            return
-        # never-active connections first, then the longest idle
-        victim = min(others, key=lambda c: (c.requests > 0, c.last_activity))
-        log.info("connection limit %d: closing %s (idle %.1f s)", self.cfg.max_connections, victim.peer,
-                 time.monotonic() - victim.last_activity)
+            return True
+        now = time.monotonic()
+        candidates = [c for c in others if not c.regular]
+        if not candidates:
+            new.close()
+            self.refused += 1
+            self.refused_last = new.peer
+            self.report_refusals(now)
+            return False
+        held = Counter(c.host for c in candidates)
+        held[new.host] += 1
+        # never active first (the oldest: it had the longest chance to send a request), then the peer
+        # address holding the most evictable slots, then the newest
+        victim = min(candidates, key=lambda c: (c.requests > 0, -held[c.host], -c.seq if c.requests else c.seq))
+        log.info("connection limit %d: closing %s (%d request(s), idle %.1f s) for %s", self.cfg.max_connections,
+                 victim.peer, victim.requests, now - victim.last_activity, new.peer)
         victim.close()
+        return True
+
+    def report_refusals(self, now: float, final: bool = False) -> None:
+        if self.refused and (final or now - self.refused_reported >= REFUSAL_LOG_INTERVAL):
+            log.warning("connection limit %d: every connection is a regular client; refused %d new "
+                        "connection(s), the last from %s", self.cfg.max_connections, self.refused,
+                        self.refused_last)
+            self.refused = 0
+            self.refused_reported = now
 
     async def reaper(self) -> None:
         while True:
@@ -241,6 +279,7 @@ class Server:
                 if now - c.last_activity > self.cfg.idle_timeout:
                     log.info("%s idle for %.1f s: closing", c.peer, now - c.last_activity)
                     c.close()
+            self.report_refusals(now)
 
 
 class Connection(asyncio.Protocol):
@@ -248,9 +287,13 @@ class Connection(asyncio.Protocol):
         self.server = server
         self.buf = bytearray()
         self.transport = None
-        self.peer = "?"
-        self.last_activity = time.monotonic()
+        self.peer = self.host = "?"
+        server.accepted += 1
+        self.seq = server.accepted
+        self.last_activity = time.monotonic()      # the latest complete request (or the connect)
         self.requests = 0
+        self.first_request = 0.0
+        self.regular = False                       # requests REGULAR_AFTER s apart: never evicted
         self.write_paused = False
         self.rate_paused = False
         self.tokens = server.cfg.max_rate
@@ -259,10 +302,11 @@ class Connection(asyncio.Protocol):
     def connection_made(self, transport) -> None:
         self.transport = transport
         p = transport.get_extra_info("peername")
-        self.peer = f"{p[0]}:{p[1]}" if p else "?"
+        if p:
+            self.host, self.peer = str(p[0]), f"{p[0]}:{p[1]}"
         transport.set_write_buffer_limits(high=64 * 1024)
         self.server.conns.add(self)
-        self.server.evict_for_new(self)
+        self.server.admit(self)
 
     def connection_lost(self, exc) -> None:
         self.server.conns.discard(self)
@@ -311,8 +355,13 @@ class Connection(asyncio.Protocol):
             unit = buf[6]
             pdu = bytes(buf[7:6 + length])
             del buf[:6 + length]
+            now = time.monotonic()
+            if not self.requests:
+                self.first_request = now
+            elif now - self.first_request >= REGULAR_AFTER:
+                self.regular = True
             self.requests += 1
-            self.last_activity = time.monotonic()
+            self.last_activity = now
             reply = self.server.handler.handle(unit, pdu)
             out.append(struct.pack(">HHHB", tid, 0, len(reply) + 1, unit) + reply)
         self._flush(out)
@@ -378,6 +427,7 @@ async def _main(cfg: ServerConfig, ex: Exchange, parent_pid: int) -> None:
     watch = loop.create_task(orphan_watch())
     await stop
     reaper.cancel()
+    server.report_refusals(time.monotonic(), final=True)
     watch.cancel()
     srv.close()
     for c in list(server.conns):
