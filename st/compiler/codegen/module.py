@@ -6,6 +6,7 @@ import ast as py
 from .. import types as T
 from ..model import Project
 from .expressions import InitGen
+from .guards import guard_loops
 from .pous import BodyGen, FuncGen
 from .pyast import Unsupported, _args, _attr, _const, _name, _set_lines, default_value
 from .statements import StmtGen, _Typed
@@ -29,6 +30,7 @@ class ModuleGen:
         out = []
         for path, fns in self.tests_by_file.items():
             m = py.Module(body=fns, type_ignores=[])
+            guard_loops(m)
             out.append((path, m))
         return out
 
@@ -103,6 +105,7 @@ class ModuleGen:
             m = py.Module(body=body, type_ignores=[])
             for node in body:
                 _set_lines(node, getattr(node, "lineno", None) or 1)
+            guard_loops(m)              # after the lines are placed: a guard carries its loop's line
             modules.append((path, m))
         return modules
 

@@ -291,20 +291,16 @@ class StmtGen(ExprGen):
         return out
 
     def s_While(self, s: A.While) -> list:
-        return [py.While(self.expr(s.cond), self.block(s.body) + self._loop_guard(), [])]
-
-    def _loop_guard(self) -> list:
-        """A cheap check that lets the runtime's watchdog end an endless loop."""
-        return [py.If(_name("_wd_armed"), [py.Expr(_call("_wd_check"))], [])]
+        return [py.While(self.expr(s.cond), self.block(s.body), [])]
 
     def s_Repeat(self, s: A.Repeat) -> list:
         if _has_continue(s.body):
             flag = self.new_tmp()
             init = py.Assign([_name(flag, py.Store())], _const(True))
             test = py.BoolOp(py.Or(), [_name(flag), py.UnaryOp(py.Not(), self.expr(s.cond))])
-            body = [py.Assign([_name(flag, py.Store())], _const(False))] + self.stmts(s.body) + self._loop_guard()
+            body = [py.Assign([_name(flag, py.Store())], _const(False))] + self.stmts(s.body)
             return [init, py.While(test, body, [])]
-        body = self.stmts(s.body) + self._loop_guard()
+        body = self.stmts(s.body)
         cond = self.expr(s.cond)
         br = _set_lines(py.If(cond, [py.Break()], []), s.cond.span.line)
         return [py.While(_const(True), body + [br], [])]
