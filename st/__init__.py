@@ -1,6 +1,6 @@
 """st: an IEC 61131-3 Structured Text toolchain and soft PLC."""
 from .diagnostics import CompileError
-from .runtime.plc import PLC, PLCFaultError
+from .runtime.plc import PLC, OnlineChangeRefused, PLCFaultError, PLCStartError
 
 __version__ = "0.1.0"
-__all__ = ["PLC", "PLCFaultError", "CompileError", "__version__"]
+__all__ = ["PLC", "PLCFaultError", "PLCStartError", "OnlineChangeRefused", "CompileError", "__version__"]

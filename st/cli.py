@@ -133,7 +133,10 @@ def compile(files, emit, time_unit, f_trig_first_scan):
 @click.option("--modbus-read-only", is_flag=True, help="Refuse every Modbus write (exception 02).")
 @click.option("--modbus-writable", default=None, metavar="RANGES",
               help="Only these are writable, e.g. holding:0-99,coil:0-15 (a write elsewhere gets 02).")
-@click.option("--modbus-max-connections", type=int, default=16, show_default=True)
+@click.option("--modbus-max-connections", type=int, default=16, show_default=True,
+              help="Most simultaneous connections. When full, a new one closes one that is not regular (one "
+                   "without a request yet, else the newest of the busiest address); regular clients (requests "
+                   "at least 1 s apart) are never closed: the new connection is refused instead.")
 @click.option("--modbus-idle-timeout", type=float, default=60.0, show_default=True, help="Seconds.")
 @click.option("--modbus-rate", type=float, default=1000.0, show_default=True,
               help="Requests per second per connection (0: unbounded).")
@@ -161,7 +164,8 @@ def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, s
         ethercat_capture, quiet, time_unit, f_trig_first_scan):
     """Run a program: its CONFIGURATION's tasks (or a lone PROGRAM as one cyclic task), in real time
     with a live status line until Ctrl-C, --duration or --scans; --virtual runs on virtual time."""
-    from .runtime.session import RunOptions, run_plc
+    from .runtime.session import RunOptions, run_plc, source_mtimes
+    seen = source_mtimes(files)         # --watch compares with the files as they were compiled
     result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
     opts = RunOptions(files=list(files), scans=scans, duration=duration, cycle=cycle, virtual=virtual,
                       policy=policy, dump_json=dump_json, stats_json=stats_json, stats_plot=stats_plot,
@@ -174,7 +178,7 @@ def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, s
                       modbus_unit_ids=modbus_unit_ids, axes=axes, trace=list(trace), trace_plot=trace_plot,
                       trace_csv=trace_csv, ethercat=ethercat, ethercat_backend=ethercat_backend,
                       ethercat_iface=ethercat_iface, ethercat_capture=ethercat_capture, quiet=quiet, time_unit=time_unit,
-                      f_trig_first_scan=f_trig_first_scan)
+                      f_trig_first_scan=f_trig_first_scan, compiled_mtimes=seen)
     sys.exit(run_plc(result, opts))
 
 

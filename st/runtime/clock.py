@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 
 SPIN_NS = 200_000            # sleep until deadline − 200 µs, then spin
+SLICE_NS = 50_000_000        # the longest single sleep
 
 
 class VirtualClock:
@@ -36,16 +37,22 @@ class RealClock:
     def __init__(self, start: int = 0, phase_ns: int = 0, spin_ns: int = SPIN_NS):
         self.base = time.monotonic_ns() - start + phase_ns
         self.spin = spin_ns
+        self.wake = False           # set by a stop request: a long sleep ends early
 
     def now(self) -> int:
         return time.monotonic_ns() - self.base
 
     def sleep_until(self, t: int) -> None:
         deadline = self.base + t
-        rest = deadline - time.monotonic_ns() - self.spin
-        if rest > 0:
-            time.sleep(rest / 1e9)
         mono = time.monotonic_ns
+        # long sleeps in slices, so that a stop request (a signal) is seen within one slice
+        while not self.wake:
+            rest = deadline - mono() - self.spin
+            if rest <= 0:
+                break
+            time.sleep(min(rest, SLICE_NS) / 1e9)
+        if self.wake:
+            return
         while mono() < deadline:
             pass
 

@@ -44,6 +44,47 @@ class PLCFaultError(RuntimeError):
         self.fault = fault
 
 
+class PLCStartError(ValueError):
+    """The program cannot start: a located address outside the process image, a VAR_CONFIG value
+    that does not fit, or a fault while creating the instances (FB_init, an initial value): then
+    `.fault` names it and its ST line, as for a fault in a scan."""
+
+    def __init__(self, message: str, fault: Optional[FaultInfo] = None):
+        super().__init__(message)
+        self.fault = fault
+
+
+class OnlineChangeRefused(ValueError):
+    """An online change that cannot be applied; the running program and its state are untouched."""
+
+    def __init__(self, reasons: list):
+        super().__init__("online change refused, the old program keeps running:\n  " + "\n  ".join(reasons))
+        self.reasons = list(reasons)
+
+
+# start-up, warm restart and online change run initial values and FB_init under the watchdog too,
+# with the task budget (--watchdog) but at least this much
+STARTUP_BUDGET = 1_000_000_000
+
+
+class _Build:
+    """A program made ready to run (namespace, instances, tasks, image bindings) but not running yet.
+    Its attribute names are the PLC's, so path resolution works on either."""
+
+    def __init__(self, compiled: CompiledProgram):
+        self.compiled = compiled
+        self.project = compiled.project
+        self.ns: dict = {}
+        self.wd: Optional[Watchdog] = None
+        self.config = None
+        self.instances: dict = {}           # lower name → (display name, object, POUType)
+        self.tasks: list = []
+        self.tick = DEFAULT_CYCLE
+        self.policy = None
+        self.bindings: dict = {}            # normalised address → [Binding]
+        self.binding_of: dict = {}          # (id(container), key) → Binding
+
+
 class PLC:
     """A PLC for one compiled program (its first CONFIGURATION).
 
@@ -75,7 +116,8 @@ class PLC:
         self.io: list = []                      # I/O drivers: before_job(), after_job(), rebind()
         self._forced: dict = {}                 # (path, id(container), key) → (container, key, value, binding)
         self._force_spec: dict = {}             # path → the value asked for (re-applied after a reload)
-        self._load(compiled)
+        self._stop_requested = False
+        self._install(self._build(compiled))
         self.retain_store = RetainStore(retain) if retain else None
         self.retain_interval = parse_duration_arg(retain_interval)
         self._next_retain = self.retain_interval
@@ -87,57 +129,81 @@ class PLC:
                 self.retain_restored = self._restore_retained(self.retain_store.load())
 
     # ------------------------------------------------------------------ construction
-    def _load(self, compiled: CompiledProgram) -> None:
-        """Namespace, instances, tasks and image bindings for `compiled` (also used by online change)."""
-        self.compiled = compiled
-        self.project = compiled.project
-        self._bindings: dict = {}
-        self._binding_of: dict = {}
+    # A program is made ready in two steps. `_build` executes the generated modules into a new
+    # namespace, creates the program instances (declared values, FB_init), applies VAR_CONFIG and
+    # checks every located address, all under the watchdog and without touching the running PLC;
+    # any failure raises PLCStartError. `_install` then makes it the running program, and cannot
+    # fail for reasons of the program. Start-up, warm restart and online change all go this way,
+    # so a change is all or nothing.
+    def _build(self, compiled: CompiledProgram, what: str = "start-up") -> "_Build":
+        b = _Build(compiled)
+        budget = max(self.watchdog or 0, STARTUP_BUDGET)
 
         def install(ns):
-            self._wd = Watchdog(ns)
+            b.wd = Watchdog(ns)
+            b.wd.start(budget, f"the {what} (initial values, FB_init)")
+        try:
+            b.ns = build_namespace(compiled, install)
+            cfg = b.config = b.project.configs[0] if b.project.configs else None
+            cyc = self.cycle
+            if cfg is not None:
+                for tm in cfg.tasks:
+                    interval = tm.interval
+                    if cfg.implicit or (interval == 0 and not tm.single):
+                        interval = cyc or DEFAULT_CYCLE
+                    b.tasks.append(Task(tm.name, interval, tm.priority, [], tm.single, index=len(b.tasks)))
+                by_task = {t.name.lower(): t for t in b.tasks}
+                for im in cfg.instances:
+                    obj = b.ns[im.type.pyname]()
+                    b.instances[im.name.lower()] = (im.name, obj, im.type)
+                    task = by_task.get(im.task.lower()) if im.task else None
+                    if task is None:
+                        if not b.tasks:
+                            b.tasks.append(Task("main", cyc or DEFAULT_CYCLE, 0, []))
+                        task = b.tasks[0]
+                    task.instances.append((im.name, obj, im))
+                self._apply_var_config(cfg, b)
+            for t in b.tasks:
+                t.calls = [(name, obj, b.ns.get("_cfg_in_" + name.lower()), b.ns.get("_cfg_out_" + name.lower()))
+                           for name, obj, im in t.instances]
+            intervals = [t.interval for t in b.tasks if t.interval > 0]
+            b.tick = math.gcd(*intervals) if intervals else (cyc or DEFAULT_CYCLE)
+            b.policy = make_policy(self.policy_name, b.tasks, b.tick)
+            self._bind_image(b)
+        except PLCStartError:
+            raise
+        except (AddressError, KeyError, ValueError_, ValueError) as e:
+            raise PLCStartError(str(e)) from None
+        except Exception as exc:  # noqa: BLE001 - a fault of ST code (FB_init, an initial value) or a limit
+            info = fault_from_exception(exc)
+            raise PLCStartError(str(info), info) from None
+        finally:
+            if b.wd is not None:
+                b.wd.stop()
+        return b
+
+    def _install(self, b: "_Build") -> None:
+        """Make a built program the running one (at a scan boundary)."""
         old_ns = getattr(self, "ns", None)
-        ns = self.ns = build_namespace(compiled, install)
+        self.compiled, self.project, self.ns, self._wd = b.compiled, b.project, b.ns, b.wd
+        self.config, self.instances, self.tasks = b.config, b.instances, b.tasks
+        self.tick, self.policy = b.tick, b.policy
+        self._bindings, self._binding_of = b.bindings, b.binding_of
         # drivers that live in the namespace (the motion kernel) follow it; the old ones hand over
         old_drivers = {type(d): d for d in self.io if getattr(d, "per_namespace", False)}
         self.io = [d for d in self.io if not getattr(d, "per_namespace", False)]
-        for d in ns.get("_io_drivers", []):
+        for d in b.ns.get("_io_drivers", []):
             prev = old_drivers.get(type(d))
             if prev is not None and old_ns is not None and hasattr(d, "adopt"):
                 d.adopt(prev)
             self.io.insert(0, d)
-        cfg = self.project.configs[0] if self.project.configs else None
-        self.config = cfg
-        self.instances: dict = {}           # lower name → (display name, object, POUType)
-        self.tasks: list[Task] = []
-        cyc = self.cycle
-        if cfg is not None:
-            for tm in cfg.tasks:
-                interval = tm.interval
-                if cfg.implicit or (interval == 0 and not tm.single):
-                    interval = cyc or DEFAULT_CYCLE
-                self.tasks.append(Task(tm.name, interval, tm.priority, [], tm.single, index=len(self.tasks)))
-            by_task = {t.name.lower(): t for t in self.tasks}
-            for im in cfg.instances:
-                obj = ns[im.type.pyname]()
-                self.instances[im.name.lower()] = (im.name, obj, im.type)
-                task = by_task.get(im.task.lower()) if im.task else None
-                if task is None:
-                    if not self.tasks:
-                        self.tasks.append(Task("main", cyc or DEFAULT_CYCLE, 0, []))
-                    task = self.tasks[0]
-                task.instances.append((im.name, obj, im))
-            self._apply_var_config(cfg)
         for t in self.tasks:
-            t.calls = [(name, obj, ns.get("_cfg_in_" + name.lower()), ns.get("_cfg_out_" + name.lower()))
-                       for name, obj, im in t.instances]
             old = self._stats.get(t.name)
             t.stats = old if old is not None and old.period == t.interval else TaskStats(t.name, t.interval)
             self._stats[t.name] = t.stats
-        intervals = [t.interval for t in self.tasks if t.interval > 0]
-        self.tick = math.gcd(*intervals) if intervals else (cyc or DEFAULT_CYCLE)
-        self.policy = make_policy(self.policy_name, self.tasks, self.tick)
-        self._bind_image()
+        for binds in self._bindings.values():
+            for bd in binds:
+                bd.publish() if bd.area in "QM" else bd.latch_in()
         self._event_tasks = [t for t in self.tasks if t.single]
         self._reset_releases(self._time)
         if getattr(self, "_force_spec", None):
@@ -167,60 +233,58 @@ class PLC:
         from ..api import compile_paths
         return cls(compile_paths(list(paths), **_compile_kw(kw)), cycle, **kw)
 
-    def _apply_var_config(self, cfg) -> None:
+    def _apply_var_config(self, cfg, b: "_Build") -> None:
         """VAR_CONFIG initial values (literals) for variables inside program instances."""
         for path, location, init, ty, span in cfg.var_config:
             if init is None or not path or not hasattr(init, "value"):
                 continue
             try:
-                self[".".join(path)] = init.value
+                container, key, t = self._resolve(".".join(path), b)
+                _set(container, key, from_python(init.value, t, ".".join(path)))
             except (KeyError, ValueError_) as e:
-                raise ValueError(f"{span.file}:{span.line}: VAR_CONFIG {'.'.join(path)}: {e}") from None
+                raise PLCStartError(f"{span.file}:{span.line}: VAR_CONFIG {'.'.join(path)}: {e}") from None
 
     # ------------------------------------------------------------------ process image
-    def _located(self):
+    def _located(self, b: "_Build"):
         """(address, container, key, type, owning instance name or None) of every located variable."""
-        for lname, (name, obj, pou) in self.instances.items():
+        for lname, (name, obj, pou) in b.instances.items():
             for sym in pou.vars.values():
                 if sym.location and "*" not in sym.location:
                     yield sym.location, obj, sym.pyname, sym.type, lname
-        for g in self.project.globals.values():
+        for g in b.project.globals.values():
             if g.location and "*" not in g.location:
-                yield g.location, self.ns, g.pyname, g.type, None
-        for addr, (pyname, t) in self.project.direct_vars.items():
-            yield addr, self.ns, pyname, t, None
-        if self.config is not None:
-            for path, location, init, ty, span in self.config.var_config:
+                yield g.location, b.ns, g.pyname, g.type, None
+        for addr, (pyname, t) in b.project.direct_vars.items():
+            yield addr, b.ns, pyname, t, None
+        if b.config is not None:
+            for path, location, init, ty, span in b.config.var_config:
                 if location and "*" not in location:
                     try:
-                        container, key, t = self._resolve(".".join(path))
+                        container, key, t = self._resolve(".".join(path), b)
                     except KeyError:
                         continue
                     yield location, container, key, t, path[0].lower()
 
-    def _bind_image(self) -> None:
+    def _bind_image(self, b: "_Build") -> None:
         """Each task latches the inputs of its own instances (and located globals) and publishes its outputs."""
-        self._bindings: dict = {}          # normalised address → [Binding]
-        self._binding_of: dict = {}        # (id(container), key) → Binding
         owner_task = {}
-        for t in self.tasks:
+        for t in b.tasks:
             t.ins, t.outs = [], []
             for name, obj, im in t.instances:
                 owner_task[name.lower()] = t
-        for addr, container, key, t, inst in self._located():
+        for addr, container, key, t, inst in self._located(b):
             try:
-                b = Binding(addr, container, key, t, self.image)
+                bd = Binding(addr, container, key, t, self.image)
             except AddressError as e:
-                raise ValueError(f"{addr}: {e}") from None
-            self._bindings.setdefault(_norm_addr(addr), []).append(b)
-            self._binding_of[(id(container), key)] = b
-            targets = [owner_task[inst]] if inst in owner_task else self.tasks
+                raise PLCStartError(f"{addr}: {e}") from None
+            b.bindings.setdefault(_norm_addr(addr), []).append(bd)
+            b.binding_of[(id(container), key)] = bd
+            targets = [owner_task[inst]] if inst in owner_task else b.tasks
             for task in targets:
-                if b.area in "IM":
-                    task.ins.append(b)
-                if b.area in "QM":
-                    task.outs.append(b)
-            b.publish() if b.area in "QM" else b.latch_in()
+                if bd.area in "IM":
+                    task.ins.append(bd)
+                if bd.area in "QM":
+                    task.outs.append(bd)
 
     # ------------------------------------------------------------------ time and the engine
     @property
@@ -288,6 +352,16 @@ class PLC:
 
     _on_idle = None
     _stop_event = None
+
+    def request_stop(self, reason: str = "stop requested") -> None:
+        """Stop the engine at the next scan boundary; safe from a signal handler or another thread.
+        A job still running finishes, or is ended by its watchdog budget; asked again while that job
+        runs, the job is ended at once (at its next loop iteration) as a WATCHDOG fault."""
+        if self._stop_requested and self._wd.running:
+            self._wd.abort(f"the job was ended by a second stop request ({reason})")
+        self._stop_requested = True
+        if isinstance(self.clock, RealClock):
+            self.clock.wake = True
     idle_slack = 0              # ns until the next release, as seen by an `on_idle` hook
 
     def _engine(self, t_end) -> None:
@@ -298,7 +372,8 @@ class PLC:
         tasks = self.tasks
         idle_jobs = 0
         while True:
-            if self._stop_event is not None and self._stop_event.is_set():
+            if self._stop_requested or (self._stop_event is not None and self._stop_event.is_set()):
+                self._stop_requested = False
                 self._time = max(self._time, min(self._next_tick, t_end))
                 return
             now = clock.now()
@@ -485,9 +560,14 @@ class PLC:
         """Warm restart after a fault (--on-fault restart): fresh instances, retained values restored."""
         snapshot = self._retained_values() if self.retain_store is None else None
         committed = self.retain_store.load() if self.retain_store is not None else snapshot
+        try:
+            b = self._build(self.compiled, "restart")
+        except PLCStartError as e:             # FB_init faults again: stay in FAULT, say why
+            self._enter_fault(e.fault or FaultInfo("START", str(e)))
+            raise PLCFaultError(self.fault) from None
         self.fault = None
         self.state = RUN
-        self._load(self.compiled)
+        self._install(b)
         if committed:
             self._restore_retained(committed)
 
@@ -535,34 +615,57 @@ class PLC:
     # ------------------------------------------------------------------ online change
     def online_change(self, compiled: CompiledProgram) -> str:
         """Swap in a new build of the program at this scan boundary, carrying every variable over by
-        name and type. Raises ValueError (and keeps the running program) when that is not possible:
-        the configuration changed, or a variable kept its name but changed its type."""
+        name and type. All or nothing: raises OnlineChangeRefused (a ValueError) and leaves the running
+        program and its state untouched when the configuration or a variable's type changed, when the
+        new program cannot start (an address outside the image, a fault in FB_init), or when a value
+        cannot be carried over."""
+        return self.apply_change(self.prepare_change(compiled))
+
+    def prepare_change(self, compiled: CompiledProgram) -> "_Build":
+        """The part of an online change that may run in another thread while the old program scans:
+        the checks, and the new namespace and instances with their FB_init."""
         problems = self._change_problems(compiled)
         if problems:
-            raise ValueError("online change refused, the old program keeps running:\n  " + "\n  ".join(problems))
-        old_instances = {k: (n, o, p) for k, (n, o, p) in self.instances.items()}
-        old_globals = {g.pyname: (g, self.ns[g.pyname]) for g in self.project.globals.values()}
-        old_ns = self.ns
-        self._load(compiled)
-        for key, (name, obj, pou) in self.instances.items():
-            old = old_instances.get(key)
+            raise OnlineChangeRefused(problems)
+        try:
+            return self._build(compiled, "online change")
+        except PLCStartError as e:
+            raise OnlineChangeRefused([f"the new program cannot start: {e}"]) from None
+
+    def apply_change(self, b: "_Build") -> str:
+        """The part of an online change done at a scan boundary: carry the old state over, swap."""
+        try:
+            self._carry_over(b)
+        except Exception as exc:  # noqa: BLE001 - whatever fails, the old program keeps running
+            reason = exc.args[0] if isinstance(exc, (ValueError, KeyError)) and exc.args else \
+                str(fault_from_exception(exc))
+            raise OnlineChangeRefused([f"the state cannot be carried over: {reason}"]) from None
+        old_now = self.ns.get("_now", 0)
+        self._install(b)
+        self.ns["_now"] = old_now
+        for t in self.tasks:
+            for bd in t.outs:
+                bd.publish()
+        return f"online change: {len(b.instances)} instance(s) carried over"
+
+    def _carry_over(self, b: "_Build") -> None:
+        """Copy every variable whose path and type are unchanged from the running program into the
+        built one, and re-aim interfaces and references at the new objects. Reads the old program only."""
+        for key, (name, obj, pou) in b.instances.items():
+            old = self.instances.get(key)
             if old is not None:
                 _restore_into(_Holder(obj), "v", pou, to_python(old[1], old[2]))
-        for g in self.project.globals.values():
+        old_globals = {g.pyname: g for g in self.project.globals.values()}
+        for g in b.project.globals.values():
             og = old_globals.get(g.pyname)
-            if og is not None and str(og[0].type) == str(g.type):
-                _restore_into(self.ns, g.pyname, g.type, to_python(og[1], og[0].type))
+            if og is not None and str(og.type) == str(g.type):
+                _restore_into(b.ns, g.pyname, g.type, to_python(self.ns[og.pyname], og.type))
         # interface variables and references still point into the old objects: re-aim them
-        relink([(old_instances[k][1], obj, old_instances[k][2], pou)
-                for k, (name, obj, pou) in self.instances.items() if k in old_instances],
-               [(g.pyname, g.pyname, old_globals[g.pyname][0].type, g.type)
-                for g in self.project.globals.values() if g.pyname in old_globals],
-               old_ns, self.ns)
-        self.ns["_now"] = old_ns.get("_now", 0)
-        for t in self.tasks:
-            for b in t.outs:
-                b.publish()
-        return f"online change: {len(self.instances)} instance(s) carried over"
+        relink([(self.instances[k][1], obj, self.instances[k][2], pou)
+                for k, (name, obj, pou) in b.instances.items() if k in self.instances],
+               [(g.pyname, g.pyname, old_globals[g.pyname].type, g.type)
+                for g in b.project.globals.values() if g.pyname in old_globals],
+               self.ns, b.ns)
 
     def _change_problems(self, compiled: CompiledProgram) -> list:
         new_cfg = compiled.project.configs[0] if compiled.project.configs else None
@@ -680,8 +783,10 @@ class PLC:
             raw = value
         self.image.set(addr, raw)
 
-    def _resolve(self, path: str):
-        """path → (container, key, type): key is an attribute name or a list index."""
+    def _resolve(self, path: str, src=None):
+        """path → (container, key, type): key is an attribute name or a list index. `src`: a _Build
+        being prepared instead of the running program."""
+        src = self if src is None else src
         toks = list(_tokens(path))
         if not toks:
             raise KeyError(f"empty variable path {path!r}")
@@ -689,17 +794,17 @@ class PLC:
         if kind != "name":
             raise KeyError(f"{path}: a path starts with a program instance or global name")
         key = first.lower()
-        if key in self.instances:
-            name, obj, pou = self.instances[key]
+        if key in src.instances:
+            name, obj, pou = src.instances[key]
             if len(toks) == 1:
                 return _Holder(obj), "v", pou
             container, attr, t = obj, None, pou
             rest = toks[1:]
         else:
-            g = self.project.global_names.get(key)
+            g = src.project.global_names.get(key)
             if not g:
                 raise KeyError(f"{path}: no program instance or global variable named '{first}'")
-            container, attr, t = self.ns, g[0].pyname, g[0].type
+            container, attr, t = src.ns, g[0].pyname, g[0].type
             rest = toks[1:]
         cur = container if attr is None else _get(container, attr)
         for kind, val in rest:
@@ -709,7 +814,7 @@ class PLC:
                     sym = ut.vars.get(val.lower())
                     if sym is None or sym.section in ("VAR_EXTERNAL", "VAR_TEMP"):
                         if sym is not None and sym.global_ref is not None:
-                            container, attr, t = self.ns, sym.global_ref.pyname, sym.global_ref.type
+                            container, attr, t = src.ns, sym.global_ref.pyname, sym.global_ref.type
                             cur = _get(container, attr)
                             continue
                         raise KeyError(f"{path}: {ut.name} has no variable '{val}'")

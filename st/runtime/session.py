@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
-from .plc import FAULT, PLC, PLCFaultError
+from .plc import FAULT, PLC, OnlineChangeRefused, PLCFaultError
 from .values import parse_duration_arg
 
 
@@ -63,6 +63,7 @@ class RunOptions:
     quiet: bool = False
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
+    compiled_mtimes: Optional[dict] = None                # the sources as compiled (see --watch)
 
 
 def _err(msg: str) -> None:
@@ -86,7 +87,7 @@ def run_plc(compiled, o: RunOptions) -> int:
         for spec in o.sim_cost:
             name, _, cost = spec.partition("=")
             plc.set_cost(name.strip(), cost.strip())
-    except (ValueError, KeyError, MemoryError) as e:
+    except (ValueError, KeyError, MemoryError) as e:     # PLCStartError: the reason, located
         _err(f"error: cannot start the PLC: {e or type(e).__name__}")
         return 2
     if not plc.instances:
@@ -140,7 +141,7 @@ def run_plc(compiled, o: RunOptions) -> int:
     if retain and not o.quiet:
         _err(f"retained data: {retain} ({'cold start' if o.cold else f'{plc.retain_restored} value(s) restored'})")
     stop = threading.Event()
-    old_handlers = _install_signals(stop)
+    old_handlers = _install_signals(stop, plc)
     status = None if o.quiet or o.virtual else _Status(plc)
     watcher = _Watcher(plc, o) if o.watch else None
     rt_setup = None
@@ -215,9 +216,7 @@ def _run_virtual(plc: PLC, o: RunOptions, stop) -> int:
                 plc.advance(min(end - plc.time, 1_000_000_000))
             except PLCFaultError as e:
                 _err(str(e.fault))
-                if o.on_fault == "restart":
-                    plc.restart()
-                    _err("restarted (warm)")
+                if o.on_fault == "restart" and not stop.is_set() and _restart(plc):
                     continue
                 return 3
     except KeyboardInterrupt:
@@ -252,13 +251,23 @@ def _run_real(plc: PLC, o: RunOptions, stop, status, watcher) -> int:
             if status is not None:
                 status.clear()
             _err(str(e.fault))
-            if o.on_fault == "restart":
-                plc.restart()
-                _err("restarted (warm)")
+            if o.on_fault == "restart" and not stop.is_set():
+                _restart(plc)
             continue
         except KeyboardInterrupt:
             break
     return 3 if plc.state == FAULT else 0
+
+
+def _restart(plc: PLC) -> bool:
+    """--on-fault restart; a program whose instances fault again while being created stays in FAULT."""
+    try:
+        plc.restart()
+    except PLCFaultError as e:
+        _err(f"restart failed: {e.fault}")
+        return False
+    _err("restarted (warm)")
+    return True
 
 
 def _sleep_while_faulted(plc, stop, remaining, on_idle) -> None:
@@ -268,9 +277,12 @@ def _sleep_while_faulted(plc, stop, remaining, on_idle) -> None:
         time.sleep(0.1)
 
 
-def _install_signals(stop: threading.Event):
+def _install_signals(stop: threading.Event, plc: PLC):
+    """Ctrl-C and SIGTERM stop the PLC at the next scan boundary; a job still running is ended by its
+    watchdog (so within one watchdog period), or at once when the signal comes a second time."""
     def handler(signum, frame):
         stop.set()
+        plc.request_stop(signal.Signals(signum).name)
     old = {}
     for sig in (signal.SIGINT, signal.SIGTERM):
         try:
@@ -367,53 +379,63 @@ class _Status:
         self.clear()
 
 
+def source_mtimes(files) -> dict:
+    """Modification times of the source files; an edit made while the PLC starts is not missed when
+    these are taken before compiling."""
+    out = {}
+    for f in files:
+        try:
+            out[f] = os.stat(f).st_mtime_ns
+        except OSError:
+            out[f] = None
+    return out
+
+
 class _Watcher:
-    """--watch: recompile in a background thread when a source changes; swap at a scan boundary."""
+    """--watch: when a source changes, compile it and build the new program (namespace, instances,
+    FB_init) in a background thread while the old one keeps scanning; carry the state over and swap
+    at a scan boundary. Whatever fails leaves the old program running and says why."""
 
     def __init__(self, plc: PLC, o: RunOptions):
         self.plc = plc
         self.o = o
-        self.mtimes = self._mtimes()
+        self.mtimes = o.compiled_mtimes if o.compiled_mtimes is not None else source_mtimes(o.files)
         self.last_poll = 0.0
         self.result = None
         self.busy = False
 
-    def _mtimes(self):
-        out = {}
-        for f in self.o.files:
-            try:
-                out[f] = os.stat(f).st_mtime_ns
-            except OSError:
-                out[f] = None
-        return out
-
     def poll(self) -> None:
         if self.result is not None:
-            compiled, self.result = self.result, None
-            self._swap(compiled)
+            prepared, self.result = self.result, None
+            self._swap(prepared)
         now = time.monotonic()
         if self.busy or now - self.last_poll < 0.5:
             return
         self.last_poll = now
-        m = self._mtimes()
+        m = source_mtimes(self.o.files)
         if m != self.mtimes:
             self.mtimes = m
             self.busy = True
-            threading.Thread(target=self._compile, daemon=True).start()
+            threading.Thread(target=self._prepare, daemon=True).start()
 
-    def _compile(self) -> None:
+    def _prepare(self) -> None:
         from ..api import compile_paths
         from ..diagnostics import CompileError
         try:
-            self.result = compile_paths(self.o.files, time_unit=self.o.time_unit,
-                                        f_trig_first_scan=self.o.f_trig_first_scan)
+            compiled = compile_paths(self.o.files, time_unit=self.o.time_unit,
+                                     f_trig_first_scan=self.o.f_trig_first_scan)
+            self.result = self.plc.prepare_change(compiled)
         except CompileError as e:
             _err("\nonline change refused, the old program keeps running:\n" + e.render())
+        except OnlineChangeRefused as e:
+            _err(f"\n{e}")
+        except Exception as e:  # noqa: BLE001 - an edit must never take the PLC down
+            _err(f"\nonline change refused, the old program keeps running:\n  {type(e).__name__}: {e}")
         finally:
             self.busy = False
 
-    def _swap(self, compiled) -> None:
+    def _swap(self, prepared) -> None:
         try:
-            _err("\n" + self.plc.online_change(compiled))
-        except ValueError as e:
+            _err("\n" + self.plc.apply_change(prepared))
+        except OnlineChangeRefused as e:
             _err(f"\n{e}")

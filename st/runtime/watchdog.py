@@ -1,9 +1,12 @@
-"""The task watchdog: ends a scan that runs too long (an endless loop).
+"""The task watchdog: ends a job that runs too long (an endless loop) or that a stop must end.
 
-Generated loops test one global flag per iteration (`if _wd_armed: _wd_check()`),
-which costs a few nanoseconds while the flag is down. A single daemon thread
-raises the flag of a PLC whose running task passed its deadline; the loop then
-calls `_wd_check`, which raises the WATCHDOG fault at the loop's ST line.
+Every loop of generated code tests one global flag per iteration (`if _wd_armed: _wd_check()`,
+put there by compiler/codegen/guards.py), which costs a few nanoseconds while the flag is down.
+A single daemon thread polls every 5 ms and raises the flag of a namespace whose running job
+passed its deadline; the loop then calls `_wd_check`, which raises the WATCHDOG fault at the
+loop's ST line. `abort()` raises the flag at once (a forced stop: a second Ctrl-C). The same
+watchdog guards start-up and online change: module code, declared initial values and FB_init
+run under a budget too.
 """
 from __future__ import annotations
 
@@ -14,34 +17,62 @@ import weakref
 from .faults import PLCFault
 
 _POLL_S = 0.005
+POLL_NS = int(_POLL_S * 1e9)
 
 
 class Watchdog:
     def __init__(self, ns: dict):
         self.ns = ns
         self.deadline = 0           # monotonic ns; 0 = not running
+        self.budget = 0
+        self.what = "the job"
+        self.abort_reason = ""
         ns["_wd_armed"] = False
         ns["_wd_check"] = self.check
         _Monitor.get().register(self)
 
-    def start(self, budget_ns: int) -> None:
+    def start(self, budget_ns: int, what: str = "the job") -> None:
+        self.abort_reason = ""
+        self.budget = budget_ns
+        self.what = what
         self.deadline = time.monotonic_ns() + budget_ns
 
     def stop(self) -> None:
         self.deadline = 0
+        self.abort_reason = ""
         if self.ns["_wd_armed"]:
             self.ns["_wd_armed"] = False
 
+    @property
+    def running(self) -> bool:
+        return self.deadline != 0
+
+    def abort(self, reason: str) -> None:
+        """End the running job at its next loop iteration (safe to call from a signal handler)."""
+        if self.deadline:
+            self.abort_reason = reason
+            self.ns["_wd_armed"] = True
+
     def check(self) -> None:
+        if self.abort_reason:
+            reason, self.abort_reason = self.abort_reason, ""
+            self.deadline = 0
+            self.ns["_wd_armed"] = False
+            raise PLCFault(reason, "WATCHDOG")
         if self.deadline and time.monotonic_ns() >= self.deadline:
             self.ns["_wd_armed"] = False
             self.deadline = 0
-            raise PLCFault("watchdog: the task did not finish in time (endless loop?)", "WATCHDOG")
+            raise PLCFault(f"{self.what} did not finish within {_ms(self.budget)} (endless loop?)",
+                           "WATCHDOG")
         self.ns["_wd_armed"] = False
 
     def poll(self, now: int) -> None:
         if self.deadline and now >= self.deadline:
             self.ns["_wd_armed"] = True
+
+
+def _ms(ns: int) -> str:
+    return f"{ns / 1e9:g} s" if ns >= 1_000_000_000 else f"{ns / 1e6:g} ms"
 
 
 class _Monitor:
