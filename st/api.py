@@ -25,9 +25,8 @@ def libraries(f_trig_first_scan: bool = False, time_unit: str = "ms", dialect=No
 
 
 def _dialect_for(sources, dialect):
-    from .compiler.dialect import from_sources, preset
-    name = dialect if dialect is not None else from_sources(s.text for s in sources)
-    return preset(name)
+    from .compiler.dialect import pragma_preset, preset
+    return preset(dialect) if dialect is not None else pragma_preset(sources)
 
 
 def compile_text(text: str, name: str = "<source>.st", *, f_trig_first_scan: bool = False,

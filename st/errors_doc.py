@@ -40,6 +40,7 @@ EXPLANATIONS = {
     "E042": "An array is too large (more than 50,000,000 elements).",
     "E043": "An object-oriented rule is broken: a PRIVATE or PROTECTED method, property or variable used from outside, an ABSTRACT function block instantiated or an ABSTRACT method or property called or left unimplemented, an OVERRIDE that overrides nothing.",
     "E044": "A construct is not part of the chosen dialect preset (--dialect or a {dialect '…'} pragma): object-oriented ST in openplc, vendor extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF, __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of programs, FB_init arguments) in iec or openplc.",
+    "E045": "A {dialect '…'} pragma names a preset st does not know (the presets: openplc, iec, codesys, twincat).",
     "E099": "An internal compiler error (a bug in st): please report it with the source file.",
     "W001": "A pragma { ... } is ignored.",
     "W002": "A variable is declared but never used.",

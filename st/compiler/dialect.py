@@ -20,6 +20,9 @@ import re
 from dataclasses import dataclass
 from typing import Optional
 
+from ..diagnostics import CompileError, Diagnostic, Severity
+from ..source import Span
+
 
 @dataclass(frozen=True)
 class Dialect:
@@ -45,13 +48,27 @@ PRESETS = {
 _PRAGMA = re.compile(r"\{\s*dialect\s+'([A-Za-z]+)'\s*\}", re.I)
 
 
-def from_sources(texts) -> Optional[str]:
-    """The preset named by a `{dialect '…'}` pragma in the sources (the first one), if any."""
-    for text in texts:
-        m = _PRAGMA.search(text)
+def from_sources(sources) -> Optional[tuple[str, Span]]:
+    """The preset named by a `{dialect '…'}` pragma in the sources (the first one) and where the
+    name stands, if any. The name is not checked here: see `pragma_preset`."""
+    for src in sources:
+        m = _PRAGMA.search(src.text)
         if m:
-            return m.group(1).lower()
+            return m.group(1).lower(), src.span_at(m.start(1))
     return None
+
+
+def pragma_preset(sources) -> Optional[Dialect]:
+    """The preset a pragma in the sources chooses; an unknown name is a located error (E045)."""
+    found = from_sources(sources)
+    if found is None:
+        return None
+    name, span = found
+    if name not in PRESETS:
+        diag = Diagnostic("E045", Severity.ERROR, span, f"unknown dialect '{name}' in a {{dialect}} pragma",
+                          hint=f"the presets are {', '.join(PRESETS)}")
+        raise CompileError([diag], {s.path: s for s in sources})
+    return PRESETS[name]
 
 
 _TYPE_AFTER_PRAGMAS = re.compile(r"((?:\{[^{}]*\}\s*)+)TYPE\s+([A-Za-z_][A-Za-z0-9_]*)", re.I)
