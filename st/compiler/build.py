@@ -62,8 +62,9 @@ class AstBuilder(Transformer):
     def _lit(self, fn, tok, *args):
         try:
             return fn(str(tok), *args)
-        except (LiteralError, ValueError) as e:
-            self.errors.append(BuildError(self.sp(tok), f"invalid literal {str(tok)!r}: {e}", "E004"))
+        except (LiteralError, ValueError, OverflowError) as e:
+            text = str(tok) if len(tok) <= 60 else f"{str(tok)[:40]}…"
+            self.errors.append(BuildError(self.sp(tok), f"invalid literal {text!r}: {e}", "E004"))
             return "" if fn is parse_string else 0
 
     # ---------------------------------------------------------------- file

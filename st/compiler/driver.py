@@ -58,11 +58,23 @@ class CompiledProgram:
 
 
 def parse_source(src: SourceFile, sink: DiagnosticSink) -> Optional[A.Unit]:
+    """Parse one file; every problem becomes a diagnostic of that file (never an exception)."""
     with _parser_lock:
         parser, builder = _get_parser()
         builder.path = src.path
         builder.errors = []
-        unit, diags = parser.parse(src)
+        try:
+            unit, diags = parser.parse(src)
+        except RecursionError:
+            sink.error("E041", Span(src.path, 1, 1), "this file is nested too deeply to parse",
+                       "split deeply nested expressions or statements")
+            return None
+        except Exception as exc:  # a parser bug must still not show the user a traceback
+            if os.environ.get("ST_DEBUG"):
+                raise
+            sink.error("E099", Span(src.path, 1, 1), f"internal compiler error while parsing: {type(exc).__name__}: {exc}",
+                       "please report this with the source file; set ST_DEBUG=1 to see the traceback")
+            return None
         errors = list(builder.errors)
     for d in diags:
         sink.add(d)

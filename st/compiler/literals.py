@@ -25,14 +25,17 @@ class LiteralError(ValueError):
     pass
 
 
+MAX_INT_DIGITS = 128     # far beyond ULINT (20 decimal digits); longer is a slip, not a number
+
+
 def parse_int(text: str) -> int:
     t = text.replace("_", "")
-    if "#" in t:
-        base, digits = t.split("#", 1)
-        if not digits:
-            raise LiteralError(f"missing digits in '{text}'")
-        return int(digits, int(base))
-    return int(t)
+    base, digits = t.split("#", 1) if "#" in t else ("10", t)
+    if not digits:
+        raise LiteralError(f"missing digits in '{text}'")
+    if len(digits.lstrip("0")) > MAX_INT_DIGITS:
+        raise LiteralError(f"{len(digits)} digits: too long for any integer type (ULINT holds 20 decimal digits)")
+    return int(digits, int(base))
 
 
 def parse_real(text: str) -> float:
@@ -74,8 +77,8 @@ def parse_time_literal(text: str) -> int:
 def _date_ns(y: int, mo: int, d: int) -> int:
     try:
         dd = date(y, mo, d)
-    except ValueError as e:
-        raise LiteralError(str(e)) from None
+    except (ValueError, OverflowError) as e:
+        raise LiteralError(str(e) if isinstance(e, ValueError) else f"year {y} is out of range") from None
     return (dd - date(1970, 1, 1)).days * DAY
 
 

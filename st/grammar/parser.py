@@ -99,18 +99,22 @@ class StParser:
             return "':=' assigns; use '=' to compare"
         return ""
 
-    @staticmethod
-    def _semicolon_fixes(ip, tok) -> bool:
+    def _semicolon_fixes(self, ip, tok) -> bool:
         """Would inserting ';' before this token let the parse go on?"""
         if ip is None or tok.type == "$END":
             return False
+        errors = getattr(self.callbacks, "errors", None)     # the builder's, if it keeps any
+        mark = len(errors) if isinstance(errors, list) else None
         try:
             trial = ip.copy()
             trial.feed_token(Token("SEMICOLON", ";"))
             trial.feed_token(tok)
             return True
-        except UnexpectedInput:
+        except (UnexpectedInput, RecursionError):   # RecursionError: copying a very deep partial tree
             return False
+        finally:
+            if mark is not None:
+                del errors[mark:]                      # what the trial reduced is not the program
 
     # ------------------------------------------------------------------ parse
     def parse(self, src: SourceFile):

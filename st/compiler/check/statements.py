@@ -336,7 +336,8 @@ class StatementsMixin:
             if d.is_intlike or isinstance(T.unalias(dst), T.SubrangeType):
                 v = self.const_value(e, None) if isinstance(e, A.Expr) else None
                 if isinstance(v, int) and not T.literal_fits(v, dst):
-                    self.err("E021", span, f"{v} does not fit in {dst} ({T.base_of(dst).lo}..{T.base_of(dst).hi})")
+                    shown = v if v.bit_length() < 256 else f"a value of {v.bit_length()} bits"
+                    self.err("E021", span, f"{shown} does not fit in {dst} ({T.base_of(dst).lo}..{T.base_of(dst).hi})")
                     return False
                 return True
             if d.is_real:
