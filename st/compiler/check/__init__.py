@@ -17,6 +17,7 @@ from .common import _NULL, STEP, CallTarget, Scope, StepType
 from .configuration import ConfigurationMixin
 from .declarations import DeclarationsMixin
 from .expressions import ExpressionsMixin
+from .limits import check_storage_limits
 from .statements import StatementsMixin
 from .tests import TestsMixin
 
@@ -50,6 +51,7 @@ class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, 
         for pou in list(self.p.pous.values()):
             self._resolve_interface(pou)
         self._resolve_globals()
+        check_storage_limits(self.p, self.err, lambda span: span.file in self.library_units)
         for pou in list(self.p.pous.values()):
             if pou.decl is not None:
                 self._check_body(pou)
