@@ -12,42 +12,11 @@ copies `%Q` and `%M` variables back into the image at the end.
 """
 from __future__ import annotations
 
-import re
 import struct
 
 from ..compiler import types as T
 
-SIZES = {"X": 1, "B": 8, "W": 16, "D": 32, "L": 64}
-TABLE_LEN = 1024
-_ADDR = re.compile(r"%([IQM])([XBWDL]?)([0-9]+)(?:\.([0-9]+))?$", re.I)
-
-
-class AddressError(KeyError):
-    def __str__(self) -> str:           # KeyError would quote the message
-        return str(self.args[0]) if self.args else ""
-
-
-def parse_address(addr: str):
-    """'%QX1.2' → ('Q', 'X', 10); '%IW3' → ('I', 'W', 3). Bits count byte × 8 + bit."""
-    m = _ADDR.match(addr.strip().upper())
-    if not m:
-        raise AddressError(f"malformed address {addr!r}")
-    area, size, a, b = m.group(1), m.group(2) or "X", int(m.group(3)), m.group(4)
-    if size == "X":
-        if b is None:
-            raise AddressError(f"{addr}: a bit address needs byte.bit, e.g. %{area}X0.0")
-        bit = int(b)
-        if bit > 7:
-            raise AddressError(f"{addr}: bit {bit} is not 0..7")
-        index = a * 8 + bit
-        limit = TABLE_LEN * 8
-    else:
-        if b is not None:
-            raise AddressError(f"{addr}: only bit addresses (X) have a '.'")
-        index, limit = a, TABLE_LEN
-    if index >= limit:
-        raise AddressError(f"{addr} is outside the process image ({TABLE_LEN} entries per table)")
-    return area, size, index
+from ..compiler.addresses import SIZES, TABLE_LEN, AddressError, parse_address  # noqa: F401 (re-exported)
 
 
 class ProcessImage:

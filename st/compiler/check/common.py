@@ -6,12 +6,22 @@ from typing import Optional
 
 from .. import ast as A
 from .. import types as T
+from ..addresses import AddressError, parse_address
 
 _SECTIONS_PARAM = ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")
 _LOGIC = {"AND", "OR", "XOR", "AND_THEN", "OR_ELSE"}
 _CMP = {"=", "<>", "<", ">", "<=", ">="}
 _DIRECT = re.compile(r"%([IQM])([XBWDL]?)(\*|[0-9]+(?:\.[0-9]+)*)")
 _DIRECT_TYPES = {"X": T.BOOL, "": T.BOOL, "B": T.BYTE, "W": T.WORD, "D": T.DWORD, "L": T.LWORD}
+
+
+def image_problem(addr: str):
+    """Why the process image cannot hold this address (the runtime's own rule), or None."""
+    try:
+        parse_address(addr)
+    except AddressError as e:
+        return str(e)
+    return None
 
 
 class CallTarget:

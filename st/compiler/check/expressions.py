@@ -5,8 +5,9 @@ from typing import Optional
 
 from .. import ast as A
 from .. import types as T
+from ..addresses import canonical
 from ..library import FuncSig
-from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, SUPER, THIS, Scope
+from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, SUPER, THIS, Scope, image_problem
 
 
 class ExpressionsMixin:
@@ -71,13 +72,17 @@ class ExpressionsMixin:
             e.const = m[1]
             return et
         if isinstance(e, A.Direct):
-            m = _DIRECT.fullmatch(e.address)
+            m = _DIRECT.fullmatch(e.address.upper())
             if not m or m.group(3) == "*":
                 self.err("E004", e.span, f"malformed address '{e.address}'")
                 return T.BOOL
+            problem = image_problem(e.address)
+            if problem:
+                self.err("E004", e.span, problem)
+                return _DIRECT_TYPES[m.group(2)]
             t = _DIRECT_TYPES[m.group(2)]
-            pyname = "_d_" + e.address[1:].replace(".", "_")
-            self.p.direct_vars[e.address if m.group(2) else e.address[:2] + "X" + e.address[2:]] = (pyname, t)
+            e.address = canonical(e.address)           # %q0.1 and %QX0.1 are one variable
+            self.p.direct_vars[e.address] = ("_d_" + e.address[1:].replace(".", "_"), t)
             e.const = None
             return t
         raise AssertionError(e)

@@ -333,11 +333,10 @@ class ExprGen:
         raise Unsupported(e.span, f"cannot use '{e.name}' here")
 
     def x_Direct(self, e: A.Direct) -> py.expr:
-        addr = e.address
-        for key, (pyname, t) in self.mod.p.direct_vars.items():
-            if key == addr or key == addr[:2] + "X" + addr[2:]:
-                return _name(pyname)
-        raise Unsupported(e.span, f"unknown address {addr}")
+        found = self.mod.p.direct_vars.get(e.address)      # the checker made the address canonical
+        if found is None:
+            raise Unsupported(e.span, f"unknown address {e.address}")
+        return _name(found[0])
 
     def x_Field(self, e: A.Field) -> py.expr:
         if isinstance(e.sym, T.EnumType):
