@@ -6,8 +6,8 @@ from typing import Optional
 from ...source import Span
 from .. import ast as A
 from .. import types as T
-from ..names import mangle
-from .common import _DIRECT, _DIRECT_TYPES, Scope, _names_in
+from ..names import mangle, qualified
+from .common import _DIRECT, _DIRECT_TYPES, Scope, _names_in, image_problem
 
 
 def _access_rank(mods) -> int:
@@ -538,7 +538,7 @@ class DeclarationsMixin:
                 self.warn("W006", v.span, f"'{v.name}' in method {m.name} hides the variable of {fb.name}")
             if v.section == "VAR_INST":               # kept in the instance between calls
                 self.feature("vendor", v.span, "VAR_INST")
-                v.pyname = f"_mi_{mangle(m.name)}_{v.pyname}"
+                v.pyname = "_mi_" + qualified(m.name, v.name)
             if key in _CONSTRUCTION and v.section in ("VAR_IN_OUT", "VAR_OUTPUT"):
                 self.err("E017", v.span, f"{m.name} runs when the instance is created: it takes inputs only")
         fb.methods[key] = mt
@@ -606,9 +606,9 @@ class DeclarationsMixin:
                     # static: one variable shared by every instance and call, kept as a module global
                     self.feature("vendor", sp, "VAR_STAT")
                     sym.is_global = True
-                    where = owner.name if getattr(owner, "owner_fb", None) is None else \
-                        f"{owner.owner_fb.name}_{owner.name}"
-                    sym.pyname = f"_gs_{mangle(where)}_{mangle(n)}"
+                    where = [owner.name] if getattr(owner, "owner_fb", None) is None else \
+                        [owner.owner_fb.name, owner.name]
+                    sym.pyname = "_gs_" + qualified(*where, n)
                     self.p.globals[sym.pyname] = sym
                 table[key] = sym
                 if decl.location:
@@ -626,12 +626,16 @@ class DeclarationsMixin:
                 self.err("E003", decl.span, f"{kind} is only allowed in a POU")
 
     def _check_location(self, loc: str, t: T.Type, span: Span) -> None:
-        m = _DIRECT.fullmatch(loc)
+        m = _DIRECT.fullmatch(loc.upper())
         if not m:
             self.err("E004", span, f"malformed address '{loc}'")
             return
         size = m.group(2)
         if m.group(3) == "*":
+            return
+        problem = image_problem(loc)
+        if problem:
+            self.err("E004", span, problem)
             return
         want = _DIRECT_TYPES[size]
         bt = T.base_of(t)
@@ -645,6 +649,7 @@ class DeclarationsMixin:
             for r in cfg.resources:
                 for b in r.var_blocks:
                     self._global_blocks.append((cfg.name + "." + r.name, b))
+        declared: dict = {}           # scope + lower-case name → symbol (ST names ignore case)
         for prefix, block in self._global_blocks:
             table: dict = {}
             if block.kind == "VAR_CONFIG":
@@ -653,15 +658,16 @@ class DeclarationsMixin:
             for key, sym in table.items():
                 sym.section = "VAR_GLOBAL"
                 sym.is_global = True
-                scope_name = prefix.replace(".", "_")
-                sym.pyname = "_g_" + (mangle(scope_name) + "_" if scope_name else "") + mangle(sym.name)
-                uniq = sym.pyname
-                if uniq in self.p.globals:
-                    other = self.p.globals[uniq]
+                scope = prefix.split(".") if prefix else []
+                sym.pyname = "_g_" + qualified(*scope, sym.name)
+                uniq = sym.pyname.lower()
+                other = declared.get(uniq)
+                if other is not None:
                     self.err("E011", sym.span, f"global '{sym.name}' is declared twice "
                              f"(first at {other.span.file}:{other.span.line})")
                     continue
-                self.p.globals[uniq] = sym
+                declared[uniq] = sym
+                self.p.globals[sym.pyname] = sym
                 self.p.global_names.setdefault(key, []).append(sym)
         # global initializers may name other globals: check them once all are declared
         for decl, t in self._deferred_inits:
@@ -733,7 +739,7 @@ class DeclarationsMixin:
             return self._raw_global_constant(key)
         if isinstance(e, A.Unary):
             v = self.const_value(e.operand, scope)
-            if v is None:
+            if v is None or isinstance(v, str):
                 return None
             if e.op == "-":
                 return -v
