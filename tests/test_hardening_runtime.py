@@ -269,14 +269,16 @@ def test_an_endless_loop_in_fb_init_or_an_initial_value_is_ended_at_start_up():
         "WATCHDOG", 7, "the start-up (initial values, FB_init) did not finish within 1 s (endless loop?)")
 
 
-def test_a_located_address_outside_the_image_is_a_start_error_not_a_traceback():
-    # st check refuses it too (tests/test_hardening_compiler.py); the runtime checks again for the API
-    from st.runtime.plc import _Build  # noqa: F401  (the build is what refuses it)
-    src = "PROGRAM main\nVAR y AT %QW2000 : INT; END_VAR\ny := 1;\nEND_PROGRAM\n"
-    compiled = compile_text(src, "addr.st", raise_on_error=False, use_cache=False)
-    if compiled.modules:           # the checker may already refuse it; then there is nothing to start
-        with pytest.raises(PLCStartError, match="outside the process image"):
-            PLC(compiled)
+def test_a_located_address_outside_the_image_is_a_start_error_not_a_traceback(monkeypatch):
+    # st check refuses it (tests/test_hardening_compiler.py); the runtime asks the same rule again
+    # when it binds, here with an image made smaller after the program was compiled
+    src = "PROGRAM main\nVAR y AT %QW20 : INT; END_VAR\ny := 1;\nEND_PROGRAM\n"
+    compiled = compile_text(src, "addr.st", use_cache=False)
+    import st.compiler.addresses as addresses
+    monkeypatch.setattr(addresses, "TABLE_LEN", 8)
+    with pytest.raises(PLCStartError) as info:
+        PLC(compiled)
+    assert str(info.value) == "%QW20: %QW20 is outside the process image (8 entries per table)"
 
 
 # ---------------------------------------------------------------------- online change: all or nothing
@@ -326,12 +328,13 @@ def test_a_change_with_an_address_the_image_cannot_hold_is_refused_whole(monkeyp
     must not half-apply the change: no new code with fresh state, no 'carried over'."""
     plc = _running()
     old_obj, old_code = plc.instances["main"][1], plc.compiled
-    import st.runtime.process_image as pi
-    monkeypatch.setattr(pi, "TABLE_LEN", 8)
     change = BASE.replace("out AT %QW0 : INT;", "out AT %QW0 : INT; far AT %QW9 : INT;") \
         .replace("n := n + step", "n := n + 100 * step")
+    compiled = compile_text(change, "v2.st", use_cache=False)
+    import st.compiler.addresses as addresses
+    monkeypatch.setattr(addresses, "TABLE_LEN", 8)
     with pytest.raises(OnlineChangeRefused) as info:
-        plc.online_change(compile_text(change, "v2.st", use_cache=False))
+        plc.online_change(compiled)
     assert str(info.value).splitlines()[1] == \
         "  the new program cannot start: %QW9: %QW9 is outside the process image (8 entries per table)"
     _assert_untouched(plc, old_obj, old_code)
@@ -394,3 +397,35 @@ def test_st_run_watch_survives_a_faulting_fb_init_and_keeps_the_old_program(tmp_
     assert "online change: 1 instance(s) carried over" in err
     c = json.loads(out.splitlines()[-1])["main.c"]
     assert c["n"] == 400 and 50 < c["m"] < 300             # every scan counted once; m: the last build's
+
+
+RETAIN_IN_BLOCKS = """
+FUNCTION_BLOCK Counter
+VAR RETAIN n : DINT; END_VAR
+VAR plain : DINT; END_VAR
+n := n + 1; plain := plain + 1;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Station
+VAR c : Counter; END_VAR
+c();
+END_FUNCTION_BLOCK
+VAR_GLOBAL g : Counter; END_VAR
+PROGRAM main
+VAR one : Counter; many : ARRAY[1..2, 0..1] OF Counter; deep : Station; END_VAR
+one(); many[2, 1](); deep(); g();
+END_PROGRAM
+"""
+
+
+def test_retain_variables_inside_block_instances_survive_a_restart(tmp_path):
+    db = str(tmp_path / "r.db")
+    for expected in (3, 6):
+        plc = PLC.from_source(RETAIN_IN_BLOCKS, name="blocks.st", retain=db, use_cache=False)
+        for _ in range(3):
+            plc.scan()
+        assert [plc["main.one.n"], plc["main.many[2, 1].n"], plc["main.many[1, 0].n"], plc["main.deep.c.n"],
+                plc["g.n"]] == [expected, expected, 0, expected, expected]
+        assert plc["main.one.plain"] == 3                     # not retained: starts from 0 every time
+        plc.close()
+    assert set(_retained(db)) == {"main.one.n", "main.many[1,0].n", "main.many[1,1].n", "main.many[2,0].n",
+                                  "main.many[2,1].n", "main.deep.c.n", "g.n"}

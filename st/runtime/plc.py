@@ -582,12 +582,12 @@ class PLC:
     def _retained_paths(self):
         """(path, container, key, type) of every RETAIN/PERSISTENT variable of the instances and globals."""
         for lname, (name, obj, pou) in self.instances.items():
-            for sym in pou.vars.values():
-                if (sym.retain or sym.persistent) and sym.section not in ("VAR_EXTERNAL", "VAR_TEMP"):
-                    yield f"{name}.{sym.name}", obj, sym.pyname, sym.type
+            yield from _retained_in(name, obj, pou)
         for g in self.project.globals.values():
             if g.retain or g.persistent:
                 yield g.name, self.ns, g.pyname, g.type
+            else:
+                yield from _retained_inside(g.name, self.ns[g.pyname], g.type)
 
     def _retained_values(self) -> dict:
         out = {}
@@ -867,6 +867,38 @@ class PLC:
             return f"{fb.name + '.' if fb is not None else ''}{g.owner.name}.{g.name}"
         ref = refnames.namer(self)
         return {name(g): to_json(self.ns[g.pyname], g.type, ref) for g in self.project.globals.values()}
+
+
+def _retained_in(path: str, obj, pou: T.POUType):
+    """(path, container, key, type) of the RETAIN/PERSISTENT variables of one program or block
+    instance, and of the block instances inside it (a RETAIN in a block is kept wherever the
+    block is instantiated, as in CODESYS)."""
+    for sym in pou.vars.values():
+        if sym.section in ("VAR_EXTERNAL", "VAR_TEMP", "VAR_IN_OUT", "VAR_STAT"):
+            continue
+        if sym.retain or sym.persistent:
+            yield f"{path}.{sym.name}", obj, sym.pyname, sym.type
+        else:
+            yield from _retained_inside(f"{path}.{sym.name}", getattr(obj, sym.pyname), sym.type)
+
+
+def _retained_inside(path: str, value, t):
+    """The retained variables inside a value that is not retained as a whole: block instances and
+    arrays of them."""
+    ut = T.unalias(t)
+    if isinstance(ut, T.POUType) and ut.pou_kind == "FUNCTION_BLOCK" and value is not None:
+        yield from _retained_in(path, value, ut)
+    elif isinstance(ut, T.ArrayType) and isinstance(T.unalias(ut.element), (T.POUType, T.ArrayType)):
+        for i, index in enumerate(_array_indices(ut.dims)):
+            yield from _retained_inside(f"{path}[{index}]", value[i], ut.element)
+
+
+def _array_indices(dims):
+    """'1', '2', … or '0,1', … : the ST indices of a flat array's elements, in storage order."""
+    out = [""]
+    for lo, hi in dims:
+        out = [f"{a},{i}" if a else str(i) for a in out for i in range(lo, hi + 1)]
+    return out
 
 
 def _restore_into(container, key, t, value) -> None:
