@@ -7,7 +7,7 @@ EXPLANATIONS = {
             "instead of ELSIF, a missing END_*.",
     "E002": "A comment '(*', '/*' or a pragma '{' is never closed.",
     "E003": "A declaration section is in a place where it is not allowed (e.g. VAR_INPUT outside a POU).",
-    "E004": "A literal or address is malformed (e.g. T#5x, D#2024-13-01, %QX0.).",
+    "E004": "A literal or address is malformed (e.g. T#5x, D#2024-13-01, %QX0.), an integer literal has more than 128 digits, or an address is outside the process image (1024 entries per table and size; bits %IX0.0..%IX1023.7).",
     "E010": "An identifier is used but never declared (or a VAR_EXTERNAL has no VAR_GLOBAL).",
     "E011": "A name is declared twice in the same scope.",
     "E012": "A type name is unknown, a type is used where it cannot be, or a type contains itself.",
@@ -35,9 +35,8 @@ EXPLANATIONS = {
     "E033": "A unit-test statement (ASSERT_*, ADVANCE_TIME, MOCK, MOCK_FUNCTION, MOCK_VERIFY_*) outside a "
             "TEST, SETUP or TEARDOWN block. Move it into a test, or rename the POU or variable it was meant to be.",
     "E040": "A construct the code generator does not support yet.",
-    "E041": "Code nested too deeply to compile: an expression of tens of thousands of terms, or more than "
-            "about 20 nested loops.",
-    "E042": "An array is too large (more than 50,000,000 elements).",
+    "E041": "Code or data nested too deeply: an expression of tens of thousands of terms, more than about 20 nested loops, or types and function blocks nested more than 100 levels inside each other.",
+    "E042": "An array is too large (more than 50,000,000 elements), or one declaration holds more than 50,000,000 values (arrays of arrays or of structures).",
     "E043": "An object-oriented rule is broken: a PRIVATE or PROTECTED method, property or variable used from outside, an ABSTRACT function block instantiated or an ABSTRACT method or property called or left unimplemented, an OVERRIDE that overrides nothing.",
     "E044": "A construct is not part of the chosen dialect preset (--dialect or a {dialect '…'} pragma): object-oriented ST in openplc, vendor extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF, __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of programs, FB_init arguments) in iec or openplc.",
     "E045": "A {dialect '…'} pragma names a preset st does not know (the presets: openplc, iec, codesys, twincat).",
