@@ -74,7 +74,8 @@ def _pow(a, b):
     try:
         r = math.pow(a, b)
     except OverflowError:
-        return math.inf
+        odd = float(b).is_integer() and int(b) % 2 == 1
+        return -math.inf if a < 0 and odd else math.inf
     except ValueError:
         return math.nan
     return r

@@ -51,21 +51,28 @@ def _safe(fn):
 
 _std_asin = _safe(math.asin)
 _std_acos = _safe(math.acos)
-
-
-def _std_tan(x):
-    return math.tan(x)
+_std_sin = _safe(math.sin)          # SIN/COS/TAN of ±INF: NaN, as IEEE 754 says
+_std_cos = _safe(math.cos)
+_std_tan = _safe(math.tan)
 
 
 # ------------------------------------------------------------------ bit shifts
 
 
+def _negative_shift(name, n):
+    return PLCFault(f"{name}: the shift count {n} is negative", "RANGE")
+
+
 def _std_shl(v, n, bits):
+    if n < 0:
+        raise _negative_shift("SHL", n)
     return (v << n) & ((1 << bits) - 1) if n < bits else 0
 
 
 def _std_shr(v, n, bits):
-    return (v & ((1 << bits) - 1)) >> n
+    if n < 0:
+        raise _negative_shift("SHR", n)
+    return (v & ((1 << bits) - 1)) >> n if n < bits else 0
 
 
 def _std_rol(v, n, bits):
@@ -174,6 +181,26 @@ def _round_half_away(v):
     return int(math.floor(v + 0.5)) if v >= 0 else -int(math.floor(-v + 0.5))
 
 
+def _out_of_range(v, lo, hi, name):
+    what = "NaN" if v != v else repr(v)
+    return PLCFault(f"{what} is outside the range of {name} ({lo}..{hi})", "CONVERSION")
+
+
+def _real_to_int(v, lo, hi, name):
+    """REAL/LREAL → an integer type: rounded half away from zero; out of range (NaN, ±INF
+    included) is a CONVERSION fault, never a silently wrapped value."""
+    if v != v or not (lo - 0.5 < v < hi + 0.5):
+        raise _out_of_range(v, lo, hi, name)
+    return int(math.floor(v + 0.5)) if v >= 0 else -int(math.floor(-v + 0.5))
+
+
+def _real_trunc_to(v, lo, hi, name):
+    """TRUNC: toward zero, with the same range rule as _real_to_int."""
+    if v != v or not (lo - 1 < v < hi + 1):
+        raise _out_of_range(v, lo, hi, name)
+    return int(v)
+
+
 def _real_to_string(v, bits=64):
     if v != v:
         return "NaN"
@@ -256,6 +283,7 @@ def _str_to_time(s):
 
 
 def _to_bcd(v, bits):
+    v0 = v
     if v < 0:
         raise PLCFault(f"cannot convert the negative value {v} to BCD", "CONVERSION")
     out, shift = 0, 0
@@ -264,7 +292,7 @@ def _to_bcd(v, bits):
         out |= d << shift
         shift += 4
     if shift > bits:
-        raise PLCFault("value too large for BCD", "CONVERSION")
+        raise PLCFault(f"{v0} has more digits than {bits // 4} BCD digits hold", "CONVERSION")
     return out
 
 
@@ -303,5 +331,5 @@ NAMESPACE = {name: obj for name, obj in list(globals().items())
              if name.startswith("_std_") or name in (
                  "_to_string", "_str_to_int", "_str_to_real", "_str_to_bool", "_str_to_time", "_to_bcd",
                  "_from_bcd", "_concat_date", "_concat_tod", "_day_of_week", "_signed", "_round_half_away",
-                 "_real_to_string")}
-NAMESPACE.update({"_sin": math.sin, "_cos": math.cos, "_atan": math.atan, "_atan2": math.atan2})
+                 "_real_to_string", "_real_to_int", "_real_trunc_to")}
+NAMESPACE.update({"_atan": math.atan, "_atan2": math.atan2})

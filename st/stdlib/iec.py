@@ -188,8 +188,10 @@ def _concat_result(types):
 
 def _trunc_sig(name, dst):
     def emit(ctx, args, types, rt):
-        node = _call("_trunc", args[0])
-        return _emit_wrap(node, rt)
+        b = T.base_of(rt)
+        if b.is_intlike:
+            return _call("_real_trunc_to", args[0], _const(b.lo), _const(b.hi), _const(b.name))
+        return _emit_wrap(_call("_trunc", args[0]), rt)
     res = (lambda ts: T.DINT) if dst is None else dst
     sig = FuncSig(name, [_p("IN", "ANY_REAL")], res, emit=emit)
     sig.result_from_context = dst is None
@@ -210,7 +212,7 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
     # numeric
     add(FuncSig("ABS", [_p("IN", "ANY_NUM", "T")], "T", emit=_abs_emit))
     for name, helper in (("SQRT", "_std_sqrt"), ("LN", "_std_ln"), ("LOG", "_std_log"), ("EXP", "_std_exp"),
-                         ("SIN", "_sin"), ("COS", "_cos"), ("TAN", "_std_tan"), ("ASIN", "_std_asin"),
+                         ("SIN", "_std_sin"), ("COS", "_std_cos"), ("TAN", "_std_tan"), ("ASIN", "_std_asin"),
                          ("ACOS", "_std_acos"), ("ATAN", "_atan")):
         add(_math(name, helper))
 
@@ -414,13 +416,15 @@ def convert(node, s, d, src_bcd=False, dst_bcd=False, time_unit="ms", ctx=None):
         sk = "int"
         s = T.UINT
     if dk == "char":
+        if sk == "real":
+            node = _call("_real_to_int", node, _const(0), _const(d.hi), _const(d.name))
         return _call("_chr", py.BinOp(node, py.BitAnd(), _const(0xFF if d is T.CHAR else 0xFFFF)))
     if sk in ("int", "bit") and dk in ("int", "bit"):
         if s.lo >= d.lo and s.hi <= d.hi:
             return node
         return wrap(node, d)
     if sk == "real" and dk in ("int", "bit"):
-        return wrap(_call("_round", node), d)
+        return _call("_real_to_int", node, _const(d.lo), _const(d.hi), _const(d.name))
     if sk in ("int", "bit") and dk == "real":
         node = _call("_float", node)
         return _call("_f32", node) if d is T.REAL and s.bits > 16 else node

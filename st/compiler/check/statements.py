@@ -221,7 +221,9 @@ class StatementsMixin:
             if tt is not None:
                 self.assignable(s.value, vt, tt, s.value.span)
         elif isinstance(s, A.CallStmt):
-            self.call(s.call, scope, statement=True)
+            rt = self.call(s.call, scope, statement=True)
+            if s.call.ty is None:
+                s.call.ty = rt           # a function's result, unused: code generation still needs its type
         elif isinstance(s, A.If):
             for cond, body in s.branches:
                 self.condition(cond, scope, "IF")

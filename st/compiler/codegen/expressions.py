@@ -490,7 +490,7 @@ class ExprGen:
                 return py.BinOp(l, py.FloorDiv(), r)
             return _call("_idiv", l, r)
         if op == "MOD":
-            if lt is not None and rt is not None and lt.is_intlike and not lt.signed and not rt.signed:
+            if lt is not None and rt is not None and lt.is_intlike and rt.is_intlike and not lt.signed and not rt.signed:
                 return _call("_umod", l, r)
             return _call("_imod", l, r)
         if op == "**":
