@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 from .compiler.driver import CompiledProgram, compile_sources, load_files
+from .diagnostics import CompileError
 from .source import SourceFile
 from .stdlib.iec import default_library
 
@@ -29,11 +30,24 @@ def _dialect_for(sources, dialect):
     return preset(dialect) if dialect is not None else pragma_preset(sources)
 
 
+def _refused(e: CompileError, raise_on_error: bool) -> CompiledProgram:
+    """A compile that stopped before the pipeline (an unknown dialect pragma), as the pipeline
+    reports one: raised, or returned with its diagnostics."""
+    if raise_on_error:
+        raise e
+    from .compiler.model import Project
+    return CompiledProgram([], Project(), e.diagnostics, e.sources)
+
+
 def compile_text(text: str, name: str = "<source>.st", *, f_trig_first_scan: bool = False,
                  time_unit: str = "ms", use_cache: bool = True, emit_python: bool = False,
                  raise_on_error: bool = True, coverage: bool = False, dialect: str | None = None) -> CompiledProgram:
     src = SourceFile(name, text.replace("\r\n", "\n"))
-    return compile_sources([src], libraries(f_trig_first_scan, time_unit, _dialect_for([src], dialect)),
+    try:
+        chosen = _dialect_for([src], dialect)
+    except CompileError as e:
+        return _refused(e, raise_on_error)
+    return compile_sources([src], libraries(f_trig_first_scan, time_unit, chosen),
                            use_cache=use_cache, emit_python=emit_python, raise_on_error=raise_on_error,
                            coverage=coverage)
 
@@ -42,6 +56,10 @@ def compile_paths(paths: list, *, f_trig_first_scan: bool = False, time_unit: st
                   use_cache: bool = True, emit_python: bool = False, raise_on_error: bool = True,
                   coverage: bool = False, dialect: str | None = None) -> CompiledProgram:
     sources = load_files([str(p) for p in paths])
-    return compile_sources(sources, libraries(f_trig_first_scan, time_unit, _dialect_for(sources, dialect)),
+    try:
+        chosen = _dialect_for(sources, dialect)
+    except CompileError as e:
+        return _refused(e, raise_on_error)
+    return compile_sources(sources, libraries(f_trig_first_scan, time_unit, chosen),
                            use_cache=use_cache, emit_python=emit_python, raise_on_error=raise_on_error,
                            coverage=coverage)

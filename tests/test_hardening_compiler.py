@@ -36,6 +36,14 @@ def test_an_unknown_dialect_pragma_is_a_located_error(tmp_path):
     assert "= hint: the presets are openplc, iec, codesys, twincat" in r.stderr
 
 
+def test_an_unknown_dialect_pragma_through_the_api_is_a_diagnostic_like_any_other():
+    src = "{dialect 'bogus'}\n" + _program("y := 1;")
+    assert _errors(src, "p.st") == [("E045", 1, 11, "unknown dialect 'bogus' in a {dialect} pragma")]
+    with pytest.raises(Exception) as info:
+        compile_text(src, "p.st", use_cache=False)          # raise_on_error=True: the CompileError
+    assert type(info.value).__name__ == "CompileError"
+
+
 def test_a_5000_deep_member_chain_with_a_syntax_error_is_a_syntax_error():
     src = _program("y := a" + ".a" * 5000 + " 1;")
     assert _errors(src) == [("E001", 3, 10008, "syntax error: unexpected '1'; expected '&', '(', '*', '**', '+', "
