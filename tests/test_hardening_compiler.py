@@ -72,6 +72,12 @@ def test_negating_a_string_in_a_constant_expression_is_a_type_error():
         ("E014", 3, 10, "operator - cannot be applied to STRING[1]")]
 
 
+def test_assigning_to_an_enumeration_value_is_an_error_not_an_internal_one():
+    # found by the fuzzer (bench/fuzz_programs.py, seed 1, mutant 14122): `CARS_AMBER := CARS_GREEN;`
+    src = "TYPE E : (A, B); END_TYPE\n" + _program("A := B;\ne := A;", "e : E;")
+    assert _errors(src) == [("E018", 4, 1, "'A' is a value of the enumeration E, not a variable")]
+
+
 def test_a_parser_failure_is_an_internal_error_diagnostic_not_an_exception(monkeypatch):
     from st.compiler import driver
     parser, _ = driver._get_parser()

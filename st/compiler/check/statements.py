@@ -420,4 +420,6 @@ class StatementsMixin:
             self.err("E013", e.span, "this expression cannot be assigned to")
         elif isinstance(e, A.Name) and e.sym is STEP:
             self.err("E013", e.span, "a step cannot be assigned to")
+        elif isinstance(e, A.Name) and isinstance(e.sym, T.EnumType):
+            self.err("E018", e.span, f"'{e.name}' is a value of the enumeration {e.sym.name}, not a variable")
         return t
