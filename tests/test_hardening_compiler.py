@@ -78,6 +78,12 @@ def test_assigning_to_an_enumeration_value_is_an_error_not_an_internal_one():
     assert _errors(src) == [("E018", 4, 1, "'A' is a value of the enumeration E, not a variable")]
 
 
+def test_a_statement_before_the_first_case_label_is_a_syntax_error_not_an_internal_one():
+    # found by the fuzzer (bench/fuzz_programs.py, seed 1, mutant 1242): a line moved above the labels
+    src = _program("CASE y OF\n  y := 2;\n  1: y := 3;\nEND_CASE;")
+    assert _errors(src) == [("E001", 4, 3, "a statement in a CASE needs a label before it")]
+
+
 def test_a_parser_failure_is_an_internal_error_diagnostic_not_an_exception(monkeypatch):
     from st.compiler import driver
     parser, _ = driver._get_parser()

@@ -547,8 +547,9 @@ class AstBuilder(Transformer):
             elif isinstance(x, tuple) and x[0] == "else":
                 orelse = x[1]
             elif isinstance(x, A.Stmt):
-                if not branches:
-                    raise BuildError(x.span, "a statement in a CASE needs a label before it", "E001")
+                if not branches:        # reported, the statement dropped: parsing goes on
+                    self.errors.append(BuildError(x.span, "a statement in a CASE needs a label before it", "E001"))
+                    continue
                 branches[-1].body.append(x)
         return A.Case(self.sp(c[0]), c[1], branches, orelse)
 
