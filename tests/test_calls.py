@@ -1,13 +1,11 @@
 """Calls: functions (outputs, in-outs, EN/ENO, positional), FB instances, arrays of FBs, actions."""
 from __future__ import annotations
 
+import helpers
+
 from st import PLC
 
-
-def run(src: str, scans: int = 1) -> PLC:
-    plc = PLC.from_source(src, use_cache=False)
-    plc.scan(scans)
-    return plc
+run = helpers.run
 
 
 def test_function_outputs_in_outs_and_positional_arguments():

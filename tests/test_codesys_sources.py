@@ -1,6 +1,9 @@
 """Sources laid out as CODESYS and TwinCAT write them: DUTs without ';' after END_STRUCT,
 STRUCT EXTENDS, methods/properties/actions after END_FUNCTION_BLOCK, methods of programs,
 qualified enums, calls chained on call results."""
+from functools import partial
+
+import helpers
 import pytest
 
 from st import PLC
@@ -8,17 +11,8 @@ from st.api import compile_text
 from st.diagnostics import CompileError
 from st.runtime.plc import PLCFaultError
 
-
-def run(src: str, scans: int = 1, dialect=None) -> PLC:
-    plc = PLC(compile_text(src, "tc.st", dialect=dialect))
-    plc.scan(scans)
-    return plc
-
-
-def errors(src: str) -> str:
-    with pytest.raises(CompileError) as e:
-        compile_text(src, "tc.st")
-    return str(e.value)
+run = partial(helpers.run, name="tc.st", use_cache=True)
+errors = partial(helpers.errors, name="tc.st")
 
 
 TWINCAT = """

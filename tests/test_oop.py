@@ -1,23 +1,17 @@
 """Object-oriented ST (IEC 61131-3 3rd edition) and its CODESYS/TwinCAT extensions: METHODs, THIS^,
 EXTENDS with virtual dispatch, SUPER^, interfaces, properties, access, ABSTRACT/FINAL/OVERRIDE,
 CLASS, references and pointers, VAR_INST, VAR_STAT, __NEW/__DELETE, dialect presets."""
+from functools import partial
+
+import helpers
 import pytest
 
 from st import PLC
 from st.api import compile_text
 from st.diagnostics import CompileError
 
-
-def run(src: str, scans: int = 1) -> PLC:
-    plc = PLC(compile_text(src, "oop.st"))
-    plc.scan(scans)
-    return plc
-
-
-def errors(src: str) -> str:
-    with pytest.raises(CompileError) as e:
-        compile_text(src, "oop.st")
-    return str(e.value)
+run = partial(helpers.run, name="oop.st", use_cache=True)
+errors = partial(helpers.errors, name="oop.st")
 
 
 COUNTER = """

@@ -3,34 +3,16 @@ CODESYS/TwinCAT example projects): methods, interfaces, properties, inheritance 
 abstract/final/override, access specifiers, CLASS, references and pointers, VAR_INST/VAR_STAT,
 __NEW/__DELETE, FB_init, dialect presets, and the located diagnostics for the usual mistakes.
 Every expected value was worked out by hand from the language semantics."""
+from functools import partial
+
+import helpers
 import pytest
 
-from st import PLC
 from st.api import compile_text
-from st.diagnostics import CompileError
-from st.runtime.plc import PLCFaultError
 
-
-def run(src: str, scans: int = 1, dialect: str | None = None) -> PLC:
-    kw = {"dialect": dialect} if dialect else {}
-    plc = PLC(compile_text(src, "conf.st", **kw))
-    plc.scan(scans)
-    return plc
-
-
-def errors(src: str, dialect: str | None = None) -> str:
-    kw = {"dialect": dialect} if dialect else {}
-    with pytest.raises(CompileError) as e:
-        compile_text(src, "conf.st", **kw)
-    return str(e.value)
-
-
-def fault(src: str, dialect: str | None = None):
-    kw = {"dialect": dialect} if dialect else {}
-    plc = PLC(compile_text(src, "conf.st", **kw))
-    with pytest.raises(PLCFaultError) as e:
-        plc.scan(1)
-    return plc, e.value.fault
+run = partial(helpers.run, name="conf.st", use_cache=True)
+errors = partial(helpers.errors, name="conf.st")
+fault = partial(helpers.fault, name="conf.st")
 
 
 # --------------------------------------------------------------------------- inheritance, SUPER^

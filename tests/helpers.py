@@ -1,0 +1,74 @@
+"""What many test modules need: compile and run ST text, collect its diagnostics, catch its fault.
+
+Import with `from helpers import ...` (pytest puts tests/ on sys.path). A module that names its
+source file in assertions binds the name once: `run = partial(helpers.run, name="oop.st")`.
+"""
+from __future__ import annotations
+
+from typing import Iterable, Optional
+
+import pytest
+
+from st import PLC
+from st.api import compile_text
+from st.diagnostics import CompileError
+from st.runtime.faults import FaultInfo
+from st.runtime.plc import PLCFaultError
+
+
+def program(body: str, decls: str = "", extra: str = "") -> str:
+    """A PROGRAM main with `decls` in its VAR section and `body`, after `extra` (types, blocks)."""
+    return f"{extra}\nPROGRAM main\nVAR\n{decls}\nEND_VAR\n{body}\nEND_PROGRAM\n"
+
+
+def run(src: str, scans: int = 1, dialect: Optional[str] = None, *, name: str = "t.st", **compile_kw) -> PLC:
+    """Compile `src` (uncached unless asked), start a PLC on virtual time and run `scans` base ticks."""
+    compile_kw.setdefault("use_cache", False)
+    plc = PLC(compile_text(src, name, dialect=dialect, **compile_kw))
+    plc.scan(scans)
+    return plc
+
+
+def compile_error(src: str, dialect: Optional[str] = None, *, name: str = "t.st") -> CompileError:
+    """The CompileError `src` must raise (the test fails if it compiles)."""
+    with pytest.raises(CompileError) as info:
+        compile_text(src, name, dialect=dialect, use_cache=False)
+    return info.value
+
+
+def errors(src: str, dialect: Optional[str] = None, *, name: str = "t.st") -> str:
+    """The rendered diagnostics of a program that must not compile (as `st check` prints them)."""
+    return str(compile_error(src, name=name, dialect=dialect))
+
+
+def fault(src: str, dialect: Optional[str] = None, *, scans: int = 1, name: str = "t.st") -> tuple[PLC, FaultInfo]:
+    """Run a program that must fault within `scans` ticks: (the PLC, its fault)."""
+    plc = PLC(compile_text(src, name, dialect=dialect, use_cache=False))
+    with pytest.raises(PLCFaultError) as info:
+        plc.scan(scans)
+    return plc, info.value.fault
+
+
+def diagnostics(src: str, *, name: str = "t.st", dialect: Optional[str] = None) -> list[tuple[str, int, int]]:
+    """Every diagnostic (errors and warnings) of `src` in its own file, as (code, line, column)."""
+    result = compile_text(src, name, dialect=dialect, use_cache=False, raise_on_error=False)
+    return [(d.code, d.span.line, d.span.col) for d in result.diagnostics if d.span is not None and d.span.file == name]
+
+
+def assert_diagnostics(src: str, expected: Iterable[tuple], *, allow: Iterable[str] = (), name: str = "t.st",
+                       dialect: Optional[str] = None) -> None:
+    """Exactly the `expected` diagnostics, each (code, line) or (code, line, column), in any order:
+    a missing one fails, and so does any other diagnostic unless its code is in `allow`."""
+    got = diagnostics(src, name=name, dialect=dialect)
+    want = [tuple(e) for e in expected]
+    unmatched = list(got)
+    missing = []
+    for e in want:
+        hit = next((g for g in unmatched if g[:len(e)] == e), None)
+        if hit is None:
+            missing.append(e)
+        else:
+            unmatched.remove(hit)
+    allowed = set(allow)
+    extra = [g for g in unmatched if g[0] not in allowed]
+    assert not missing and not extra, f"missing {missing}, unexpected {extra}; all reported: {got}"
