@@ -2,6 +2,7 @@
 driven through the `plc` fixture of st's pytest plugin, plus a hypothesis property."""
 from pathlib import Path
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as hs
 
@@ -30,6 +31,7 @@ def test_phase_sequence_trace(plc):
     assert p["%MW0"] == 1                           # crossings, as the HMI reads it
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None)
 @given(presses=hs.lists(hs.integers(min_value=0, max_value=60_000), max_size=6))
 def test_cars_and_pedestrians_never_both_have_green(plc, presses):

@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -22,6 +24,7 @@ def test_run_openplc_export_and_dump_json():
     assert isinstance(data["instance0.on_time"], str) and data["instance0.on_time"].startswith("T#")
 
 
+@pytest.mark.slow
 def test_run_lone_program_with_cycle(tmp_path):
     f = tmp_path / "p.st"
     f.write_text("PROGRAM p\nVAR n : INT; t : TIME; END_VAR\nn := n + 1;\nEND_PROGRAM\n")

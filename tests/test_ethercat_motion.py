@@ -228,6 +228,7 @@ def test_configuration_errors_name_the_file_and_the_slave(tmp_path):
         make({"segment": {"task": "slow"}, "slave": [{"name": "a", "axis": 1}]})
 
 
+@pytest.mark.slow
 def test_gantry_program_runs_with_st_run(tmp_path):
     stats = tmp_path / "stats.json"
     out = subprocess.run([sys.executable, "-m", "st", "run", "programs/gantry.st", "--ethercat",
@@ -247,10 +248,11 @@ def test_gantry_program_runs_with_st_run(tmp_path):
 def test_pdo_mapping_changed_in_preop_resizes_the_process_data():
     """The master remaps 0x1A00 over SDO in PREOP (adding torque actual 0x6077): the drive accepts
     it, the SyncManager and FMMU follow, and the new entry arrives in every frame."""
+    import struct
+
     from st.io.ethercat.config import build_segment
     from st.io.ethercat.master import FrameMaster
     from st.io.ethercat.od import ABORT_NOT_MAPPABLE
-    import struct
     seg = build_segment(from_dict({"slave": [{"name": "d1", "type": "cia402"}]}))
     clock = [0.0]
     m = FrameMaster(lambda f: seg.exchange(f, clock[0]), pause=lambda s: clock.__setitem__(0, clock[0] + s),

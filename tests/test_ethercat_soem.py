@@ -100,8 +100,8 @@ def served(tmp_path):
 
 
 def test_soem_reaches_op_reads_sdo_and_exchanges_process_data(served):
-    from st.io.ethercat.pdo import CIA402_RX, CIA402_TX, PdoLayout
     from st.io.ethercat.driver import drive_state
+    from st.io.ethercat.pdo import CIA402_RX, CIA402_TX, PdoLayout
     from st.io.ethercat.soem import SoemMaster
     iface, _cfg, cap = served
     m = SoemMaster(iface)
@@ -136,6 +136,7 @@ def test_soem_reaches_op_reads_sdo_and_exchanges_process_data(served):
         m.close()
 
 
+@pytest.mark.slow
 def test_st_run_moves_an_axis_through_soem(served, tmp_path):
     iface, cfg, cap = served
     prog = tmp_path / "move.st"

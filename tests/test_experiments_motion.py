@@ -41,6 +41,7 @@ def test_offset_between_two_axes_is_speed_times_delay_and_compensation_removes_i
     assert abs(plain[-1][2]) < 0.01
 
 
+@pytest.mark.slow
 def test_st_experiment_writes_csv_plots_and_a_reproducible_summary(tmp_path):
     outs = []
     for k in range(2):

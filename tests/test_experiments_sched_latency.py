@@ -7,6 +7,8 @@ import importlib.util
 
 import pytest
 
+pytestmark = pytest.mark.slow      # every test here runs the thesis experiments end to end
+
 from st.api import compile_text
 from st.experiments import latency, scheduling
 

@@ -15,6 +15,7 @@ from st.testing.fuzz import Outcome, Worker, corpus, mutant, run_one, shrink
 SEED, MUTANTS, WORKERS = 2026, 300, 2
 
 
+@pytest.mark.slow
 def test_mutated_example_programs_never_crash_the_compiler_or_the_runtime():
     programs = corpus()
     counts, defects = {}, {}
@@ -178,6 +179,7 @@ def test_python_text_in_a_fault_is_a_raw_fault_defect(monkeypatch):
     assert (o.cls, o.signature) == ("raw-fault", "[FAULT] ValueError: math domain error")
 
 
+@pytest.mark.slow
 def test_a_mutant_that_outlasts_the_timeout_is_a_timeout_and_the_worker_is_replaced():
     endless = PROGRAM.format("WHILE TRUE DO x := x + 1; END_WHILE;")
     worker = Worker(timeout=3, watchdog="60s")        # the PLC's own watchdog would come too late
@@ -190,6 +192,7 @@ def test_a_mutant_that_outlasts_the_timeout_is_a_timeout_and_the_worker_is_repla
     assert run_one(endless, timeout=20).cls == "fault:WATCHDOG"                  # the usual 100 ms watchdog
 
 
+@pytest.mark.slow
 def test_a_worker_that_dies_is_a_crash_and_is_replaced():
     worker = Worker(timeout=30, watchdog="60s")
     try:

@@ -266,6 +266,7 @@ def _unmangle(name: str) -> str:
     return name[:-1] if name.endswith("_") else name
 
 
+@pytest.mark.slow
 @settings(max_examples=500, deadline=None)
 @given(st_.lists(_ident, min_size=1, max_size=4))
 def test_qualified_names_are_injective(parts):

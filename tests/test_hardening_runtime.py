@@ -6,7 +6,6 @@ swapped, and any failure leaves the running program and its state untouched."""
 import ast
 import json
 import signal
-import sqlite3
 import subprocess
 import sys
 import time
@@ -191,6 +190,7 @@ def _retained(db: Path) -> dict:
         store.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig, twice", [(signal.SIGTERM, False), (signal.SIGINT, False), (signal.SIGINT, True)])
 def test_signals_stop_a_runaway_job_outputs_safe_retain_flushed(tmp_path, sig, twice):
     prog = tmp_path / "runaway.st"
@@ -379,6 +379,7 @@ def test_a_good_change_after_a_refused_one_carries_the_state_over():
 WATCHED = BASE
 
 
+@pytest.mark.slow
 def test_st_run_watch_survives_a_faulting_fb_init_and_keeps_the_old_program(tmp_path):
     prog = tmp_path / "w.st"
     prog.write_text(WATCHED)

@@ -330,6 +330,7 @@ def test_malformed_headers_close_only_that_connection(plc, tmp_path):
     assert "be ef" not in err and "beef" not in err                                 # never another client's frame
 
 
+@pytest.mark.slow
 def test_truncated_frames_and_slow_senders_time_out_while_others_are_served(plc):
     with ModbusSlave(plc, port=0, idle_timeout=1.0) as slave:
         slow = [connect(slave) for _ in range(3)]
@@ -371,6 +372,7 @@ def test_a_thousand_connections_do_not_lock_out_a_polling_client(plc):
         good.close()
 
 
+@pytest.mark.slow
 def test_a_burst_of_short_connections_never_evicts_a_polling_hmi(plc):
     # The failure seen in the field: an HMI polls once a second on one long-lived connection; another
     # client opens short connections in a loop (each one request, some never closed). Between two of
@@ -473,6 +475,7 @@ def test_connection_limit_evicts_never_active_then_the_busiest_peer_newest_first
             s.close()
 
 
+@pytest.mark.slow
 def test_regular_clients_are_never_evicted_and_new_connections_are_refused_instead(plc, tmp_path):
     log = tmp_path / "modbus.log"
     ok = bytes([3, 2, 0, 0])
@@ -509,6 +512,7 @@ def test_regular_clients_are_never_evicted_and_new_connections_are_refused_inste
                      f"{head} 4 new connection(s), the last from {refused[4]}"]      # the rest: once, at the stop
 
 
+@pytest.mark.slow
 def test_request_rate_is_bounded_per_connection(plc):
     with ModbusSlave(plc, port=0, max_rate=50) as slave:
         s = connect(slave)
@@ -522,6 +526,7 @@ def test_request_rate_is_bounded_per_connection(plc):
         s.close()
 
 
+@pytest.mark.slow
 def test_a_client_that_never_reads_replies_is_throttled_and_memory_stays_bounded(plc):
     with ModbusSlave(plc, port=0, max_rate=0) as slave:
         rss0 = _rss(slave.proc.pid)
@@ -551,6 +556,7 @@ def _rss(pid) -> int:
     return 0
 
 
+@pytest.mark.slow
 def test_st_run_with_modbus_serves_and_stops_cleanly(tmp_path):
     (tmp_path / "main.st").write_text(PROGRAM)
     with socket.socket() as probe:

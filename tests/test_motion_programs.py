@@ -37,6 +37,7 @@ def test_conveyor_sync_processes_parts_while_moving_with_the_conveyor():
     assert conveyor.set_pos == 2350.0 and plc["line.conveyor_pos.Position"] == pytest.approx(349.6)
 
 
+@pytest.mark.slow
 def test_st_run_trace_writes_csv_and_plot(tmp_path):
     out = subprocess.run([sys.executable, "-m", "st.cli", "run", str(ROOT / "programs" / "pick_and_place.st"),
                           "--axes", str(ROOT / "programs" / "pick_and_place.axes.toml"), "--virtual",

@@ -16,6 +16,7 @@ its flags are compared with the state the axis had right before the kernel phase
 import math
 
 import hypothesis.strategies as hs
+import pytest
 from hypothesis import HealthCheck, given, settings
 
 from st import PLC
@@ -292,12 +293,14 @@ SETTINGS = dict(deadline=None, derandomize=True, suppress_health_check=[HealthCh
                                                                         HealthCheck.data_too_large])
 
 
+@pytest.mark.slow
 @settings(max_examples=60, **SETTINGS)
 @given(acts=actions)
 def test_output_rules_hold_after_every_scan(acts):
     play(acts, check_outputs=True, check_position=False)
 
 
+@pytest.mark.slow
 @settings(max_examples=30, **SETTINGS)
 @given(acts=actions)
 def test_set_position_stays_finite_and_bounded(acts):

@@ -1,6 +1,8 @@
 """The pytest plugin: ST test files collected next to Python tests, reports, options, fixture, xdist."""
 import textwrap
 
+import pytest
+
 pytest_plugins = ["pytester"]
 
 COUNTER = """
@@ -99,6 +101,7 @@ def test_st_sources_ini_option(pytester):
     pytester.runpytest().assert_outcomes(passed=1, failed=1)
 
 
+@pytest.mark.slow
 def test_xdist_runs_st_items(pytester):
     _project(pytester)
     pytester.runpytest_subprocess("-n", "2").assert_outcomes(passed=1, failed=1)

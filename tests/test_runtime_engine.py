@@ -253,6 +253,7 @@ plc.run_realtime(duration="60s", gc_control=False)
 """
 
 
+@pytest.mark.slow
 def test_retained_snapshot_survives_kill_9(tmp_path):
     db = str(tmp_path / "kill.db")
     child = subprocess.Popen([sys.executable, "-c", CHILD, db], stdout=subprocess.PIPE, text=True)
@@ -313,6 +314,7 @@ def _st(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "st.cli", *args], capture_output=True, text=True, cwd=cwd)
 
 
+@pytest.mark.slow
 def test_st_run_virtual_stats_json_and_fault_exit(tmp_path):
     prog = tmp_path / "one.st"
     prog.write_text(ONE)
@@ -332,6 +334,7 @@ def test_st_run_virtual_stats_json_and_fault_exit(tmp_path):
     assert json.loads(out.stdout.splitlines()[-1])["main.total"] == 3
 
 
+@pytest.mark.slow
 def test_st_run_real_time_for_a_short_duration(tmp_path):
     prog = tmp_path / "one.st"
     prog.write_text(ONE)
@@ -349,6 +352,7 @@ END_RESOURCE END_CONFIGURATION
 """
 
 
+@pytest.mark.slow
 def test_st_run_watch_swaps_new_code_in_and_refuses_a_type_change(tmp_path):
     prog = tmp_path / "w.st"
     prog.write_text(WATCHED)

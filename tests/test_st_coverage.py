@@ -2,6 +2,8 @@
 import io
 import textwrap
 
+import pytest
+
 from st.api import compile_text
 from st.runtime.plc import PLC
 from st.testing.covreport import CoverageData, Point, html_report, terminal_report
@@ -95,6 +97,7 @@ def test_html_report(tmp_path):
     assert "&#x27;&lt;ok&gt;&#x27;" in page
 
 
+@pytest.mark.slow
 def test_pytest_st_cov_serial_and_xdist_agree(pytester):
     pytester.makefile(".st", prog=SRC)
     pytester.makefile(".st", test_prog=textwrap.dedent("""\

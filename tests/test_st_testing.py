@@ -267,6 +267,7 @@ def _st(*args, cwd):
     return subprocess.run([sys.executable, "-m", "st.cli", *args], cwd=cwd, capture_output=True, text=True)
 
 
+@pytest.mark.slow
 def test_st_test_command_output_and_exit_codes(tmp_path):
     (tmp_path / "counter.st").write_text(LIB)
     (tmp_path / "test_counter.st").write_text(textwrap.dedent("""\

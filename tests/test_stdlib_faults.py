@@ -118,6 +118,7 @@ def _conversions():
 GROUPS_OF_CASES = list(_functions()) + list(_conversions())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("chunk", range(2))
 def test_every_standard_function_and_conversion_faults_cleanly_on_extreme_arguments(chunk):
     bad, ran = [], 0
