@@ -167,6 +167,23 @@ def test_addresses_the_process_image_cannot_hold_are_refused_by_the_checker():
     assert _errors(_program("%QW1023 := 1; %IX1023.7 := TRUE;", "m AT %MD1023 : DINT; q AT %QX1023.7 : BOOL;")) == []
 
 
+@pytest.mark.parametrize("t", ["STRING", "WSTRING[4]", "CHAR", "REFERENCE TO INT", "REF_TO INT", "POINTER TO INT",
+                               "ARRAY[0..1] OF INT", "TON"])
+def test_a_located_variable_must_be_a_value_one_image_cell_holds(t):
+    # found by the fuzzer (bench/fuzz_programs.py, seed 1, mutant 15407): `x AT %MW2 : REFERENCE TO INT`
+    # checked clean, then crashed the start-up with a TypeError
+    src = _program("", f"y : DINT;\n  x AT %MW2 : {t};")
+    assert _errors(src) == [("E013", 3, 3, f"'%MW2' is one cell of the process image; it cannot hold a value of type {t}")]
+
+
+@pytest.mark.parametrize("t, value", [("INT", 0), ("WORD", 0), ("UINT(1..5)", 1), ("E", "A")])
+def test_numbers_bit_strings_subranges_and_enumerations_are_located(t, value):
+    plc = PLC.from_source("TYPE E : (A, B); END_TYPE\n" + _program("x := x;", f"y : DINT;\n  x AT %MW2 : {t};"),
+                          use_cache=False)
+    plc.scan()
+    assert plc["%MW2"] == value            # the initial value (a subrange's starts at its low bound)
+
+
 def test_a_var_config_address_outside_the_image_is_refused_by_the_checker():
     src = """PROGRAM main
 VAR x AT %Q* : INT; END_VAR

@@ -639,6 +639,10 @@ class DeclarationsMixin:
             return
         want = _DIRECT_TYPES[size]
         bt = T.base_of(t)
+        if not (isinstance(bt, T.EnumType) or isinstance(bt, T.ElemType) and bt.kind not in ("string", "char")):
+            self.err("E013", span, f"'{loc}' is one cell of the process image; it cannot hold a value of type {t}",
+                     "locate a number, a bit string, BOOL, a time or a date, or use an unlocated variable")
+            return
         if isinstance(bt, T.ElemType) and bt.bits != want.bits and not (size in ("", "X") and bt.is_bool):
             self.err("E013", span, f"'{loc}' is {want.bits} bit(s) wide; it cannot hold a {t}")
 
