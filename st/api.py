@@ -35,7 +35,7 @@ def _refused(e: CompileError, raise_on_error: bool) -> CompiledProgram:
     reports one: raised, or returned with its diagnostics."""
     if raise_on_error:
         raise e
-    from .compiler.model import Project
+    from .model.program import Project
     return CompiledProgram([], Project(), e.diagnostics, e.sources)
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Optional
 
 from ..diagnostics import CompileError, Diagnostic, DiagnosticSink, Severity
+from ..model.program import Project
 from ..source import SourceFile, Span
 from . import ast as A
 from .build import AstBuilder
@@ -24,7 +25,6 @@ from .check import Checker
 from .codegen import ModuleGen
 from .dialect import strict_types
 from .library import Library
-from .model import Project
 
 COMPILER_VERSION = "0.1.0-9"
 _parser_lock = threading.Lock()

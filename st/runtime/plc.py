@@ -15,7 +15,7 @@ import re
 import threading
 from typing import Callable, Optional
 
-from ..compiler import types as T
+from ..model import types as T
 from ..compiler.driver import CompiledProgram
 from .clock import RealClock, VirtualClock
 from .faults import FaultInfo, fault_from_exception

@@ -7,11 +7,11 @@ their type in `.ty`; names get their symbol in `.sym`; calls get `.target`.
 from __future__ import annotations
 
 from ...diagnostics import DiagnosticSink
+from ...model import types as T
+from ...model.program import Project
 from ...source import Span
 from .. import ast as A
-from .. import types as T
 from ..library import Library
-from ..model import Project
 from .calls import CallsMixin
 from .common import _NULL, STEP, CallTarget, Scope, StepType
 from .configuration import ConfigurationMixin
