@@ -6,8 +6,9 @@
 """
 from __future__ import annotations
 
-from .compiler.driver import CompiledProgram, compile_sources, load_files
+from .compiler.driver import compile_sources, load_files
 from .diagnostics import CompileError
+from .model.compiled import CompiledProgram
 from .source import SourceFile
 from .stdlib.iec import default_library
 

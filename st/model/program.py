@@ -1,11 +1,14 @@
-"""The checked program: what the checker produces and code generation consumes."""
+"""The checked program: what the checker produces, code generation consumes and the runtime reads.
+
+Fields marked "syntax" hold the compiler's AST while it compiles; in the compiled artefact
+(st.compiler.artefact) they hold the AST-free values of st.model.summaries, or None.
+"""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any
 
 from ..source import Span
-
 from .types import POUType
 
 
@@ -24,7 +27,7 @@ class InstanceModel:
     type: POUType
     task: str                   # task name ("" = runs every base tick)
     resource: str = ""
-    args: list = field(default_factory=list)   # connections [(param, Expr, is_output)]
+    args: list = field(default_factory=list)   # connections [(param, syntax: Expr | None, is_output)]
     span: Any = None
 
 
@@ -33,7 +36,8 @@ class ConfigModel:
     name: str
     tasks: list = field(default_factory=list)          # [TaskModel]
     instances: list = field(default_factory=list)      # [InstanceModel]
-    var_config: list = field(default_factory=list)     # [(path list, location, init Expr|None, type, span)]
+    var_config: list = field(default_factory=list)     # [(path list, location, syntax: init (InitialValue),
+    #                                                     syntax: declared type (None), span)]
     implicit: bool = False      # made up for a file with only a PROGRAM
 
 
@@ -42,7 +46,7 @@ class StepModel:
     name: str
     index: int
     initial: bool
-    actions: list               # [(action name, qualifier, time Expr|None)]
+    actions: list               # [(action name, qualifier, syntax: time Expr | None)]
     span: Any = None
 
 
@@ -51,7 +55,7 @@ class TransitionModel:
     index: int
     sources: list               # step indices
     targets: list
-    cond: Any                   # Expr (BOOL)
+    cond: Any                   # syntax: Expr (BOOL) | None
     priority: int = 0
     span: Any = None
 
@@ -74,10 +78,10 @@ class Project:
     enum_members: dict = field(default_factory=dict)   # lower member → [(EnumType, name, value)]
     direct_vars: dict = field(default_factory=dict)    # "%QX0.0" → (pyname, Type)
     sfc: dict = field(default_factory=dict)            # pou lower → SfcModel
-    test_blocks: list = field(default_factory=list)    # ast.TestBlock as parsed
+    test_blocks: list = field(default_factory=list)    # syntax: ast.TestBlock as parsed ([] in the artefact)
     tests: list = field(default_factory=list)          # [TestModel], checked
     test_asserts: list = field(default_factory=list)   # [AssertInfo], index = id in generated code
-    libraries: list = field(default_factory=list)
+    libraries: list = field(default_factory=list)      # compiler: Library; artefact: LibraryInfo
 
     def user_pous(self):
         return [p for p in self.pous.values() if not p.library]
@@ -90,8 +94,8 @@ class TestModel:
     name: str
     span: Span
     pyname: str
-    pou: Any = None             # the pseudo-POU holding SETUP + TEST variables (dropped from the cache)
-    setup: list = field(default_factory=list)
+    pou: Any = None             # the pseudo-POU holding SETUP + TEST variables (None in the artefact)
+    setup: list = field(default_factory=list)      # syntax: statements ([] in the artefact)
     body: list = field(default_factory=list)
     teardown: list = field(default_factory=list)
 

@@ -185,7 +185,7 @@ class ArrayType(Type):
 class Member:
     name: str
     type: Type
-    init: Any = None        # AST initializer or None
+    init: Any = None        # syntax: the initializer (compiler: AST; artefact: InitialValue | None)
     span: Any = None
     pyname: str = ""
 
@@ -252,7 +252,7 @@ class AliasType(Type):
 
     name: str = "?"
     target: Type = None
-    init: Any = None
+    init: Any = None        # syntax: the default value (compiler: AST; artefact: InitialValue | None)
 
 
 @dataclass(eq=False)
@@ -261,7 +261,7 @@ class VarSym:
     type: Type
     section: str            # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL
     span: Any = None
-    init: Any = None
+    init: Any = None        # syntax: the initial value (compiler: AST; artefact: InitialValue | None)
     location: str = ""
     constant: bool = False
     retain: bool = False
@@ -282,13 +282,13 @@ class VarSym:
 class POUType(Type):
     name: str = "?"
     pou_kind: str = "FUNCTION_BLOCK"   # FUNCTION, FUNCTION_BLOCK, PROGRAM (TEST: a unit test's variables)
-    decl: Any = None        # ast.POU (None for native)
+    decl: Any = None        # syntax: ast.POU / ast.Method (artefact: PouInfo); None for native
     vars: dict = field(default_factory=dict)      # lower → VarSym, declaration order
     return_type: Optional[Type] = None
     pyname: str = ""
     library: str = ""       # "" for user code, else the library name
     native: Any = None      # a native implementation (Python) for library POUs
-    actions: dict = field(default_factory=dict)   # lower → ast.ActionDecl
+    actions: dict = field(default_factory=dict)   # lower → syntax: ast.ActionDecl (artefact: PouInfo)
     resolved: bool = False
     methods: dict = field(default_factory=dict)   # lower → POUType (pou_kind FUNCTION, owner_fb set)
     owner_fb: Any = None    # a METHOD: the function block it belongs to

@@ -16,7 +16,7 @@ import threading
 from typing import Callable, Optional
 
 from ..model import types as T
-from ..compiler.driver import CompiledProgram
+from ..model.compiled import CompiledProgram
 from .clock import RealClock, VirtualClock
 from .faults import FaultInfo, fault_from_exception
 from .namespace import build_namespace
