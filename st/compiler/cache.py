@@ -18,6 +18,7 @@ from typing import Any, Optional
 from ..model.compiled import CompiledProgram, FormatError
 from ..source import SourceFile
 from .library import Library
+from .options import CompileOptions
 
 COMPILER_VERSION = "0.1.0-9"
 _toolchain_digest: Optional[str] = None
@@ -52,11 +53,11 @@ def _toolchain() -> str:
     return _toolchain_digest
 
 
-def cache_key(sources: list[SourceFile], libraries: list[Library], emit_python: bool) -> str:
+def cache_key(sources: list[SourceFile], libraries: list[Library], options: CompileOptions) -> str:
     h = hashlib.sha256()
     h.update(_toolchain().encode())
     h.update(sys.version.encode())
-    h.update(b"py" if emit_python else b"-")
+    h.update(options.cache_token().encode() + b"\0")
     for lib in libraries:
         h.update(lib.name.encode() + lib.version.encode())
         for path, text in lib.sources:

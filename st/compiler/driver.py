@@ -22,8 +22,8 @@ from .artefact import artefact
 from .build import AstBuilder
 from .check import Checker
 from .codegen import ModuleGen
-from .dialect import strict_types
 from .library import Library
+from .options import CompileOptions
 
 _parser_lock = threading.Lock()
 _parser = None
@@ -67,9 +67,10 @@ def parse_source(src: SourceFile, sink: DiagnosticSink) -> Optional[A.Unit]:
     return unit
 
 
-def compile_sources(sources: list[SourceFile], libraries: list[Library], *, emit_python: bool = False,
-                    use_cache: bool = True, raise_on_error: bool = True, coverage: bool = False) -> CompiledProgram:
-    """Compile ST sources with the given libraries; `coverage` adds line and branch probes (not cached)."""
+def compile_sources(sources: list[SourceFile], libraries: list[Library], options: Optional[CompileOptions] = None, *,
+                    raise_on_error: bool = True) -> CompiledProgram:
+    """Compile ST sources with the given libraries and options (st.api builds both)."""
+    options = options or CompileOptions()
     # The compiler allocates millions of small objects that all live until the end:
     # the cyclic GC would rescan them again and again (a third of the time on 20k lines).
     enabled = gc.isenabled()
@@ -78,23 +79,23 @@ def compile_sources(sources: list[SourceFile], libraries: list[Library], *, emit
     limit = sys.getrecursionlimit()
     sys.setrecursionlimit(max(limit, 20000))
     try:
-        return _compile_sources(sources, libraries, emit_python=emit_python, use_cache=use_cache and not coverage,
-                                raise_on_error=raise_on_error, coverage=coverage)
+        return _compile_sources(sources, libraries, options, raise_on_error=raise_on_error)
     finally:
         sys.setrecursionlimit(limit)
         if enabled:
             gc.enable()
 
 
-def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_error, coverage) -> CompiledProgram:
+def _compile_sources(sources: list[SourceFile], libraries: list[Library], options: CompileOptions, *,
+                     raise_on_error: bool) -> CompiledProgram:
     all_sources = {s.path: s for s in sources}
     lib_sources = [SourceFile(path, text) for lib in libraries for path, text in lib.sources]
     all_sources.update((src.path, src) for src in lib_sources)
     helpers = {}
     for lib in libraries:
         helpers.update(lib.helpers)
-    key = cache.cache_key(sources, libraries, emit_python)
-    cdir = cache.cache_dir() if use_cache else None
+    key = cache.cache_key(sources, libraries, options)
+    cdir = cache.cache_dir() if options.use_cache and not options.coverage else None
     if cdir is not None:
         hit = cache.load(cdir, key, sources=all_sources, helpers=helpers)
         if hit is not None:
@@ -110,13 +111,12 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
         u = parse_source(s, sink)
         if u is not None:
             units.append(u)
-    dialect = next((lib.dialect for lib in libraries if getattr(lib, "dialect", None)), None)
+    dialect = options.dialect
     # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat
     sink.items = [d for d in sink.items if not (d.code == "W001" and (
         "{dialect" in d.message.lower().replace(" ", "") or
         (dialect is not None and dialect.attribute_pragmas and "{attribute" in d.message.lower())))]
-    checker = Checker(sink, libraries)
-    checker.strict_enums = strict_types(s.text for s in sources)
+    checker = Checker(sink, libraries, options)
     modules = []
     test_modules = []
     pysrc = {}
@@ -126,12 +126,12 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
         project = checker.run(units, lib_paths)
         _attach_test_texts(project, all_sources)
         if not sink.has_errors:
-            gen = ModuleGen(project, sink, coverage=coverage)
+            gen = ModuleGen(project, sink, coverage=options.coverage)
             py_modules = gen.generate()
             if not sink.has_errors:
                 for out, group in ((modules, py_modules), (test_modules, gen.test_modules())):
                     for path, mod in group:
-                        if emit_python:
+                        if options.emit_python:
                             import ast as pyast
                             pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + pyast.unparse(mod)
                         out.append((path, compile(mod, path, "exec")))
@@ -150,7 +150,7 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
             raise
     diags = sink.sorted()
     draft = CompiledProgram(modules, project, diags, all_sources, helpers, pysrc, test_modules=test_modules)
-    if coverage and gen is not None:
+    if options.coverage and gen is not None:
         draft.coverage_points = gen.cov_points
         draft.coverage_hits = bytearray(len(gen.cov_points))
     failed = any(d.is_error for d in diags)
