@@ -172,18 +172,3 @@ def test_the_model_is_a_leaf_package():
                 for a in node.names:
                     assert a.name.split(".")[0] in sys.stdlib_module_names, (f.name, a.name)
 
-
-def test_the_cache_key_includes_the_options(tmp_path, monkeypatch):
-    monkeypatch.setenv("ST_CACHE_DIR", str(tmp_path))
-    src = "PROGRAM main\nVAR t : TIME := T#1500ms; n : DINT; END_VAR\nn := TIME_TO_DINT(t);\nEND_PROGRAM\n"
-    runs = [compile_text(src, "o.st", **kw) for kw in ({}, {"time_unit": "s"}, {"dialect": "openplc"},
-                                                         {"emit_python": True}, {}, {"dialect": "openplc"})]
-    assert [r.from_cache for r in runs] == [False, False, False, False, True, True]
-    assert [_scan_n(r) for r in runs] == [1500, 1, 1, 1500, 1500, 1]
-    assert runs[3].python_source and not runs[0].python_source
-
-
-def _scan_n(compiled) -> int:
-    plc = PLC(compiled)
-    plc.scan()
-    return plc["main.n"]

@@ -111,11 +111,9 @@ def _compile_sources(sources: list[SourceFile], libraries: list[Library], option
         u = parse_source(s, sink)
         if u is not None:
             units.append(u)
-    dialect = options.dialect
     # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat
-    sink.items = [d for d in sink.items if not (d.code == "W001" and (
-        "{dialect" in d.message.lower().replace(" ", "") or
-        (dialect is not None and dialect.attribute_pragmas and "{attribute" in d.message.lower())))]
+    known = {"dialect"} | ({"attribute"} if options.dialect is not None and options.dialect.attribute_pragmas else set())
+    sink.items = [d for d in sink.items if not (d.code == "W001" and d.datum("pragma") in known)]
     checker = Checker(sink, libraries, options)
     modules = []
     test_modules = []
