@@ -31,7 +31,9 @@ _LEAF = ("st.model.", "st.source", "st.diagnostics")
 _MARSHAL = 2
 
 # An object's state in the payload instead of its own (`substitute`), or None to keep the object.
-Substitute = Callable[[Any], Optional[dict]]
+Substitute = Callable[[Any], Optional[dict[str, Any]]]
+# pickle writes a NEWOBJ for this function (as for any object it pickles by its state)
+_NEWOBJ: Callable[..., Any] = getattr(copyreg, "__newobj__")
 
 
 class FormatError(ValueError):
@@ -42,16 +44,16 @@ class FormatError(ValueError):
 class CompiledProgram:
     """Everything the runtime needs: code objects and the checked model."""
 
-    modules: list                      # [(filename, code object)]
+    modules: list[tuple[str, types.CodeType]]           # [(filename, code object)]
     project: Project
-    diagnostics: list                  # [Diagnostic]
-    sources: dict                      # path → SourceFile (for rendering diagnostics)
-    helpers: dict = field(default_factory=dict)
-    python_source: dict = field(default_factory=dict)   # path → Python text (emit python)
+    diagnostics: list[Diagnostic]
+    sources: dict[str, SourceFile]                      # path → SourceFile (for rendering diagnostics)
+    helpers: dict[str, Any] = field(default_factory=dict)
+    python_source: dict[str, str] = field(default_factory=dict)     # path → Python text (emit python)
     from_cache: bool = False
-    coverage_points: list = field(default_factory=list)  # [(file, line, kind, label, target)] (coverage builds)
+    coverage_points: list[tuple[Any, ...]] = field(default_factory=list)  # [(file, line, kind, label, target)]
     coverage_hits: Optional[bytearray] = None            # one byte per point, shared by every PLC of this build
-    test_modules: list = field(default_factory=list)     # [(filename, code)]: `_test_<n>` functions (TEST blocks)
+    test_modules: list[tuple[str, types.CodeType]] = field(default_factory=list)  # `_test_<n>` functions (TESTs)
 
     def to_bytes(self, substitute: Optional[Substitute] = None) -> bytes:
         """The compiler's output as bytes (FORMAT, this Python). `substitute(obj)` may give the
@@ -107,7 +109,7 @@ class _Writer(pickle.Pickler):
         if self._substitute is not None:
             state = self._substitute(obj)
             if state is not None:
-                return copyreg.__newobj__, (type(obj),), state     # as pickle itself writes an object
+                return _NEWOBJ, (type(obj),), state
         owner = obj if isinstance(obj, (type, types.FunctionType, types.BuiltinFunctionType)) else type(obj)
         module = getattr(owner, "__module__", None) or ""
         if module.startswith("st.") and not module.startswith(_LEAF):

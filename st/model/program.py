@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..source import Span
-from .types import POUType
+from .types import EnumType, POUType, Type, VarSym
 
 
 @dataclass(eq=False)
@@ -27,17 +27,17 @@ class InstanceModel:
     type: POUType
     task: str                   # task name ("" = runs every base tick)
     resource: str = ""
-    args: list = field(default_factory=list)   # connections [(param, syntax: Expr | None, is_output)]
+    args: list[tuple[str, Any, bool]] = field(default_factory=list)   # connections [(param, syntax: Expr | None, is_output)]
     span: Any = None
 
 
 @dataclass(eq=False)
 class ConfigModel:
     name: str
-    tasks: list = field(default_factory=list)          # [TaskModel]
-    instances: list = field(default_factory=list)      # [InstanceModel]
-    var_config: list = field(default_factory=list)     # [(path list, location, syntax: init (InitialValue),
-    #                                                     syntax: declared type (None), span)]
+    tasks: list[TaskModel] = field(default_factory=list)
+    instances: list[InstanceModel] = field(default_factory=list)
+    # [(path, location, syntax: init (artefact: InitialValue | None), syntax: declared type (None), span)]
+    var_config: list[tuple[list[str], str, Any, Any, Span]] = field(default_factory=list)
     implicit: bool = False      # made up for a file with only a PROGRAM
 
 
@@ -46,15 +46,15 @@ class StepModel:
     name: str
     index: int
     initial: bool
-    actions: list               # [(action name, qualifier, syntax: time Expr | None)]
+    actions: list[tuple[str, str, Any]]    # [(action name, qualifier, syntax: time Expr | None)]
     span: Any = None
 
 
 @dataclass(eq=False)
 class TransitionModel:
     index: int
-    sources: list               # step indices
-    targets: list
+    sources: list[int]          # step indices
+    targets: list[int]
     cond: Any                   # syntax: Expr (BOOL) | None
     priority: int = 0
     span: Any = None
@@ -62,28 +62,28 @@ class TransitionModel:
 
 @dataclass(eq=False)
 class SfcModel:
-    steps: list
-    transitions: list
-    actions: list               # action names in use (lower)
-    action_index: dict          # lower name → index
+    steps: list[StepModel]
+    transitions: list[TransitionModel]
+    actions: list[str]          # action names in use (lower)
+    action_index: dict[str, int]  # lower name → index
 
 
 @dataclass(eq=False)
 class Project:
-    types: dict = field(default_factory=dict)          # lower → Type
-    pous: dict = field(default_factory=dict)           # lower → POUType
-    globals: dict = field(default_factory=dict)        # unique key → VarSym
-    global_names: dict = field(default_factory=dict)   # lower name → [VarSym]
-    configs: list = field(default_factory=list)        # [ConfigModel]
-    enum_members: dict = field(default_factory=dict)   # lower member → [(EnumType, name, value)]
-    direct_vars: dict = field(default_factory=dict)    # "%QX0.0" → (pyname, Type)
-    sfc: dict = field(default_factory=dict)            # pou lower → SfcModel
-    test_blocks: list = field(default_factory=list)    # syntax: ast.TestBlock as parsed ([] in the artefact)
-    tests: list = field(default_factory=list)          # [TestModel], checked
-    test_asserts: list = field(default_factory=list)   # [AssertInfo], index = id in generated code
-    libraries: list = field(default_factory=list)      # compiler: Library; artefact: LibraryInfo
+    types: dict[str, Type] = field(default_factory=dict)            # lower name → Type
+    pous: dict[str, POUType] = field(default_factory=dict)          # lower name → POUType
+    globals: dict[str, VarSym] = field(default_factory=dict)        # unique key → VarSym
+    global_names: dict[str, list[VarSym]] = field(default_factory=dict)   # lower name → [VarSym]
+    configs: list[ConfigModel] = field(default_factory=list)
+    enum_members: dict[str, list[tuple[EnumType, str, int]]] = field(default_factory=dict)  # lower member → …
+    direct_vars: dict[str, tuple[str, Type]] = field(default_factory=dict)    # "%QX0.0" → (pyname, Type)
+    sfc: dict[str, SfcModel] = field(default_factory=dict)          # pou lower → SfcModel
+    test_blocks: list[Any] = field(default_factory=list)    # syntax: ast.TestBlock as parsed ([] in the artefact)
+    tests: list[TestModel] = field(default_factory=list)            # checked
+    test_asserts: list[AssertInfo] = field(default_factory=list)    # index = id in generated code
+    libraries: list[Any] = field(default_factory=list)      # compiler: Library; artefact: LibraryInfo
 
-    def user_pous(self):
+    def user_pous(self) -> list[POUType]:
         return [p for p in self.pous.values() if not p.library]
 
 
@@ -95,9 +95,9 @@ class TestModel:
     span: Span
     pyname: str
     pou: Any = None             # the pseudo-POU holding SETUP + TEST variables (None in the artefact)
-    setup: list = field(default_factory=list)      # syntax: statements ([] in the artefact)
-    body: list = field(default_factory=list)
-    teardown: list = field(default_factory=list)
+    setup: list[Any] = field(default_factory=list)      # syntax: statements ([] in the artefact)
+    body: list[Any] = field(default_factory=list)
+    teardown: list[Any] = field(default_factory=list)
 
 
 @dataclass(eq=False)
@@ -107,5 +107,5 @@ class AssertInfo:
     kind: str                   # ASSERT_EQ, ADVANCE_TIME, MOCK_VERIFY_CALLED, ...
     span: Span
     text: str = ""              # the statement's source text, filled by the driver
-    types: list = field(default_factory=list)
+    types: list[Type] = field(default_factory=list)
     index: int = -1
