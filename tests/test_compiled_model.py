@@ -172,3 +172,14 @@ def test_the_model_is_a_leaf_package():
                 for a in node.names:
                     assert a.name.split(".")[0] in sys.stdlib_module_names, (f.name, a.name)
 
+
+
+def test_a_compiler_object_left_in_the_model_is_an_internal_error(monkeypatch):
+    from st.compiler import artefact
+    from st.diagnostics import CompileError
+    monkeypatch.setattr(artefact, "_RULES", {})      # nothing dropped: the AST stays in the model
+    r = compile_text(PROGRAM, "m.st", use_cache=False, raise_on_error=False)
+    assert [d.code for d in r.diagnostics if d.is_error] == ["E099"]
+    assert "cannot be part of a compiled program" in r.diagnostics[0].message and r.project.pous == {}
+    with pytest.raises(CompileError):
+        compile_text(PROGRAM, "m.st", use_cache=False)

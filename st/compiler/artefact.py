@@ -33,6 +33,11 @@ def artefact(draft: CompiledProgram) -> CompiledProgram:
     return replace(copy, coverage_points=draft.coverage_points, coverage_hits=draft.coverage_hits)
 
 
+def libraries_only(libraries: list[Any]) -> Project:
+    """The model of a program that does not check: the libraries it was compiled with, nothing else."""
+    return Project(libraries=[_library(lib) for lib in libraries])
+
+
 def ast_free_state(obj: Any) -> Optional[dict]:
     """The state `obj` has in the artefact, or None when it has no syntax to drop."""
     rule = _RULES.get(type(obj))

@@ -1,7 +1,8 @@
-"""The compiler pipeline: sources → parse → check → generate → code objects (cached).
+"""The compiler pipeline: sources → parse → check → generate → code objects → the compiled
+artefact (artefact.py), cached (cache.py).
 
 `compile_sources` is the one entry point; the CLI, the PLC API and the tests
-all go through it.
+all go through it (st.api builds its libraries and CompileOptions).
 """
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from ..model.program import Project
 from ..source import SourceFile, Span
 from . import ast as A
 from . import cache
-from .artefact import artefact
+from .artefact import artefact, libraries_only
 from .build import AstBuilder
 from .check import Checker
 from .codegen import ModuleGen
@@ -151,13 +152,23 @@ def _compile_sources(sources: list[SourceFile], libraries: list[Library], option
     if options.coverage and gen is not None:
         draft.coverage_points = gen.cov_points
         draft.coverage_hits = bytearray(len(gen.cov_points))
-    failed = any(d.is_error for d in diags)
-    if failed:
+    result = None
+    if not any(d.is_error for d in diags):
+        try:
+            result = artefact(draft)
+        except Exception as exc:  # a compiler object left in the model: a compiler bug, reported as one
+            if os.environ.get("ST_DEBUG"):
+                raise
+            sink.error("E099", Span(sources[0].path if sources else "<input>", 1, 1),
+                       f"internal compiler error: {type(exc).__name__}: {exc}",
+                       "please report this with the source file; set ST_DEBUG=1 to see the traceback")
+            draft.diagnostics = diags = sink.sorted()
+    if result is None:
         if raise_on_error:
             raise CompileError(diags, all_sources)
-        draft.project = Project(libraries=libraries)    # a program that does not check has no model
-    result = artefact(draft)
-    if cdir is not None and not failed:
+        draft.project = libraries_only(libraries)
+        return artefact(draft)
+    if cdir is not None:
         cache.store(cdir, key, result)
     return result
 
