@@ -14,14 +14,7 @@ from typing import Any, Callable, Optional
 
 from ..model import types as T
 from ..model.compiled import CompiledProgram
-from ..model.program import (
-    ConfigModel,
-    InstanceModel,
-    Project,
-    StepModel,
-    TestModel,
-    TransitionModel,
-)
+from ..model.program import ConfigModel, InstanceModel, Project, StepModel, TestModel, TransitionModel
 from ..model.summaries import InitialValue, LibraryInfo, PouInfo
 from . import ast as A
 

@@ -67,7 +67,8 @@ def cache_key(sources: list[SourceFile], libraries: list[Library], options: Comp
     return h.hexdigest()
 
 
-def load(directory: Path, key: str, *, sources: dict[str, SourceFile], helpers: dict[str, Any]) -> Optional[CompiledProgram]:
+def load(directory: Path, key: str, *, sources: dict[str, SourceFile],
+         helpers: dict[str, Any]) -> Optional[CompiledProgram]:
     """The program stored under `key`, with the caller's sources and helpers, or None."""
     try:
         data = (directory / key).read_bytes()

@@ -113,7 +113,9 @@ def _compile_sources(sources: list[SourceFile], libraries: list[Library], option
         if u is not None:
             units.append(u)
     # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat
-    known = {"dialect"} | ({"attribute"} if options.dialect is not None and options.dialect.attribute_pragmas else set())
+    known = {"dialect"}
+    if options.dialect is not None and options.dialect.attribute_pragmas:
+        known.add("attribute")
     sink.items = [d for d in sink.items if not (d.code == "W001" and d.datum("pragma") in known)]
     checker = Checker(sink, libraries, options)
     modules = []

@@ -27,7 +27,8 @@ class InstanceModel:
     type: POUType
     task: str                   # task name ("" = runs every base tick)
     resource: str = ""
-    args: list[tuple[str, Any, bool]] = field(default_factory=list)   # connections [(param, syntax: Expr | None, is_output)]
+    # connections [(param, syntax: Expr (None in the artefact), is_output)]
+    args: list[tuple[str, Any, bool]] = field(default_factory=list)
     span: Any = None
 
 
