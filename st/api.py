@@ -6,28 +6,20 @@
 """
 from __future__ import annotations
 
-from .compiler.driver import CompiledProgram, compile_sources, load_files
+from .compiler.driver import compile_sources, load_files
+from .compiler.options import CompileOptions
 from .diagnostics import CompileError
+from .model.compiled import CompiledProgram
 from .source import SourceFile
 from .stdlib.iec import default_library
 
 
-def libraries(f_trig_first_scan: bool = False, time_unit: str = "ms", dialect=None) -> list:
-    """The libraries of a compilation; a dialect preset (st.compiler.dialect) sets the time unit and
-    F_TRIG behaviour and travels with the standard library to the checker."""
+def libraries(options: CompileOptions | None = None) -> list:
+    """The libraries of a compilation: the standard library (its time unit and F_TRIG behaviour
+    are the options') and PLCopen motion."""
     from .stdlib.plcopen import library as plcopen_library
-    if dialect is not None:
-        time_unit, f_trig_first_scan = dialect.time_unit, dialect.f_trig_first_scan
-    std = default_library(f_trig_first_scan, time_unit)
-    if dialect is not None:                     # a copy: the standard library object is shared (cached)
-        import dataclasses
-        std = dataclasses.replace(std, dialect=dialect, version=f"{std.version}+{dialect.name}")
-    return [std, plcopen_library()]
-
-
-def _dialect_for(sources, dialect):
-    from .compiler.dialect import pragma_preset, preset
-    return preset(dialect) if dialect is not None else pragma_preset(sources)
+    options = options or CompileOptions()
+    return [default_library(options.f_trig_first_scan, options.time_unit), plcopen_library()]
 
 
 def _refused(e: CompileError, raise_on_error: bool) -> CompiledProgram:
@@ -35,7 +27,7 @@ def _refused(e: CompileError, raise_on_error: bool) -> CompiledProgram:
     reports one: raised, or returned with its diagnostics."""
     if raise_on_error:
         raise e
-    from .compiler.model import Project
+    from .model.program import Project
     return CompiledProgram([], Project(), e.diagnostics, e.sources)
 
 
@@ -43,23 +35,22 @@ def compile_text(text: str, name: str = "<source>.st", *, f_trig_first_scan: boo
                  time_unit: str = "ms", use_cache: bool = True, emit_python: bool = False,
                  raise_on_error: bool = True, coverage: bool = False, dialect: str | None = None) -> CompiledProgram:
     src = SourceFile(name, text.replace("\r\n", "\n"))
-    try:
-        chosen = _dialect_for([src], dialect)
-    except CompileError as e:
-        return _refused(e, raise_on_error)
-    return compile_sources([src], libraries(f_trig_first_scan, time_unit, chosen),
-                           use_cache=use_cache, emit_python=emit_python, raise_on_error=raise_on_error,
-                           coverage=coverage)
+    return _compile([src], raise_on_error, dialect=dialect, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan,
+                    use_cache=use_cache, emit_python=emit_python, coverage=coverage)
 
 
 def compile_paths(paths: list, *, f_trig_first_scan: bool = False, time_unit: str = "ms",
                   use_cache: bool = True, emit_python: bool = False, raise_on_error: bool = True,
                   coverage: bool = False, dialect: str | None = None) -> CompiledProgram:
     sources = load_files([str(p) for p in paths])
+    return _compile(sources, raise_on_error, dialect=dialect, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan,
+                    use_cache=use_cache, emit_python=emit_python, coverage=coverage)
+
+
+def _compile(sources: list[SourceFile], raise_on_error: bool, **options) -> CompiledProgram:
+    """The options from the keyword arguments and the sources' pragmas, then the pipeline."""
     try:
-        chosen = _dialect_for(sources, dialect)
+        chosen = CompileOptions.for_sources(sources, **options)
     except CompileError as e:
         return _refused(e, raise_on_error)
-    return compile_sources(sources, libraries(f_trig_first_scan, time_unit, chosen),
-                           use_cache=use_cache, emit_python=emit_python, raise_on_error=raise_on_error,
-                           coverage=coverage)
+    return compile_sources(sources, libraries(chosen), chosen, raise_on_error=raise_on_error)

@@ -24,6 +24,12 @@ class Diagnostic:
     span: Span
     message: str
     hint: str = ""
+    data: tuple[tuple[str, str], ...] = ()   # facts as (name, value) pairs, e.g. W001: (("pragma", "dialect"),)
+
+    def datum(self, name: str) -> str:
+        """A fact about this diagnostic ("" if it has none of that name): what tools and filters
+        read instead of the message text, which is for people and may change."""
+        return next((v for k, v in self.data if k == name), "")
 
     @property
     def is_error(self) -> bool:

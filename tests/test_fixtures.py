@@ -15,9 +15,9 @@ import pytest
 
 from st import PLC
 from st.api import compile_paths
-from st.compiler import types as T
 from st.compiler.codegen import f32
 from st.diagnostics import CompileError
+from st.model import types as T
 
 HERE = Path(__file__).parent / "fixtures"
 RUN = sorted((HERE / "run").rglob("*.st"))

@@ -274,7 +274,7 @@ def test_a_located_address_outside_the_image_is_a_start_error_not_a_traceback(mo
     # when it binds, here with an image made smaller after the program was compiled
     src = "PROGRAM main\nVAR y AT %QW20 : INT; END_VAR\ny := 1;\nEND_PROGRAM\n"
     compiled = compile_text(src, "addr.st", use_cache=False)
-    import st.compiler.addresses as addresses
+    import st.model.addresses as addresses
     monkeypatch.setattr(addresses, "TABLE_LEN", 8)
     with pytest.raises(PLCStartError) as info:
         PLC(compiled)
@@ -331,7 +331,7 @@ def test_a_change_with_an_address_the_image_cannot_hold_is_refused_whole(monkeyp
     change = BASE.replace("out AT %QW0 : INT;", "out AT %QW0 : INT; far AT %QW9 : INT;") \
         .replace("n := n + step", "n := n + 100 * step")
     compiled = compile_text(change, "v2.st", use_cache=False)
-    import st.compiler.addresses as addresses
+    import st.model.addresses as addresses
     monkeypatch.setattr(addresses, "TABLE_LEN", 8)
     with pytest.raises(OnlineChangeRefused) as info:
         plc.online_change(compiled)

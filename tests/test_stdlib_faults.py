@@ -9,7 +9,7 @@ import pytest
 
 from st import PLC, PLCFaultError
 from st.api import compile_text
-from st.compiler import types as T
+from st.model import types as T
 from st.stdlib.iec import default_library
 
 NAMED = {"DIV0", "INDEX", "RANGE", "CONVERSION", "OVERFLOW", "NULL"}

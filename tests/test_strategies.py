@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, find, given, settings
 
 from st import PLC
-from st.compiler import types as T
+from st.model import types as T
 from st.testing import strategies as iec
 
 FAST = settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.too_slow])

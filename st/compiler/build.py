@@ -9,7 +9,7 @@ from lark import Token, Transformer
 
 from ..source import Span
 from . import ast as A
-from .literals import (LiteralError, parse_date_literal, parse_dt_literal, parse_int, parse_real,
+from ..model.literals import (LiteralError, parse_date_literal, parse_dt_literal, parse_int, parse_real,
                        parse_string, parse_time_literal, parse_tod_literal)
 
 

@@ -46,7 +46,6 @@ class Library:
     helpers: dict = field(default_factory=dict)       # python name → object (module namespace)
     conversion: Optional[Callable] = None             # name → FuncSig | None (X_TO_Y family)
     version: str = "1"
-    dialect: Any = None         # a dialect preset (st.compiler.dialect), on the standard library
 
     def add(self, sig: FuncSig) -> None:
         self.functions[sig.name.upper()] = sig

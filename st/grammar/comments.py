@@ -12,12 +12,19 @@ from dataclasses import dataclass
 
 _TOKENS = re.compile(r"\(\*|\*\)|/\*|//|'|\"|\{")
 _BLANK = re.compile(r"[^\n]")
+_NAME = re.compile(r"\{\s*([A-Za-z_][A-Za-z0-9_]*)")
 
 
 @dataclass(frozen=True, slots=True)
 class Pragma:
     offset: int
     text: str
+
+    @property
+    def name(self) -> str:
+        """The pragma's first word, lower-case: 'dialect' for `{ dialect 'iec' }`, '' for none."""
+        m = _NAME.match(self.text)
+        return m.group(1).lower() if m else ""
 
 
 @dataclass(frozen=True, slots=True)

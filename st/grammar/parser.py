@@ -128,7 +128,7 @@ class StParser:
             if p.text not in seen_pragmas:
                 seen_pragmas.add(p.text)
                 diags.append(Diagnostic("W001", Severity.WARNING, src.span_at(p.offset),
-                                        f"pragma {p.text[:60]!r} is ignored"))
+                                        f"pragma {p.text[:60]!r} is ignored", data=(("pragma", p.name),)))
         def on_error(e: UnexpectedInput) -> bool:
             if isinstance(e, UnexpectedCharacters):
                 ch = text[e.pos_in_stream] if e.pos_in_stream < len(text) else "?"

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import Callable, Optional
 
-from ..compiler.driver import CompiledProgram
+from ..model.compiled import CompiledProgram
 from .helpers import BASE_NAMESPACE, make_f32
 from .sfc import SfcDesc, SfcState
 

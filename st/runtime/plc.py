@@ -15,8 +15,8 @@ import re
 import threading
 from typing import Callable, Optional
 
-from ..compiler import types as T
-from ..compiler.driver import CompiledProgram
+from ..model import types as T
+from ..model.compiled import CompiledProgram
 from .clock import RealClock, VirtualClock
 from .faults import FaultInfo, fault_from_exception
 from .namespace import build_namespace

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import struct
 
-from ..compiler import types as T
+from ..model import types as T
 
-from ..compiler.addresses import SIZES, TABLE_LEN, AddressError, parse_address  # noqa: F401 (re-exported)
+from ..model.addresses import SIZES, TABLE_LEN, AddressError, parse_address  # noqa: F401 (re-exported)
 
 
 class ProcessImage:

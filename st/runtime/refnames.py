@@ -4,7 +4,7 @@
 dump, only when a reference is met."""
 from __future__ import annotations
 
-from ..compiler import types as T
+from ..model import types as T
 from .helpers import _AttrRef, _ItemRef, _ObjRef
 
 _SKIP = ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT")

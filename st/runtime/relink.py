@@ -6,7 +6,7 @@ reference at the new object in the same place. What has no counterpart any more 
 values made by __NEW (outside every variable) are kept as they are."""
 from __future__ import annotations
 
-from ..compiler import types as T
+from ..model import types as T
 from .helpers import _AttrRef, _ItemRef, _NegRef, _ObjRef
 
 _SKIP = ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT")

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import math
 
-from ..compiler import types as T
-from ..compiler.literals import (format_date, format_dt, format_duration, format_tod, parse_date_literal,
+from ..model import types as T
+from ..model.literals import (format_date, format_dt, format_duration, format_tod, parse_date_literal,
                                  parse_dt_literal, parse_duration, parse_time_literal, parse_tod_literal)
 from .helpers import _f32
 

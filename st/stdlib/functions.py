@@ -1,6 +1,6 @@
 """Runtime implementations of the IEC standard functions (called by generated code).
 
-Values follow the representation in st.compiler.types: times are ns integers.
+Values follow the representation in st.model.types: times are ns integers.
 String positions are 1-based as in IEC 61131-3.
 """
 from __future__ import annotations
@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from datetime import date
 
-from ..compiler.literals import (DAY, LiteralError, format_date, format_dt, format_duration, format_tod,
+from ..model.literals import (DAY, LiteralError, format_date, format_dt, format_duration, format_tod,
                                  parse_duration, parse_int, parse_real)
 from ..runtime.faults import PLCFault
 from ..runtime.helpers import _f32

@@ -10,9 +10,9 @@ import re
 from functools import lru_cache
 from pathlib import Path
 
-from ..compiler import types as T
 from ..compiler.codegen import _call, _const, wrap
 from ..compiler.library import FuncSig, Library, Param
+from ..model import types as T
 from . import functions
 
 FBS_PATH = Path(__file__).with_name("standard_fbs.st")

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable, Optional
 
-from ..compiler.driver import CompiledProgram
+from ..model.compiled import CompiledProgram
 from ..runtime.faults import PLCFault, fault_from_exception
 from ..runtime.namespace import build_namespace
 from ..runtime.values import parse_duration_arg, to_st_literal

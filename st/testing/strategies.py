@@ -28,7 +28,7 @@ import struct
 
 import hypothesis.strategies as st
 
-from ..compiler import types as T
+from ..model import types as T
 from ..runtime.values import from_python, parse_duration_arg
 
 __all__ = [

@@ -7,11 +7,12 @@ their type in `.ty`; names get their symbol in `.sym`; calls get `.target`.
 from __future__ import annotations
 
 from ...diagnostics import DiagnosticSink
+from ...model import types as T
+from ...model.program import Project
 from ...source import Span
 from .. import ast as A
-from .. import types as T
 from ..library import Library
-from ..model import Project
+from ..options import CompileOptions
 from .calls import CallsMixin
 from .common import _NULL, STEP, CallTarget, Scope, StepType
 from .configuration import ConfigurationMixin
@@ -25,7 +26,7 @@ __all__ = ["Checker", "CallTarget", "STEP", "StepType", "Scope", "_NULL"]
 
 
 class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, ConfigurationMixin, TestsMixin):
-    def __init__(self, sink: DiagnosticSink, libraries: list[Library]):
+    def __init__(self, sink: DiagnosticSink, libraries: list[Library], options: CompileOptions | None = None):
         self.sink = sink
         self.libraries = libraries
         self.p = Project(libraries=libraries)
@@ -38,8 +39,9 @@ class Checker(DeclarationsMixin, StatementsMixin, ExpressionsMixin, CallsMixin, 
         self._calls: dict = {}         # caller lower name → [(callee lower name, span)]
         self._configs: list = []
         self._global_blocks: list = []
-        self.strict_enums: set = set()  # {attribute 'strict'} enumerations (lower-case names)
-        self.dialect = next((lib.dialect for lib in libraries if getattr(lib, "dialect", None)), None)
+        self.options = options or CompileOptions()
+        self.strict_enums: set = set(self.options.strict_types)  # {attribute 'strict'} enumerations (lower-case names)
+        self.dialect = self.options.dialect
 
     # ================================================================ entry
     def run(self, units: list[A.Unit], library_units: set[str]) -> Project:

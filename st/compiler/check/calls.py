@@ -5,7 +5,7 @@ import re
 from typing import Optional
 
 from .. import ast as A
-from .. import types as T
+from ...model import types as T
 from ..library import FuncSig
 from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies, method_of, take_address
 from .tests import TEST_CALLS

@@ -4,9 +4,9 @@ from __future__ import annotations
 import re
 from typing import Optional
 
+from ...model import types as T
+from ...model.addresses import AddressError, parse_address
 from .. import ast as A
-from .. import types as T
-from ..addresses import AddressError, parse_address
 
 _SECTIONS_PARAM = ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")
 _LOGIC = {"AND", "OR", "XOR", "AND_THEN", "OR_ELSE"}

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from ...source import Span
 from .. import ast as A
-from .. import types as T
-from ..model import ConfigModel, InstanceModel, TaskModel
+from ...model import types as T
+from ...model.program import ConfigModel, InstanceModel, TaskModel
 from .common import _SECTIONS_PARAM, Scope
 
 

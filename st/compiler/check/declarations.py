@@ -3,9 +3,9 @@ from __future__ import annotations
 
 from typing import Optional
 
+from ...model import types as T
 from ...source import Span
 from .. import ast as A
-from .. import types as T
 from ..names import mangle, qualified
 from .common import _DIRECT, _DIRECT_TYPES, Scope, _names_in, image_problem
 

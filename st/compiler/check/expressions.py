@@ -4,8 +4,8 @@ from __future__ import annotations
 from typing import Optional
 
 from .. import ast as A
-from .. import types as T
-from ..addresses import canonical
+from ...model import types as T
+from ...model.addresses import canonical
 from ..library import FuncSig
 from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, SUPER, THIS, Scope, image_problem
 

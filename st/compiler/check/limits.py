@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Callable, Iterator
 
-from .. import types as T
+from ...model import types as T
 
 MAX_NESTING = 100             # real programs nest types and blocks a handful of levels deep
 MAX_VALUES = 50_000_000       # the same bound as one array's elements (E042)

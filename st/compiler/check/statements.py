@@ -3,10 +3,10 @@ from __future__ import annotations
 
 from typing import Optional
 
+from ...model import types as T
+from ...model.program import SfcModel, StepModel, TransitionModel
 from ...source import Span
 from .. import ast as A
-from .. import types as T
-from ..model import SfcModel, StepModel, TransitionModel
 from .common import _NULL, STEP, Scope, take_address
 from .expressions import _null_at, _zero_pointer
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from typing import Optional
 
+from ...model import types as T
+from ...model.program import AssertInfo, TestModel
 from .. import ast as A
-from .. import types as T
-from ..model import AssertInfo, TestModel
 from .common import CallTarget, Scope
 
 # name → (minimum, maximum) number of arguments, the message included

@@ -4,8 +4,8 @@ from __future__ import annotations
 import ast as py
 from typing import TYPE_CHECKING, Optional
 
+from ...model import types as T
 from .. import ast as A
-from .. import types as T
 from ..check import STEP, CallTarget
 
 if TYPE_CHECKING:

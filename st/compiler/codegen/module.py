@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import ast as py
 
-from .. import types as T
-from ..model import Project
+from ...model import types as T
+from ...model.program import Project
 from .expressions import InitGen
 from .guards import guard_loops
 from .pous import BodyGen, FuncGen

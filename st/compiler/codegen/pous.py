@@ -4,8 +4,8 @@ from __future__ import annotations
 import ast as py
 from typing import TYPE_CHECKING
 
+from ...model import types as T
 from .. import ast as A
-from .. import types as T
 from ..names import mangle
 from .expressions import InitGen
 from .pyast import _args, _attr, _call, _const, _name, _set_lines, _store

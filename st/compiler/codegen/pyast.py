@@ -4,7 +4,7 @@ from __future__ import annotations
 import ast as py
 import struct
 
-from .. import types as T
+from ...model import types as T
 
 _F32 = struct.Struct("<f")
 DAY_NS = 86_400_000_000_000

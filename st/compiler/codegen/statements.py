@@ -4,7 +4,7 @@ from __future__ import annotations
 import ast as py
 
 from .. import ast as A
-from .. import types as T
+from ...model import types as T
 from ..check import CallTarget
 from .expressions import _is_super, ExprGen, wrap
 from .pyast import (Unsupported, _attr, _call, _const, _name, _set_lines)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import ast as py
 
-from .. import types as T
-from ..model import TestModel
+from ...model import types as T
+from ...model.program import TestModel
 from .expressions import InitGen
 from .pyast import _args, _call, _const, _name, _set_lines
 from .statements import StmtGen, _by_ref_names

@@ -161,7 +161,7 @@ class MapEntry:
 
 def _type_info(t):
     """(type name, string length) of a compiled type, for the encodings above."""
-    from ...compiler import types as T
+    from ...model import types as T
     bt = T.base_of(t)
     name = getattr(bt, "name", str(bt)).upper()
     if name.startswith("STRING") or name.startswith("WSTRING"):

@@ -26,7 +26,7 @@ def canonical(addr: str) -> str:
     return a
 
 
-def parse_address(addr: str):
+def parse_address(addr: str) -> tuple[str, str, int]:
     """'%QX1.2' → ('Q', 'X', 10); '%IW3' → ('I', 'W', 3). Bits count byte × 8 + bit."""
     m = _ADDR.match(addr.strip().upper())
     if not m:

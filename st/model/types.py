@@ -78,29 +78,29 @@ class ElemType(Type):
     def __repr__(self) -> str:
         return self.name
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[Any, ...]:
         # keep the canonical instances canonical across pickling (the compile cache)
         if ELEMENTARY.get(self.name) is self or ELEMENTARY.get({"TIME_OF_DAY": "TOD"}.get(self.name, "")) is self:
             return (_elementary, (self.name,))
         return (_rebuild, (type(self), dict(self.__dict__)))
 
 
-def _elementary(name):
+def _elementary(name: str) -> Type:
     return ELEMENTARY[name]
 
 
-def _rebuild(cls, state):
+def _rebuild(cls: type[Type], state: dict[str, Any]) -> Type:
     obj = cls.__new__(cls)
     obj.__dict__.update(state)
     return obj
 
 
-def _int(name, bits, signed):
+def _int(name: str, bits: int, signed: bool) -> ElemType:
     lo, hi = (-(1 << (bits - 1)), (1 << (bits - 1)) - 1) if signed else (0, (1 << bits) - 1)
     return ElemType(name, "int", bits, signed, lo, hi, 0)
 
 
-def _bit(name, bits):
+def _bit(name: str, bits: int) -> ElemType:
     return ElemType(name, "bit", bits, False, 0, (1 << bits) - 1, 0)
 
 
@@ -165,8 +165,8 @@ LIT_REAL = LiteralType("real literal", "lit_real")
 
 @dataclass(eq=False)
 class ArrayType(Type):
-    dims: list = None       # [(lo, hi)]
-    element: Type = None
+    dims: list[tuple[int, int]] = field(default_factory=list)   # [(lo, hi)]; hi < lo: ARRAY[*]
+    element: Type = None    # type: ignore[assignment]  # always given
     kind: str = "array"
 
     @property
@@ -185,7 +185,7 @@ class ArrayType(Type):
 class Member:
     name: str
     type: Type
-    init: Any = None        # AST initializer or None
+    init: Any = None        # syntax: the initializer (compiler: AST; artefact: InitialValue | None)
     span: Any = None
     pyname: str = ""
 
@@ -193,7 +193,7 @@ class Member:
 @dataclass(eq=False)
 class StructType(Type):
     name: str
-    members: dict = field(default_factory=dict)   # lower name → Member
+    members: dict[str, Member] = field(default_factory=dict)   # lower name → Member
     kind: str = "struct"
     pyname: str = ""
     resolved: bool = False
@@ -202,17 +202,17 @@ class StructType(Type):
 @dataclass(eq=False)
 class EnumType(Type):
     name: str
-    members: dict = field(default_factory=dict)   # lower name → (name, value)
+    members: dict[str, tuple[str, int]] = field(default_factory=dict)   # lower name → (name, value)
     base: ElemType = INT
     default_value: int = 0
     kind: str = "enum"
-    names_by_value: dict = field(default_factory=dict)
+    names_by_value: dict[int, str] = field(default_factory=dict)
 
 
 @dataclass(eq=False)
 class SubrangeType(Type):
     name: str = "?"
-    base: ElemType = None
+    base: ElemType = None   # type: ignore[assignment]  # always given
     lo: int = 0
     hi: int = 0
 
@@ -221,17 +221,17 @@ class SubrangeType(Type):
         return self.base.kind
 
     @property
-    def bits(self):
+    def bits(self) -> int:
         return self.base.bits
 
     @property
-    def signed(self):
+    def signed(self) -> bool:
         return self.base.signed
 
 
 @dataclass(eq=False)
 class RefType(Type):
-    target: Type = None
+    target: Type = None     # type: ignore[assignment]  # always given
     ref_kind: str = "REF_TO"
     kind: str = "ref"
 
@@ -240,7 +240,7 @@ class RefType(Type):
         return f"{'REF_TO' if self.ref_kind == 'REF_TO' else self.ref_kind + ' TO'} {self.target}"
 
 
-def is_reference(t) -> bool:
+def is_reference(t: Optional[Type]) -> bool:
     """REFERENCE TO: a reference used as the variable it refers to (bound with REF=)."""
     u = unalias(t) if t is not None else None
     return isinstance(u, RefType) and u.ref_kind == "REFERENCE"
@@ -251,8 +251,8 @@ class AliasType(Type):
     """A named alias whose only difference from its target is a default value."""
 
     name: str = "?"
-    target: Type = None
-    init: Any = None
+    target: Type = None     # type: ignore[assignment]  # always given
+    init: Any = None        # syntax: the default value (compiler: AST; artefact: InitialValue | None)
 
 
 @dataclass(eq=False)
@@ -261,7 +261,7 @@ class VarSym:
     type: Type
     section: str            # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL
     span: Any = None
-    init: Any = None
+    init: Any = None        # syntax: the initial value (compiler: AST; artefact: InitialValue | None)
     location: str = ""
     constant: bool = False
     retain: bool = False
@@ -282,36 +282,36 @@ class VarSym:
 class POUType(Type):
     name: str = "?"
     pou_kind: str = "FUNCTION_BLOCK"   # FUNCTION, FUNCTION_BLOCK, PROGRAM (TEST: a unit test's variables)
-    decl: Any = None        # ast.POU (None for native)
-    vars: dict = field(default_factory=dict)      # lower → VarSym, declaration order
+    decl: Any = None        # syntax: ast.POU / ast.Method (artefact: PouInfo); None for native
+    vars: dict[str, VarSym] = field(default_factory=dict)      # lower → VarSym, declaration order
     return_type: Optional[Type] = None
     pyname: str = ""
     library: str = ""       # "" for user code, else the library name
     native: Any = None      # a native implementation (Python) for library POUs
-    actions: dict = field(default_factory=dict)   # lower → ast.ActionDecl
+    actions: dict[str, Any] = field(default_factory=dict)   # lower → syntax: ast.ActionDecl (artefact: PouInfo)
     resolved: bool = False
-    methods: dict = field(default_factory=dict)   # lower → POUType (pou_kind FUNCTION, owner_fb set)
+    methods: dict[str, POUType] = field(default_factory=dict)   # lower → POUType (pou_kind FUNCTION, owner_fb set)
     owner_fb: Any = None    # a METHOD: the function block it belongs to
     base: Any = None        # FUNCTION_BLOCK … EXTENDS base
-    interfaces: list = field(default_factory=list)   # INTERFACEs implemented (FB) or extended (INTERFACE)
-    properties: dict = field(default_factory=dict)   # lower → PropSym
-    modifiers: tuple = ()   # ABSTRACT, FINAL, OVERRIDE, PUBLIC, …
+    interfaces: list[POUType] = field(default_factory=list)   # INTERFACEs implemented (FB) or extended (INTERFACE)
+    properties: dict[str, PropSym] = field(default_factory=dict)   # lower → PropSym
+    modifiers: tuple[str, ...] = ()   # ABSTRACT, FINAL, OVERRIDE, PUBLIC, …
 
     @property
     def kind(self) -> str:  # type: ignore[override]
         return {"FUNCTION": "function", "FUNCTION_BLOCK": "fb", "PROGRAM": "fb", "TEST": "test",
                 "INTERFACE": "interface"}[self.pou_kind]
 
-    def inputs(self):
+    def inputs(self) -> list[VarSym]:
         return [v for v in self.vars.values() if v.section == "VAR_INPUT"]
 
-    def outputs(self):
+    def outputs(self) -> list[VarSym]:
         return [v for v in self.vars.values() if v.section == "VAR_OUTPUT"]
 
-    def in_outs(self):
+    def in_outs(self) -> list[VarSym]:
         return [v for v in self.vars.values() if v.section == "VAR_IN_OUT"]
 
-    def params(self):
+    def params(self) -> list[VarSym]:
         return [v for v in self.vars.values() if v.section in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")]
 
 
@@ -327,7 +327,7 @@ class PropSym:
     bare: bool = False      # an interface prototype without accessors: GET, SET or both satisfy it
 
 
-def is_conformant(t) -> bool:
+def is_conformant(t: Optional[Type]) -> bool:
     """ARRAY[*] (a VAR_IN_OUT whose bounds come from the argument: a runtime `_Conf`)."""
     u = unalias(t) if t is not None else None
     return isinstance(u, ArrayType) and any(hi < lo for lo, hi in u.dims)
@@ -347,7 +347,7 @@ def extends(t: Type, base: Type) -> bool:
     return False
 
 
-def fb_init_chain(pou: "POUType") -> list:
+def fb_init_chain(pou: POUType) -> list[POUType]:
     """The FB_init methods that construct an instance of `pou` (CODESYS): its bases' first, then
     its own; each block's own one only (an inherited entry is its base's)."""
     chain = []
@@ -447,7 +447,7 @@ def common_type(a: Type, b: Type) -> Optional[Type]:
         if lit is LIT_REAL:
             if other.is_real:
                 return other
-            if other.is_int:
+            if isinstance(other, ElemType) and other.is_int:
                 return REAL if other.bits <= 16 else LREAL
         return None
     if widens_to(a, b):
@@ -467,16 +467,16 @@ def common_type(a: Type, b: Type) -> Optional[Type]:
     return None
 
 
-def literal_fits(value, t: Type) -> bool:
+def literal_fits(value: Any, t: Type) -> bool:
     t = base_of(t)
     if isinstance(t, SubrangeType):
-        return t.lo <= value <= t.hi
+        return bool(t.lo <= value <= t.hi)
     if isinstance(t, ElemType) and t.kind in ("int", "bit"):
-        return t.lo <= value <= t.hi
+        return bool(t.lo <= value <= t.hi)
     return True
 
 
-def default_type_for_literal(t: Type, value=None) -> Type:
+def default_type_for_literal(t: Type, value: Any = None) -> Type:
     if t is LIT_INT:
         if value is not None and not (DINT.lo <= value <= DINT.hi):
             return LINT
