@@ -15,8 +15,8 @@ _F32 = struct.Struct("<f")
 _pack, _unpack = _F32.pack, _F32.unpack
 
 
-def _f32(v):
-    """Round to IEEE single precision (REAL on store)."""
+def round_f32(v):
+    """Round to IEEE single precision (REAL on store); generated code calls it `_f32`."""
     try:
         return _unpack(_pack(v))[0]
     except OverflowError:
@@ -202,7 +202,7 @@ def _wrap_to(v, spec):
     if spec is None:
         return v
     if spec == "f32":
-        return _f32(v)
+        return round_f32(v)
     if spec[0] == "str":
         return v[:spec[1]]
     bits, signed = spec
@@ -351,7 +351,7 @@ def _deref_null():
 
 
 BASE_NAMESPACE = {
-    "_f32": _f32, "_idiv": _idiv, "_imod": _imod, "_umod": _umod, "_fdiv": _fdiv, "_pow": _pow,
+    "_f32": round_f32, "_idiv": _idiv, "_imod": _imod, "_umod": _umod, "_fdiv": _fdiv, "_pow": _pow,
     "_round": _round, "_trunc": _trunc, "_ix": _ix, "_subrange": _subrange, "_setbit": _setbit,
     "_setbits": _setbits,
     "_for_dir": _for_dir, "_Struct": _Struct, "_FB": _FB, "_copy": _copy, "_assign": _assign,

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import gc
 import math
-import re
 import threading
 from typing import Callable, Optional
 
@@ -20,18 +19,18 @@ from ..compiler.driver import CompiledProgram
 from .clock import RealClock, VirtualClock
 from .faults import FaultInfo, fault_from_exception
 from .namespace import build_namespace
+from .paths import Holder, norm_addr, read, resolve, write
 from .process_image import AddressError, Binding, ProcessImage, from_raw, parse_address, to_raw
 from . import refnames
 from .relink import relink
 from .retain import RetainStore
 from .scheduler import Task, make_policy
 from .stats import TaskStats
+from .varref import VarRef
 from .watchdog import Watchdog
 from .values import ValueError_, from_python, parse_duration_arg, to_json, to_python
 
 DEFAULT_CYCLE = 10_000_000
-_PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\.([A-Za-z_][A-Za-z0-9_]*|[0-9]+)|\[([^\]]*)\])")
-_ADDR = re.compile(r"%([IQM])([XBWDL]?)([0-9]+(?:\.[0-9]+)*)$", re.I)
 
 STOP, RUN, FAULT = "STOP", "RUN", "FAULT"
 
@@ -92,6 +91,10 @@ class PLC:
     its interval on real time, at least 1 s on virtual time).  retain: a SQLite file for
     RETAIN/PERSISTENT variables (restored here unless cold=True).  safe_outputs: {"%QX0.1":
     True, …} written to the image on a fault or stop instead of FALSE/0.
+
+    For drivers: `image` (the process image), `bindings` (normalised address → [Binding] of the
+    located variables), `tasks`, `ns` (the program's namespace), `io` (the I/O drivers, see
+    iodriver.py), `clock`; `ref(path)` gives a VarRef to one variable.
     """
 
     def __init__(self, compiled: CompiledProgram, cycle=None, *, watchdog=None, policy: str = "openplc",
@@ -188,7 +191,7 @@ class PLC:
         self.compiled, self.project, self.ns, self._wd = b.compiled, b.project, b.ns, b.wd
         self.config, self.instances, self.tasks = b.config, b.instances, b.tasks
         self.tick, self.policy = b.tick, b.policy
-        self._bindings, self._binding_of = b.bindings, b.binding_of
+        self.bindings, self._binding_of = b.bindings, b.binding_of
         # drivers that live in the namespace (the motion kernel) follow it; the old ones hand over
         old_drivers = {type(d): d for d in self.io if getattr(d, "per_namespace", False)}
         self.io = [d for d in self.io if not getattr(d, "per_namespace", False)]
@@ -201,7 +204,7 @@ class PLC:
             old = self._stats.get(t.name)
             t.stats = old if old is not None and old.period == t.interval else TaskStats(t.name, t.interval)
             self._stats[t.name] = t.stats
-        for binds in self._bindings.values():
+        for binds in self.bindings.values():
             for bd in binds:
                 bd.publish() if bd.area in "QM" else bd.latch_in()
         self._event_tasks = [t for t in self.tasks if t.single]
@@ -239,8 +242,8 @@ class PLC:
             if init is None or not path or not hasattr(init, "value"):
                 continue
             try:
-                container, key, t = self._resolve(".".join(path), b)
-                _set(container, key, from_python(init.value, t, ".".join(path)))
+                container, key, t = resolve(b, ".".join(path))
+                write(container, key, from_python(init.value, t, ".".join(path)))
             except (KeyError, ValueError_) as e:
                 raise PLCStartError(f"{span.file}:{span.line}: VAR_CONFIG {'.'.join(path)}: {e}") from None
 
@@ -260,7 +263,7 @@ class PLC:
             for path, location, init, ty, span in b.config.var_config:
                 if location and "*" not in location:
                     try:
-                        container, key, t = self._resolve(".".join(path), b)
+                        container, key, t = resolve(b, ".".join(path))
                     except KeyError:
                         continue
                     yield location, container, key, t, path[0].lower()
@@ -277,7 +280,7 @@ class PLC:
                 bd = Binding(addr, container, key, t, self.image)
             except AddressError as e:
                 raise PLCStartError(f"{addr}: {e}") from None
-            b.bindings.setdefault(_norm_addr(addr), []).append(bd)
+            b.bindings.setdefault(norm_addr(addr), []).append(bd)
             b.binding_of[(id(container), key)] = bd
             targets = [owner_task[inst]] if inst in owner_task else b.tasks
             for task in targets:
@@ -654,7 +657,7 @@ class PLC:
         for key, (name, obj, pou) in b.instances.items():
             old = self.instances.get(key)
             if old is not None:
-                _restore_into(_Holder(obj), "v", pou, to_python(old[1], old[2]))
+                _restore_into(Holder(obj), "v", pou, to_python(old[1], old[2]))
         old_globals = {g.pyname: g for g in self.project.globals.values()}
         for g in b.project.globals.values():
             og = old_globals.get(g.pyname)
@@ -694,27 +697,36 @@ class PLC:
         """Per-task statistics summaries (see runtime/stats.py)."""
         return [t.stats.summary() for t in self.tasks]
 
+    def use_stats(self, task: str, stats: TaskStats) -> None:
+        """Record a task's jobs in `stats` (a TaskStats, or a subclass that records more) from now on,
+        also after a reload while the task keeps its interval."""
+        for t in self.tasks:
+            if t.name.lower() == task.lower():
+                t.stats = self._stats[t.name] = stats
+                return
+        raise KeyError(f"no task named {task!r}")
+
     # ------------------------------------------------------------------ variables
     def __getitem__(self, path: str):
         if path.strip().startswith("%"):
             return self._image_read(path)
-        container, key, t = self._resolve(path)
-        return to_python(_get(container, key), t, refnames.namer(self))
+        container, key, t = resolve(self, path)
+        return to_python(read(container, key), t, refnames.namer(self))
 
     def force(self, path: str, value) -> None:
         """Force a variable (or a located variable by its %address): it holds `value` when every job
         starts and ends, whatever the program, the inputs or an HMI write it, until unforce()."""
         if path.strip().startswith("%"):
-            binds = self._bindings.get(_norm_addr(path))
+            binds = self.bindings.get(norm_addr(path))
             if not binds:
                 raise KeyError(f"{path}: no located variable at this address")
             targets = [(b.container, b.key, b.type) for b in binds]
         else:
-            targets = [self._resolve(path)]
+            targets = [resolve(self, path)]
         self._force_spec[path] = value
         for container, key, t in targets:
             v = from_python(value, t, path)
-            _set(container, key, v)
+            write(container, key, v)
             self._forced[(path.strip().lower(), id(container), key)] = (container, key, v,
                                                                        self._binding_of.get((id(container), key)))
         self._apply_forced()
@@ -736,7 +748,7 @@ class PLC:
 
     def _apply_forced(self) -> None:
         for container, key, v, b in self._forced.values():
-            _set(container, key, v)
+            write(container, key, v)
             if b is not None:
                 b.table[b.index] = b.conv_out(v)
 
@@ -744,9 +756,9 @@ class PLC:
         if path.strip().startswith("%"):
             self._image_write(path, value)
             return
-        container, key, t = self._resolve(path)
+        container, key, t = resolve(self, path)
         v = from_python(value, t, path)
-        _set(container, key, v)
+        write(container, key, v)
         b = self._binding_of.get((id(container), key))
         if b is not None:                   # keep the image in step, or the next latch would undo the write
             b.table[b.index] = to_raw(v, t, b.size)
@@ -758,7 +770,7 @@ class PLC:
         except AddressError as e:
             raise KeyError(str(e)) from None
         raw = self.image.tables[(area, size)][i]
-        binds = self._bindings.get(_norm_addr(addr))
+        binds = self.bindings.get(norm_addr(addr))
         if binds:
             return to_python(from_raw(raw, binds[0].type, size), binds[0].type)
         return raw
@@ -769,7 +781,7 @@ class PLC:
             area, size, i = parse_address(addr)
         except AddressError as e:
             raise KeyError(str(e)) from None
-        binds = self._bindings.get(_norm_addr(addr), [])
+        binds = self.bindings.get(norm_addr(addr), [])
         if binds:
             t = binds[0].type
             v = from_python(value, t, addr)
@@ -783,65 +795,11 @@ class PLC:
             raw = value
         self.image.set(addr, raw)
 
-    def _resolve(self, path: str, src=None):
-        """path → (container, key, type): key is an attribute name or a list index. `src`: a _Build
-        being prepared instead of the running program."""
-        src = self if src is None else src
-        toks = list(_tokens(path))
-        if not toks:
-            raise KeyError(f"empty variable path {path!r}")
-        kind, first = toks[0]
-        if kind != "name":
-            raise KeyError(f"{path}: a path starts with a program instance or global name")
-        key = first.lower()
-        if key in src.instances:
-            name, obj, pou = src.instances[key]
-            if len(toks) == 1:
-                return _Holder(obj), "v", pou
-            container, attr, t = obj, None, pou
-            rest = toks[1:]
-        else:
-            g = src.project.global_names.get(key)
-            if not g:
-                raise KeyError(f"{path}: no program instance or global variable named '{first}'")
-            container, attr, t = src.ns, g[0].pyname, g[0].type
-            rest = toks[1:]
-        cur = container if attr is None else _get(container, attr)
-        for kind, val in rest:
-            ut = T.unalias(t)
-            if kind == "name":
-                if isinstance(ut, T.POUType):
-                    sym = ut.vars.get(val.lower())
-                    if sym is None or sym.section in ("VAR_EXTERNAL", "VAR_TEMP"):
-                        if sym is not None and sym.global_ref is not None:
-                            container, attr, t = src.ns, sym.global_ref.pyname, sym.global_ref.type
-                            cur = _get(container, attr)
-                            continue
-                        raise KeyError(f"{path}: {ut.name} has no variable '{val}'")
-                    container, attr, t = cur, sym.pyname, sym.type
-                elif isinstance(ut, T.StructType):
-                    m = ut.members.get(val.lower())
-                    if m is None:
-                        raise KeyError(f"{path}: {ut.name} has no field '{val}'")
-                    container, attr, t = cur, m.pyname, m.type
-                elif isinstance(T.base_of(ut), T.ElemType) and val.isdigit() and T.base_of(ut).is_intlike:
-                    return _BitHolder(container, attr, int(val), T.base_of(ut)), "v", T.BOOL
-                else:
-                    raise KeyError(f"{path}: '{val}' cannot be read from a {t}")
-            else:  # index
-                if not isinstance(ut, T.ArrayType):
-                    raise KeyError(f"{path}: {t} is not an array")
-                idx = [int(x) for x in val.split(",")]
-                if len(idx) != len(ut.dims):
-                    raise KeyError(f"{path}: the array has {len(ut.dims)} dimension(s)")
-                flat = 0
-                for i, (lo, hi) in zip(idx, ut.dims):
-                    if not lo <= i <= hi:
-                        raise KeyError(f"{path}: index {i} is outside {lo}..{hi}")
-                    flat = flat * (hi - lo + 1) + (i - lo)
-                container, attr, t = cur, flat, ut.element
-            cur = _get(container, attr)
-        return container, attr, t
+    def ref(self, path: str) -> VarRef:
+        """A reference to the variable at `path` ("main.fb.x", "g_arr[2]", "main.w.3"); KeyError
+        saying what is wrong with the path. Valid until the program is reloaded."""
+        container, key, t = resolve(self, path)
+        return VarRef(path, container, key, t, self._binding_of.get((id(container), key)))
 
     def variables(self) -> dict:
         """Every variable of every program instance, as JSON values keyed "instance.var"."""
@@ -905,7 +863,7 @@ def _restore_into(container, key, t, value) -> None:
     """Write a to_python-form value back into a variable, aggregates element by element."""
     ut = T.unalias(t)
     if isinstance(ut, T.ArrayType):
-        arr = _get(container, key)
+        arr = read(container, key)
         flat = _flatten(value, len(ut.dims))
         if len(flat) != len(arr):
             raise ValueError("array size changed")
@@ -914,13 +872,13 @@ def _restore_into(container, key, t, value) -> None:
     elif isinstance(ut, T.RefType) or (isinstance(ut, T.POUType) and ut.pou_kind == "INTERFACE"):
         return                                   # references: re-aimed by relink()
     elif isinstance(ut, (T.StructType, T.POUType)):
-        obj = _get(container, key)
+        obj = read(container, key)
         members = ut.members if isinstance(ut, T.StructType) else ut.vars
         for m in members.values():
             if m.name in value and getattr(m, "section", "") not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
                 _restore_into(obj, m.pyname, m.type, value[m.name])
     else:
-        _set(container, key, from_python(value, t, ""))
+        write(container, key, from_python(value, t, ""))
 
 
 def _type_changes(old: T.Type, new: T.Type, path: str, out: list) -> None:
@@ -942,71 +900,6 @@ def _flatten(v, depth: int) -> list:
     if depth <= 1:
         return list(v)
     return [x for row in v for x in _flatten(row, depth - 1)]
-
-
-class _Holder:
-    def __init__(self, v):
-        self.v = v
-
-
-class _BitHolder:
-    def __init__(self, container, key, bit, t):
-        self.container, self.key, self.bit, self.t = container, key, bit, t
-
-    @property
-    def v(self):
-        return bool(_get(self.container, self.key) >> self.bit & 1)
-
-    @v.setter
-    def v(self, value):
-        from .helpers import _setbit
-        _set(self.container, self.key, _setbit(_get(self.container, self.key), self.bit, value, self.t.bits,
-                                               self.t.signed))
-
-
-def _get(container, key):
-    if isinstance(key, str):
-        if isinstance(container, dict):
-            return container[key]
-        return getattr(container, key)
-    return container[key]
-
-
-def _set(container, key, value):
-    if isinstance(key, str):
-        if isinstance(container, dict):
-            container[key] = value
-        else:
-            setattr(container, key, value)
-    else:
-        container[key] = value
-
-
-def _tokens(path: str):
-    pos = 0
-    path = path.strip()
-    while pos < len(path):
-        m = _PATH_TOKEN.match(path, pos)
-        if not m or m.end() == pos:
-            raise KeyError(f"malformed variable path {path!r}")
-        if m.group(1) is not None:
-            if pos != 0:
-                raise KeyError(f"malformed variable path {path!r}")
-            yield "name", m.group(1)
-        elif m.group(2) is not None:
-            yield "name", m.group(2)
-        else:
-            yield "index", m.group(3).replace(" ", "")
-        pos = m.end()
-
-
-def _norm_addr(addr: str) -> str:
-    a = addr.strip().upper()
-    m = _ADDR.match(a)
-    if not m:
-        return a
-    size = m.group(2) or "X"
-    return f"%{m.group(1)}{size}{m.group(3)}"
 
 
 def _compile_kw(kw: dict) -> dict:

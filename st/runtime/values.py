@@ -6,7 +6,7 @@ import math
 from ..compiler import types as T
 from ..compiler.literals import (format_date, format_dt, format_duration, format_tod, parse_date_literal,
                                  parse_dt_literal, parse_duration, parse_time_literal, parse_tod_literal)
-from .helpers import _f32
+from .helpers import round_f32
 
 
 class ValueError_(ValueError):
@@ -85,7 +85,7 @@ def to_st_literal(v, t) -> str:
         if bt is T.REAL:
             for digits in range(1, 10):
                 text = f"{v:.{digits}g}"
-                if _f32(float(text)) == v:
+                if round_f32(float(text)) == v:
                     return _real_text(text)
         return _real_text(repr(v))
     if isinstance(bt, T.ElemType) and bt.kind in ("time", "date", "tod", "dt"):
@@ -144,7 +144,7 @@ def from_python(v, t: T.Type, where: str = ""):
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise ValueError_(f"{where}: expected a number, got {v!r}")
         try:
-            return _f32(float(v)) if bt.bits == 32 else float(v)
+            return round_f32(float(v)) if bt.bits == 32 else float(v)
         except OverflowError:
             raise ValueError_(f"{where}: the value is too large for {bt.name}") from None
     if k in ("time", "date", "tod", "dt"):

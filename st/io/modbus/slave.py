@@ -15,7 +15,6 @@ import sys
 import time
 from typing import Optional
 
-from ...runtime.plc import _get, _set
 from ...runtime.values import from_python
 from .addressmap import OPENPLC_LIMIT, Encoding, effective_map, load_map, located_cells
 from .exchange import COILS, DISCRETE, HOLDING, INPUT, Exchange
@@ -180,9 +179,9 @@ class ModbusSlave:
             for k in range(n):
                 route[(table, first + k)] = ("cell", binds, k, n)
         for e in self.entries:
-            container, key, t = plc._resolve(e.path)
+            ref = plc.ref(e.path)
             dst = self.ex.bits[e.table] if e.table in (COILS, DISCRETE) else self.ex.regs[e.table]
-            cell = [container, key, t, e.encoding, dst, e.address, e.path]
+            cell = [ref, e.encoding, dst, e.address]
             varcells.append(cell)
             for k in range(e.count):
                 route[(e.table, e.address + k)] = ("var", cell, k, e.count)
@@ -205,8 +204,8 @@ class ModbusSlave:
                 else:
                     for k in range(n):
                         dst[a + k] = (raw >> (16 * (n - 1 - k))) & 0xFFFF
-            for container, key, t, enc, dst, a, path in self._vars:
-                v = _get(container, key)
+            for ref, enc, dst, a in self._vars:
+                v = ref.get()
                 if enc.registers == 0:
                     dst[a] = 1 if v else 0
                 else:
@@ -243,19 +242,19 @@ class ModbusSlave:
             x.write_var(x.conv_in(raw))
 
     def _write_var(self, cell, k: int, n: int, word: int) -> None:
-        container, key, t, enc, dst, a, path = cell
+        ref, enc, dst, a = cell
         if enc.registers == 0:
             value = bool(word)
         else:
-            words = enc.to_words(_get(container, key))
+            words = enc.to_words(ref.get())
             words[k] = word & 0xFFFF
             value = enc.from_words(words)
         try:
-            v = from_python(value, t, path)
+            v = from_python(value, ref.type, ref.path)
         except (ValueError, TypeError, OverflowError):
             return                                   # e.g. a REAL pattern that is NaN for an integer
-        _set(container, key, v)
-        b = self.plc._binding_of.get((id(container), key))
+        ref.set(v)
+        b = ref.binding
         if b is not None:
             b.table[b.index] = b.conv_out(v)
 

@@ -23,9 +23,7 @@ class AxisTrace:
     def axis(self):
         """The traced Axis, once the program has used its AXIS_REF (an FB call assigns the handle)."""
         if self._axis is None:
-            from ...runtime.plc import _get
-            container, key, _ = self.plc._resolve(self.path)
-            ref = _get(container, key)
+            ref = self.plc.ref(self.path).get()
             reg = self.plc.ns.get("_motion")
             if reg is not None and getattr(ref, "Handle", 0) in reg.axes:
                 self._axis = reg.axes[ref.Handle]
@@ -45,7 +43,7 @@ def start_traces(plc, paths: list) -> list:
         raise KeyError("--trace: the program uses no PLCopen motion block")
     out = []
     for p in paths:
-        container, key, t = plc._resolve(p)
+        t = plc.ref(p).type
         if getattr(t, "name", "").upper() != "AXIS_REF":
             raise TypeError(f"--trace {p}: not an AXIS_REF (it is {t})")
         tr = AxisTrace(plc, p)
