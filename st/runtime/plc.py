@@ -18,6 +18,7 @@ from ..compiler import types as T
 from ..compiler.driver import CompiledProgram
 from .clock import RealClock, VirtualClock
 from .faults import FaultInfo, fault_from_exception
+from .iodriver import IODriver
 from .namespace import build_namespace
 from .paths import Holder, norm_addr, read, resolve, write
 from .process_image import AddressError, Binding, ProcessImage, from_raw, parse_address, to_raw
@@ -116,7 +117,7 @@ class PLC:
         self.scans = 0
         self.clock = VirtualClock()
         self._stats: dict = {}
-        self.io: list = []                      # I/O drivers: before_job(), after_job(), rebind()
+        self.io: list[IODriver] = []            # see iodriver.py
         self._forced: dict = {}                 # (path, id(container), key) → (container, key, value, binding)
         self._force_spec: dict = {}             # path → the value asked for (re-applied after a reload)
         self._stop_requested = False
@@ -193,11 +194,11 @@ class PLC:
         self.tick, self.policy = b.tick, b.policy
         self.bindings, self._binding_of = b.bindings, b.binding_of
         # drivers that live in the namespace (the motion kernel) follow it; the old ones hand over
-        old_drivers = {type(d): d for d in self.io if getattr(d, "per_namespace", False)}
-        self.io = [d for d in self.io if not getattr(d, "per_namespace", False)]
+        old_drivers = {type(d): d for d in self.io if d.per_namespace}
+        self.io = [d for d in self.io if not d.per_namespace]
         for d in b.ns.get("_io_drivers", []):
             prev = old_drivers.get(type(d))
-            if prev is not None and old_ns is not None and hasattr(d, "adopt"):
+            if prev is not None and old_ns is not None:
                 d.adopt(prev)
             self.io.insert(0, d)
         for t in self.tasks:

@@ -304,7 +304,7 @@ def _report(plc: PLC, o: RunOptions) -> None:
             json.dump({"policy": plc.policy_name, "clock": "virtual" if o.virtual else "real",
                        "plc_time_s": plc.time / 1e9, "state": plc.state,
                        "faults": [str(x) for x in plc.faults], "tasks": stats,
-                       "io": {d.name: d.stats() for d in plc.io if hasattr(d, "stats") and hasattr(d, "name")}},
+                       "io": _io_stats(plc)},
                       f, indent=1)
     if o.stats_plot:
         from .stats import plot_latency
@@ -317,7 +317,7 @@ def _report(plc: PLC, o: RunOptions) -> None:
     if not o.quiet:
         _err(f"stopped at PLC time {plc.time / 1e9:g} s, state {plc.state}")
         for d in plc.io:
-            if getattr(d, "name", "") == "ethercat":
+            if d.name == "ethercat":
                 c = d.stats()
                 _err(f"  ethercat: {c['frames']} frames, {c['lost_frames']} lost, {c['wkc_errors']} working-counter "
                      f"errors, {c['outages']} outage(s)")
@@ -327,6 +327,16 @@ def _report(plc: PLC, o: RunOptions) -> None:
                 _err(f"  task {s['task']}: {s['jobs']} jobs, {s['overruns']} overruns, {s['skipped']} skipped; "
                      f"latency µs min {lat['min']:g} avg {lat['avg']:g} p99 {lat['p99']:g} p99.9 {lat['p99.9']:g} "
                      f"max {lat['max']:g}; exec µs avg {ex['avg']:g} max {ex['max']:g}")
+
+
+def _io_stats(plc: PLC) -> dict:
+    """The counters of the named drivers that keep some."""
+    out = {}
+    for d in plc.io:
+        s = d.stats() if d.name else None
+        if s is not None:
+            out[d.name] = s
+    return out
 
 
 class _Status:

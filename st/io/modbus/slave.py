@@ -15,6 +15,8 @@ import sys
 import time
 from typing import Optional
 
+from ...runtime.iodriver import IODriverBase
+from ...runtime.scheduler import Task
 from ...runtime.values import from_python
 from .addressmap import OPENPLC_LIMIT, Encoding, effective_map, load_map, located_cells
 from .exchange import COILS, DISCRETE, HOLDING, INPUT, Exchange
@@ -66,7 +68,7 @@ def _merge(ranges) -> list:
     return out
 
 
-class ModbusSlave:
+class ModbusSlave(IODriverBase):
     """`st run --modbus`: a Modbus TCP slave for `plc` in its own process.
 
     host/port: where to listen (port 0 picks a free one: see `.port`); map_file: a TOML map of
@@ -188,7 +190,7 @@ class ModbusSlave:
         self._bits, self._words, self._vars, self._route = bits, words, varcells, route
 
     # ------------------------------------------------------------------ the job boundary
-    def after_job(self, task=None) -> None:
+    def after_job(self, task: Optional[Task] = None) -> None:
         """Publish every owned cell into the snapshot (seqlock: readers retry while it moves)."""
         ex = self.ex
         if ex is None:
@@ -214,7 +216,7 @@ class ModbusSlave:
         finally:
             ex.end_write()
 
-    def before_job(self, task=None) -> None:
+    def before_job(self, task: Optional[Task] = None) -> None:
         """Apply the queued HMI writes, oldest first."""
         ex = self.ex
         if ex is None or not ex.pending():
