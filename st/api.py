@@ -1,4 +1,5 @@
-"""The public Python API: compile ST and get a PLC.
+"""The public Python API: compile ST and get a PLC (`st.PLC` is the runtime's PLC with constructors
+that compile first).
 
     from st import PLC
     plc = PLC.from_source(text, cycle="10ms")
@@ -8,14 +9,15 @@ from __future__ import annotations
 
 from .compiler.driver import CompiledProgram, compile_sources, load_files
 from .diagnostics import CompileError
+from .runtime import plc as runtime_plc
 from .source import SourceFile
 from .stdlib.iec import default_library
+from .stdlib.plcopen import library as plcopen_library
 
 
 def libraries(f_trig_first_scan: bool = False, time_unit: str = "ms", dialect=None) -> list:
     """The libraries of a compilation; a dialect preset (st.compiler.dialect) sets the time unit and
     F_TRIG behaviour and travels with the standard library to the checker."""
-    from .stdlib.plcopen import library as plcopen_library
     if dialect is not None:
         time_unit, f_trig_first_scan = dialect.time_unit, dialect.f_trig_first_scan
     std = default_library(f_trig_first_scan, time_unit)
@@ -63,3 +65,24 @@ def compile_paths(paths: list, *, f_trig_first_scan: bool = False, time_unit: st
     return compile_sources(sources, libraries(f_trig_first_scan, time_unit, chosen),
                            use_cache=use_cache, emit_python=emit_python, raise_on_error=raise_on_error,
                            coverage=coverage)
+
+
+class PLC(runtime_plc.PLC):
+    """The runtime's PLC, made from ST source text or files: the compile options among `kw`
+    (f_trig_first_scan, time_unit, use_cache, coverage) go to the compiler, the rest to the PLC."""
+
+    @classmethod
+    def from_source(cls, text: str, cycle=None, *, name: str = "<source>.st", **kw) -> PLC:
+        return cls(compile_text(text, name, **_compile_kw(kw)), cycle, **kw)
+
+    @classmethod
+    def from_files(cls, *paths: str, cycle=None, **kw) -> PLC:
+        return cls(compile_paths(list(paths), **_compile_kw(kw)), cycle, **kw)
+
+
+def _compile_kw(kw: dict) -> dict:
+    out = {}
+    for k in ("f_trig_first_scan", "time_unit", "use_cache", "coverage"):
+        if k in kw:
+            out[k] = kw.pop(k)
+    return out

@@ -227,16 +227,6 @@ class PLC:
                 t.next_release = -(-now // t.interval) * t.interval     # the next multiple of the interval
         self._next_tick = -(-now // self.tick) * self.tick
 
-    @classmethod
-    def from_source(cls, text: str, cycle=None, *, name: str = "<source>.st", **kw) -> "PLC":
-        from ..api import compile_text
-        return cls(compile_text(text, name, **_compile_kw(kw)), cycle, **kw)
-
-    @classmethod
-    def from_files(cls, *paths: str, cycle=None, **kw) -> "PLC":
-        from ..api import compile_paths
-        return cls(compile_paths(list(paths), **_compile_kw(kw)), cycle, **kw)
-
     def _apply_var_config(self, cfg, b: "_Build") -> None:
         """VAR_CONFIG initial values (literals) for variables inside program instances."""
         for path, location, init, ty, span in cfg.var_config:
@@ -901,11 +891,3 @@ def _flatten(v, depth: int) -> list:
     if depth <= 1:
         return list(v)
     return [x for row in v for x in _flatten(row, depth - 1)]
-
-
-def _compile_kw(kw: dict) -> dict:
-    out = {}
-    for k in ("f_trig_first_scan", "time_unit", "use_cache", "coverage"):
-        if k in kw:
-            out[k] = kw.pop(k)
-    return out

@@ -12,7 +12,7 @@ from typing import Callable, Optional, Union
 
 from ..compiler import types as T
 from ..compiler.codegen.pyast import default_value
-from ..runtime.plc import PLC
+from ..api import PLC
 from ..runtime.values import from_python, parse_duration_arg, to_python
 
 

@@ -10,12 +10,12 @@ from pathlib import Path
 from ...compiler.library import Library
 from .axis import Axis, AxisConfig
 from .errors import E
+from .fbs import install
 
 SOURCE_PATH = Path(__file__).with_name("plcopen.st")
 
 
 def library() -> Library:
-    from .fbs import install
     lib = Library("plcopen", sources=[(str(SOURCE_PATH), SOURCE_PATH.read_text())], version="1")
     lib.helpers["_post_exec_plcopen"] = install
     return lib
