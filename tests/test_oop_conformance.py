@@ -8,7 +8,7 @@ import pytest
 from st import PLC
 from st.api import compile_text
 from st.diagnostics import CompileError
-from st.runtime.plc import PLCFaultError
+from st import PLCFaultError
 
 
 def run(src: str, scans: int = 1, dialect: str | None = None) -> PLC:

@@ -12,9 +12,9 @@ import threading
 import time
 from pathlib import Path
 
-from ..io.ethercat import ConfigError, EtherCATDriver, MasterError, load_segment
-from ..io.modbus import MapError, ModbusSlave, parse_endpoint
-from ..runtime.plc import FAULT, PLC, PLCFaultError
+from ..runtime.faults import PLCFaultError
+from ..runtime.lifecycle import FAULT
+from ..runtime.plc import PLC
 from ..runtime.realtime import RealtimeSetup
 from ..runtime.values import parse_duration_arg
 from ..stdlib.plcopen import configure_axes
@@ -60,7 +60,8 @@ def run_plc(compiled, o: RunOptions) -> int:
             plc.close()
             return 2
     ecat = None
-    if o.ethercat:
+    if o.ethercat:                  # the I/O packages are imported when used: each costs 0.1-0.2 s of start-up
+        from ..io.ethercat import ConfigError, EtherCATDriver, MasterError, load_segment
         try:
             ecat = EtherCATDriver(plc, load_segment(o.ethercat), backend=o.ethercat_backend,
                                   iface=o.ethercat_iface or "", capture=o.ethercat_capture or "")
@@ -73,6 +74,7 @@ def run_plc(compiled, o: RunOptions) -> int:
                  f"{len(ecat.links)} drive(s) bound")
     slave = None
     if o.modbus:
+        from ..io.modbus import MapError, ModbusSlave, parse_endpoint
         try:
             host, port = parse_endpoint(o.modbus)
             units = None if not o.modbus_unit_ids else [int(u) for u in o.modbus_unit_ids.split(",")]

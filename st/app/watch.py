@@ -7,7 +7,8 @@ import time
 
 from ..api import compile_paths
 from ..diagnostics import CompileError
-from ..runtime.plc import PLC, OnlineChangeRefused
+from ..runtime.online_change import OnlineChangeRefused
+from ..runtime.plc import PLC
 from .options import RunOptions
 from .output import err
 

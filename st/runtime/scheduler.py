@@ -106,3 +106,13 @@ def make_policy(name: str, tasks: list, tick: int) -> Policy:
     if cls is None:
         raise ValueError(f"unknown scheduling policy {name!r} (one of {', '.join(POLICIES)})")
     return cls(tasks, tick)
+
+
+def reset_releases(tasks: list, tick: int, now: int) -> int:
+    """Every periodic task's next release is its next multiple of its interval from `now`, nothing is
+    pending; returns the next base tick (start-up, start, a reload, a reset fault)."""
+    for t in tasks:
+        t.pending = None
+        if t.interval > 0:
+            t.next_release = -(-now // t.interval) * t.interval
+    return -(-now // tick) * tick
