@@ -40,15 +40,15 @@ class Build:
     def __init__(self, compiled: CompiledProgram):
         self.compiled = compiled
         self.project = compiled.project
-        self.ns: dict = {}
+        self.ns: dict[str, Any] = {}
         self.wd: Optional[Watchdog] = None
         self.config: Any = None
-        self.instances: dict = {}           # lower name → (display name, object, POUType)
+        self.instances: dict[str, tuple[str, Any, Any]] = {}    # lower name → (display name, object, POUType)
         self.tasks: list[Task] = []
         self.tick = DEFAULT_CYCLE
-        self.policy: Optional[Policy] = None
-        self.bindings: dict = {}            # normalised address → [Binding]
-        self.binding_of: dict = {}          # (id(container), key) → Binding
+        self.policy: Policy = None           # type: ignore[assignment]      # set by build()
+        self.bindings: dict[str, list[Binding]] = {}        # normalised address → [Binding]
+        self.binding_of: dict[tuple[int, Any], Binding] = {}    # (id(container), key) → Binding
 
 
 def build(compiled: CompiledProgram, image: ProcessImage, *, cycle: Optional[int], watchdog: Optional[int],
@@ -57,7 +57,7 @@ def build(compiled: CompiledProgram, image: ProcessImage, *, cycle: Optional[int
     b = Build(compiled)
     budget = max(watchdog or 0, STARTUP_BUDGET)
 
-    def install_watchdog(ns: dict) -> None:
+    def install_watchdog(ns: dict[str, Any]) -> None:
         b.wd = Watchdog(ns)
         b.wd.start(budget, f"the {what} (initial values, FB_init)")
     try:
@@ -103,6 +103,7 @@ def build(compiled: CompiledProgram, image: ProcessImage, *, cycle: Optional[int
 
 def install(plc: PLC, b: Build, first: bool = False) -> None:
     """Make a built program the PLC's running one (at a scan boundary); `first` at start-up."""
+    assert b.wd is not None                     # a finished build has its watchdog
     plc.compiled, plc.project, plc.ns, plc._wd = b.compiled, b.project, b.ns, b.wd
     plc.config, plc.instances, plc.tasks = b.config, b.instances, b.tasks
     plc.tick, plc.policy = b.tick, b.policy
@@ -141,7 +142,7 @@ def _apply_var_config(cfg: Any, b: Build) -> None:
             raise PLCStartError(f"{span.file}:{span.line}: VAR_CONFIG {'.'.join(path)}: {e}") from None
 
 
-def _located(b: Build) -> Iterator[tuple]:
+def _located(b: Build) -> Iterator[tuple[str, Any, Any, Any, Optional[str]]]:
     """(address, container, key, type, owning instance name or None) of every located variable."""
     for lname, (name, obj, pou) in b.instances.items():
         for sym in pou.vars.values():

@@ -12,12 +12,12 @@ from __future__ import annotations
 import gc
 import math
 import threading
-from typing import TYPE_CHECKING, Callable, Optional
+from typing import TYPE_CHECKING, Any, Callable, Optional
 
 from .access import apply_forced
 from .clock import RealClock, VirtualClock
 from .faults import PLCFaultError, fault_from_exception
-from .lifecycle import FAULT, RUN, enter_fault
+from .lifecycle import FAULT, RUN, enter_fault, fault_error
 from .retained import commit_retained
 from .scheduler import Task
 from .values import parse_duration_arg
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 def run_virtual(plc: PLC, t_end: int) -> None:
     """Run on virtual time until PLC time t_end."""
     if plc.state == FAULT:
-        raise PLCFaultError(plc.fault)
+        raise fault_error(plc)
     if not isinstance(plc.clock, VirtualClock):
         plc.clock = VirtualClock(plc._time)
     if plc.clock.now() < plc._time:
@@ -37,12 +37,13 @@ def run_virtual(plc: PLC, t_end: int) -> None:
     run(plc, t_end)
 
 
-def run_realtime(plc: PLC, scans: Optional[int] = None, duration=None, on_idle: Optional[Callable] = None,
-                 phase="500us", gc_control: bool = True, stop: Optional[threading.Event] = None) -> None:
+def run_realtime(plc: PLC, scans: Optional[int] = None, duration: Any = None,
+                 on_idle: Optional[Callable[[PLC], None]] = None, phase: Any = "500us", gc_control: bool = True,
+                 stop: Optional[threading.Event] = None) -> None:
     """See PLC.run_realtime."""
     if plc.state == FAULT:
-        raise PLCFaultError(plc.fault)
-    end = math.inf
+        raise fault_error(plc)
+    end: float = math.inf
     if scans is not None:
         end = plc._time + scans * plc.tick
     if duration is not None:
@@ -76,8 +77,8 @@ def request_stop(plc: PLC, reason: str) -> None:
         plc.clock.wake = True
 
 
-def run(plc: PLC, t_end) -> None:
-    """Release and run jobs until PLC time t_end (exclusive for releases)."""
+def run(plc: PLC, t_end: Any) -> None:
+    """Release and run jobs until PLC time t_end (exclusive for releases): ns, or math.inf for no end."""
     clock = plc.clock
     eager = plc.policy.eager
     key = plc.policy.key
@@ -97,8 +98,8 @@ def run(plc: PLC, t_end) -> None:
             _release_until(plc, min(now, t_end - 1))
             ready = [t for t in tasks if t.pending is not None]
             if ready and plc.state == RUN:
-                task = min(ready, key=lambda t: key(t, t.pending))
-                release = task.pending
+                task = min(ready, key=lambda t: key(t, t.pending))  # type: ignore[arg-type]
+                release: int = task.pending     # type: ignore[assignment]      # ready: it is set
                 task.pending = None
                 _job(plc, task, release)
                 idle_jobs += 1
@@ -126,7 +127,7 @@ def run(plc: PLC, t_end) -> None:
         clock.sleep_until(nxt)
 
 
-def _idle(plc: PLC, next_event: int, jobs_since: int) -> None:
+def _idle(plc: PLC, next_event: float, jobs_since: int) -> None:
     """Slack before the next event: retained data, a young-generation GC, the caller's hook."""
     if plc.retain_store is not None and plc.clock.now() >= plc._next_retain:
         commit_retained(plc)

@@ -13,7 +13,7 @@ take over the state of the one it replaces.
 """
 from __future__ import annotations
 
-from typing import Optional, Protocol
+from typing import Any, Optional, Protocol
 
 from .scheduler import Task
 
@@ -30,7 +30,7 @@ class IODriver(Protocol):
 
     def adopt(self, old: IODriver) -> None: ...
 
-    def stats(self) -> Optional[dict]: ...
+    def stats(self) -> Optional[dict[str, Any]]: ...
 
 
 class IODriverBase:
@@ -51,6 +51,6 @@ class IODriverBase:
     def adopt(self, old: IODriver) -> None:
         """A per-namespace driver replacing `old` after a reload takes over what must survive it."""
 
-    def stats(self) -> Optional[dict]:
+    def stats(self) -> Optional[dict[str, Any]]:
         """Counters for the end-of-run report, or None."""
         return None

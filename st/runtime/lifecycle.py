@@ -20,6 +20,12 @@ if TYPE_CHECKING:
 STOP, RUN, FAULT = "STOP", "RUN", "FAULT"
 
 
+def fault_error(plc: PLC) -> PLCFaultError:
+    """The error for an attempt to run a PLC in FAULT."""
+    assert plc.fault is not None                # FAULT is only entered with its FaultInfo
+    return PLCFaultError(plc.fault)
+
+
 def enter_fault(plc: PLC, info: FaultInfo) -> None:
     plc.state = FAULT
     plc.fault = info
@@ -50,7 +56,7 @@ def stop(plc: PLC) -> None:
 
 def start(plc: PLC) -> None:
     if plc.state == FAULT:
-        raise PLCFaultError(plc.fault)
+        raise fault_error(plc)
     plc.state = RUN
     plc._next_tick = reset_releases(plc.tasks, plc.tick, plc._time)
     for t in plc.tasks:
@@ -73,8 +79,9 @@ def restart(plc: PLC) -> None:
         b = build(plc.compiled, plc.image, cycle=plc.cycle, watchdog=plc.watchdog, policy=plc.policy_name,
                   what="restart")
     except PLCStartError as e:             # FB_init faults again: stay in FAULT, say why
-        enter_fault(plc, e.fault or FaultInfo("START", str(e)))
-        raise PLCFaultError(plc.fault) from None
+        info = e.fault or FaultInfo("START", str(e))
+        enter_fault(plc, info)
+        raise PLCFaultError(info) from None
     plc.fault = None
     plc.state = RUN
     install(plc, b)

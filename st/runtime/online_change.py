@@ -6,7 +6,7 @@ variable over by path and type, reading the old program only, then installs the 
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..compiler import types as T
 from ..compiler.driver import CompiledProgram
@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 class OnlineChangeRefused(ValueError):
     """An online change that cannot be applied; the running program and its state are untouched."""
 
-    def __init__(self, reasons: list):
+    def __init__(self, reasons: list[str]):
         super().__init__("online change refused, the old program keeps running:\n  " + "\n  ".join(reasons))
         self.reasons = list(reasons)
 
@@ -76,11 +76,11 @@ def _carry_over(plc: PLC, b: Build) -> None:
            plc.ns, b.ns)
 
 
-def _change_problems(plc: PLC, compiled: CompiledProgram) -> list:
+def _change_problems(plc: PLC, compiled: CompiledProgram) -> list[str]:
     new_cfg = compiled.project.configs[0] if compiled.project.configs else None
-    out: list = []
+    out: list[str] = []
 
-    def shape(cfg):
+    def shape(cfg: Any) -> tuple[set[tuple[Any, ...]], set[tuple[Any, ...]]]:
         if cfg is None:
             return set(), set()
         return ({(t.name.lower(), t.interval, t.priority, t.single) for t in cfg.tasks},
@@ -99,7 +99,7 @@ def _change_problems(plc: PLC, compiled: CompiledProgram) -> list:
     return out
 
 
-def _type_changes(old: T.Type, new: T.Type, path: str, out: list) -> None:
+def _type_changes(old: T.Type, new: T.Type, path: str, out: list[str]) -> None:
     """Variables that keep their name but change their type (their values cannot be carried over)."""
     uo, un = T.unalias(old), T.unalias(new)
     if isinstance(uo, (T.POUType, T.StructType)) and isinstance(un, (T.POUType, T.StructType)) \

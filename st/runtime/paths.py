@@ -19,9 +19,9 @@ _ADDR = re.compile(r"%([IQM])([XBWDL]?)([0-9]+(?:\.[0-9]+)*)$", re.I)
 
 class Program(Protocol):
     """What resolution needs of a program: the running PLC or a build being prepared."""
-    instances: dict
+    instances: dict[str, tuple[str, Any, Any]]
     project: Any
-    ns: dict
+    ns: dict[str, Any]
 
 
 def read(container: Any, key: Any) -> Any:
@@ -52,7 +52,7 @@ class Holder:
 class BitHolder:
     """One bit of an integer variable (`main.w.3`), read and written as a BOOL."""
 
-    def __init__(self, container: Any, key: Any, bit: int, t: T.ElemType):
+    def __init__(self, container: Any, key: Any, bit: int, t: Any):
         self.container, self.key, self.bit, self.t = container, key, bit, t
 
     @property
@@ -65,7 +65,7 @@ class BitHolder:
                                                 self.t.signed))
 
 
-def resolve(src: Program, path: str) -> tuple:
+def resolve(src: Program, path: str) -> tuple[Any, Any, Any]:
     """path → (container, key, type) in `src`; KeyError saying what is wrong with the path."""
     toks = list(tokens(path))
     if not toks:
@@ -127,7 +127,7 @@ def resolve(src: Program, path: str) -> tuple:
     return container, attr, t
 
 
-def tokens(path: str) -> Iterator[tuple]:
+def tokens(path: str) -> Iterator[tuple[str, str]]:
     """("name", text) and ("index", "1,2") tokens of a path."""
     pos = 0
     path = path.strip()

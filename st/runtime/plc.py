@@ -44,25 +44,25 @@ class PLC:
     # set by install() (build.py) for every program made the running one
     compiled: CompiledProgram
     project: Any
-    ns: dict
+    ns: dict[str, Any]
     config: Any
-    instances: dict                     # lower name → (display name, object, POUType)
+    instances: dict[str, tuple[str, Any, Any]]      # lower name → (display name, object, POUType)
     tasks: list[Task]
     tick: int
     policy: Policy
     bindings: dict[str, list[Binding]]
-    _binding_of: dict
+    _binding_of: dict[tuple[int, Any], Binding]
     _wd: Watchdog
     _event_tasks: list[Task]
     _next_tick: int
 
-    _on_idle: Optional[Callable] = None
+    _on_idle: Optional[Callable[[PLC], None]] = None
     _stop_event: Optional[threading.Event] = None
-    idle_slack = 0              # ns until the next release, as seen by an `on_idle` hook
+    idle_slack: float = 0       # ns until the next release, as seen by an `on_idle` hook
 
-    def __init__(self, compiled: CompiledProgram, cycle=None, *, watchdog=None, policy: str = "openplc",
-                 retain: Optional[str] = None, retain_interval="1s", cold: bool = False,
-                 safe_outputs: Optional[dict] = None):
+    def __init__(self, compiled: CompiledProgram, cycle: Any = None, *, watchdog: Any = None,
+                 policy: str = "openplc", retain: Optional[str] = None, retain_interval: Any = "1s",
+                 cold: bool = False, safe_outputs: Optional[dict[str, Any]] = None):
         self.cycle = parse_duration_arg(cycle) if cycle is not None else None
         self.watchdog = parse_duration_arg(watchdog) if watchdog is not None else None
         self.policy_name = policy
@@ -74,14 +74,14 @@ class PLC:
         self.image_lock = threading.Lock()      # held by a job under the frame policy (the thesis's semaphore)
         self.state = RUN
         self.fault: Optional[FaultInfo] = None
-        self.faults: list = []
+        self.faults: list[FaultInfo] = []
         self._time = 0
         self.scans = 0
         self.clock: Any = VirtualClock()
-        self._stats: dict = {}
+        self._stats: dict[str, TaskStats] = {}
         self.io: list[IODriver] = []            # see iodriver.py
-        self._forced: dict = {}                 # (path, id(container), key) → (container, key, value, binding)
-        self._force_spec: dict = {}             # path → the value asked for (re-applied after a reload)
+        self._forced: dict[tuple[str, int, Any], tuple[Any, Any, Any, Optional[Binding]]] = {}                 # (path, id(container), key) → (container, key, value, binding)
+        self._force_spec: dict[str, Any] = {}             # path → the value asked for (re-applied after a reload)
         self._stop_requested = False
         self.retain_store: Optional[RetainStore] = None
         install(self, build(compiled, self.image, cycle=self.cycle, watchdog=self.watchdog, policy=policy),
@@ -102,7 +102,7 @@ class PLC:
         """The PLC time (ns) at which the next scan runs."""
         return self._time
 
-    def set_cost(self, task: str, cost) -> None:
+    def set_cost(self, task: str, cost: Any) -> None:
         """Simulated execution time of a task's job on virtual time (to study overload): a duration,
         or a callable returning ns for each job (e.g. random execution times)."""
         for t in self.tasks:
@@ -115,13 +115,14 @@ class PLC:
         """Run n base ticks on virtual time."""
         engine.run_virtual(self, self._time + n * self.tick)
 
-    def advance(self, duration) -> None:
+    def advance(self, duration: Any) -> None:
         """Run on virtual time until `duration` more PLC time has passed (whole base ticks)."""
         d = parse_duration_arg(duration)
         engine.run_virtual(self, self._time + -(-d // self.tick) * self.tick)
 
-    def run_realtime(self, scans: Optional[int] = None, duration=None, on_idle: Optional[Callable] = None,
-                     phase="500us", gc_control: bool = True, stop: Optional[threading.Event] = None) -> None:
+    def run_realtime(self, scans: Optional[int] = None, duration: Any = None,
+                     on_idle: Optional[Callable[[PLC], None]] = None, phase: Any = "500us", gc_control: bool = True,
+                     stop: Optional[threading.Event] = None) -> None:
         """Pace the engine by CLOCK_MONOTONIC with absolute deadlines (no drift) until `scans` base ticks
         or `duration` have passed, `stop` is set, or Ctrl-C. `on_idle(plc)` runs between jobs when there
         is slack (status line, file watching). A fault ends the run with PLCFaultError."""
@@ -176,7 +177,7 @@ class PLC:
         return online_change.apply_change(self, b)
 
     # ------------------------------------------------------------------ statistics
-    def stats(self) -> list:
+    def stats(self) -> list[dict[str, Any]]:
         """Per-task statistics summaries (see runtime/stats.py)."""
         return [t.stats.summary() for t in self.tasks]
 
@@ -211,13 +212,13 @@ class PLC:
         access.unforce(self, path)
 
     @property
-    def forced(self) -> list:
+    def forced(self) -> list[str]:
         return sorted({k[0] for k in self._forced})
 
-    def variables(self) -> dict:
+    def variables(self) -> dict[str, Any]:
         """Every variable of every program instance, as JSON values keyed "instance.var"."""
         return access.variables(self)
 
-    def globals(self) -> dict:
+    def globals(self) -> dict[str, Any]:
         """Global variables, and static ones (VAR_STAT) as 'POU.name' or 'FB.Method.name'."""
         return access.globals_(self)

@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from .plc import PLC
 
 
-def retained_paths(plc: PLC) -> Iterator[tuple]:
+def retained_paths(plc: PLC) -> Iterator[tuple[str, Any, Any, Any]]:
     """(path, container, key, type) of every RETAIN/PERSISTENT variable of the instances and globals."""
     for lname, (name, obj, pou) in plc.instances.items():
         yield from _retained_in(name, obj, pou)
@@ -27,7 +27,7 @@ def retained_paths(plc: PLC) -> Iterator[tuple]:
             yield from _retained_inside(g.name, plc.ns[g.pyname], g.type)
 
 
-def retained_values(plc: PLC) -> dict:
+def retained_values(plc: PLC) -> dict[str, tuple[str, Any]]:
     out = {}
     for path, c, k, t in retained_paths(plc):
         out[path] = (str(t), to_python(c[k] if isinstance(c, dict) else getattr(c, k), t))
@@ -39,7 +39,7 @@ def commit_retained(plc: PLC) -> None:
         plc.retain_store.save(retained_values(plc), plc._time)
 
 
-def restore_retained(plc: PLC, saved: dict) -> int:
+def restore_retained(plc: PLC, saved: dict[str, tuple[str, Any]]) -> int:
     """Restore a snapshot; returns how many values were restored."""
     n = 0
     for path, c, k, t in retained_paths(plc):
@@ -54,7 +54,7 @@ def restore_retained(plc: PLC, saved: dict) -> int:
     return n
 
 
-def _retained_in(path: str, obj: Any, pou: T.POUType) -> Iterator[tuple]:
+def _retained_in(path: str, obj: Any, pou: T.POUType) -> Iterator[tuple[str, Any, Any, Any]]:
     """(path, container, key, type) of the RETAIN/PERSISTENT variables of one program or block
     instance, and of the block instances inside it (a RETAIN in a block is kept wherever the
     block is instantiated, as in CODESYS)."""
@@ -67,7 +67,7 @@ def _retained_in(path: str, obj: Any, pou: T.POUType) -> Iterator[tuple]:
             yield from _retained_inside(f"{path}.{sym.name}", getattr(obj, sym.pyname), sym.type)
 
 
-def _retained_inside(path: str, value: Any, t: T.Type) -> Iterator[tuple]:
+def _retained_inside(path: str, value: Any, t: T.Type) -> Iterator[tuple[str, Any, Any, Any]]:
     """The retained variables inside a value that is not retained as a whole: block instances and
     arrays of them."""
     ut = T.unalias(t)
@@ -78,7 +78,7 @@ def _retained_inside(path: str, value: Any, t: T.Type) -> Iterator[tuple]:
             yield from _retained_inside(f"{path}[{index}]", value[i], ut.element)
 
 
-def _array_indices(dims: list) -> list:
+def _array_indices(dims: list[tuple[int, int]]) -> list[str]:
     """'1', '2', … or '0,1', … : the ST indices of a flat array's elements, in storage order."""
     out = [""]
     for lo, hi in dims:
