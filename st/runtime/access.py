@@ -150,13 +150,13 @@ def store_python(container: Any, key: Any, t: T.Type, value: Any) -> None:
         write(container, key, from_python(value, t, ""))
 
 
-def _flatten(v: Any, depth: int) -> list:
+def _flatten(v: Any, depth: int) -> list[Any]:
     if depth <= 1:
         return list(v)
     return [x for row in v for x in _flatten(row, depth - 1)]
 
 
-def variables(plc: PLC) -> dict:
+def variables(plc: PLC) -> dict[str, Any]:
     """Every variable of every program instance, as JSON values keyed "instance.var"."""
     out = {}
     ref = refnames.namer(plc)
@@ -172,11 +172,11 @@ def variables(plc: PLC) -> dict:
     return out
 
 
-def globals_(plc: PLC) -> dict:
+def globals_(plc: PLC) -> dict[str, Any]:
     """Global variables, and static ones (VAR_STAT) as 'POU.name' or 'FB.Method.name'."""
-    def name(g):
+    def name(g: Any) -> str:
         if g.section != "VAR_STAT" or g.owner is None:
-            return g.name
+            return str(g.name)
         fb = getattr(g.owner, "owner_fb", None)
         return f"{fb.name + '.' if fb is not None else ''}{g.owner.name}.{g.name}"
     ref = refnames.namer(plc)

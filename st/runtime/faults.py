@@ -77,14 +77,14 @@ def fault_from_exception(exc: BaseException, task: str = "") -> FaultInfo:
     return FaultInfo(kind, msg, file, line, pou, task)
 
 
-def _pou_name(frame) -> str:
-    name = frame.f_code.co_name
+def _pou_name(frame: types.FrameType) -> str:
+    name: str = frame.f_code.co_name
     self = frame.f_locals.get("self")
     if self is not None:
         cls = type(self).__name__
         for p in ("_fb_", "_prg_"):
             if cls.startswith(p):
-                return cls[len(p):]
+                return str(cls[len(p):])
     if name.startswith("_fn_"):
         return name[4:]
     return name

@@ -80,7 +80,8 @@ class PLC:
         self.clock: Any = VirtualClock()
         self._stats: dict[str, TaskStats] = {}
         self.io: list[IODriver] = []            # see iodriver.py
-        self._forced: dict[tuple[str, int, Any], tuple[Any, Any, Any, Optional[Binding]]] = {}                 # (path, id(container), key) → (container, key, value, binding)
+        # (path, id(container), key) → (container, key, value, binding)
+        self._forced: dict[tuple[str, int, Any], tuple[Any, Any, Any, Optional[Binding]]] = {}
         self._force_spec: dict[str, Any] = {}             # path → the value asked for (re-applied after a reload)
         self._stop_requested = False
         self.retain_store: Optional[RetainStore] = None

@@ -24,8 +24,8 @@ __all__ = ["ProcessImage", "Binding", "to_raw", "from_raw", "AddressError", "par
 
 class ProcessImage:
     def __init__(self) -> None:
-        self.tables: dict[tuple[str, str], list[Any]] = {(a, s): ([False] if s == "X" else [0]) * (TABLE_LEN * (8 if s == "X" else 1))
-                       for a in "IQM" for s in SIZES}
+        self.tables: dict[tuple[str, str], list[Any]] = {
+            (a, s): ([False] if s == "X" else [0]) * (TABLE_LEN * (8 if s == "X" else 1)) for a in "IQM" for s in SIZES}
 
     def get(self, addr: str) -> Any:
         area, size, i = parse_address(addr)

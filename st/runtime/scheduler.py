@@ -103,7 +103,9 @@ class FramePolicy(Policy):
 
 
 def make_policy(name: str, tasks: list[Task], tick: int) -> Policy:
-    cls: Optional[type[Policy]] = {"openplc": OpenPLCPolicy, "priority": PriorityPolicy, "edf": EDFPolicy, "frame": FramePolicy}.get(name)
+    policies: dict[str, type[Policy]] = {"openplc": OpenPLCPolicy, "priority": PriorityPolicy, "edf": EDFPolicy,
+                                         "frame": FramePolicy}
+    cls = policies.get(name)
     if cls is None:
         raise ValueError(f"unknown scheduling policy {name!r} (one of {', '.join(POLICIES)})")
     return cls(tasks, tick)
