@@ -18,7 +18,7 @@ from typing import Optional
 from ...runtime.iodriver import IODriverBase
 from ...runtime.scheduler import Task
 from ...runtime.values import from_python
-from .addressmap import OPENPLC_LIMIT, Encoding, effective_map, load_map, located_cells
+from .addressmap import OPENPLC_LIMIT, TABLES, Encoding, effective_map, load_map, located_cells
 from .exchange import COILS, DISCRETE, HOLDING, INPUT, Exchange
 from .server import ServerConfig
 
@@ -42,7 +42,6 @@ def parse_endpoint(text: str, default_host: str = "127.0.0.1"):
 
 def parse_ranges(text: str) -> dict:
     """'holding:0-99,coil:0-15' → {HOLDING: [(0, 100)], COILS: [(0, 16)]}."""
-    from .addressmap import TABLES
     out: dict = {}
     for part in filter(None, (p.strip() for p in str(text).split(","))):
         name, _, span = part.partition(":")

@@ -9,6 +9,8 @@ from __future__ import annotations
 import csv
 from typing import Optional
 
+from . import registry
+
 MAX_SAMPLES = 2_000_000
 
 
@@ -24,7 +26,7 @@ class AxisTrace:
         """The traced Axis, once the program has used its AXIS_REF (an FB call assigns the handle)."""
         if self._axis is None:
             ref = self.plc.ref(self.path).get()
-            reg = self.plc.ns.get("_motion")
+            reg = registry(self.plc)
             if reg is not None and getattr(ref, "Handle", 0) in reg.axes:
                 self._axis = reg.axes[ref.Handle]
         return self._axis
@@ -38,7 +40,7 @@ class AxisTrace:
 
 def start_traces(plc, paths: list) -> list:
     """Trace the axes behind these AXIS_REF paths; raises KeyError/TypeError with a clear message."""
-    reg = plc.ns.get("_motion")
+    reg = registry(plc)
     if reg is None:
         raise KeyError("--trace: the program uses no PLCopen motion block")
     out = []
