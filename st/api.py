@@ -1,4 +1,5 @@
-"""The public Python API: compile ST and get a PLC.
+"""The public Python API: compile ST and get a PLC (`st.PLC` is the runtime's PLC with constructors
+that compile first).
 
     from st import PLC
     plc = PLC.from_source(text, cycle="10ms")
@@ -10,14 +11,16 @@ from .compiler.driver import compile_sources, load_files
 from .compiler.options import CompileOptions
 from .diagnostics import CompileError
 from .model.compiled import CompiledProgram
+from .model.program import Project
+from .runtime import plc as runtime_plc
 from .source import SourceFile
 from .stdlib.iec import default_library
+from .stdlib.plcopen import library as plcopen_library
 
 
 def libraries(options: CompileOptions | None = None) -> list:
     """The libraries of a compilation: the standard library (its time unit and F_TRIG behaviour
     are the options') and PLCopen motion."""
-    from .stdlib.plcopen import library as plcopen_library
     options = options or CompileOptions()
     return [default_library(options.f_trig_first_scan, options.time_unit), plcopen_library()]
 
@@ -27,7 +30,6 @@ def _refused(e: CompileError, raise_on_error: bool) -> CompiledProgram:
     reports one: raised, or returned with its diagnostics."""
     if raise_on_error:
         raise e
-    from .model.program import Project
     return CompiledProgram([], Project(), e.diagnostics, e.sources)
 
 
@@ -54,3 +56,24 @@ def _compile(sources: list[SourceFile], raise_on_error: bool, **options) -> Comp
     except CompileError as e:
         return _refused(e, raise_on_error)
     return compile_sources(sources, libraries(chosen), chosen, raise_on_error=raise_on_error)
+
+
+class PLC(runtime_plc.PLC):
+    """The runtime's PLC, made from ST source text or files: the compile options among `kw`
+    (f_trig_first_scan, time_unit, use_cache, coverage) go to the compiler, the rest to the PLC."""
+
+    @classmethod
+    def from_source(cls, text: str, cycle=None, *, name: str = "<source>.st", **kw) -> PLC:
+        return cls(compile_text(text, name, **_compile_kw(kw)), cycle, **kw)
+
+    @classmethod
+    def from_files(cls, *paths: str, cycle=None, **kw) -> PLC:
+        return cls(compile_paths(list(paths), **_compile_kw(kw)), cycle, **kw)
+
+
+def _compile_kw(kw: dict) -> dict:
+    out = {}
+    for k in ("f_trig_first_scan", "time_unit", "use_cache", "coverage"):
+        if k in kw:
+            out[k] = kw.pop(k)
+    return out

@@ -164,7 +164,9 @@ def run(files, scans, duration, cycle, virtual, policy, dump_json, stats_json, s
         ethercat_capture, quiet, time_unit, f_trig_first_scan):
     """Run a program: its CONFIGURATION's tasks (or a lone PROGRAM as one cyclic task), in real time
     with a live status line until Ctrl-C, --duration or --scans; --virtual runs on virtual time."""
-    from .runtime.session import RunOptions, run_plc, source_mtimes
+    from .app.options import RunOptions
+    from .app.session import run_plc
+    from .app.watch import source_mtimes
     seen = source_mtimes(files)         # --watch compares with the files as they were compiled
     result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
     opts = RunOptions(files=list(files), scans=scans, duration=duration, cycle=cycle, virtual=virtual,

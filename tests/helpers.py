@@ -13,7 +13,7 @@ from st import PLC
 from st.api import compile_text
 from st.diagnostics import CompileError
 from st.runtime.faults import FaultInfo
-from st.runtime.plc import PLCFaultError
+from st.runtime.faults import PLCFaultError
 
 
 def program(body: str, decls: str = "", extra: str = "") -> str:

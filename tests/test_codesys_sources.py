@@ -9,7 +9,7 @@ import pytest
 from st import PLC
 from st.api import compile_text
 from st.diagnostics import CompileError
-from st.runtime.plc import PLCFaultError
+from st import PLCFaultError
 
 run = partial(helpers.run, name="tc.st", use_cache=True)
 errors = partial(helpers.errors, name="tc.st")

@@ -5,7 +5,7 @@ import pytest
 from st import PLC
 from st.api import compile_text
 from st.diagnostics import CompileError
-from st.runtime.plc import PLCFaultError
+from st import PLCFaultError
 
 SRC = """
 FUNCTION SumAll : DINT

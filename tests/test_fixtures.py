@@ -38,7 +38,7 @@ def _ids(paths, root):
 def _resolve_type(plc: PLC, path: str):
     if path.strip().startswith("%"):
         return None
-    return plc._resolve(path)[2]
+    return plc.ref(path).type
 
 
 def _same(actual, expected, t) -> bool:
@@ -90,10 +90,9 @@ def test_run_fixture(path: Path):
             actual = plc[var]
             t = None
         else:
-            container, key, t = plc._resolve(var)
-            value = container[key] if not isinstance(key, str) else (
-                container[key] if isinstance(container, dict) else getattr(container, key))
-            actual = to_json(value, t)
+            ref = plc.ref(var)
+            t = ref.type
+            actual = to_json(ref.get(), t)
         if not _same(actual, expected, t):
             failures.append(f"{var}: expected {expected!r}, got {actual!r}")
     assert not failures, "\n".join(failures)

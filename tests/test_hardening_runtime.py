@@ -354,11 +354,11 @@ def test_an_endless_fb_init_in_a_change_is_refused_and_the_old_program_runs_on()
 def test_a_change_that_fails_while_carrying_state_over_is_refused(monkeypatch):
     plc = _running()
     old_obj, old_code = plc.instances["main"][1], plc.compiled
-    import st.runtime.plc as plcmod
+    import st.runtime.online_change as online_change
 
     def broken(*a, **k):
         raise ValueError("array size changed")
-    monkeypatch.setattr(plcmod, "relink", broken)
+    monkeypatch.setattr(online_change, "relink", broken)
     with pytest.raises(OnlineChangeRefused) as info:
         plc.online_change(compile_text(BASE.replace("n := n + step", "n := n + 2 * step"), "v2.st", use_cache=False))
     assert str(info.value).splitlines()[1] == "  the state cannot be carried over: array size changed"

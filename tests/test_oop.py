@@ -261,7 +261,7 @@ END_PROGRAM
 
 
 def test_a_call_through_a_null_interface_is_a_null_fault_with_the_line():
-    from st.runtime.plc import PLCFaultError
+    from st import PLCFaultError
     plc = PLC(compile_text(SHAPES + """
 PROGRAM main
   VAR s : I_Shape; a : REAL; END_VAR
@@ -524,7 +524,7 @@ END_PROGRAM
 
 
 def test_an_unbound_reference_is_a_null_fault_with_the_line():
-    from st.runtime.plc import PLCFaultError
+    from st import PLCFaultError
     plc = PLC(compile_text("""PROGRAM main
   VAR r : REFERENCE TO INT; x : INT; END_VAR
   x := r + 1;

@@ -21,7 +21,6 @@ from hypothesis import HealthCheck, given, settings
 
 from st import PLC
 from st.api import compile_text
-from st.runtime.plc import _get
 from st.stdlib.plcopen import axis_of, configure_axes
 
 PROGRAM = """
@@ -166,8 +165,7 @@ class Run:
         self.done_actions = []
 
     def _obj(self, path):
-        container, key, _ = self.plc._resolve(path)
-        return _get(container, key)
+        return self.plc.ref(path).get()
 
     def play(self, acts) -> None:
         for a in acts:

@@ -5,7 +5,7 @@ import textwrap
 import pytest
 
 from st.api import compile_text
-from st.runtime.plc import PLC
+from st import PLC
 from st.testing.covreport import CoverageData, Point, html_report, terminal_report
 from st.testing.measure import coverage_data
 

@@ -64,7 +64,7 @@ def plc():
 
 
 def type_of(plc, path):
-    return plc._resolve(path)[2]
+    return plc.ref(path).type
 
 
 def assign(plc, path, t, value):

@@ -120,8 +120,7 @@ def simulate(compiled, policy: str, costs_ms=COSTS_MS, jitter: float = JITTER, s
     plc = PLC(compiled, policy=policy)
     rng = random.Random(seed)
     for t in plc.tasks:
-        t.stats = _TracedStats(t.name, t.interval, k, log)
-        plc._stats[t.name] = t.stats
+        plc.use_stats(t.name, _TracedStats(t.name, t.interval, k, log))
     for task, c in zip(TASKS, costs_ms):
         base = int(c * 1_000_000)
         plc.set_cost(task, (lambda b=base: int(b * rng.uniform(1 - jitter, 1 + jitter))) if jitter else base)

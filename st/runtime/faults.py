@@ -1,4 +1,4 @@
-"""PLC runtime faults and how a Python exception maps to an ST location."""
+"""PLC runtime faults, how a Python exception maps to an ST location, and the errors the PLC raises."""
 from __future__ import annotations
 
 import types
@@ -27,6 +27,24 @@ class FaultInfo:
         where = f"{self.file}:{self.line}: " if self.file else ""
         ctx = f" (in {self.pou}" + (f", task {self.task}" if self.task else "") + ")" if self.pou else ""
         return f"{where}PLC fault [{self.kind}]: {self.message}{ctx}"
+
+
+class PLCFaultError(RuntimeError):
+    """A scan ended in a PLC fault; `.fault` says where and why."""
+
+    def __init__(self, fault: FaultInfo):
+        super().__init__(str(fault))
+        self.fault = fault
+
+
+class PLCStartError(ValueError):
+    """The program cannot start: a located address outside the process image, a VAR_CONFIG value
+    that does not fit, or a fault while creating the instances (FB_init, an initial value): then
+    `.fault` names it and its ST line, as for a fault in a scan."""
+
+    def __init__(self, message: str, fault: FaultInfo | None = None):
+        super().__init__(message)
+        self.fault = fault
 
 
 _PY_KINDS = {
@@ -59,14 +77,14 @@ def fault_from_exception(exc: BaseException, task: str = "") -> FaultInfo:
     return FaultInfo(kind, msg, file, line, pou, task)
 
 
-def _pou_name(frame) -> str:
-    name = frame.f_code.co_name
+def _pou_name(frame: types.FrameType) -> str:
+    name: str = frame.f_code.co_name
     self = frame.f_locals.get("self")
     if self is not None:
         cls = type(self).__name__
         for p in ("_fb_", "_prg_"):
             if cls.startswith(p):
-                return cls[len(p):]
+                return str(cls[len(p):])
     if name.startswith("_fn_"):
         return name[4:]
     return name

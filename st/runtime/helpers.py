@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import struct
 from array import array
+from typing import Any, Callable, NoReturn
 
 from .faults import PLCFault
 
@@ -15,10 +16,11 @@ _F32 = struct.Struct("<f")
 _pack, _unpack = _F32.pack, _F32.unpack
 
 
-def _f32(v):
-    """Round to IEEE single precision (REAL on store)."""
+def round_f32(v: float) -> float:
+    """Round to IEEE single precision (REAL on store); generated code calls it `_f32`."""
     try:
-        return _unpack(_pack(v))[0]
+        r: float = _unpack(_pack(v))[0]
+        return r
     except OverflowError:
         if v != v:
             return v
@@ -27,17 +29,17 @@ def _f32(v):
         return math.nan
 
 
-def make_f32():
+def make_f32() -> Callable[[float], float]:
     """A faster REAL rounding for one PLC's generated code (its own buffer: no sharing between PLCs)."""
     buf = array("f", [0.0])
 
-    def _f32(v):
+    def _f32(v: float) -> float:
         buf[0] = v          # C float conversion: overflow gives ±inf, NaN stays NaN
         return buf[0]
     return _f32
 
 
-def _idiv(a, b):
+def _idiv(a: int, b: int) -> int:
     """Integer division truncating toward zero (IEC/C)."""
     if b == 0:
         raise PLCFault("division by zero", "DIV0")
@@ -47,7 +49,7 @@ def _idiv(a, b):
     return q
 
 
-def _imod(a, b):
+def _imod(a: int, b: int) -> int:
     """MOD with the sign of the dividend; x MOD 0 = 0 (IEC 61131-3)."""
     if b == 0:
         return 0
@@ -55,11 +57,11 @@ def _imod(a, b):
     return -r if a < 0 else r
 
 
-def _umod(a, b):
+def _umod(a: int, b: int) -> int:
     return a % b if b else 0
 
 
-def _fdiv(a, b):
+def _fdiv(a: float, b: float) -> float:
     """REAL division: IEEE semantics for a zero divisor."""
     try:
         return a / b
@@ -70,7 +72,7 @@ def _fdiv(a, b):
         return -math.inf if neg else math.inf
 
 
-def _pow(a, b):
+def _pow(a: float, b: float) -> float:
     try:
         r = math.pow(a, b)
     except OverflowError:
@@ -81,33 +83,33 @@ def _pow(a, b):
     return r
 
 
-def _round(v):
+def _round(v: float) -> int:
     """Nearest integer, halves away from zero (IEC REAL_TO_INT)."""
     if v != v or v in (math.inf, -math.inf):
         raise PLCFault(f"cannot convert {v} to an integer", "CONVERSION")
     return int(math.floor(v + 0.5)) if v >= 0 else -int(math.floor(-v + 0.5))
 
 
-def _trunc(v):
+def _trunc(v: float) -> int:
     if v != v or v in (math.inf, -math.inf):
         raise PLCFault(f"cannot convert {v} to an integer", "CONVERSION")
     return int(v)
 
 
-def _ix(i, lo, hi):
+def _ix(i: int, lo: int, hi: int) -> int:
     """Array index check → 0-based offset."""
     if lo <= i <= hi:
         return i - lo
     raise PLCFault(f"array index {i} is outside the bounds {lo}..{hi}", "INDEX")
 
 
-def _subrange(v, lo, hi):
+def _subrange(v: int, lo: int, hi: int) -> int:
     if lo <= v <= hi:
         return v
     raise PLCFault(f"value {v} is outside the subrange {lo}..{hi}", "RANGE")
 
 
-def _setbit(x, n, v, bits, signed):
+def _setbit(x: int, n: int, v: Any, bits: int, signed: bool) -> int:
     x = (x | (1 << n)) if v else (x & ~(1 << n))
     x &= (1 << bits) - 1
     if signed and x >> (bits - 1):
@@ -115,7 +117,7 @@ def _setbit(x, n, v, bits, signed):
     return x
 
 
-def _setbits(x, shift, width, v, bits, signed):
+def _setbits(x: int, shift: int, width: int, v: int, bits: int, signed: bool) -> int:
     """Write a partial access (x.%B1 := v): `width` bits at `shift`."""
     m = ((1 << width) - 1) << shift
     x = (x & ~m) | ((v << shift) & m)
@@ -125,7 +127,7 @@ def _setbits(x, shift, width, v, bits, signed):
     return x
 
 
-def _for_dir(step):
+def _for_dir(step: Any) -> int:
     if step > 0:
         return 1
     if step < 0:
@@ -136,9 +138,9 @@ def _for_dir(step):
 class _Struct:
     """Base of generated STRUCT classes: value semantics on assignment."""
 
-    __slots__ = ()
+    __slots__: tuple[str, ...] = ()
 
-    def _copy(self):
+    def _copy(self) -> Any:
         new = object.__new__(type(self))
         for s in self.__slots__:
             setattr(new, s, _copy(getattr(self, s)))
@@ -148,19 +150,19 @@ class _Struct:
 class _FB:
     """Base of generated FUNCTION_BLOCK and PROGRAM classes."""
 
-    __slots__ = ()
+    __slots__: tuple[str, ...] = ()
 
-    def _body(self):  # pragma: no cover - always overridden
+    def _body(self) -> None:  # pragma: no cover - always overridden
         pass
 
-    def _copy(self):
+    def _copy(self) -> Any:
         new = object.__new__(type(self))
         for s in self.__slots__:
             setattr(new, s, _copy(getattr(self, s)))
         return new
 
 
-def _copy(v):
+def _copy(v: Any) -> Any:
     if isinstance(v, list):
         if v and isinstance(v[0], (list, _Struct, _FB)):
             return [_copy(x) for x in v]
@@ -170,7 +172,7 @@ def _copy(v):
     return v
 
 
-def _assign(dst, src):
+def _assign(dst: Any, src: Any) -> None:
     """Aggregate assignment in place (so references into dst stay valid)."""
     if isinstance(dst, list):
         if len(dst) != len(src):
@@ -189,7 +191,7 @@ def _assign(dst, src):
             setattr(dst, s, sv)
 
 
-def _init_fields(obj, pairs):
+def _init_fields(obj: Any, pairs: Any) -> Any:
     for name, value in pairs:
         setattr(obj, name, value)
     return obj
@@ -198,11 +200,11 @@ def _init_fields(obj, pairs):
 # ------------------------------------------------------------------ references
 
 
-def _wrap_to(v, spec):
+def _wrap_to(v: Any, spec: Any) -> Any:
     if spec is None:
         return v
     if spec == "f32":
-        return _f32(v)
+        return round_f32(v)
     if spec[0] == "str":
         return v[:spec[1]]
     bits, signed = spec
@@ -220,16 +222,16 @@ class _Conf:
 
     __slots__ = ("data", "dims")
 
-    def __init__(self, data, dims):
+    def __init__(self, data: list[Any], dims: list[tuple[int, int]]):
         self.data, self.dims = data, dims
 
 
-def _conf(arr, dims):
+def _conf(arr: Any, dims: list[tuple[int, int]]) -> _Conf:
     """Bind an array to an ARRAY[*] parameter (one already bound is passed on as it is)."""
     return arr if isinstance(arr, _Conf) else _Conf(arr, dims)
 
 
-def _cix(a, *idx):
+def _cix(a: _Conf, *idx: int) -> int:
     """Flat index into a conformant array, checked against the bounds the caller's array has."""
     flat = 0
     for i, (lo, hi) in zip(idx, a.dims):
@@ -244,26 +246,26 @@ class _AttrRef:
 
     __slots__ = ("obj", "name", "spec")
 
-    def __init__(self, obj, name, spec=None):
+    def __init__(self, obj: Any, name: str, spec: Any = None):
         self.obj, self.name, self.spec = obj, name, spec
 
-    def get(self):
+    def get(self) -> Any:
         return getattr(self.obj, self.name)
 
-    def set(self, v):
+    def set(self, v: Any) -> None:
         setattr(self.obj, self.name, _wrap_to(v, self.spec))
 
     # a reference can stand for a one-element box: `x[0]` (an in-out whose address is taken)
-    def __getitem__(self, _):
+    def __getitem__(self, _: Any) -> Any:
         return getattr(self.obj, self.name)
 
-    def __setitem__(self, _, v):
+    def __setitem__(self, _: Any, v: Any) -> None:
         setattr(self.obj, self.name, _wrap_to(v, self.spec))
 
-    def __eq__(self, other):
+    def __eq__(self, other: object) -> bool:
         return isinstance(other, _AttrRef) and other.obj is self.obj and other.name == self.name
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]      # equal by identity of the target, not hashable
 
 
 class _ObjRef:
@@ -271,22 +273,22 @@ class _ObjRef:
 
     __slots__ = ("obj",)
 
-    def __init__(self, obj):
+    def __init__(self, obj: Any):
         self.obj = obj
 
-    def get(self):
+    def get(self) -> Any:
         return self.obj
 
-    def set(self, v):
+    def set(self, v: Any) -> None:
         raise TypeError("THIS cannot be assigned")
 
-    def __eq__(self, other):
+    def __eq__(self, other: object) -> bool:
         return isinstance(other, _ObjRef) and other.obj is self.obj
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]      # equal by identity of the target, not hashable
 
 
-def _query_itf(obj, itf: str, dest) -> bool:
+def _query_itf(obj: Any, itf: str, dest: Any) -> bool:
     """__QUERYINTERFACE: store obj in dest when its block provides interface `itf`."""
     if obj is not None and itf in getattr(type(obj), "_kinds", ()):
         dest.set(obj)
@@ -294,7 +296,7 @@ def _query_itf(obj, itf: str, dest) -> bool:
     return False
 
 
-def _attempt(src, kind: str, src_is_ref: bool, dest_is_ref: bool):
+def _attempt(src: Any, kind: str, src_is_ref: bool, dest_is_ref: bool) -> Any:
     """`dest ?= src`: what dest receives, the instance (or a reference to it) when it is a `kind`
     (that block, a block extending it, or a provider of that interface), else NULL (None)."""
     if src is None:
@@ -312,46 +314,46 @@ class _ItemRef:
 
     __slots__ = ("obj", "key", "spec")
 
-    def __init__(self, obj, key, spec=None):
+    def __init__(self, obj: Any, key: Any, spec: Any = None):
         self.obj, self.key, self.spec = obj, key, spec
 
-    def get(self):
+    def get(self) -> Any:
         return self.obj[self.key]
 
-    def set(self, v):
+    def set(self, v: Any) -> None:
         self.obj[self.key] = _wrap_to(v, self.spec)
 
-    def __getitem__(self, _):
+    def __getitem__(self, _: Any) -> Any:
         return self.obj[self.key]
 
-    def __setitem__(self, _, v):
+    def __setitem__(self, _: Any, v: Any) -> None:
         self.obj[self.key] = _wrap_to(v, self.spec)
 
-    def __eq__(self, other):
+    def __eq__(self, other: object) -> bool:
         return isinstance(other, _ItemRef) and other.obj is self.obj and other.key == self.key
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]      # equal by identity of the target, not hashable
 
 
 class _NegRef:
     __slots__ = ("ref",)
 
-    def __init__(self, ref):
+    def __init__(self, ref: Any):
         self.ref = ref
 
-    def get(self):
+    def get(self) -> Any:
         return not self.ref.get()
 
-    def set(self, v):
+    def set(self, v: Any) -> None:
         self.ref.set(not v)
 
 
-def _deref_null():
+def _deref_null() -> NoReturn:
     raise PLCFault("dereference of a NULL reference", "NULL")
 
 
-BASE_NAMESPACE = {
-    "_f32": _f32, "_idiv": _idiv, "_imod": _imod, "_umod": _umod, "_fdiv": _fdiv, "_pow": _pow,
+BASE_NAMESPACE: dict[str, Any] = {
+    "_f32": round_f32, "_idiv": _idiv, "_imod": _imod, "_umod": _umod, "_fdiv": _fdiv, "_pow": _pow,
     "_round": _round, "_trunc": _trunc, "_ix": _ix, "_subrange": _subrange, "_setbit": _setbit,
     "_setbits": _setbits,
     "_for_dir": _for_dir, "_Struct": _Struct, "_FB": _FB, "_copy": _copy, "_assign": _assign,

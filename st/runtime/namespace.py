@@ -5,16 +5,17 @@ another: globals, FB classes and mocks are all fresh).
 """
 from __future__ import annotations
 
-from typing import Callable, Optional
+from typing import Any, Callable, Optional
 
 from ..model.compiled import CompiledProgram
 from .helpers import BASE_NAMESPACE, make_f32
 from .sfc import SfcDesc, SfcState
 
 
-def build_namespace(compiled: CompiledProgram, install: Optional[Callable[[dict], None]] = None) -> dict:
+def build_namespace(compiled: CompiledProgram,
+                    install: Optional[Callable[[dict[str, Any]], None]] = None) -> dict[str, Any]:
     """`install(ns)` adds what must exist before module code runs (watchdog, test helpers)."""
-    ns: dict = dict(BASE_NAMESPACE)
+    ns: dict[str, Any] = dict(BASE_NAMESPACE)
     ns.update(compiled.helpers)
     ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True,
                "_f32": make_f32()})

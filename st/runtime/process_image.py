@@ -13,22 +13,25 @@ copies `%Q` and `%M` variables back into the image at the end.
 from __future__ import annotations
 
 import struct
+from typing import Any, Callable
 
 from ..model import types as T
 
 from ..model.addresses import SIZES, TABLE_LEN, AddressError, parse_address  # noqa: F401 (re-exported)
 
+__all__ = ["ProcessImage", "Binding", "to_raw", "from_raw", "AddressError", "parse_address", "SIZES", "TABLE_LEN"]
+
 
 class ProcessImage:
-    def __init__(self):
-        self.tables = {(a, s): ([False] if s == "X" else [0]) * (TABLE_LEN * (8 if s == "X" else 1))
-                       for a in "IQM" for s in SIZES}
+    def __init__(self) -> None:
+        self.tables: dict[tuple[str, str], list[Any]] = {
+            (a, s): ([False] if s == "X" else [0]) * (TABLE_LEN * (8 if s == "X" else 1)) for a in "IQM" for s in SIZES}
 
-    def get(self, addr: str):
+    def get(self, addr: str) -> Any:
         area, size, i = parse_address(addr)
         return self.tables[(area, size)][i]
 
-    def set(self, addr: str, raw) -> None:
+    def set(self, addr: str, raw: Any) -> None:
         area, size, i = parse_address(addr)
         self.tables[(area, size)][i] = _mask(raw, size)
 
@@ -38,7 +41,7 @@ class ProcessImage:
             t[:] = [False if s == "X" else 0] * len(t)
 
 
-def _mask(raw, size):
+def _mask(raw: Any, size: str) -> Any:
     if size == "X":
         return bool(raw)
     return int(raw) & ((1 << SIZES[size]) - 1)
@@ -50,7 +53,7 @@ _F = struct.Struct("<f")
 _D = struct.Struct("<d")
 
 
-def to_raw(v, t: T.Type, size: str):
+def to_raw(v: Any, t: T.Type, size: str) -> Any:
     """A variable's value as the unsigned bits of its image cell."""
     if size == "X":
         return bool(v)
@@ -61,7 +64,7 @@ def to_raw(v, t: T.Type, size: str):
     return int(v) & ((1 << bits) - 1)
 
 
-def from_raw(raw, t: T.Type, size: str):
+def from_raw(raw: Any, t: T.Type, size: str) -> Any:
     """An image cell's bits as a value of the variable's type."""
     if size == "X":
         return bool(raw)
@@ -80,7 +83,7 @@ def from_raw(raw, t: T.Type, size: str):
     return raw
 
 
-def _converters(t: T.Type, size: str):
+def _converters(t: T.Type, size: str) -> tuple[Callable[[Any], Any], Callable[[Any], Any]]:
     """(raw → value, value → raw) for one variable type and cell size, decided once per binding."""
     if size == "X":
         return bool, bool
@@ -100,7 +103,7 @@ class Binding:
     __slots__ = ("addr", "area", "size", "index", "container", "key", "type", "table", "conv_in", "conv_out",
                  "is_dict")
 
-    def __init__(self, addr, container, key, t, image: ProcessImage):
+    def __init__(self, addr: str, container: Any, key: Any, t: T.Type, image: ProcessImage):
         self.addr = addr
         self.area, self.size, self.index = parse_address(addr)
         self.container, self.key, self.type = container, key, t
@@ -108,11 +111,11 @@ class Binding:
         self.conv_in, self.conv_out = _converters(t, self.size)
         self.is_dict = isinstance(container, dict)
 
-    def read_var(self):
+    def read_var(self) -> Any:
         c = self.container
         return c[self.key] if self.is_dict else getattr(c, self.key)
 
-    def write_var(self, v) -> None:
+    def write_var(self, v: Any) -> None:
         if self.is_dict:
             self.container[self.key] = v
         else:

@@ -10,17 +10,18 @@ import ctypes
 import ctypes.util
 import os
 import struct
+from typing import Optional
 
 _MCL_CURRENT, _MCL_FUTURE = 1, 2
 _PR_SET_TIMERSLACK = 29
 
 
 class RealtimeSetup:
-    def __init__(self):
-        self.granted: dict = {}
-        self._dma_fd = None
+    def __init__(self) -> None:
+        self.granted: dict[str, str] = {}
+        self._dma_fd: Optional[int] = None
 
-    def apply(self, priority: int = 30, cpu=None) -> dict:
+    def apply(self, priority: int = 30, cpu: Optional[int] = None) -> dict[str, str]:
         libc = _libc()
         try:
             # every thread of the process, not only the scan's: a helper thread (the watchdog monitor)
@@ -68,14 +69,14 @@ class RealtimeSetup:
             libc.munlockall()
 
 
-def _threads() -> list:
+def _threads() -> list[int]:
     try:
         return [int(t) for t in os.listdir("/proc/self/task")]
     except OSError:
         return [0]
 
 
-def _libc():
+def _libc() -> Optional[ctypes.CDLL]:
     name = ctypes.util.find_library("c")
     if not name:
         return None
@@ -85,5 +86,5 @@ def _libc():
         return None
 
 
-def _why(e: OSError) -> str:
-    return e.strerror or type(e).__name__
+def _why(e: OSError | AttributeError) -> str:
+    return getattr(e, "strerror", None) or type(e).__name__

@@ -4,17 +4,20 @@
 dump, only when a reference is met."""
 from __future__ import annotations
 
+from typing import Any, Callable
+
 from ..model import types as T
 from .helpers import _AttrRef, _ItemRef, _ObjRef
+from .paths import Program
 
 _SKIP = ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT")
 
 
-def _index(plc) -> dict:
+def _index(plc: Program) -> dict[int, tuple[str, Any]]:
     """id(container) → (path, type) for every instance, structure and array of the PLC."""
-    out: dict = {}
+    out: dict[int, tuple[str, Any]] = {}
 
-    def walk(v, t, path):
+    def walk(v: Any, t: Any, path: str) -> None:
         u = T.unalias(t)
         if v is None or id(v) in out:
             return
@@ -48,19 +51,20 @@ def _subscript(at: T.ArrayType, flat: int) -> str:
     return "[" + ", ".join(str(i) for i in reversed(idx)) + "]"
 
 
-def _member(t, pyname: str):
+def _member(t: Any, pyname: str) -> str:
     members = t.members.values() if isinstance(t, T.StructType) else t.vars.values()
     for m in members:
         if m.pyname == pyname:
-            return m.name
+            name: str = m.name
+            return name
     return pyname
 
 
-def namer(plc):
+def namer(plc: Program) -> Callable[[Any], str]:
     """A function giving the display text of a reference value (for to_python / to_json)."""
-    cache: dict = {}
+    cache: dict[str, dict[int, tuple[str, Any]]] = {}
 
-    def name(ref) -> str:
+    def name(ref: Any) -> str:
         if "index" not in cache:
             cache["index"] = _index(plc)
         index = cache["index"]

@@ -6,21 +6,25 @@ reference at the new object in the same place. What has no counterpart any more 
 values made by __NEW (outside every variable) are kept as they are."""
 from __future__ import annotations
 
+from typing import Any, Callable
+
 from ..model import types as T
 from .helpers import _AttrRef, _ItemRef, _NegRef, _ObjRef
 
 _SKIP = ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT")
 
 
-def _members(t):
+def _members(t: Any) -> dict[str, Any]:
     if isinstance(t, T.StructType):
         return {k: m for k, m in t.members.items()}
     return {k: s for k, s in t.vars.items() if s.section not in _SKIP}
 
 
-def _walk(old, new, ot, nt, visit_leaf, seen, pairs):
+def _walk(old: Any, new: Any, ot: Any, nt: Any, visit_leaf: Callable[[Any, Any, Any, Any], None], seen: set[int],
+          pairs: dict[int, Any]) -> None:
     """Visit (old, new) values of types (ot, nt); aggregates are paired in `pairs` and recursed."""
-    ou, nu = T.unalias(ot), T.unalias(nt)
+    ou: Any = T.unalias(ot)
+    nu: Any = T.unalias(nt)
     if old is None or new is None or str(ou) != str(nu):
         return
     if isinstance(nu, T.ArrayType):
@@ -53,7 +57,7 @@ def _walk(old, new, ot, nt, visit_leaf, seen, pairs):
                 _walk(getattr(old, o.pyname), getattr(new, m.pyname), o.type, m.type, visit_leaf, seen, pairs)
 
 
-def _is_link(t) -> bool:
+def _is_link(t: Any) -> bool:
     u = T.unalias(t)
     return isinstance(u, T.RefType) or (isinstance(u, T.POUType) and u.pou_kind == "INTERFACE")
 
@@ -63,13 +67,13 @@ class _Attr:
 
     __slots__ = ("obj", "name")
 
-    def __init__(self, obj, name):
+    def __init__(self, obj: Any, name: str):
         self.obj, self.name = obj, name
 
-    def get(self):
+    def get(self) -> Any:
         return getattr(self.obj, self.name)
 
-    def put(self, v):
+    def put(self, v: Any) -> None:
         setattr(self.obj, self.name, v)
 
 
@@ -78,35 +82,36 @@ class _Item(_Attr):
 
     __slots__ = ()
 
-    def get(self):
+    def get(self) -> Any:
         return self.obj[self.name]
 
-    def put(self, v):
+    def put(self, v: Any) -> None:
         self.obj[self.name] = v
 
 
-def _read(container, key):
+def _read(container: Any, key: Any) -> Any:
     return container.get() if isinstance(container, _Attr) else container[key]
 
 
-def _write(container, key, v):
+def _write(container: Any, key: Any, v: Any) -> None:
     if isinstance(container, _Attr):
         container.put(v)
     else:
         container[key] = v
 
 
-def relink(instances, globals_, old_ns: dict, new_ns: dict) -> int:
+def relink(instances: list[tuple[Any, Any, Any, Any]], globals_: list[tuple[str, str, Any, Any]],
+           old_ns: dict[str, Any], new_ns: dict[str, Any]) -> int:
     """instances: (old object, new object, old type, new type) of every program instance;
     globals_: (old pyname, new pyname, old type, new type). Returns how many references now
     point at new objects."""
-    pairs: dict = {id(old_ns): new_ns}
-    leaves = []
+    pairs: dict[int, Any] = {id(old_ns): new_ns}
+    leaves: list[tuple[Any, Any, Any, Any]] = []
 
-    def collect(oc, nc, key, t):
+    def collect(oc: Any, nc: Any, key: Any, t: Any) -> None:
         leaves.append((oc, nc, key, t))
 
-    seen: set = set()
+    seen: set[int] = set()
     for old, new, ot, nt in instances:
         _walk(old, new, ot, nt, collect, seen, pairs)
     for op, np_, ot, nt in globals_:
@@ -126,7 +131,7 @@ def relink(instances, globals_, old_ns: dict, new_ns: dict) -> int:
     return moved
 
 
-def _moved(v, pairs):
+def _moved(v: Any, pairs: dict[int, Any]) -> Any:
     if v is None:
         return None
     if isinstance(v, _AttrRef):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import sqlite3
 import time
+from typing import Any
 
 
 class RetainStore:
@@ -24,11 +25,11 @@ class RetainStore:
         self.db.execute("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT)")
         self.commits = 0
 
-    def load(self) -> dict:
+    def load(self) -> dict[str, tuple[str, Any]]:
         """path → (type name, value)."""
         return {p: (t, json.loads(v)) for p, t, v in self.db.execute("SELECT path, type, value FROM retain")}
 
-    def save(self, values: dict, plc_time: int = 0) -> None:
+    def save(self, values: dict[str, tuple[str, Any]], plc_time: int = 0) -> None:
         """Replace the snapshot with `values` (path → (type name, value)) atomically."""
         rows = [(p, t, json.dumps(v)) for p, (t, v) in values.items()]
         db = self.db
@@ -44,7 +45,7 @@ class RetainStore:
             raise
         self.commits += 1
 
-    def meta(self) -> dict:
+    def meta(self) -> dict[str, Any]:
         row = self.db.execute("SELECT value FROM meta WHERE key = 'committed'").fetchone()
         return json.loads(row[0]) if row else {}
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Any, Callable, Optional
 
 from .stats import TaskStats
 
@@ -37,29 +37,30 @@ class Task:
     name: str
     interval: int               # ns (0: event task)
     priority: int
-    instances: list             # [(name, object, InstanceModel)]
+    instances: list[tuple[str, Any, Any]]     # [(name, object, InstanceModel)]
     single: str = ""            # event task: the BOOL global whose rising edge releases it
     index: int = 0              # declaration order
     prev_single: bool = False
     runs: int = 0
-    calls: list = None          # [(name, object, copy-in fn, copy-out fn)]
-    cost: int = 0               # simulated execution time on virtual time (ns)
-    stats: Optional[TaskStats] = None
+    calls: list[tuple[str, Any, Optional[Callable[[Any], None]], Optional[Callable[[Any], None]]]] = \
+        field(default_factory=list)             # [(name, object, copy-in fn, copy-out fn)]
+    cost: Any = 0               # simulated execution time on virtual time (ns), or a callable giving it
+    stats: TaskStats = None     # type: ignore[assignment]     # set when the program is installed
     next_release: int = 0
     pending: Optional[int] = None       # release time of a released job not yet started
-    ins: list = field(default_factory=list)     # process image bindings latched before the job
-    outs: list = field(default_factory=list)    # … published after it
+    ins: list[Any] = field(default_factory=list)     # process image bindings latched before the job
+    outs: list[Any] = field(default_factory=list)    # … published after it
 
 
 class Policy:
     name = ""
     eager = True                # releases happen at their time (False: OpenPLC's tick catch-up)
 
-    def __init__(self, tasks: list, tick: int):
+    def __init__(self, tasks: list[Task], tick: int):
         self.tasks = tasks
         self.tick = tick
 
-    def key(self, task: Task, release: int):
+    def key(self, task: Task, release: int) -> tuple[Any, ...]:
         raise NotImplementedError
 
 
@@ -67,28 +68,28 @@ class OpenPLCPolicy(Policy):
     name = "openplc"
     eager = False
 
-    def key(self, task, release):
+    def key(self, task: Task, release: int) -> tuple[Any, ...]:
         return (release, task.index)
 
 
 class PriorityPolicy(Policy):
     name = "priority"
 
-    def key(self, task, release):
+    def key(self, task: Task, release: int) -> tuple[Any, ...]:
         return (task.priority, task.interval or math.inf, task.index, release)
 
 
 class EDFPolicy(Policy):
     name = "edf"
 
-    def key(self, task, release):
+    def key(self, task: Task, release: int) -> tuple[Any, ...]:
         return (release + (task.interval or self.tick), task.index)
 
 
 class FramePolicy(Policy):
     name = "frame"
 
-    def __init__(self, tasks, tick):
+    def __init__(self, tasks: list[Task], tick: int):
         super().__init__(tasks, tick)
         periodic = [t.interval for t in tasks if t.interval > 0]
         self.frame = min(periodic) if periodic else tick
@@ -97,12 +98,24 @@ class FramePolicy(Policy):
                 raise ValueError(f"policy frame: task {t.name}'s interval {t.interval / 1e6:g} ms is not a multiple "
                                  f"of the minor frame {self.frame / 1e6:g} ms (the shortest interval)")
 
-    def key(self, task, release):
+    def key(self, task: Task, release: int) -> tuple[Any, ...]:
         return (release, task.interval or self.frame, task.index)
 
 
-def make_policy(name: str, tasks: list, tick: int) -> Policy:
-    cls = {"openplc": OpenPLCPolicy, "priority": PriorityPolicy, "edf": EDFPolicy, "frame": FramePolicy}.get(name)
+def make_policy(name: str, tasks: list[Task], tick: int) -> Policy:
+    policies: dict[str, type[Policy]] = {"openplc": OpenPLCPolicy, "priority": PriorityPolicy, "edf": EDFPolicy,
+                                         "frame": FramePolicy}
+    cls = policies.get(name)
     if cls is None:
         raise ValueError(f"unknown scheduling policy {name!r} (one of {', '.join(POLICIES)})")
     return cls(tasks, tick)
+
+
+def reset_releases(tasks: list[Task], tick: int, now: int) -> int:
+    """Every periodic task's next release is its next multiple of its interval from `now`, nothing is
+    pending; returns the next base tick (start-up, start, a reload, a reset fault)."""
+    for t in tasks:
+        t.pending = None
+        if t.interval > 0:
+            t.next_release = -(-now // t.interval) * t.interval
+    return -(-now // tick) * tick

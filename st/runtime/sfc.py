@@ -10,6 +10,7 @@ an action gets the action's state).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 
 @dataclass
@@ -18,9 +19,9 @@ class SfcDesc:
 
     n_steps: int
     initial: int
-    transitions: list       # [(sources tuple, targets tuple, method name)]
-    steps: list             # per step: [(action index, qualifier, time method name or "")]
-    actions: list           # per action: ("act", method name) or ("var", attribute name)
+    transitions: list[tuple[tuple[int, ...], tuple[int, ...], str]]  # [(sources, targets, method name)]
+    steps: list[list[tuple[int, str, str]]]     # per step: [(action index, qualifier, time method name or "")]
+    actions: list[tuple[str, str]]              # per action: ("act", method name) or ("var", attribute name)
 
 
 class SfcState:
@@ -34,7 +35,7 @@ class SfcState:
         self.last = [0] * desc.n_steps
         self.prev_x = [False] * desc.n_steps
         self.stored = [False] * len(desc.actions)
-        self.timers = {}        # (action, kind) → start time for SD/DS/SL
+        self.timers: dict[tuple[int, str], int] = {}     # (action, kind) → start time for SD/DS/SL
         self.started = False
         self.act_prev = [False] * len(desc.actions)
 
@@ -43,7 +44,7 @@ class SfcState:
 
     _now = 0
 
-    def run(self, inst, now: int) -> None:
+    def run(self, inst: Any, now: int) -> None:
         d = self.desc
         x = self.x
         SfcState._now = now
@@ -51,7 +52,7 @@ class SfcState:
             self.started = True
             self.start[d.initial] = now
         # 1-2: transitions
-        consumed = set()
+        consumed: set[int] = set()
         fire = []
         for srcs, dsts, meth in d.transitions:
             if all(x[s] for s in srcs) and not any(s in consumed for s in srcs):
@@ -132,9 +133,10 @@ class SfcState:
                 getattr(inst, name)()
         self.act_prev = q
 
-    def _duration(self, inst, a, qual) -> int:
+    def _duration(self, inst: Any, a: int, qual: str) -> int:
         for assoc in self.desc.steps:
             for act, q, tmeth in assoc:
                 if act == a and q == qual and tmeth:
-                    return getattr(inst, tmeth)()
+                    d: int = getattr(inst, tmeth)()
+                    return d
         return 0

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from typing import Any, Optional
 
 
 class TaskStats:
@@ -32,10 +33,10 @@ class TaskStats:
         self.exec_min = math.inf
         self.exec_max = 0
         self.exec_sum = 0
-        self.latencies: deque = deque(maxlen=keep)  # the latest `keep` samples (ns)
-        self.periods: deque = deque(maxlen=keep)    # start-to-start intervals (ns)
-        self._last_start = None
-        self.utility_window: deque = deque(maxlen=k)
+        self.latencies: deque[int] = deque(maxlen=keep)  # the latest `keep` samples (ns)
+        self.periods: deque[int] = deque(maxlen=keep)    # start-to-start intervals (ns)
+        self._last_start: Optional[int] = None
+        self.utility_window: deque[int] = deque(maxlen=k)
         self.mk_violations = 0     # windows (after the first k jobs) with U < m/k
 
     def record(self, release: int, start: int, end: int) -> None:
@@ -77,7 +78,7 @@ class TaskStats:
         w = self.utility_window
         return sum(w) / len(w) if w else 1.0
 
-    def summary(self) -> dict:
+    def summary(self) -> dict[str, Any]:
         """Everything as plain numbers (µs for times), for JSON and the status line."""
         lats = sorted(self.latencies)
         jitter = [p - self.period for p in self.periods] if self.period > 0 else []
@@ -100,7 +101,7 @@ class TaskStats:
                         "windows_below_m_over_k": self.mk_violations},
         }
 
-    def period_histogram(self, bins: int = 20) -> dict:
+    def period_histogram(self, bins: int = 20) -> dict[str, Any]:
         """Start-to-start intervals in `bins` equal bins around the nominal period (µs edges)."""
         ps = self.periods
         if not ps:
@@ -114,7 +115,7 @@ class TaskStats:
             counts[min(int((p - lo) / width), bins - 1)] += 1
         return {"edges_us": [_us(lo + i * width) for i in range(bins + 1)], "counts": counts}
 
-    def latency_histogram(self, bin_us: float = 10.0) -> tuple:
+    def latency_histogram(self, bin_us: float = 10.0) -> tuple[list[float], list[int]]:
         """(bin edges in µs, counts) of the recent wake-up latencies."""
         if not self.latencies:
             return [], []
@@ -137,25 +138,25 @@ def _nice_bin(raw_us: float) -> float:
         step *= 10
 
 
-def _us(v) -> float:
+def _us(v: float) -> float:
     return round(v / 1e3, 3)
 
 
-def _pct(sorted_vals: list, p: float):
+def _pct(sorted_vals: list[int], p: float) -> int:
     if not sorted_vals:
         return 0
     i = min(len(sorted_vals) - 1, max(0, math.ceil(p / 100 * len(sorted_vals)) - 1))
     return sorted_vals[i]
 
 
-def _stdev(vals: list) -> float:
+def _stdev(vals: list[int]) -> float:
     if len(vals) < 2:
         return 0.0
     mean = sum(vals) / len(vals)
     return math.sqrt(sum((v - mean) ** 2 for v in vals) / (len(vals) - 1))
 
 
-def plot_latency(stats: list, path: str) -> None:
+def plot_latency(stats: list[TaskStats], path: str) -> None:
     """A PNG of each task's wake-up latency histogram (log scale), as cyclictest users draw it."""
     try:
         import matplotlib

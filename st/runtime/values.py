@@ -2,18 +2,19 @@
 from __future__ import annotations
 
 import math
+from typing import Any, Callable, NoReturn, Optional
 
 from ..model import types as T
 from ..model.literals import (format_date, format_dt, format_duration, format_tod, parse_date_literal,
                                  parse_dt_literal, parse_duration, parse_time_literal, parse_tod_literal)
-from .helpers import _f32
+from .helpers import round_f32
 
 
 class ValueError_(ValueError):
     pass
 
 
-def _convert(v, t: T.Type, leaf, ref=None):
+def _convert(v: Any, t: T.Type, leaf: Callable[[Any, Any], Any], ref: Optional[Callable[[Any], str]] = None) -> Any:
     """Walk a value by its type: aggregates become lists/dicts, scalars go through `leaf`,
     references through `ref` (None when not given: a reference is shown as null)."""
     t = T.unalias(t)
@@ -34,12 +35,12 @@ def _convert(v, t: T.Type, leaf, ref=None):
     return leaf(v, t)
 
 
-def to_python(v, t: T.Type, ref=None):
+def to_python(v: Any, t: T.Type, ref: Optional[Callable[[Any], str]] = None) -> Any:
     """A runtime value as a plain Python value (API reads). TIME etc. stay ns integers."""
     return _convert(v, t, lambda v, t: v, ref)
 
 
-def _json_leaf(v, t):
+def _json_leaf(v: Any, t: Any) -> Any:
     if isinstance(t, T.ElemType):
         k = t.kind
         if k == "time":
@@ -55,12 +56,12 @@ def _json_leaf(v, t):
     return v
 
 
-def to_json(v, t: T.Type, ref=None):
+def to_json(v: Any, t: T.Type, ref: Optional[Callable[[Any], str]] = None) -> Any:
     """A runtime value as JSON: times and dates as IEC literal text, enums by name."""
     return _convert(v, t, _json_leaf, ref)
 
 
-def to_st_literal(v, t) -> str:
+def to_st_literal(v: Any, t: Optional[T.Type]) -> str:
     """A runtime value as ST source text (TRUE, 16#FF stays 255, 0.1, T#1s500ms, 'text'), for reports."""
     if t is None:
         return repr(v)
@@ -85,11 +86,11 @@ def to_st_literal(v, t) -> str:
         if bt is T.REAL:
             for digits in range(1, 10):
                 text = f"{v:.{digits}g}"
-                if _f32(float(text)) == v:
+                if round_f32(float(text)) == v:
                     return _real_text(text)
         return _real_text(repr(v))
     if isinstance(bt, T.ElemType) and bt.kind in ("time", "date", "tod", "dt"):
-        return _json_leaf(v, bt)
+        return str(_json_leaf(v, bt))
     return str(v)
 
 
@@ -97,7 +98,7 @@ def _real_text(text: str) -> str:
     return text if any(c in text for c in ".eEn") else text + ".0"
 
 
-def _nest(flat: list, dims: list) -> list:
+def _nest(flat: list[Any], dims: list[tuple[int, int]]) -> list[Any]:
     if len(dims) <= 1:
         return flat
     inner = 1
@@ -106,10 +107,10 @@ def _nest(flat: list, dims: list) -> list:
     return [_nest(flat[i:i + inner], dims[1:]) for i in range(0, len(flat), inner)]
 
 
-def from_python(v, t: T.Type, where: str = ""):
+def from_python(v: Any, t: T.Type, where: str = "") -> Any:
     """A Python value (API write) as a runtime value of type t, checked and converted."""
-    ut = T.unalias(t)
-    bt = T.base_of(t)
+    ut: Any = T.unalias(t)
+    bt: Any = T.base_of(t)
     if isinstance(ut, T.EnumType):
         if isinstance(v, str):
             for name, val in ut.members.values():
@@ -144,7 +145,7 @@ def from_python(v, t: T.Type, where: str = ""):
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise ValueError_(f"{where}: expected a number, got {v!r}")
         try:
-            return _f32(float(v)) if bt.bits == 32 else float(v)
+            return round_f32(float(v)) if bt.bits == 32 else float(v)
         except OverflowError:
             raise ValueError_(f"{where}: the value is too large for {bt.name}") from None
     if k in ("time", "date", "tod", "dt"):
@@ -168,11 +169,11 @@ def from_python(v, t: T.Type, where: str = ""):
     return v
 
 
-def _raise(where, v):
+def _raise(where: str, v: Any) -> NoReturn:
     raise ValueError_(f"{where}: '{v}' needs an IEC literal such as D#2024-01-31")
 
 
-def parse_duration_arg(d) -> int:
+def parse_duration_arg(d: Any) -> int:
     """'2.5s', 'T#20ms', 2.5 (seconds) or an int of ns → ns."""
     if isinstance(d, bool):
         raise ValueError(f"not a duration: {d!r}")
@@ -181,8 +182,11 @@ def parse_duration_arg(d) -> int:
     if isinstance(d, float):
         return round(d * 1e9)
     if hasattr(d, "total_seconds"):
-        return round(d.total_seconds() * 1e9)
+        seconds: float = d.total_seconds()
+        return round(seconds * 1e9)
     s = str(d).strip()
     if "#" in s:
-        return parse_time_literal(s)
-    return parse_duration(s)
+        ns: int = parse_time_literal(s)
+        return ns
+    ns = parse_duration(s)
+    return ns

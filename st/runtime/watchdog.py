@@ -13,6 +13,7 @@ from __future__ import annotations
 import threading
 import time
 import weakref
+from typing import Any
 
 from .faults import PLCFault
 
@@ -21,7 +22,7 @@ POLL_NS = int(_POLL_S * 1e9)
 
 
 class Watchdog:
-    def __init__(self, ns: dict):
+    def __init__(self, ns: dict[str, Any]):
         self.ns = ns
         self.deadline = 0           # monotonic ns; 0 = not running
         self.budget = 0
@@ -79,7 +80,7 @@ class _Monitor:
     _instance = None
     _lock = threading.Lock()
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.dogs: "weakref.WeakSet[Watchdog]" = weakref.WeakSet()
         t = threading.Thread(target=self._run, name="st-watchdog", daemon=True)
         t.start()

@@ -11,7 +11,7 @@ from datetime import date
 from ..model.literals import (DAY, LiteralError, format_date, format_dt, format_duration, format_tod,
                                  parse_duration, parse_int, parse_real)
 from ..runtime.faults import PLCFault
-from ..runtime.helpers import _f32
+from ..runtime.helpers import round_f32
 
 # ------------------------------------------------------------------ numeric
 
@@ -210,7 +210,7 @@ def _real_to_string(v, bits=64):
         # the shortest text that reads back as the same float32
         for digits in range(1, 10):
             t = f"{v:.{digits}g}"
-            if _f32(float(t)) == v:
+            if round_f32(float(t)) == v:
                 break
     else:
         t = repr(float(v))

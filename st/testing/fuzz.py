@@ -408,7 +408,8 @@ def run_one(source: str, filename: str = "fuzz.st", scans: int = 20, timeout: Op
         finally:
             w.close()
     from ..api import compile_text
-    from ..runtime.plc import PLC, PLCFaultError, PLCStartError
+    from ..runtime.faults import PLCFaultError, PLCStartError
+    from ..runtime.plc import PLC
     tell = phase or (lambda p: None)
     tell("compile")
     try:

@@ -11,8 +11,8 @@ from __future__ import annotations
 from typing import Callable, Optional, Union
 
 from ..compiler.codegen.pyast import default_value
+from ..api import PLC
 from ..model import types as T
-from ..runtime.plc import PLC
 from ..runtime.values import from_python, parse_duration_arg, to_python
 
 

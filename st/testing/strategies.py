@@ -251,8 +251,7 @@ def for_type(t, **opts):
 
 def for_variable(plc, path: str, **opts):
     """The strategy for the declared type of the variable at `path` of a PLC (e.g. "main.speed")."""
-    _, _, t = plc._resolve(path)
-    return for_type(t, **opts)
+    return for_type(plc.ref(path).type, **opts)
 
 
 # --------------------------------------------------------------------------- named shortcuts

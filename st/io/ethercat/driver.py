@@ -16,7 +16,11 @@ from __future__ import annotations
 
 from typing import Optional
 
+from ...runtime.iodriver import IODriverBase
 from ...runtime.process_image import parse_address
+from ...runtime.scheduler import Task
+from ...stdlib.plcopen import registry
+from ...stdlib.plcopen.errors import E
 from .config import SegmentConfig, build_segment
 from .master import FrameMaster, MasterError
 
@@ -152,7 +156,6 @@ class DriveLink:
         ax = self.axis
         if ax is None:
             return
-        from ...stdlib.plcopen.errors import E
         if self.state in ("FAULT", "FAULT_REACTION_ACTIVE"):
             ax.power_on = False
             if self.resetting:                      # MC_Reset asked the drive to leave Fault: give it time
@@ -167,7 +170,7 @@ class DriveLink:
         self.was_enabled = self.enabled
 
 
-class EtherCATDriver:
+class EtherCATDriver(IODriverBase):
     """The scan binding (an I/O driver on `plc.io`)."""
 
     name = "ethercat"
@@ -295,20 +298,13 @@ class EtherCATDriver:
     def _claim_axes(self) -> None:
         """Register the drive links with the motion registry: an axis is bound when it is created,
         or now if it exists."""
-        reg = self.plc.ns.get("_motion")
+        reg = registry(self.plc)
         if reg is None:
             return
         for link in self.links:
-            reg.drives[link.axis_no] = link
-            if link.axis is None or link.axis.drive is not link:
-                ax = next((a for a in reg.axes.values() if a.axis_no == link.axis_no), None)
-                if ax is not None:
-                    link.attach(ax)
+            reg.add_drive(link)
 
-    def before_job(self, task=None) -> None:
-        pass
-
-    def after_job(self, task=None) -> None:
+    def after_job(self, task: Optional[Task] = None) -> None:
         if task is None:                            # stop or fault: outputs safe, drives disabled
             for link in self.links:
                 link.want = False
@@ -362,7 +358,6 @@ class EtherCATDriver:
             if self.bad_run >= self.cfg.lost_frame_limit and not self.outage:
                 self.outage = True
                 self.counters["outages"] += 1
-                from ...stdlib.plcopen.errors import E
                 for link in self.links:
                     link.state = "UNKNOWN"
                     ax = link.axis

@@ -225,7 +225,7 @@ def _entry(path, lines, item: dict, plc) -> MapEntry:
     if not isinstance(address, int) or not 0 <= address < N:
         fail("address must be an integer 0..65535")
     try:
-        _, _, t = plc._resolve(var)
+        t = plc.ref(var).type
     except (KeyError, ValueError, TypeError, IndexError) as e:
         fail(f"no variable '{var}' in the program: {e.args[0] if e.args else e}")
     tname, strlen = _type_info(t)
@@ -279,7 +279,7 @@ def located_cells(plc, entries: Optional[list] = None):
     """(bindings, table, first address, registers) of every located variable OpenPLC's map serves,
     except where a map-file entry claims the address."""
     claimed = {(e.table, a) for e in entries or [] for a in range(e.address, e.end)}
-    for binds in plc._bindings.values():
+    for binds in plc.bindings.values():
         b = binds[0]
         where = modbus_address(b.area, b.size, b.index)
         if where is None:

@@ -15,9 +15,10 @@ import sys
 import time
 from typing import Optional
 
-from ...runtime.plc import _get, _set
+from ...runtime.iodriver import IODriverBase
+from ...runtime.scheduler import Task
 from ...runtime.values import from_python
-from .addressmap import OPENPLC_LIMIT, Encoding, effective_map, load_map, located_cells
+from .addressmap import OPENPLC_LIMIT, TABLES, Encoding, effective_map, load_map, located_cells
 from .exchange import COILS, DISCRETE, HOLDING, INPUT, Exchange
 from .server import ServerConfig
 
@@ -41,7 +42,6 @@ def parse_endpoint(text: str, default_host: str = "127.0.0.1"):
 
 def parse_ranges(text: str) -> dict:
     """'holding:0-99,coil:0-15' → {HOLDING: [(0, 100)], COILS: [(0, 16)]}."""
-    from .addressmap import TABLES
     out: dict = {}
     for part in filter(None, (p.strip() for p in str(text).split(","))):
         name, _, span = part.partition(":")
@@ -67,7 +67,7 @@ def _merge(ranges) -> list:
     return out
 
 
-class ModbusSlave:
+class ModbusSlave(IODriverBase):
     """`st run --modbus`: a Modbus TCP slave for `plc` in its own process.
 
     host/port: where to listen (port 0 picks a free one: see `.port`); map_file: a TOML map of
@@ -180,16 +180,16 @@ class ModbusSlave:
             for k in range(n):
                 route[(table, first + k)] = ("cell", binds, k, n)
         for e in self.entries:
-            container, key, t = plc._resolve(e.path)
+            ref = plc.ref(e.path)
             dst = self.ex.bits[e.table] if e.table in (COILS, DISCRETE) else self.ex.regs[e.table]
-            cell = [container, key, t, e.encoding, dst, e.address, e.path]
+            cell = [ref, e.encoding, dst, e.address]
             varcells.append(cell)
             for k in range(e.count):
                 route[(e.table, e.address + k)] = ("var", cell, k, e.count)
         self._bits, self._words, self._vars, self._route = bits, words, varcells, route
 
     # ------------------------------------------------------------------ the job boundary
-    def after_job(self, task=None) -> None:
+    def after_job(self, task: Optional[Task] = None) -> None:
         """Publish every owned cell into the snapshot (seqlock: readers retry while it moves)."""
         ex = self.ex
         if ex is None:
@@ -205,8 +205,8 @@ class ModbusSlave:
                 else:
                     for k in range(n):
                         dst[a + k] = (raw >> (16 * (n - 1 - k))) & 0xFFFF
-            for container, key, t, enc, dst, a, path in self._vars:
-                v = _get(container, key)
+            for ref, enc, dst, a in self._vars:
+                v = ref.get()
                 if enc.registers == 0:
                     dst[a] = 1 if v else 0
                 else:
@@ -215,7 +215,7 @@ class ModbusSlave:
         finally:
             ex.end_write()
 
-    def before_job(self, task=None) -> None:
+    def before_job(self, task: Optional[Task] = None) -> None:
         """Apply the queued HMI writes, oldest first."""
         ex = self.ex
         if ex is None or not ex.pending():
@@ -243,19 +243,19 @@ class ModbusSlave:
             x.write_var(x.conv_in(raw))
 
     def _write_var(self, cell, k: int, n: int, word: int) -> None:
-        container, key, t, enc, dst, a, path = cell
+        ref, enc, dst, a = cell
         if enc.registers == 0:
             value = bool(word)
         else:
-            words = enc.to_words(_get(container, key))
+            words = enc.to_words(ref.get())
             words[k] = word & 0xFFFF
             value = enc.from_words(words)
         try:
-            v = from_python(value, t, path)
+            v = from_python(value, ref.type, ref.path)
         except (ValueError, TypeError, OverflowError):
             return                                   # e.g. a REAL pattern that is NaN for an integer
-        _set(container, key, v)
-        b = self.plc._binding_of.get((id(container), key))
+        ref.set(v)
+        b = ref.binding
         if b is not None:
             b.table[b.index] = b.conv_out(v)
 

@@ -10,12 +10,12 @@ from pathlib import Path
 from ...compiler.library import Library
 from .axis import Axis, AxisConfig
 from .errors import E
+from .fbs import install
 
 SOURCE_PATH = Path(__file__).with_name("plcopen.st")
 
 
 def library() -> Library:
-    from .fbs import install
     lib = Library("plcopen", sources=[(str(SOURCE_PATH), SOURCE_PATH.read_text())], version="1")
     lib.helpers["_post_exec_plcopen"] = install
     return lib
@@ -31,9 +31,7 @@ def axis_of(plc, path: str) -> Axis:
     reg = registry(plc)
     if reg is None:
         raise KeyError("the program uses no PLCopen motion block")
-    container, key, t = plc._resolve(path)
-    from ...runtime.plc import _get
-    return reg.axis(_get(container, key))
+    return reg.axis(plc.ref(path).get())
 
 
 def configure_axes(plc, axes) -> None:
@@ -67,7 +65,7 @@ def _switch_reader(plc, path: str, what: str):
     """A callable reading the BOOL variable `path` (the reference switch of an axis); resolved on
     every read, which only happens while homing, so it survives an online change."""
     try:
-        plc._resolve(path)
+        plc.ref(path)
     except KeyError:
         raise ValueError(f"{what}: home_switch '{path}' is not a variable of the program") from None
     return lambda: bool(plc[path])

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional
+from typing import Optional, Protocol
 
 from .errors import E
 from .profiles import Profile, RuckigProfile, position_profile, velocity_profile
@@ -25,6 +25,22 @@ ABORTING, BUFFERED, BLEND_LOW, BLEND_PREVIOUS, BLEND_NEXT, BLEND_HIGH = range(6)
 POSITIVE, SHORTEST, NEGATIVE, CURRENT = range(4)
 
 QUEUED, ACTIVE, DONE, ABORTED, ERROR = "queued", "active", "done", "aborted", "error"
+
+
+class Drive(Protocol):
+    """A drive that moves an axis (EtherCAT's DriveLink): claimed for its AxisNo with
+    MotionRegistry.add_drive, attached as `Axis.drive`. An axis without one is virtual."""
+    axis_no: int
+    axis: Optional["Axis"]
+
+    @property
+    def enabled(self) -> bool: ...             # the power stage is on (CiA 402 Operation Enabled)
+
+    def attach(self, ax: "Axis") -> None: ...
+
+    def request_enable(self, on: bool) -> None: ...
+
+    def fault_reset(self) -> None: ...
 
 
 @dataclass
@@ -102,7 +118,7 @@ class Axis:
         self.task = None
         self._next_id = 1
         self.commands: dict = {}        # id → Command, for the FBs' ledgers
-        self.drive = None               # an attached drive (EtherCAT); None: virtual axis
+        self.drive: Optional[Drive] = None      # an attached drive (EtherCAT); None: virtual axis
         self.home_signal = None         # callable → bool: the reference switch (config home_switch)
         self.axis_no = 0
 

@@ -9,14 +9,17 @@ from __future__ import annotations
 
 from typing import Optional
 
+from ...runtime.iodriver import IODriver, IODriverBase
+from ...runtime.scheduler import Task
 from .axis import (ABORTED, ACTIVE, CONTINUOUS, DISABLED, DISCRETE, DONE, ERROR, ERRORSTOP, HOMING, QUEUED,
-                   STANDSTILL, STOPPING, Axis, AxisConfig)
+                   STANDSTILL, STOPPING, Axis, AxisConfig, Drive)
 
 DEFAULT_CYCLE_S = 0.001
 
 
-class MotionRegistry:
-    """Every axis of one PLC, by handle; configurations by AxisNo."""
+class MotionRegistry(IODriverBase):
+    """Every axis of one PLC, by handle; configurations by AxisNo. The motion kernel: an I/O driver
+    of the PLC made with the program's namespace."""
 
     per_namespace = True
 
@@ -24,7 +27,7 @@ class MotionRegistry:
         self.axes: dict = {}            # handle → Axis
         self.configs: dict = {}         # AxisNo → AxisConfig
         self.signals: dict = {}         # AxisNo → callable: the reference switch of MC_Home
-        self.drives: dict = {}          # AxisNo → a drive link (EtherCAT) that claims the axis
+        self.drives: dict = {}          # AxisNo → the Drive (EtherCAT) that claims the axis
         self.task = None
         self.traces: list = []          # [AxisTrace]
 
@@ -49,18 +52,28 @@ class MotionRegistry:
             ax.cycle = DEFAULT_CYCLE_S
         return ax
 
-    def adopt(self, old: "MotionRegistry") -> None:
+    def add_drive(self, link: Drive) -> None:
+        """A drive claims the axis of its AxisNo: attached now if that axis exists (and is not
+        attached to it yet), else when the axis is created."""
+        self.drives[link.axis_no] = link
+        if link.axis is None or link.axis.drive is not link:
+            ax = next((a for a in self.axes.values() if a.axis_no == link.axis_no), None)
+            if ax is not None:
+                link.attach(ax)
+
+    def adopt(self, old: IODriver) -> None:
         """Online change: the new program's AXIS_REFs carry their handles over, so keep the axes."""
+        assert isinstance(old, MotionRegistry)          # the PLC hands over a driver of the same type
         self.axes, self.configs, self.traces, self.signals = old.axes, old.configs, old.traces, old.signals
         self.drives = old.drives
         for ax in self.axes.values():
             ax.task = None                  # the new program's tasks claim their axes on the next call
 
     # the I/O driver interface
-    def before_job(self, task=None) -> None:
+    def before_job(self, task: Optional[Task] = None) -> None:
         self.task = task
 
-    def after_job(self, task=None) -> None:
+    def after_job(self, task: Optional[Task] = None) -> None:
         if task is None:
             return
         for ax in self.axes.values():
@@ -70,9 +83,6 @@ class MotionRegistry:
             ax = tr.axis
             if ax is not None and ax.task is task:
                 tr.sample()
-
-    def rebind(self) -> None:
-        pass
 
 
 # ---------------------------------------------------------------------------- output helpers

@@ -9,6 +9,8 @@ from __future__ import annotations
 import csv
 from typing import Optional
 
+from . import registry
+
 MAX_SAMPLES = 2_000_000
 
 
@@ -23,10 +25,8 @@ class AxisTrace:
     def axis(self):
         """The traced Axis, once the program has used its AXIS_REF (an FB call assigns the handle)."""
         if self._axis is None:
-            from ...runtime.plc import _get
-            container, key, _ = self.plc._resolve(self.path)
-            ref = _get(container, key)
-            reg = self.plc.ns.get("_motion")
+            ref = self.plc.ref(self.path).get()
+            reg = registry(self.plc)
             if reg is not None and getattr(ref, "Handle", 0) in reg.axes:
                 self._axis = reg.axes[ref.Handle]
         return self._axis
@@ -40,12 +40,12 @@ class AxisTrace:
 
 def start_traces(plc, paths: list) -> list:
     """Trace the axes behind these AXIS_REF paths; raises KeyError/TypeError with a clear message."""
-    reg = plc.ns.get("_motion")
+    reg = registry(plc)
     if reg is None:
         raise KeyError("--trace: the program uses no PLCopen motion block")
     out = []
     for p in paths:
-        container, key, t = plc._resolve(p)
+        t = plc.ref(p).type
         if getattr(t, "name", "").upper() != "AXIS_REF":
             raise TypeError(f"--trace {p}: not an AXIS_REF (it is {t})")
         tr = AxisTrace(plc, p)

@@ -1,0 +1,68 @@
+"""The options of one `st run` (the CLI's flags as one value)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+
+@dataclass
+class RunOptions:
+    files: list = field(default_factory=list)
+    scans: Optional[int] = None
+    duration: Optional[str] = None
+    cycle: Optional[str] = None
+    virtual: bool = False
+    policy: str = "openplc"
+    dump_json: bool = False
+    stats_json: Optional[str] = None
+    stats_plot: Optional[str] = None
+    on_fault: str = "stop"
+    watchdog: Optional[str] = None
+    retain_file: Optional[str] = None
+    no_retain: bool = False
+    retain_interval: str = "1s"
+    cold: bool = False
+    watch: bool = False
+    rt: bool = True
+    rt_priority: int = 30
+    cpu: Optional[int] = None
+    sim_cost: list = field(default_factory=list)
+    safe_outputs: list = field(default_factory=list)      # ["%QX0.1=TRUE", "%QW3=100"]
+    modbus: Optional[str] = None                          # "[HOST:]PORT"
+    modbus_map: Optional[str] = None
+    modbus_read_only: bool = False
+    modbus_writable: Optional[str] = None
+    modbus_max_connections: int = 16
+    modbus_idle_timeout: float = 60.0
+    modbus_rate: float = 1000.0
+    modbus_unit_ids: Optional[str] = None
+    axes: Optional[str] = None                            # axis configuration (TOML)
+    trace: list = field(default_factory=list)             # AXIS_REF paths
+    trace_plot: Optional[str] = None
+    trace_csv: Optional[str] = None
+    ethercat: Optional[str] = None                        # segment configuration (TOML)
+    ethercat_backend: str = "sim"
+    ethercat_iface: Optional[str] = None
+    ethercat_capture: Optional[str] = None
+    quiet: bool = False
+    time_unit: str = "ms"
+    f_trig_first_scan: bool = False
+    compiled_mtimes: Optional[dict] = None                # the sources as compiled (see --watch)
+
+
+def safe_values(specs: list) -> dict:
+    """["%QX0.1=TRUE", "%QW3=100"] → {"%QX0.1": True, "%QW3": 100}."""
+    out = {}
+    for spec in specs:
+        addr, sep, text = spec.partition("=")
+        text = text.strip().upper()
+        if not sep or not text:
+            raise ValueError(f"--safe-output {spec!r}: expected ADDRESS=VALUE, e.g. %QX0.1=TRUE")
+        if text in ("TRUE", "FALSE"):
+            out[addr.strip()] = text == "TRUE"
+            continue
+        try:
+            out[addr.strip()] = int(text, 0)
+        except ValueError:
+            raise ValueError(f"--safe-output {spec!r}: the value must be TRUE, FALSE or an integer") from None
+    return out

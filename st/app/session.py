@@ -1,0 +1,219 @@
+"""One `st run`: the PLC with its real-time setup, motion, EtherCAT, Modbus, signals, online change
+and reports.
+
+Ctrl-C and SIGTERM stop cleanly: the engine stops at a scan boundary, outputs go to their
+safe values, retained data is committed. A fault leaves the PLC in FAULT (safe outputs, the
+process alive until the run ends) or, with --on-fault restart, restarts it warm.
+"""
+from __future__ import annotations
+
+import signal
+import threading
+import time
+from pathlib import Path
+
+from ..runtime.faults import PLCFaultError
+from ..runtime.lifecycle import FAULT
+from ..runtime.plc import PLC
+from ..runtime.realtime import RealtimeSetup
+from ..runtime.values import parse_duration_arg
+from ..stdlib.plcopen import configure_axes
+from ..stdlib.plcopen.trace import start_traces
+from .options import RunOptions, safe_values
+from .output import err
+from .report import report, write_traces
+from .status import StatusLine
+from .watch import Watcher
+
+
+def _has_retained(compiled) -> bool:
+    p = compiled.project
+    return any(v.retain or v.persistent for pou in p.pous.values() if not pou.library for v in pou.vars.values()) \
+        or any(g.retain or g.persistent for g in p.globals.values())
+
+
+def run_plc(compiled, o: RunOptions) -> int:
+    """Returns the exit code: 0 after a clean stop, 3 when the run ended in FAULT, 2 when it could not start."""
+    retain = None
+    if not o.no_retain and (o.retain_file or _has_retained(compiled)):
+        retain = o.retain_file or str(Path(o.files[0]).with_suffix(".retain.db"))
+    try:
+        plc = PLC(compiled, o.cycle, watchdog=o.watchdog, policy=o.policy, retain=retain,
+                  retain_interval=o.retain_interval, cold=o.cold, safe_outputs=safe_values(o.safe_outputs))
+        for spec in o.sim_cost:
+            name, _, cost = spec.partition("=")
+            plc.set_cost(name.strip(), cost.strip())
+    except (ValueError, KeyError, MemoryError) as e:     # PLCStartError: the reason, located
+        err(f"error: cannot start the PLC: {e or type(e).__name__}")
+        return 2
+    if not plc.instances:
+        err("error: nothing to run: no PROGRAM and no CONFIGURATION")
+        return 2
+    traces = []
+    if o.axes or o.trace:
+        try:
+            if o.axes:
+                configure_axes(plc, o.axes)
+            traces = start_traces(plc, o.trace)
+        except (KeyError, TypeError, ValueError) as e:
+            err(f"error: {e.args[0] if e.args else e}")
+            plc.close()
+            return 2
+    ecat = None
+    if o.ethercat:                  # the I/O packages are imported when used: each costs 0.1-0.2 s of start-up
+        from ..io.ethercat import ConfigError, EtherCATDriver, MasterError, load_segment
+        try:
+            ecat = EtherCATDriver(plc, load_segment(o.ethercat), backend=o.ethercat_backend,
+                                  iface=o.ethercat_iface or "", capture=o.ethercat_capture or "")
+        except (ConfigError, MasterError) as e:
+            err(f"error: {e}")
+            plc.close()
+            return 2
+        if not o.quiet:
+            err(f"ethercat: {len(ecat.master.slaves)} slave(s) in OP ({o.ethercat_backend} backend), "
+                 f"{len(ecat.links)} drive(s) bound")
+    slave = None
+    if o.modbus:
+        from ..io.modbus import MapError, ModbusSlave, parse_endpoint
+        try:
+            host, port = parse_endpoint(o.modbus)
+            units = None if not o.modbus_unit_ids else [int(u) for u in o.modbus_unit_ids.split(",")]
+            slave = ModbusSlave(plc, host, port, map_file=o.modbus_map, read_only=o.modbus_read_only,
+                                writable=o.modbus_writable, max_connections=o.modbus_max_connections,
+                                idle_timeout=o.modbus_idle_timeout, max_rate=o.modbus_rate, unit_ids=units).start()
+        except MapError as e:
+            err(str(e))
+            plc.close()
+            return 2
+        except (ValueError, OSError) as e:
+            err(f"error: cannot start the Modbus slave: {e}")
+            plc.close()
+            return 2
+        if not o.quiet:
+            err(f"modbus: serving on {host}:{slave.port} (OpenPLC map" +
+                 (f" + {o.modbus_map}" if o.modbus_map else "") + (", read-only" if o.modbus_read_only else "") + ")")
+    if retain and not o.quiet:
+        err(f"retained data: {retain} ({'cold start' if o.cold else f'{plc.retain_restored} value(s) restored'})")
+    stop = threading.Event()
+    old_handlers = _install_signals(stop, plc)
+    status = None if o.quiet or o.virtual else StatusLine(plc)
+    watcher = Watcher(plc, o) if o.watch else None
+    rt_setup = None
+    code = 0
+    try:
+        if o.virtual:
+            code = _run_virtual(plc, o, stop)
+        else:
+            if o.rt:
+                rt_setup = RealtimeSetup()
+                granted = rt_setup.apply(o.rt_priority, o.cpu)
+                if not o.quiet:
+                    err("real time: " + ", ".join(f"{k} {v}" for k, v in granted.items()))
+            code = _run_real(plc, o, stop, status, watcher)
+    finally:
+        if status is not None:
+            status.close()
+        plc.close()
+        if ecat is not None:
+            ecat.close()
+        if slave is not None:
+            slave.stop()
+        if rt_setup is not None:
+            rt_setup.release()
+        _restore_signals(old_handlers)
+    report(plc, o)
+    if traces:
+        write_traces(traces, o)
+    return code
+
+
+def _run_virtual(plc: PLC, o: RunOptions, stop) -> int:
+    try:
+        if o.scans is None and o.duration is None:
+            err("--virtual needs --scans or --duration")
+            return 2
+        end = plc.time + (o.scans * plc.tick if o.scans is not None else parse_duration_arg(o.duration))
+        while plc.time < end and not stop.is_set():
+            try:
+                plc.advance(min(end - plc.time, 1_000_000_000))
+            except PLCFaultError as e:
+                err(str(e.fault))
+                if o.on_fault == "restart" and not stop.is_set() and _restart(plc):
+                    continue
+                return 3
+    except KeyboardInterrupt:
+        pass
+    return 3 if plc.state == FAULT else 0
+
+
+def _run_real(plc: PLC, o: RunOptions, stop, status, watcher) -> int:
+    end_time = None
+    if o.duration is not None:
+        end_time = plc.time + parse_duration_arg(o.duration)
+    if o.scans is not None:
+        t = plc.time + o.scans * plc.tick
+        end_time = t if end_time is None else min(end_time, t)
+
+    def on_idle(p):
+        if status is not None:
+            status.update()
+        if watcher is not None:
+            watcher.poll()
+
+    while not stop.is_set():
+        remaining = None if end_time is None else end_time - plc.time
+        if remaining is not None and remaining <= 0:
+            break
+        try:
+            if plc.state == FAULT:      # stay alive with safe outputs until the run ends
+                _sleep_while_faulted(plc, stop, remaining, on_idle)
+                break
+            plc.run_realtime(duration=remaining, on_idle=on_idle, stop=stop)
+        except PLCFaultError as e:
+            if status is not None:
+                status.clear()
+            err(str(e.fault))
+            if o.on_fault == "restart" and not stop.is_set():
+                _restart(plc)
+            continue
+        except KeyboardInterrupt:
+            break
+    return 3 if plc.state == FAULT else 0
+
+
+def _restart(plc: PLC) -> bool:
+    """--on-fault restart; a program whose instances fault again while being created stays in FAULT."""
+    try:
+        plc.restart()
+    except PLCFaultError as e:
+        err(f"restart failed: {e.fault}")
+        return False
+    err("restarted (warm)")
+    return True
+
+
+def _sleep_while_faulted(plc, stop, remaining, on_idle) -> None:
+    t0 = time.monotonic()
+    while not stop.is_set() and (remaining is None or (time.monotonic() - t0) * 1e9 < remaining):
+        on_idle(plc)
+        time.sleep(0.1)
+
+
+def _install_signals(stop: threading.Event, plc: PLC):
+    """Ctrl-C and SIGTERM stop the PLC at the next scan boundary; a job still running is ended by its
+    watchdog (so within one watchdog period), or at once when the signal comes a second time."""
+    def handler(signum, frame):
+        stop.set()
+        plc.request_stop(signal.Signals(signum).name)
+    old = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        try:
+            old[sig] = signal.signal(sig, handler)
+        except ValueError:         # not the main thread
+            pass
+    return old
+
+
+def _restore_signals(old: dict) -> None:
+    for sig, h in old.items():
+        signal.signal(sig, h)

@@ -1,0 +1,183 @@
+"""Reading, writing and forcing a running program's variables by path or %address, and dumps.
+
+A write by path converts the value to the variable's type and keeps a located variable's
+process-image cell in step (or the next latch would undo it). A %address reads or writes the
+image itself, typed by the variable bound there. A forced variable holds its value whenever a
+job starts and ends; forces are asked for by path and applied again after a reload.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Optional
+
+from ..model import types as T
+from . import refnames
+from .paths import norm_addr, read, resolve, write
+from .process_image import AddressError, from_raw, parse_address, to_raw
+from .values import ValueError_, from_python, to_json, to_python
+from .varref import VarRef
+
+if TYPE_CHECKING:
+    from .plc import PLC
+
+
+def get(plc: PLC, path: str) -> Any:
+    if path.strip().startswith("%"):
+        return _image_read(plc, path)
+    container, key, t = resolve(plc, path)
+    return to_python(read(container, key), t, refnames.namer(plc))
+
+
+def set_(plc: PLC, path: str, value: Any) -> None:
+    if path.strip().startswith("%"):
+        _image_write(plc, path, value)
+        return
+    container, key, t = resolve(plc, path)
+    v = from_python(value, t, path)
+    write(container, key, v)
+    b = plc._binding_of.get((id(container), key))
+    if b is not None:                   # keep the image in step, or the next latch would undo the write
+        b.table[b.index] = to_raw(v, t, b.size)
+
+
+def ref(plc: PLC, path: str) -> VarRef:
+    container, key, t = resolve(plc, path)
+    return VarRef(path, container, key, t, plc._binding_of.get((id(container), key)))
+
+
+def force(plc: PLC, path: str, value: Any) -> None:
+    if path.strip().startswith("%"):
+        binds = plc.bindings.get(norm_addr(path))
+        if not binds:
+            raise KeyError(f"{path}: no located variable at this address")
+        targets = [(b.container, b.key, b.type) for b in binds]
+    else:
+        targets = [resolve(plc, path)]
+    plc._force_spec[path] = value
+    for container, key, t in targets:
+        v = from_python(value, t, path)
+        write(container, key, v)
+        plc._forced[(path.strip().lower(), id(container), key)] = (container, key, v,
+                                                                  plc._binding_of.get((id(container), key)))
+    apply_forced(plc)
+
+
+def unforce(plc: PLC, path: Optional[str] = None) -> None:
+    if path is None:
+        plc._forced.clear()
+        plc._force_spec.clear()
+        return
+    plc._force_spec.pop(path, None)
+    p = path.strip().lower()
+    for k in [k for k in plc._forced if k[0] == p]:
+        del plc._forced[k]
+
+
+def apply_forced(plc: PLC) -> None:
+    """Every forced variable (and its image cell) to its forced value: when a job starts and ends."""
+    for container, key, v, b in plc._forced.values():
+        write(container, key, v)
+        if b is not None:
+            b.table[b.index] = b.conv_out(v)
+
+
+def reapply_forces(plc: PLC) -> None:
+    """After a reload: force the new program's variables again; a force whose variable is gone or
+    changed its type is dropped."""
+    if not plc._force_spec:
+        return
+    spec, plc._forced = dict(plc._force_spec), {}
+    for path, value in spec.items():
+        try:
+            force(plc, path, value)
+        except (KeyError, ValueError, TypeError):
+            plc._force_spec.pop(path, None)
+
+
+def _image_read(plc: PLC, addr: str) -> Any:
+    """%I, %Q, %M read from the process image (what I/O and the HMI see), typed by the bound variable."""
+    try:
+        area, size, i = parse_address(addr)
+    except AddressError as e:
+        raise KeyError(str(e)) from None
+    raw = plc.image.tables[(area, size)][i]
+    binds = plc.bindings.get(norm_addr(addr))
+    if binds:
+        return to_python(from_raw(raw, binds[0].type, size), binds[0].type)
+    return raw
+
+
+def _image_write(plc: PLC, addr: str, value: Any) -> None:
+    """Write an image cell; %Q and %M also write their variables (the program would overwrite them)."""
+    try:
+        area, size, i = parse_address(addr)
+    except AddressError as e:
+        raise KeyError(str(e)) from None
+    binds = plc.bindings.get(norm_addr(addr), [])
+    if binds:
+        t = binds[0].type
+        v = from_python(value, t, addr)
+        raw = to_raw(v, t, size)
+        if area in "QM":
+            for b in binds:
+                b.write_var(from_python(value, b.type, addr))
+    else:
+        if isinstance(value, bool) and size != "X" or not isinstance(value, (bool, int)):
+            raise ValueError_(f"{addr}: expected {'a BOOL' if size == 'X' else 'an integer'}, got {value!r}")
+        raw = value
+    plc.image.set(addr, raw)
+
+
+def store_python(container: Any, key: Any, t: T.Type, value: Any) -> None:
+    """Write a to_python-form value back into a variable, aggregates element by element (retained
+    data, online change); references are left alone (relink re-aims them)."""
+    ut = T.unalias(t)
+    if isinstance(ut, T.ArrayType):
+        arr = read(container, key)
+        flat = _flatten(value, len(ut.dims))
+        if len(flat) != len(arr):
+            raise ValueError("array size changed")
+        for i, v in enumerate(flat):
+            store_python(arr, i, ut.element, v)
+    elif isinstance(ut, T.RefType) or (isinstance(ut, T.POUType) and ut.pou_kind == "INTERFACE"):
+        return                                   # references: re-aimed by relink()
+    elif isinstance(ut, (T.StructType, T.POUType)):
+        obj = read(container, key)
+        members = ut.members if isinstance(ut, T.StructType) else ut.vars
+        for m in members.values():
+            if m.name in value and getattr(m, "section", "") not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP"):
+                store_python(obj, m.pyname, m.type, value[m.name])
+    else:
+        write(container, key, from_python(value, t, ""))
+
+
+def _flatten(v: Any, depth: int) -> list[Any]:
+    if depth <= 1:
+        return list(v)
+    return [x for row in v for x in _flatten(row, depth - 1)]
+
+
+def variables(plc: PLC) -> dict[str, Any]:
+    """Every variable of every program instance, as JSON values keyed "instance.var"."""
+    out = {}
+    ref = refnames.namer(plc)
+    for lname, (name, obj, pou) in plc.instances.items():
+        for sym in pou.vars.values():
+            if sym.section == "VAR_TEMP":
+                continue
+            if sym.section == "VAR_EXTERNAL":
+                if sym.global_ref is not None:
+                    out[f"{name}.{sym.name}"] = to_json(plc.ns[sym.global_ref.pyname], sym.global_ref.type, ref)
+                continue
+            out[f"{name}.{sym.name}"] = to_json(getattr(obj, sym.pyname), sym.type, ref)
+    return out
+
+
+def globals_(plc: PLC) -> dict[str, Any]:
+    """Global variables, and static ones (VAR_STAT) as 'POU.name' or 'FB.Method.name'."""
+    def name(g: Any) -> str:
+        if g.section != "VAR_STAT" or g.owner is None:
+            return str(g.name)
+        fb = getattr(g.owner, "owner_fb", None)
+        return f"{fb.name + '.' if fb is not None else ''}{g.owner.name}.{g.name}"
+    ref = refnames.namer(plc)
+    return {name(g): to_json(plc.ns[g.pyname], g.type, ref) for g in plc.project.globals.values()}

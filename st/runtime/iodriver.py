@@ -1,0 +1,56 @@
+"""What the PLC asks of an I/O driver (the Modbus slave, EtherCAT, the motion kernel).
+
+A driver joins `PLC.io`. The engine calls `before_job(task)` before a job latches its inputs
+and `after_job(task)` after it published its outputs; `after_job()` without a task when the
+outputs went to their safe values (stop, fault). `rebind()` follows every reload of the
+program (warm restart, online change). Work done there must be a few memory operations: a
+driver keeps its own threads or processes off the scan's path.
+
+The optional parts have defaults in `IODriverBase`, which drivers extend: a `name` and
+`stats()` for the end-of-run report, and for a driver that lives in the program's namespace
+(`per_namespace`, listed in its `_io_drivers`, made again with every reload) `adopt(old)` to
+take over the state of the one it replaces.
+"""
+from __future__ import annotations
+
+from typing import Any, Optional, Protocol
+
+from .scheduler import Task
+
+
+class IODriver(Protocol):
+    name: str
+    per_namespace: bool
+
+    def before_job(self, task: Optional[Task] = None) -> None: ...
+
+    def after_job(self, task: Optional[Task] = None) -> None: ...
+
+    def rebind(self) -> None: ...
+
+    def adopt(self, old: IODriver) -> None: ...
+
+    def stats(self) -> Optional[dict[str, Any]]: ...
+
+
+class IODriverBase:
+    """Defaults for the optional parts of IODriver: nothing to do, nothing to report."""
+
+    name = ""                   # shown in reports ("" and stats() None: not reported)
+    per_namespace = False       # True: made by the program's namespace, replaced on every reload
+
+    def before_job(self, task: Optional[Task] = None) -> None:
+        pass
+
+    def after_job(self, task: Optional[Task] = None) -> None:
+        pass
+
+    def rebind(self) -> None:
+        pass
+
+    def adopt(self, old: IODriver) -> None:
+        """A per-namespace driver replacing `old` after a reload takes over what must survive it."""
+
+    def stats(self) -> Optional[dict[str, Any]]:
+        """Counters for the end-of-run report, or None."""
+        return None
