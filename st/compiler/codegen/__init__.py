@@ -11,10 +11,11 @@ Shapes (see docs/ARCHITECTURE.md): a FUNCTION becomes a Python function
 locals once and written back on exit (locals are the fastest thing CPython
 has); variables that something else may reach while the body runs (through a
 reference, an action or an SFC) stay attributes.
+
+Libraries emit code through the public API of `emit.py` (`call`, `const`, `wrap`).
 """
 
 from .module import ModuleGen
-from .pyast import _call, _const, f32
-from .expressions import wrap
+from .pyast import f32
 
-__all__ = ["ModuleGen", "f32", "wrap", "_call", "_const"]
+__all__ = ["ModuleGen", "f32"]
