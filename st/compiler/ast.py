@@ -210,6 +210,30 @@ class Repeat(Stmt):
 
 
 @dataclass(slots=True, eq=False)
+class CountedFor(Stmt):
+    """A FOR after lowering (compiler/lower/loops.py): how the counter runs is decided.
+
+    form "range": the body never writes the counter, which steps from start to end;
+    "while": the body writes it, so the loop tests it each round and steps it (wrapping
+    to its type) before every round but the first. `step_value` is the step as a constant
+    (1 without BY), or None when only known at run time.
+    """
+    var: Expr = None
+    start: Expr = None
+    end: Expr = None
+    step: Optional[Expr] = None
+    step_value: Optional[int] = 1
+    form: str = "range"
+    body: list = None
+
+
+@dataclass(slots=True, eq=False)
+class LoopGuard(Stmt):
+    """The watchdog's check (compiler/lower/loops.py puts it first in every ST loop's body):
+    while the flag is down it costs one test; when a job overran, it ends the job here."""
+
+
+@dataclass(slots=True, eq=False)
 class Exit(Stmt):
     pass
 

@@ -22,6 +22,7 @@ from . import ast as A
 from .build import AstBuilder
 from .check import Checker
 from .codegen import ModuleGen
+from .lower import lower
 from .dialect import strict_types
 from .library import Library
 from .model import Project
@@ -187,7 +188,7 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
         project = checker.run(units, lib_paths)
         _attach_test_texts(project, all_sources)
         if not sink.has_errors:
-            gen = ModuleGen(project, sink, coverage=coverage)
+            gen = ModuleGen(lower(project), sink, coverage=coverage)
             py_modules = gen.generate()
             if not sink.has_errors:
                 for out, group in ((modules, py_modules), (test_modules, gen.test_modules())):

@@ -1,0 +1,34 @@
+"""Lowering: the checked AST → a smaller AST that code generation prints without semantic choices.
+
+Runs after the checks, before code generation (compiler/codegen). Each lowering is one module
+and rewrites the bodies in place (the checked project is built for one compilation):
+
+- loops.py: FOR → `CountedFor` (its form decided), a `LoopGuard` first in every loop.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..model import Project
+from . import loops
+from .walk import bodies
+
+
+@dataclass(slots=True)
+class LowerOptions:
+    loop_guards: bool = True        # the watchdog's check in every loop (off only to measure its cost)
+
+
+@dataclass(slots=True)
+class LoweredProgram:
+    """What code generation prints: the project with lowered bodies."""
+    project: Project
+
+
+def lower(project: Project, options: LowerOptions | None = None) -> LoweredProgram:
+    options = options or LowerOptions()
+    for body in bodies(project):
+        loops.count_fors(body)
+        if options.loop_guards:
+            loops.guard_loops(body)
+    return LoweredProgram(project)
