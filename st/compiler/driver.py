@@ -22,6 +22,7 @@ from . import ast as A
 from .build import AstBuilder
 from .check import Checker
 from .codegen import ModuleGen
+from .codegen.source import python_text
 from .lower import lower
 from .dialect import strict_types
 from .library import Library
@@ -194,8 +195,7 @@ def _compile_sources(sources, libraries, *, emit_python, use_cache, raise_on_err
                 for out, group in ((modules, py_modules), (test_modules, gen.test_modules())):
                     for path, mod in group:
                         if emit_python:
-                            import ast as pyast
-                            pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + pyast.unparse(mod)
+                            pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + python_text(mod)
                         out.append((path, compile(mod, path, "exec")))
     except RecursionError as exc:
         first = sources[0].path if sources else "<input>"
