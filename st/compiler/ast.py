@@ -106,6 +106,16 @@ class Binary(Expr):
 
 
 @dataclass(slots=True, eq=False)
+class AccessorCall(Expr):
+    """A property read or written, after lowering (compiler/lower/properties.py): a call of
+    `accessor` (its GET; its SET as an assignment's target) on `obj`, None for this instance.
+    `nonvirtual`: SUPER^.Prop, the base block's accessor on this instance (obj is the SUPER^)."""
+    obj: Optional[Expr] = None
+    accessor: Any = field(default=None, repr=False)
+    nonvirtual: bool = False
+
+
+@dataclass(slots=True, eq=False)
 class ArrayInit:
     span: Span
     items: list             # of initializers or RepeatInit

@@ -203,7 +203,7 @@ class ExprGen:
         """Is this REAL-typed expression already exactly a float32 value?"""
         if e is None:
             return False
-        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref)):
+        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.AccessorCall)):
             return T.base_of(e.ty) is T.REAL if e.ty is not None else False
         if isinstance(e, A.Literal):
             return True
@@ -235,7 +235,7 @@ class ExprGen:
         sub = T.unalias(e.ty)
         declared = (sub.lo, sub.hi) if isinstance(sub, T.SubrangeType) else (
             (t.lo, t.hi) if t.is_intlike else None)
-        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit)) or (
+        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit, A.AccessorCall)) or (
                 isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method")):
             return declared
         if isinstance(e, A.Binary):
@@ -328,8 +328,6 @@ class ExprGen:
             return _const(None)
         if getattr(sym, "kind", "") == "this":
             return _call("_ObjRef", _name(self.self_name))
-        if isinstance(sym, T.PropSym):                  # this instance's property: its GET
-            return _call(_attr(_name(self.self_name), sym.get.pyname))
         raise Unsupported(e.span, f"cannot use '{e.name}' here")
 
     def x_Direct(self, e: A.Direct) -> py.expr:
@@ -351,17 +349,17 @@ class ExprGen:
         if isinstance(bt, T.ElemType) and bt.is_intlike:
             return self._bit_read(base, int(e.name), bt)
         sym = e.sym
-        if isinstance(sym, T.PropSym):                  # inst.Prop: its GET
-            return self.accessor_call(e, sym.get)
         if isinstance(sym, T.VarSym) and T.is_reference(sym.type):
             return _call(_attr(_attr(base, sym.pyname), "get"))     # inst.r: through the reference
         return _attr(base, sym.pyname)
 
-    def accessor_call(self, e: A.Field, acc: T.POUType, *args) -> py.expr:
-        """A property accessor of inst.Prop; SUPER^.Prop runs the base's one (not virtual)."""
-        if _is_super(e.base):
+    def x_AccessorCall(self, e: A.AccessorCall, *args) -> py.expr:
+        """A property's accessor on its instance (`args`: SET's value); non-virtual: the base's."""
+        acc = e.accessor
+        if e.nonvirtual:
             return _call(_attr(_name(acc.owner_fb.pyname), acc.pyname), _name(self.self_name), *args)
-        return _call(_attr(self.expr(e.base), acc.pyname), *args)
+        obj = _name(self.self_name) if e.obj is None else self.expr(e.obj)
+        return _call(_attr(obj, acc.pyname), *args)
 
     def _bit_read(self, base: py.expr, n: int, t) -> py.expr:
         return py.Compare(py.BinOp(base, py.BitAnd(), _const(1 << n)), [py.NotEq()], [_const(0)])

@@ -86,12 +86,10 @@ class StmtGen(ExprGen):
             if isinstance(tgt, A.Field):
                 return [py.Assign([_attr(self.expr(tgt.base), tgt.sym.pyname, py.Store())], ref)]
             return [py.Assign([self.var_store(tgt.sym)], ref)]
-        if isinstance(tgt, (A.Name, A.Field)) and isinstance(tgt.sym, T.PropSym):
+        if isinstance(tgt, A.AccessorCall):
             # a property: its SET with the value (S=/R= only when the condition holds)
             def setter(value):
-                if isinstance(tgt, A.Field):
-                    return py.Expr(self.accessor_call(tgt, tgt.sym.set, value))
-                return py.Expr(_call(_attr(_name(self.self_name), tgt.sym.set.pyname), value))
+                return py.Expr(self.x_AccessorCall(tgt, value))
             if s.kind in ("S=", "R="):
                 return [py.If(self.expr(s.value), [setter(_const(s.kind == "S="))], [])]
             return [setter(self.coerce(self.expr(s.value), s.value, tt))]
@@ -467,6 +465,8 @@ def _walk_exprs_in(body):
             stack.append(e.operand)
         elif isinstance(e, (A.Field, A.Bit, A.Deref)):
             stack.append(e.base)
+        elif isinstance(e, A.AccessorCall):
+            stack.append(e.obj)
         elif isinstance(e, A.Index):
             stack.append(e.base)
             stack += e.indices

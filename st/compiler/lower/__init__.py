@@ -3,6 +3,7 @@
 Runs after the checks, before code generation (compiler/codegen). Each lowering is one module
 and rewrites the bodies in place (the checked project is built for one compilation):
 
+- properties.py: property reads and writes → `AccessorCall` (GET, or SET as a target);
 - loops.py: FOR → `CountedFor` (its form decided), a `LoopGuard` first in every loop.
 """
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..model import Project
-from . import loops
+from . import loops, properties
 from .walk import bodies
 
 
@@ -28,7 +29,9 @@ class LoweredProgram:
 def lower(project: Project, options: LowerOptions | None = None) -> LoweredProgram:
     options = options or LowerOptions()
     for body in bodies(project):
+        properties.accessor_calls(body)
         loops.count_fors(body)
         if options.loop_guards:
             loops.guard_loops(body)
+    properties.accessor_calls_outside_bodies(project)
     return LoweredProgram(project)

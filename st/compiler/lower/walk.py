@@ -1,9 +1,10 @@
 """Where the statements are: every body code generation prints, and walking nested statements."""
 from __future__ import annotations
 
-from typing import Iterator
+from typing import Callable, Iterator
 
 from .. import ast as A
+from ..check import CallTarget
 from ..model import Project
 
 
@@ -53,3 +54,44 @@ def walk_stmts(body: list) -> Iterator:
         yield s
         for inner in inner_bodies(s):
             yield from walk_stmts(inner)
+
+
+def rewrite_exprs(body: list, fn: Callable) -> None:
+    """Replace in place every expression of `body` by `fn(expression)`, innermost first: in
+    nested statements, call arguments and what a call resolved to (`Call.target`), so that
+    every place code generation reads an expression from sees the rewritten one."""
+    memo: dict = {}
+
+    def expr(e):
+        if id(e) in memo:
+            return memo[id(e)]
+        memo[id(e)] = e                 # the same node reached again while rewriting its parts
+        fields(e)
+        out = memo[id(e)] = fn(e)
+        return out
+
+    def value(v):
+        if isinstance(v, A.Expr):
+            return expr(v)
+        if isinstance(v, list):
+            v[:] = [value(x) for x in v]
+        elif isinstance(v, tuple):
+            return tuple(value(x) for x in v)
+        elif isinstance(v, dict):
+            for k in v:
+                v[k] = value(v[k])
+        elif isinstance(v, (A.Stmt, A.Arg, A.CaseBranch)):
+            fields(v)
+        elif isinstance(v, CallTarget):
+            for k, x in v.__dict__.items():
+                if k != "pou":
+                    v.__dict__[k] = value(x)
+        return v
+
+    def fields(node):
+        for name in node.__dataclass_fields__:
+            if name in ("ty", "const", "sym", "span", "name_span", "pou"):
+                continue
+            setattr(node, name, value(getattr(node, name)))
+
+    value(body)
