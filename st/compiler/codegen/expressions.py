@@ -44,10 +44,11 @@ class InitGen:
             obj = _call(ut.pyname)
             if isinstance(init, A.StructInit):
                 obj = self._with_fields(obj, init, lambda n: _member_of_pou(ut, n))
-            if T.fb_init_chain(ut):                 # CODESYS: FB_init runs once the values are set
+            block = self.mod.blocks.get(ut)
+            if block is not None and block.constructor is not None:     # FB_init runs once the values are set
                 keys, values = [], []
                 if ctor is not None:
-                    inputs = {p.name.lower(): p for p in ut.methods["fb_init"].params()}
+                    inputs = block.constructor.inputs
                     for name, sp, val in ctor.args:
                         keys.append(_const(name.lower()))
                         values.append(self.initial(inputs[name.lower()].type, val))

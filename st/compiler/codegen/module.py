@@ -17,6 +17,7 @@ class ModuleGen:
 
     def __init__(self, program: LoweredProgram, sink, coverage: bool = False):
         self.p = program.project
+        self.blocks = program.blocks
         self.sink = sink
         self.tmp = 0
         self.coverage = coverage

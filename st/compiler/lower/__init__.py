@@ -4,14 +4,16 @@ Runs after the checks, before code generation (compiler/codegen). Each lowering 
 and rewrites the bodies in place (the checked project is built for one compilation):
 
 - properties.py: property reads and writes → `AccessorCall` (GET, or SET as a target);
-- loops.py: FOR → `CountedFor` (its form decided), a `LoopGuard` first in every loop.
+- loops.py: FOR → `CountedFor` (its form decided), a `LoopGuard` first in every loop;
+- inheritance.py: each block's flattened member set and what its instances are (`Block`),
+  with fb_init.py's explicit constructor for its FB_init chain.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from ..model import Project
-from . import loops, properties
+from . import inheritance, loops, properties
 from .walk import bodies
 
 
@@ -22,8 +24,9 @@ class LowerOptions:
 
 @dataclass(slots=True)
 class LoweredProgram:
-    """What code generation prints: the project with lowered bodies."""
+    """What code generation prints: the project with lowered bodies, and each block's class."""
     project: Project
+    blocks: dict                    # POUType → inheritance.Block
 
 
 def lower(project: Project, options: LowerOptions | None = None) -> LoweredProgram:
@@ -34,4 +37,4 @@ def lower(project: Project, options: LowerOptions | None = None) -> LoweredProgr
         if options.loop_guards:
             loops.guard_loops(body)
     properties.accessor_calls_outside_bodies(project)
-    return LoweredProgram(project)
+    return LoweredProgram(project, inheritance.blocks(project))

@@ -1,7 +1,7 @@
 """Where the statements are: every body code generation prints, and walking nested statements."""
 from __future__ import annotations
 
-from typing import Callable, Iterator
+from collections.abc import Callable, Iterator
 
 from .. import ast as A
 from ..check import CallTarget
