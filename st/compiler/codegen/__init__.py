@@ -1,4 +1,7 @@
-"""Code generation: checked AST → Python `ast` → code objects.
+"""Code generation: lowered AST (compiler/lower) → Python `ast` → code objects.
+
+A printer: the lowering has made the semantic decisions (inheritance, properties, FB_init,
+loop forms and their watchdog guards); what is left here is how to say it in Python.
 
 One Python module per ST source file, all executed into one namespace per PLC.
 Every generated statement carries its ST line, and each module is compiled
