@@ -149,3 +149,31 @@ def test_the_fb_init_chain_is_one_constructor_base_first():
     assert [a if isinstance(a, bool) else a.name for a in ctor.calls[0].args] == [True, False, "nId"]
     assert set(ctor.inputs) == {"binitretains", "bincopycode", "nid"}
     assert inheritance.blocks(project)[project.pous["main"]].constructor is None
+
+
+SUPER = """
+FUNCTION_BLOCK Animal
+VAR_OUTPUT calls : INT; END_VAR
+METHOD Speak : STRING Speak := 'generic'; END_METHOD
+calls := calls + 1;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Dog EXTENDS Animal
+METHOD Speak : STRING Speak := CONCAT('woof/', SUPER^.Speak()); END_METHOD
+SUPER^();
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR d : Dog; s : STRING; END_VAR
+d();
+s := d.Speak();
+END_PROGRAM
+"""
+
+
+def test_super_calls_run_the_base_and_other_calls_are_virtual():
+    project = _project(SUPER)
+    dog, animal = project.pous["dog"], project.pous["animal"]
+    assert dog.decl.body[0].call.target.nonvirtual is animal                     # SUPER^()
+    speak = dog.methods["speak"].decl.body[0].value.target.args[1].value         # SUPER^.Speak()
+    assert speak.target.nonvirtual is animal
+    main = project.pous["main"].decl.body
+    assert main[0].call.target.nonvirtual is None and main[1].value.target.nonvirtual is None

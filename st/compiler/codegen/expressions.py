@@ -532,9 +532,8 @@ class ExprGen:
     def method_call(self, e: A.Call, tgt) -> py.expr:
         """inst.M(...): a Python method call on the instance, so a derived block's override runs;
         SUPER^.M(...): the base block's method on this instance (not virtual)."""
-        if _is_super(tgt.obj):
-            base = tgt.obj.base.ty.target
-            return self.function_call(e, tgt, fn=_attr(_name(base.pyname), tgt.pou.pyname),
+        if tgt.nonvirtual is not None:
+            return self.function_call(e, tgt, fn=_attr(_name(tgt.nonvirtual.pyname), tgt.pou.pyname),
                                       first=_name(self.self_name))
         obj = _name(self.self_name) if tgt.obj is None else self.expr(tgt.obj)
         return self.function_call(e, tgt, fn=_attr(obj, tgt.pou.pyname))
@@ -670,8 +669,3 @@ def wrap(node: py.expr, d) -> py.expr:
         h = 1 << (d.bits - 1)
         return py.BinOp(py.BinOp(py.BinOp(node, py.Add(), _const(h)), py.BitAnd(), _const(mask)), py.Sub(), _const(h))
     return py.BinOp(node, py.BitAnd(), _const(mask))
-
-
-def _is_super(e) -> bool:
-    """SUPER^ (the instance as its base block)."""
-    return isinstance(e, A.Deref) and isinstance(e.base, A.Name) and getattr(e.base.sym, "kind", "") == "super"

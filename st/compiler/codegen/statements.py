@@ -7,7 +7,7 @@ from .. import ast as A
 from .. import types as T
 from ..check import CallTarget
 from ..lower.walk import walk_stmts
-from .expressions import _is_super, ExprGen, wrap
+from .expressions import ExprGen, wrap
 from .pyast import (Unsupported, _attr, _call, _const, _name, _set_lines)
 
 
@@ -229,8 +229,8 @@ class StmtGen(ExprGen):
                 out.append(py.Expr(_call("_assign", _attr(inst, p.pyname), self.expr(a.value))))
             else:
                 out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.coerce(self.expr(a.value), a.value, p.type)))
-        if _is_super(c.callee):                    # SUPER^(): the base block's body on this instance
-            out.append(py.Expr(_call(_attr(_name(fb.pyname), "_body"), inst)))
+        if tgt.nonvirtual is not None:             # SUPER^(): the base block's body on this instance
+            out.append(py.Expr(_call(_attr(_name(tgt.nonvirtual.pyname), "_body"), inst)))
         else:
             out.append(py.Expr(_call(_attr(inst, "_body"))))
         out.extend(after)

@@ -6,7 +6,8 @@ and rewrites the bodies in place (the checked project is built for one compilati
 - properties.py: property reads and writes → `AccessorCall` (GET, or SET as a target);
 - loops.py: FOR → `CountedFor` (its form decided), a `LoopGuard` first in every loop;
 - inheritance.py: each block's flattened member set and what its instances are (`Block`),
-  with fb_init.py's explicit constructor for its FB_init chain.
+  with fb_init.py's explicit constructor for its FB_init chain; which implementation each
+  method or block call runs (SUPER^ calls are the base's).
 """
 from __future__ import annotations
 
@@ -33,8 +34,10 @@ def lower(project: Project, options: LowerOptions | None = None) -> LoweredProgr
     options = options or LowerOptions()
     for body in bodies(project):
         properties.accessor_calls(body)
+        inheritance.super_calls(body)
         loops.count_fors(body)
         if options.loop_guards:
             loops.guard_loops(body)
     properties.accessor_calls_outside_bodies(project)
+    inheritance.super_calls_outside_bodies(project)
     return LoweredProgram(project, inheritance.blocks(project))

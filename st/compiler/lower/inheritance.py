@@ -5,13 +5,20 @@ already put them into `POUType.vars`) and gets every method, property accessor a
 has, its own and the inherited ones it does not override, so a base may be declared after its
 derived blocks or in another file. `kinds` names what an instance is (the block, its bases and
 every interface they provide) for `?=` and __QUERYINTERFACE.
+
+Every call of a method or a block gets `nonvirtual` on its call target: None for a Python
+method call (the instance's most derived implementation runs), else the block whose method
+or body runs on this instance: the base, for SUPER^.M(…) and SUPER^().
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .. import ast as A
 from .. import types as T
+from ..check import CallTarget
 from .fb_init import Constructor, constructor
+from .walk import is_super, rewrite_exprs, rewrite_outside_bodies
 
 
 @dataclass(slots=True)
@@ -41,6 +48,25 @@ def blocks(project) -> dict:
             [acc for ps in pou.properties.values() for acc in (ps.get, ps.set) if acc is not None],
             constructor(pou))
     return out
+
+
+def super_calls(body: list) -> None:
+    """Decide, for every method and block call in `body`, which implementation runs."""
+    rewrite_exprs(body, _dispatch)
+
+
+def super_calls_outside_bodies(project) -> None:
+    rewrite_outside_bodies(project, _dispatch)
+
+
+def _dispatch(e):
+    if isinstance(e, A.Call) and isinstance(e.target, CallTarget):
+        tgt = e.target
+        if tgt.kind == "method":
+            tgt.nonvirtual = tgt.obj.base.ty.target if is_super(tgt.obj) else None
+        elif tgt.kind == "fb":
+            tgt.nonvirtual = tgt.pou if is_super(e.callee) else None
+    return e
 
 
 def kinds_of(pou: T.POUType) -> set:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from .. import ast as A
 from .. import types as T
-from .walk import rewrite_exprs, walk_stmts
+from .walk import is_super, rewrite_exprs, rewrite_outside_bodies, walk_stmts
 
 
 def accessor_calls(body: list) -> None:
@@ -20,24 +20,8 @@ def accessor_calls(body: list) -> None:
 
 
 def accessor_calls_outside_bodies(project) -> None:
-    """The same in what is not a statement: SFC transition conditions and action durations,
-    a configuration's program arguments."""
-    for sfc in project.sfc.values():
-        for t in sfc.transitions:
-            t.cond = _rewritten(t.cond)
-        for st in sfc.steps:
-            st.actions = [(act, q, _rewritten(texpr)) for act, q, texpr in st.actions]
-    for cfg in project.configs:
-        for im in cfg.instances:
-            im.args = [(p, _rewritten(value), is_out) for p, value, is_out in im.args]
-
-
-def _rewritten(e):
-    if e is None:
-        return None
-    holder = [e]
-    rewrite_exprs(holder, _read)
-    return holder[0]
+    """The same in what is not a statement (SFC conditions, configuration arguments)."""
+    rewrite_outside_bodies(project, _read)
 
 
 def _read(e):
@@ -50,11 +34,6 @@ def _is_property(e) -> bool:
 
 def _call(e, accessor: T.POUType) -> A.AccessorCall:
     obj = e.base if isinstance(e, A.Field) else None
-    out = A.AccessorCall(e.span, obj, accessor, _is_super(obj))
+    out = A.AccessorCall(e.span, obj, accessor, is_super(obj))
     out.ty = e.ty
     return out
-
-
-def _is_super(e) -> bool:
-    """SUPER^ (the instance as its base block)."""
-    return isinstance(e, A.Deref) and isinstance(e.base, A.Name) and getattr(e.base.sym, "kind", "") == "super"

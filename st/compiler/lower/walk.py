@@ -56,6 +56,30 @@ def walk_stmts(body: list) -> Iterator:
             yield from walk_stmts(inner)
 
 
+def rewrite_outside_bodies(project: Project, fn: Callable) -> None:
+    """`rewrite_exprs` for the expressions that are not in a statement: SFC transition
+    conditions and action durations, a configuration's program arguments."""
+    def one(e):
+        if e is None:
+            return None
+        holder = [e]
+        rewrite_exprs(holder, fn)
+        return holder[0]
+    for sfc in project.sfc.values():
+        for t in sfc.transitions:
+            t.cond = one(t.cond)
+        for st in sfc.steps:
+            st.actions = [(act, q, one(texpr)) for act, q, texpr in st.actions]
+    for cfg in project.configs:
+        for im in cfg.instances:
+            im.args = [(p, one(value), is_out) for p, value, is_out in im.args]
+
+
+def is_super(e) -> bool:
+    """SUPER^ (the instance as its base block)."""
+    return isinstance(e, A.Deref) and isinstance(e.base, A.Name) and getattr(e.base.sym, "kind", "") == "super"
+
+
 def rewrite_exprs(body: list, fn: Callable) -> None:
     """Replace in place every expression of `body` by `fn(expression)`, innermost first: in
     nested statements, call arguments and what a call resolved to (`Call.target`), so that
