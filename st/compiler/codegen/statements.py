@@ -315,6 +315,8 @@ class StmtGen(ExprGen):
         return [py.While(_const(True), body + [br], [])]
 
     def s_CountedFor(self, s: A.CountedFor) -> list:
+        """A FOR in the form lower/loops.py chose: a Python `for` over `_range` (the counter ends
+        one step past the limit, wrapped, as IEC says) or, for the "while" form, `_for_while`."""
         var = s.var
         vt = T.base_of(var.ty)
         start = self.coerce(self.expr(s.start), s.start, var.ty)
