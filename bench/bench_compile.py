@@ -39,6 +39,7 @@ from st import api
 from st.compiler import driver
 from st.compiler.check import Checker
 from st.compiler.codegen import ModuleGen
+from st.compiler.lower import lower
 from st.diagnostics import DiagnosticSink
 from st.source import SourceFile
 gc.disable()                       # compile_sources does the same
@@ -67,7 +68,10 @@ project = Checker(sink, libs).run(units, lib_paths)
 T["check"] = time.perf_counter() - t
 assert not sink.has_errors, "the library has errors"
 t = time.perf_counter()
-mods = ModuleGen(project, sink).generate()
+lowered = lower(project)
+T["lower"] = time.perf_counter() - t
+t = time.perf_counter()
+mods = ModuleGen(lowered, sink).generate()
 T["codegen (Python ast)"] = time.perf_counter() - t
 t = time.perf_counter()
 codes = [compile(m, p, "exec") for p, m in mods]

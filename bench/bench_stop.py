@@ -64,15 +64,15 @@ def _stop_latency(src: str, watchdog: str, sig: signal.Signals, twice: bool) -> 
 
 def _loop_ns(guarded: bool, n: int = 2_000_000) -> float:
     from st import PLC
-    from st.compiler.codegen import module
+    from st.compiler.lower import loops
     src = f"PROGRAM main\nVAR i, x : DINT; END_VAR\nFOR i := 1 TO {n} DO x := x + i MOD 7; END_FOR;\nEND_PROGRAM\n"
-    saved = module.guard_loops
+    saved = loops.guard_loops
     if not guarded:
-        module.guard_loops = lambda tree: 0
+        loops.guard_loops = lambda body: None
     try:
         plc = PLC.from_source(src, name=f"loop_{guarded}.st", use_cache=False, watchdog="60s")
     finally:
-        module.guard_loops = saved
+        loops.guard_loops = saved
     best = float("inf")
     for _ in range(5):
         t = time.perf_counter()

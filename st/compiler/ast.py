@@ -106,6 +106,16 @@ class Binary(Expr):
 
 
 @dataclass(slots=True, eq=False)
+class AccessorCall(Expr):
+    """A property read or written, after lowering (compiler/lower/properties.py): a call of
+    `accessor` (its GET; its SET as an assignment's target) on `obj`, None for this instance.
+    `nonvirtual`: SUPER^.Prop, the base block's accessor on this instance (obj is the SUPER^)."""
+    obj: Optional[Expr] = None
+    accessor: Any = field(default=None, repr=False)
+    nonvirtual: bool = False
+
+
+@dataclass(slots=True, eq=False)
 class ArrayInit:
     span: Span
     items: list             # of initializers or RepeatInit
@@ -207,6 +217,30 @@ class While(Stmt):
 class Repeat(Stmt):
     body: list = None
     cond: Expr = None
+
+
+@dataclass(slots=True, eq=False)
+class CountedFor(Stmt):
+    """A FOR after lowering (compiler/lower/loops.py): how the counter runs is decided.
+
+    form "range": the body never writes the counter, which steps from start to end;
+    "while": the body writes it, so the loop tests it each round and steps it (wrapping
+    to its type) before every round but the first. `step_value` is the step as a constant
+    (1 without BY), or None when only known at run time.
+    """
+    var: Expr = None
+    start: Expr = None
+    end: Expr = None
+    step: Optional[Expr] = None
+    step_value: Optional[int] = 1
+    form: str = "range"
+    body: list = None
+
+
+@dataclass(slots=True, eq=False)
+class LoopGuard(Stmt):
+    """The watchdog's check (compiler/lower/loops.py puts it first in every ST loop's body):
+    while the flag is down it costs one test; when a job overran, it ends the job here."""
 
 
 @dataclass(slots=True, eq=False)

@@ -23,6 +23,8 @@ from .artefact import artefact, libraries_only
 from .build import AstBuilder
 from .check import Checker
 from .codegen import ModuleGen
+from .codegen.source import python_text
+from .lower import lower
 from .library import Library
 from .options import CompileOptions
 
@@ -102,21 +104,7 @@ def _compile_sources(sources: list[SourceFile], libraries: list[Library], option
         if hit is not None:
             return hit
     sink = DiagnosticSink()
-    units = []
-    lib_paths = {src.path for src in lib_sources}
-    for src in lib_sources:
-        u = parse_source(src, sink)
-        if u is not None:
-            units.append(u)
-    for s in sources:
-        u = parse_source(s, sink)
-        if u is not None:
-            units.append(u)
-    # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat
-    known = {"dialect"}
-    if options.dialect is not None and options.dialect.attribute_pragmas:
-        known.add("attribute")
-    sink.items = [d for d in sink.items if not (d.code == "W001" and d.datum("pragma") in known)]
+    units, lib_paths = _parse_all(sources, lib_sources, options, sink)
     checker = Checker(sink, libraries, options)
     modules = []
     test_modules = []
@@ -127,14 +115,13 @@ def _compile_sources(sources: list[SourceFile], libraries: list[Library], option
         project = checker.run(units, lib_paths)
         _attach_test_texts(project, all_sources)
         if not sink.has_errors:
-            gen = ModuleGen(project, sink, coverage=options.coverage)
+            gen = ModuleGen(lower(project), sink, coverage=options.coverage)
             py_modules = gen.generate()
             if not sink.has_errors:
                 for out, group in ((modules, py_modules), (test_modules, gen.test_modules())):
                     for path, mod in group:
                         if options.emit_python:
-                            import ast as pyast
-                            pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + pyast.unparse(mod)
+                            pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + python_text(mod)
                         out.append((path, compile(mod, path, "exec")))
     except RecursionError as exc:
         first = sources[0].path if sources else "<input>"
@@ -173,6 +160,41 @@ def _compile_sources(sources: list[SourceFile], libraries: list[Library], option
     if cdir is not None:
         cache.store(cdir, key, result)
     return result
+
+
+
+def _parse_all(sources: list[SourceFile], lib_sources: list[SourceFile], options: CompileOptions,
+               sink: DiagnosticSink) -> tuple[list[A.Unit], set[str]]:
+    """Parse the libraries' sources and the user's; (units, the library paths)."""
+    units = []
+    lib_paths = {src.path for src in lib_sources}
+    for src in lib_sources:
+        u = parse_source(src, sink)
+        if u is not None:
+            units.append(u)
+    for s in sources:
+        u = parse_source(s, sink)
+        if u is not None:
+            units.append(u)
+    # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat
+    known = {"dialect"}
+    if options.dialect is not None and options.dialect.attribute_pragmas:
+        known.add("attribute")
+    sink.items = [d for d in sink.items if not (d.code == "W001" and d.datum("pragma") in known)]
+    return units, lib_paths
+
+
+def check_sources(sources: list[SourceFile], libraries: list[Library],
+                  options: Optional[CompileOptions] = None) -> tuple[Project, list[Diagnostic]]:
+    """The front end alone: parse and check, (the checked model with its AST, the diagnostics).
+    For tools and tests that look at what the compiler works on; `compile_sources` returns the
+    AST-free artefact instead."""
+    options = options or CompileOptions()
+    lib_sources = [SourceFile(path, text) for lib in libraries for path, text in lib.sources]
+    sink = DiagnosticSink()
+    units, lib_paths = _parse_all(sources, lib_sources, options, sink)
+    project = Checker(sink, libraries, options).run(units, lib_paths)
+    return project, sink.sorted()
 
 
 def _attach_test_texts(project: Project, sources: dict) -> None:

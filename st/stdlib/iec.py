@@ -10,7 +10,7 @@ import re
 from functools import lru_cache
 from pathlib import Path
 
-from ..compiler.codegen import _call, _const, wrap
+from ..compiler.codegen.emit import call, const, wrap
 from ..compiler.library import FuncSig, Library, Param
 from ..model import types as T
 from . import functions
@@ -26,7 +26,7 @@ def _p(name, constraint, group=""):
 
 def _emit_helper(helper):
     def emit(ctx, args, types, rt):
-        return _call(helper, *args)
+        return call(helper, *args)
     return emit
 
 
@@ -35,7 +35,7 @@ def _emit_wrap(node, rt):
     if b.is_intlike:
         return wrap(node, b)
     if b is T.REAL:
-        return _call("_f32", node)
+        return call("_f32", node)
     return node
 
 
@@ -51,8 +51,8 @@ def _real_result(types):
 
 def _math(name, helper):
     def emit(ctx, args, types, rt):
-        node = _call(helper, args[0])
-        return _call("_f32", node) if T.base_of(rt) is T.REAL else node
+        node = call(helper, args[0])
+        return call("_f32", node) if T.base_of(rt) is T.REAL else node
     return FuncSig(name, [_p("IN", "ANY_REAL")], _real_result, emit=emit)
 
 
@@ -64,9 +64,9 @@ def _bits_of(t):
 def _shift(name, helper):
     def emit(ctx, args, types, rt):
         b = T.base_of(rt)
-        node = _call(helper, args[0], args[1], _const(b.bits))
+        node = call(helper, args[0], args[1], const(b.bits))
         if b.is_int and b.signed:
-            node = _call("_signed", node, _const(b.bits))
+            node = call("_signed", node, const(b.bits))
         return node
     sig = FuncSig(name, [_p("IN", "ANY_BIT", "T"), _p("N", "ANY_INT")], "T", emit=emit)
     sig.exact = True
@@ -82,9 +82,9 @@ def _arith(name, op, extensible):
         for a in args[1:]:
             if op == "/":
                 b = T.base_of(rt)
-                node = _call("_fdiv", node, a) if b.is_real else _call("_idiv", node, a)
+                node = call("_fdiv", node, a) if b.is_real else call("_idiv", node, a)
             elif op == "MOD":
-                node = _call("_imod", node, a)
+                node = call("_imod", node, a)
             else:
                 node = py.BinOp(node, {"+": py.Add(), "-": py.Sub(), "*": py.Mult()}[op], a)
         return node
@@ -132,24 +132,24 @@ def _time_fn(name, a, b, result, op):
             yt = T.base_of(types[1])
             node = py.BinOp(x, py.Mult(), y)
             if yt.is_real or yt is T.LIT_REAL:
-                node = _call("_round", node)
+                node = call("_round", node)
         elif op == "/":
             yt = T.base_of(types[1])
-            node = _call("_round", _call("_fdiv", x, y)) if (yt.is_real or yt is T.LIT_REAL) else _call("_idiv", x, y)
+            node = call("_round", call("_fdiv", x, y)) if (yt.is_real or yt is T.LIT_REAL) else call("_idiv", x, y)
         elif op == "concat":
-            node = py.BinOp(x, py.Add(), py.BinOp(y, py.Mod(), _const(functions.DAY)))
+            node = py.BinOp(x, py.Add(), py.BinOp(y, py.Mod(), const(functions.DAY)))
         if result in ("TOD", "LTOD"):
-            node = py.BinOp(node, py.Mod(), _const(functions.DAY))
+            node = py.BinOp(node, py.Mod(), const(functions.DAY))
         return node
     return FuncSig(name, [_p("IN1", a), _p("IN2", b)], result, emit=emit)
 
 
 def _len_emit(ctx, args, types, rt):
-    return _call("_len", args[0])
+    return call("_len", args[0])
 
 
 def _limit_emit(ctx, args, types, rt):
-    return _call("_std_limit", *args)
+    return call("_std_limit", *args)
 
 
 def _move_emit(ctx, args, types, rt):
@@ -157,7 +157,7 @@ def _move_emit(ctx, args, types, rt):
 
 
 def _abs_emit(ctx, args, types, rt):
-    return _call("_abs", args[0])
+    return call("_abs", args[0])
 
 
 def _minmax(name, helper):
@@ -190,8 +190,8 @@ def _trunc_sig(name, dst):
     def emit(ctx, args, types, rt):
         b = T.base_of(rt)
         if b.is_intlike:
-            return _call("_real_trunc_to", args[0], _const(b.lo), _const(b.hi), _const(b.name))
-        return _emit_wrap(_call("_trunc", args[0]), rt)
+            return call("_real_trunc_to", args[0], const(b.lo), const(b.hi), const(b.name))
+        return _emit_wrap(call("_trunc", args[0]), rt)
     res = (lambda ts: T.DINT) if dst is None else dst
     sig = FuncSig(name, [_p("IN", "ANY_REAL")], res, emit=emit)
     sig.result_from_context = dst is None
@@ -217,14 +217,14 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
         add(_math(name, helper))
 
     def atan2_emit(ctx, args, types, rt):
-        node = _call("_atan2", args[0], args[1])
-        return _call("_f32", node) if T.base_of(rt) is T.REAL else node
+        node = call("_atan2", args[0], args[1])
+        return call("_f32", node) if T.base_of(rt) is T.REAL else node
     add(FuncSig("ATAN2", [_p("Y", "ANY_REAL", "T"), _p("X", "ANY_REAL", "T")],
                 lambda ts: _real_result([T.common_type(ts[0], ts[1]) or ts[0]]), emit=atan2_emit))
 
     def expt_emit(ctx, args, types, rt):
-        node = _call("_pow", args[0], args[1])
-        return _call("_f32", node) if T.base_of(rt) is T.REAL else node
+        node = call("_pow", args[0], args[1])
+        return call("_f32", node) if T.base_of(rt) is T.REAL else node
     add(FuncSig("EXPT", [_p("IN1", "ANY_REAL"), _p("IN2", "ANY_NUM")], _real_result, emit=expt_emit))
     add(_arith("ADD", "+", True))
     add(_arith("MUL", "*", True))
@@ -257,7 +257,7 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
         if b.is_bool:
             return py.UnaryOp(py.Not(), args[0])
         if b.is_intlike and not b.signed:
-            return py.BinOp(py.UnaryOp(py.Invert(), args[0]), py.BitAnd(), _const(b.hi))
+            return py.BinOp(py.UnaryOp(py.Invert(), args[0]), py.BitAnd(), const(b.hi))
         return py.UnaryOp(py.Invert(), args[0])
     add(FuncSig("NOT", [_p("IN", "ANY_BIT", "T")], "T", emit=not_emit))
     # selection
@@ -378,94 +378,94 @@ def convert(node, s, d, src_bcd=False, dst_bcd=False, time_unit="ms", ctx=None):
     sk, dk = s.kind, d.kind
     unit = 1_000_000_000 if time_unit == "s" else NS_PER_MS
     if src_bcd:
-        node = _call("_from_bcd", node)
+        node = call("_from_bcd", node)
         sk = "int"
         s = T.ULINT
     if dst_bcd:
-        return _call("_to_bcd", node, _const(d.bits))
+        return call("_to_bcd", node, const(d.bits))
     if s is d:
         return node
     if dk == "string":
         if sk == "string":
             return node
-        txt = _call("_to_string", node, _const(sk), _const(1 if (sk == "time" and s.long) else s.bits))
+        txt = call("_to_string", node, const(sk), const(1 if (sk == "time" and s.long) else s.bits))
         return txt
     if sk == "string":
         if dk in ("int", "bit"):
-            return wrap(_call("_str_to_int", node), d)
+            return wrap(call("_str_to_int", node), d)
         if dk == "real":
-            return _call("_f32", _call("_str_to_real", node)) if d is T.REAL else _call("_str_to_real", node)
+            return call("_f32", call("_str_to_real", node)) if d is T.REAL else call("_str_to_real", node)
         if dk == "bool":
-            return _call("_str_to_bool", node)
+            return call("_str_to_bool", node)
         if dk == "time":
-            return _call("_str_to_time", node)
+            return call("_str_to_time", node)
         if dk == "char":
-            return py.Subscript(py.BinOp(node, py.Add(), _const("\0")), _const(0), py.Load())
+            return py.Subscript(py.BinOp(node, py.Add(), const("\0")), const(0), py.Load())
         raise TypeError
     if dk == "bool":
-        return py.Compare(node, [py.NotEq()], [_const(0)])
+        return py.Compare(node, [py.NotEq()], [const(0)])
     if sk == "bool":
-        node = _call("_int", node)
+        node = call("_int", node)
         if dk == "real":
-            return _call("_float", node)
+            return call("_float", node)
         if dk == "time":
-            return py.BinOp(node, py.Mult(), _const(unit))
+            return py.BinOp(node, py.Mult(), const(unit))
         return node
     if sk == "char":
-        node = _call("_ord", node)
+        node = call("_ord", node)
         sk = "int"
         s = T.UINT
     if dk == "char":
         if sk == "real":
-            node = _call("_real_to_int", node, _const(0), _const(d.hi), _const(d.name))
-        return _call("_chr", py.BinOp(node, py.BitAnd(), _const(0xFF if d is T.CHAR else 0xFFFF)))
+            node = call("_real_to_int", node, const(0), const(d.hi), const(d.name))
+        return call("_chr", py.BinOp(node, py.BitAnd(), const(0xFF if d is T.CHAR else 0xFFFF)))
     if sk in ("int", "bit") and dk in ("int", "bit"):
         if s.lo >= d.lo and s.hi <= d.hi:
             return node
         return wrap(node, d)
     if sk == "real" and dk in ("int", "bit"):
-        return _call("_real_to_int", node, _const(d.lo), _const(d.hi), _const(d.name))
+        return call("_real_to_int", node, const(d.lo), const(d.hi), const(d.name))
     if sk in ("int", "bit") and dk == "real":
-        node = _call("_float", node)
-        return _call("_f32", node) if d is T.REAL and s.bits > 16 else node
+        node = call("_float", node)
+        return call("_f32", node) if d is T.REAL and s.bits > 16 else node
     if sk == "real" and dk == "real":
-        return _call("_f32", node) if d is T.REAL else node
+        return call("_f32", node) if d is T.REAL else node
     # time and dates (ns integers)
     if sk == "time" and dk in ("int", "bit"):
         per = 1 if s.long else unit
-        return wrap(_call("_idiv", node, _const(per)) if per != 1 else node, d)
+        return wrap(call("_idiv", node, const(per)) if per != 1 else node, d)
     if sk in ("int", "bit") and dk == "time":
         per = 1 if d.long else unit
-        return py.BinOp(node, py.Mult(), _const(per)) if per != 1 else node
+        return py.BinOp(node, py.Mult(), const(per)) if per != 1 else node
     if sk == "time" and dk == "real":
         per = 1 if s.long else unit
-        node = py.BinOp(node, py.Div(), _const(float(per)))
-        return _call("_f32", node) if d is T.REAL else node
+        node = py.BinOp(node, py.Div(), const(float(per)))
+        return call("_f32", node) if d is T.REAL else node
     if sk == "real" and dk == "time":
         per = 1 if d.long else unit
-        return _call("_round", py.BinOp(node, py.Mult(), _const(float(per))))
+        return call("_round", py.BinOp(node, py.Mult(), const(float(per))))
     if sk == dk:                       # TIME ↔ LTIME, DATE ↔ LDATE, ...
         return node
     DAY = functions.DAY
     if sk == "dt" and dk == "date":
-        return py.BinOp(node, py.Sub(), py.BinOp(node, py.Mod(), _const(DAY)))
+        return py.BinOp(node, py.Sub(), py.BinOp(node, py.Mod(), const(DAY)))
     if sk == "dt" and dk == "tod":
-        return py.BinOp(node, py.Mod(), _const(DAY))
+        return py.BinOp(node, py.Mod(), const(DAY))
     if sk == "date" and dk == "dt":
         return node
     if sk == "tod" and dk == "time" or sk == "time" and dk == "tod":
-        return node if dk == "time" else py.BinOp(node, py.Mod(), _const(DAY))
+        return node if dk == "time" else py.BinOp(node, py.Mod(), const(DAY))
     if sk in ("dt", "date") and dk in ("int", "bit"):
-        return wrap(_call("_idiv", node, _const(1_000_000_000)), d)
+        return wrap(call("_idiv", node, const(1_000_000_000)), d)
     if sk == "tod" and dk in ("int", "bit"):
-        return wrap(_call("_idiv", node, _const(NS_PER_MS)), d)
+        return wrap(call("_idiv", node, const(NS_PER_MS)), d)
     if sk in ("int", "bit") and dk in ("dt", "date"):
-        node = py.BinOp(node, py.Mult(), _const(1_000_000_000))
+        node = py.BinOp(node, py.Mult(), const(1_000_000_000))
         if dk == "date":
-            node = py.BinOp(node, py.Sub(), py.BinOp(node, py.Mod(), _const(DAY)))
+            node = py.BinOp(node, py.Sub(), py.BinOp(node, py.Mod(), const(DAY)))
         return node
     if sk in ("int", "bit") and dk == "tod":
-        return py.BinOp(py.BinOp(node, py.Mult(), _const(NS_PER_MS)), py.Mod(), _const(DAY))
+        return py.BinOp(py.BinOp(node, py.Mult(), const(NS_PER_MS)), py.Mod(), const(DAY))
     raise TypeError(f"no conversion from {s} to {d}")
 
 

@@ -1,4 +1,7 @@
-"""Code generation: checked AST → Python `ast` → code objects.
+"""Code generation: lowered AST (compiler/lower) → Python `ast` → code objects.
+
+A printer: the lowering has made the semantic decisions (inheritance, properties, FB_init,
+loop forms and their watchdog guards); what is left here is how to say it in Python.
 
 One Python module per ST source file, all executed into one namespace per PLC.
 Every generated statement carries its ST line, and each module is compiled
@@ -11,10 +14,11 @@ Shapes (see docs/ARCHITECTURE.md): a FUNCTION becomes a Python function
 locals once and written back on exit (locals are the fastest thing CPython
 has); variables that something else may reach while the body runs (through a
 reference, an action or an SFC) stay attributes.
+
+Libraries emit code through the public API of `emit.py` (`call`, `const`, `wrap`).
 """
 
 from .module import ModuleGen
-from .pyast import _call, _const, f32
-from .expressions import wrap
+from .pyast import f32
 
-__all__ = ["ModuleGen", "f32", "wrap", "_call", "_const"]
+__all__ = ["ModuleGen", "f32"]

@@ -44,10 +44,11 @@ class InitGen:
             obj = _call(ut.pyname)
             if isinstance(init, A.StructInit):
                 obj = self._with_fields(obj, init, lambda n: _member_of_pou(ut, n))
-            if T.fb_init_chain(ut):                 # CODESYS: FB_init runs once the values are set
+            block = self.mod.blocks.get(ut)
+            if block is not None and block.constructor is not None:     # FB_init runs once the values are set
                 keys, values = [], []
                 if ctor is not None:
-                    inputs = {p.name.lower(): p for p in ut.methods["fb_init"].params()}
+                    inputs = block.constructor.inputs
                     for name, sp, val in ctor.args:
                         keys.append(_const(name.lower()))
                         values.append(self.initial(inputs[name.lower()].type, val))
@@ -203,7 +204,7 @@ class ExprGen:
         """Is this REAL-typed expression already exactly a float32 value?"""
         if e is None:
             return False
-        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref)):
+        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.AccessorCall)):
             return T.base_of(e.ty) is T.REAL if e.ty is not None else False
         if isinstance(e, A.Literal):
             return True
@@ -235,7 +236,7 @@ class ExprGen:
         sub = T.unalias(e.ty)
         declared = (sub.lo, sub.hi) if isinstance(sub, T.SubrangeType) else (
             (t.lo, t.hi) if t.is_intlike else None)
-        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit)) or (
+        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit, A.AccessorCall)) or (
                 isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method")):
             return declared
         if isinstance(e, A.Binary):
@@ -328,8 +329,6 @@ class ExprGen:
             return _const(None)
         if getattr(sym, "kind", "") == "this":
             return _call("_ObjRef", _name(self.self_name))
-        if isinstance(sym, T.PropSym):                  # this instance's property: its GET
-            return _call(_attr(_name(self.self_name), sym.get.pyname))
         raise Unsupported(e.span, f"cannot use '{e.name}' here")
 
     def x_Direct(self, e: A.Direct) -> py.expr:
@@ -351,17 +350,17 @@ class ExprGen:
         if isinstance(bt, T.ElemType) and bt.is_intlike:
             return self._bit_read(base, int(e.name), bt)
         sym = e.sym
-        if isinstance(sym, T.PropSym):                  # inst.Prop: its GET
-            return self.accessor_call(e, sym.get)
         if isinstance(sym, T.VarSym) and T.is_reference(sym.type):
             return _call(_attr(_attr(base, sym.pyname), "get"))     # inst.r: through the reference
         return _attr(base, sym.pyname)
 
-    def accessor_call(self, e: A.Field, acc: T.POUType, *args) -> py.expr:
-        """A property accessor of inst.Prop; SUPER^.Prop runs the base's one (not virtual)."""
-        if _is_super(e.base):
+    def x_AccessorCall(self, e: A.AccessorCall, *args) -> py.expr:
+        """A property's accessor on its instance (`args`: SET's value); non-virtual: the base's."""
+        acc = e.accessor
+        if e.nonvirtual:
             return _call(_attr(_name(acc.owner_fb.pyname), acc.pyname), _name(self.self_name), *args)
-        return _call(_attr(self.expr(e.base), acc.pyname), *args)
+        obj = _name(self.self_name) if e.obj is None else self.expr(e.obj)
+        return _call(_attr(obj, acc.pyname), *args)
 
     def _bit_read(self, base: py.expr, n: int, t) -> py.expr:
         return py.Compare(py.BinOp(base, py.BitAnd(), _const(1 << n)), [py.NotEq()], [_const(0)])
@@ -533,9 +532,8 @@ class ExprGen:
     def method_call(self, e: A.Call, tgt) -> py.expr:
         """inst.M(...): a Python method call on the instance, so a derived block's override runs;
         SUPER^.M(...): the base block's method on this instance (not virtual)."""
-        if _is_super(tgt.obj):
-            base = tgt.obj.base.ty.target
-            return self.function_call(e, tgt, fn=_attr(_name(base.pyname), tgt.pou.pyname),
+        if tgt.nonvirtual is not None:
+            return self.function_call(e, tgt, fn=_attr(_name(tgt.nonvirtual.pyname), tgt.pou.pyname),
                                       first=_name(self.self_name))
         obj = _name(self.self_name) if tgt.obj is None else self.expr(tgt.obj)
         return self.function_call(e, tgt, fn=_attr(obj, tgt.pou.pyname))
@@ -671,8 +669,3 @@ def wrap(node: py.expr, d) -> py.expr:
         h = 1 << (d.bits - 1)
         return py.BinOp(py.BinOp(py.BinOp(node, py.Add(), _const(h)), py.BitAnd(), _const(mask)), py.Sub(), _const(h))
     return py.BinOp(node, py.BitAnd(), _const(mask))
-
-
-def _is_super(e) -> bool:
-    """SUPER^ (the instance as its base block)."""
-    return isinstance(e, A.Deref) and isinstance(e.base, A.Name) and getattr(e.base.sym, "kind", "") == "super"

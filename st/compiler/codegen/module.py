@@ -4,9 +4,8 @@ from __future__ import annotations
 import ast as py
 
 from ...model import types as T
-from ...model.program import Project
+from ..lower import LoweredProgram
 from .expressions import InitGen
-from .guards import guard_loops
 from .pous import BodyGen, FuncGen
 from .pyast import Unsupported, _args, _attr, _const, _name, _set_lines, default_value
 from .statements import StmtGen, _Typed
@@ -14,10 +13,11 @@ from .tests import TestGen
 
 
 class ModuleGen:
-    """Generates the Python modules for a checked project."""
+    """Prints the Python modules of a lowered project (compiler/lower)."""
 
-    def __init__(self, project: Project, sink, coverage: bool = False):
-        self.p = project
+    def __init__(self, program: LoweredProgram, sink, coverage: bool = False):
+        self.p = program.project
+        self.blocks = program.blocks
         self.sink = sink
         self.tmp = 0
         self.coverage = coverage
@@ -29,9 +29,7 @@ class ModuleGen:
         """[(st file path, Python module)] holding the `_test_<n>` functions (after `generate`)."""
         out = []
         for path, fns in self.tests_by_file.items():
-            m = py.Module(body=fns, type_ignores=[])
-            guard_loops(m)
-            out.append((path, m))
+            out.append((path, py.Module(body=fns, type_ignores=[])))
         return out
 
     def probe(self, file: str, line: int, kind: str, label: str = "", target: int = 0) -> py.stmt:
@@ -105,7 +103,6 @@ class ModuleGen:
             m = py.Module(body=body, type_ignores=[])
             for node in body:
                 _set_lines(node, getattr(node, "lineno", None) or 1)
-            guard_loops(m)              # after the lines are placed: a guard carries its loop's line
             modules.append((path, m))
         return modules
 

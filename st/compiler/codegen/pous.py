@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 
 from ...model import types as T
 from .. import ast as A
+from ..lower.fb_init import Constructor
 from ..names import mangle
 from .expressions import InitGen
 from .pyast import _args, _attr, _call, _const, _name, _set_lines, _store
@@ -106,35 +107,6 @@ class MethodGen(FuncGen):
         return fn
 
 
-def _fb_init_args(mt: T.POUType, init: InitGen) -> list:
-    """Arguments of an implicit FB_init call: bInitRetains TRUE (a cold start: retained values are
-    restored afterwards), bInCopyCode FALSE, the others from the declaration or their defaults."""
-    args = []
-    for p in mt.params():
-        key = p.name.lower()
-        if key == "binitretains":
-            args.append(_const(True))
-        elif key == "bincopycode":
-            args.append(_const(False))
-        else:
-            args.append(_call(_attr(_name("a"), "get"), _const(key), init.initial(p.type, p.init)))
-    return args
-
-
-def _kinds_of(pou: T.POUType) -> set:
-    """Lower-case names of what an instance is: its block, the blocks it extends and every
-    interface they provide (for __QUERYINTERFACE and ?=)."""
-    out, todo = set(), [pou]
-    while todo:
-        x = todo.pop()
-        if x is None or x.name.lower() in out:
-            continue
-        out.add(x.name.lower())
-        todo.extend(x.interfaces)
-        todo.append(x.base)
-    return out
-
-
 def _mentions_this(body) -> bool:
     """THIS or SUPER in a body: other code then works on the instance while it runs."""
     return any(isinstance(e, A.Name) and getattr(e.sym, "kind", "") in ("this", "super")
@@ -160,27 +132,24 @@ class BodyGen(StmtGen):
 
     def klass(self) -> py.ClassDef:
         pou = self.pou
+        block = self.mod.blocks[pou]
         d = pou.decl
         init = InitGen(self.mod)
         sfc = self.mod.p.sfc.get(pou.name.lower())
-        slots = [v.pyname for v in pou.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP", "VAR_STAT")]
+        slots = [v.pyname for v in block.variables]
         edges = [v for v in pou.vars.values() if v.edge]
         slots += ["_e_" + v.pyname for v in edges]
         init_body = []
-        for v in pou.vars.values():
-            if v.section in ("VAR_EXTERNAL", "VAR_TEMP", "VAR_STAT"):
-                continue
+        for v in block.variables:
             init_body.append(_set_lines(py.Assign([_attr(_name("self"), v.pyname, py.Store())],
                                                   init.initial(v.type, v.init)), v.span.line))
         for v in edges:
             init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_e_" + v.pyname, py.Store())],
                                                   _const(v.edge == "F_EDGE")), v.span.line))
-        for mt in pou.methods.values():               # METHOD VAR_INST: attributes of the instance
-            for v in mt.vars.values():
-                if v.section == "VAR_INST":
-                    slots.append(v.pyname)
-                    init_body.append(_set_lines(py.Assign([_attr(_name("self"), v.pyname, py.Store())],
-                                                          init.initial(v.type, v.init)), v.span.line))
+        for v in block.method_variables:              # METHOD VAR_INST: attributes of the instance
+            slots.append(v.pyname)
+            init_body.append(_set_lines(py.Assign([_attr(_name("self"), v.pyname, py.Store())],
+                                                  init.initial(v.type, v.init)), v.span.line))
         if sfc is not None:
             slots += ["_sfc", "_sfc_x"]
             init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_sfc", py.Store())],
@@ -188,7 +157,7 @@ class BodyGen(StmtGen):
             init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_sfc_x", py.Store())],
                                                   _attr(_attr(_name("self"), "_sfc"), "x")), d.span.line))
         members = [py.Assign([_name("__slots__", py.Store())], py.Tuple([_const(s) for s in slots], py.Load())),
-                   py.Assign([_name("_kinds", py.Store())], _const(tuple(sorted(_kinds_of(pou))))),
+                   py.Assign([_name("_kinds", py.Store())], _const(block.kinds)),
                    py.FunctionDef("__init__", _args(["self"]), init_body or [py.Pass()], [], None, None)]
         # caching policy: with actions, methods, THIS or SFC other code touches the variables during
         # the body: keep them attributes
@@ -201,18 +170,15 @@ class BodyGen(StmtGen):
         else:
             members.append(self.method("_body", d.body, can_cache, edges, d.span.line,
                                        d.end_span.line if d.end_span else d.span.line))
-        chain = T.fb_init_chain(pou)
-        if chain:
-            members.append(self._constructor(chain, d.span.line))
-        for act in pou.actions.values():              # its own and inherited ones
+        if block.constructor is not None:
+            members.append(self._constructor(block.constructor, d.span.line))
+        for act in block.actions:                     # its own and inherited ones
             g = BodyGen(self.mod, pou)
             members.append(g.method("_act_" + act.name.lower(), act.body, False, [], act.span.line, act.span.line))
-        for mt in pou.methods.values():
+        for mt in block.methods:
             members.append(MethodGen(self.mod, mt).function())
-        for ps in pou.properties.values():
-            for acc in (ps.get, ps.set):
-                if acc is not None:
-                    members.append(MethodGen(self.mod, acc).function())
+        for acc in block.accessors:
+            members.append(MethodGen(self.mod, acc).function())
         if sfc is not None:
             members.extend(self.sfc_methods(sfc))
         cls = py.ClassDef(pou.pyname, [_name("_FB")], [], members, [])
@@ -241,12 +207,18 @@ class BodyGen(StmtGen):
                      _const(tuple(actions)))
         return _set_lines(py.Assign([_name("_sfc_" + pou.pyname, py.Store())], desc), pou.decl.span.line)
 
-    def _constructor(self, chain: list, line: int) -> py.FunctionDef:
-        """_ctor(self, a): run every FB_init of the chain, base first (a: the declaration's
+    def _constructor(self, ctor: Constructor, line: int) -> py.FunctionDef:
+        """_ctor(self, a): every FB_init call of the constructor in turn (a: the declaration's
         arguments by lower-case name); returns the instance."""
         init = InitGen(self.mod)
-        body = [py.Expr(_call(_attr(_name(mt.owner_fb.pyname), mt.pyname), _name("self"), *_fb_init_args(mt, init)))
-                for mt in chain]
+
+        def arg(a):
+            if isinstance(a, bool):
+                return _const(a)
+            return _call(_attr(_name("a"), "get"), _const(a.name.lower()), init.initial(a.type, a.init))
+        body = [py.Expr(_call(_attr(_name(c.method.owner_fb.pyname), c.method.pyname), _name("self"),
+                              *[arg(a) for a in c.args]))
+                for c in ctor.calls]
         body.append(py.Return(_name("self")))
         return _set_lines(py.FunctionDef("_ctor", _args(["self", "a"]), body, [], None, None), line)
 

@@ -6,7 +6,8 @@ import ast as py
 from .. import ast as A
 from ...model import types as T
 from ..check import CallTarget
-from .expressions import _is_super, ExprGen, wrap
+from ..lower.walk import walk_stmts
+from .expressions import ExprGen, wrap
 from .pyast import (Unsupported, _attr, _call, _const, _name, _set_lines)
 
 
@@ -29,7 +30,7 @@ class StmtGen(ExprGen):
                 if not hasattr(exc, "st_span"):
                     exc.st_span = s.span      # where the internal error happened, for the report
                 raise
-            if covered and r:
+            if covered and r and not isinstance(s, A.LoopGuard):
                 r.insert(0, self.mod.probe(s.span.file, s.span.line, "line"))
             for n in r:
                 _set_lines(n, s.span.line)
@@ -49,6 +50,16 @@ class StmtGen(ExprGen):
     def block(self, body) -> list:
         b = self.stmts(body)
         return b or [py.Pass()]
+
+    def loop_body(self, body: list, before: list = ()) -> list:
+        """A loop's Python body: its guard first, then what the printer needs each round
+        (`before`), then the statements."""
+        if body and isinstance(body[0], A.LoopGuard):
+            return self.stmts(body[:1]) + list(before) + self.stmts(body[1:])
+        return list(before) + self.stmts(body)
+
+    def s_LoopGuard(self, s: A.LoopGuard) -> list:
+        return [py.If(_name("_wd_armed"), [py.Expr(_call("_wd_check"))], [])]
 
     def stmt(self, s) -> list:
         return getattr(self, "s_" + type(s).__name__)(s)
@@ -75,12 +86,10 @@ class StmtGen(ExprGen):
             if isinstance(tgt, A.Field):
                 return [py.Assign([_attr(self.expr(tgt.base), tgt.sym.pyname, py.Store())], ref)]
             return [py.Assign([self.var_store(tgt.sym)], ref)]
-        if isinstance(tgt, (A.Name, A.Field)) and isinstance(tgt.sym, T.PropSym):
+        if isinstance(tgt, A.AccessorCall):
             # a property: its SET with the value (S=/R= only when the condition holds)
             def setter(value):
-                if isinstance(tgt, A.Field):
-                    return py.Expr(self.accessor_call(tgt, tgt.sym.set, value))
-                return py.Expr(_call(_attr(_name(self.self_name), tgt.sym.set.pyname), value))
+                return py.Expr(self.x_AccessorCall(tgt, value))
             if s.kind in ("S=", "R="):
                 return [py.If(self.expr(s.value), [setter(_const(s.kind == "S="))], [])]
             return [setter(self.coerce(self.expr(s.value), s.value, tt))]
@@ -220,8 +229,8 @@ class StmtGen(ExprGen):
                 out.append(py.Expr(_call("_assign", _attr(inst, p.pyname), self.expr(a.value))))
             else:
                 out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.coerce(self.expr(a.value), a.value, p.type)))
-        if _is_super(c.callee):                    # SUPER^(): the base block's body on this instance
-            out.append(py.Expr(_call(_attr(_name(fb.pyname), "_body"), inst)))
+        if tgt.nonvirtual is not None:             # SUPER^(): the base block's body on this instance
+            out.append(py.Expr(_call(_attr(_name(tgt.nonvirtual.pyname), "_body"), inst)))
         else:
             out.append(py.Expr(_call(_attr(inst, "_body"))))
         out.extend(after)
@@ -291,31 +300,30 @@ class StmtGen(ExprGen):
         return out
 
     def s_While(self, s: A.While) -> list:
-        return [py.While(self.expr(s.cond), self.block(s.body), [])]
+        return [py.While(self.expr(s.cond), self.loop_body(s.body) or [py.Pass()], [])]
 
     def s_Repeat(self, s: A.Repeat) -> list:
         if _has_continue(s.body):
             flag = self.new_tmp()
             init = py.Assign([_name(flag, py.Store())], _const(True))
             test = py.BoolOp(py.Or(), [_name(flag), py.UnaryOp(py.Not(), self.expr(s.cond))])
-            body = [py.Assign([_name(flag, py.Store())], _const(False))] + self.stmts(s.body)
+            body = self.loop_body(s.body, [py.Assign([_name(flag, py.Store())], _const(False))])
             return [init, py.While(test, body, [])]
-        body = self.stmts(s.body)
+        body = self.loop_body(s.body)
         cond = self.expr(s.cond)
         br = _set_lines(py.If(cond, [py.Break()], []), s.cond.span.line)
         return [py.While(_const(True), body + [br], [])]
 
-    def s_For(self, s: A.For) -> list:
+    def s_CountedFor(self, s: A.CountedFor) -> list:
+        """A FOR in the form lower/loops.py chose: a Python `for` over `_range` (the counter ends
+        one step past the limit, wrapped, as IEC says) or, for the "while" form, `_for_while`."""
         var = s.var
         vt = T.base_of(var.ty)
         start = self.coerce(self.expr(s.start), s.start, var.ty)
         end = self.expr(s.end)
-        step_c = 1
+        step_c = s.step_value
         out = []
-        if s.step is not None:
-            c = s.step.const if s.step.const is not None else (s.step.value if isinstance(s.step, A.Literal) else None)
-            step_c = c if isinstance(c, int) else None
-        if _assigns_var(s.body, var):
+        if s.form == "while":
             return self._for_while(s, start, end, step_c)
         if step_c is None:
             stp = self.new_tmp()
@@ -334,11 +342,11 @@ class StmtGen(ExprGen):
             loopvar = var.sym.pyname
             self.written_locals.add(var.sym)
             pre = []
-            body = self.block(s.body)
+            body = self.loop_body(s.body) or [py.Pass()]
         else:
             loopvar = self.new_tmp()
             pre = []
-            body = self.assign(var, _name(loopvar), None) + self.stmts(s.body)
+            body = self.loop_body(s.body, self.assign(var, _name(loopvar), None))
         # before: loopvar = start - step (so that 'else' can add step: the IEC final value)
         init = py.Assign([_name(loopvar, py.Store())], py.BinOp(start, py.Sub(), step))
         final = py.BinOp(_name(loopvar), py.Add(), step)
@@ -349,7 +357,7 @@ class StmtGen(ExprGen):
             orelse += self.assign(var, _name(loopvar), None)
         return out + pre + [init, py.For(_name(loopvar, py.Store()), rng, body, orelse)]
 
-    def _for_while(self, s, start, end, step_c):
+    def _for_while(self, s: A.CountedFor, start, end, step_c):
         """FOR whose body writes the loop variable: a faithful while loop."""
         var = s.var
         vt = T.base_of(var.ty)
@@ -370,8 +378,8 @@ class StmtGen(ExprGen):
         # CONTINUE must still increment: use try/finally-free form: increment at loop top after the first pass
         first = self.new_tmp()
         out.append(py.Assign([_name(first, py.Store())], _const(True)))
-        body = [py.If(_name(first), [py.Assign([_name(first, py.Store())], _const(False))], incr),
-                py.If(py.UnaryOp(py.Not(), test), [py.Break()], [])] + self.stmts(s.body)
+        body = self.loop_body(s.body, [py.If(_name(first), [py.Assign([_name(first, py.Store())], _const(False))], incr),
+                                       py.If(py.UnaryOp(py.Not(), test), [py.Break()], [])])
         out.append(py.While(_const(True), body, []))
         return out
 
@@ -426,42 +434,10 @@ def _has_continue(body) -> bool:
     return False
 
 
-def _assigns_var(body, var) -> bool:
-    if not isinstance(var, A.Name):
-        return True
-    key = var.name.lower()
-    for s in _walk_stmts(body):
-        if isinstance(s, A.Assign) and isinstance(s.target, A.Name) and s.target.name.lower() == key:
-            return True
-        if isinstance(s, A.For) and isinstance(s.var, A.Name) and s.var.name.lower() == key:
-            return True
-        if isinstance(s, A.CallStmt):
-            for a in s.call.args:
-                if (a.output or isinstance(s.call.target, CallTarget)) and isinstance(a.value, A.Name) \
-                        and a.value.name.lower() == key and a.output:
-                    return True
-    return False
-
-
-def _walk_stmts(body):
-    for s in body:
-        yield s
-        if isinstance(s, A.If):
-            for _, b in s.branches:
-                yield from _walk_stmts(b)
-            yield from _walk_stmts(s.orelse or [])
-        elif isinstance(s, A.Case):
-            for b in s.branches:
-                yield from _walk_stmts(b.body)
-            yield from _walk_stmts(s.orelse or [])
-        elif isinstance(s, (A.For, A.While, A.Repeat)):
-            yield from _walk_stmts(s.body)
-
-
 def _walk_exprs_in(body):
     """Every expression node in a statement list (for pre-scans)."""
     stack = []
-    for s in _walk_stmts(body):
+    for s in walk_stmts(body):
         if isinstance(s, A.Assign):
             stack += [s.target, s.value]
         elif isinstance(s, A.CallStmt):
@@ -470,7 +446,7 @@ def _walk_exprs_in(body):
             stack += [c for c, _ in s.branches]
         elif isinstance(s, A.Case):
             stack.append(s.selector)
-        elif isinstance(s, A.For):
+        elif isinstance(s, A.CountedFor):
             stack += [s.var, s.start, s.end] + ([s.step] if s.step else [])
         elif isinstance(s, A.While):
             stack.append(s.cond)
@@ -491,6 +467,8 @@ def _walk_exprs_in(body):
             stack.append(e.operand)
         elif isinstance(e, (A.Field, A.Bit, A.Deref)):
             stack.append(e.base)
+        elif isinstance(e, A.AccessorCall):
+            stack.append(e.obj)
         elif isinstance(e, A.Index):
             stack.append(e.base)
             stack += e.indices

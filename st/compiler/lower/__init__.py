@@ -1,0 +1,43 @@
+"""Lowering: the checked AST → a smaller AST that code generation prints without semantic choices.
+
+Runs after the checks, before code generation (compiler/codegen). Each lowering is one module
+and rewrites the bodies in place (the checked project is built for one compilation):
+
+- properties.py: property reads and writes → `AccessorCall` (GET, or SET as a target);
+- loops.py: FOR → `CountedFor` (its form decided), a `LoopGuard` first in every loop;
+- inheritance.py: each block's flattened member set and what its instances are (`Block`),
+  with fb_init.py's explicit constructor for its FB_init chain; which implementation each
+  method or block call runs (SUPER^ calls are the base's).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ...model.program import Project
+from . import inheritance, loops, properties
+from .walk import bodies
+
+
+@dataclass(slots=True)
+class LowerOptions:
+    loop_guards: bool = True        # the watchdog's check in every loop (off only to measure its cost)
+
+
+@dataclass(slots=True)
+class LoweredProgram:
+    """What code generation prints: the project with lowered bodies, and each block's class."""
+    project: Project
+    blocks: dict                    # POUType → inheritance.Block
+
+
+def lower(project: Project, options: LowerOptions | None = None) -> LoweredProgram:
+    options = options or LowerOptions()
+    for body in bodies(project):
+        properties.accessor_calls(body)
+        inheritance.super_calls(body)
+        loops.count_fors(body)
+        if options.loop_guards:
+            loops.guard_loops(body)
+    properties.accessor_calls_outside_bodies(project)
+    inheritance.super_calls_outside_bodies(project)
+    return LoweredProgram(project, inheritance.blocks(project))

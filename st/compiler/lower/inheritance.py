@@ -1,0 +1,83 @@
+"""Inheritance: what a block's class holds once EXTENDS is resolved.
+
+A derived block's class is flattened: it holds every variable of its bases (the checker has
+already put them into `POUType.vars`) and gets every method, property accessor and action it
+has, its own and the inherited ones it does not override, so a base may be declared after its
+derived blocks or in another file. `kinds` names what an instance is (the block, its bases and
+every interface they provide) for `?=` and __QUERYINTERFACE.
+
+Every call of a method or a block gets `nonvirtual` on its call target: None for a Python
+method call (the instance's most derived implementation runs), else the block whose method
+or body runs on this instance: the base, for SUPER^.M(…) and SUPER^().
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .. import ast as A
+from ...model import types as T
+from ..check import CallTarget
+from .fb_init import Constructor, constructor
+from .walk import is_super, rewrite_exprs, rewrite_outside_bodies
+
+
+@dataclass(slots=True)
+class Block:
+    pou: T.POUType
+    kinds: tuple                # sorted lower-case names
+    variables: list             # [VarSym] an instance holds (VAR_EXTERNAL, VAR_TEMP, VAR_STAT are elsewhere)
+    method_variables: list      # [VarSym] its methods' VAR_INST, kept in the instance
+    actions: list               # [ast.ActionDecl]
+    methods: list               # [POUType]
+    accessors: list             # [POUType] GET and SET of its properties
+    constructor: Constructor | None
+
+
+def blocks(project) -> dict:
+    """POUType → Block for every FUNCTION_BLOCK, PROGRAM and CLASS with a body to generate."""
+    out = {}
+    for pou in project.pous.values():
+        if pou.decl is None or pou.pou_kind in ("INTERFACE", "FUNCTION"):
+            continue
+        out[pou] = Block(
+            pou, tuple(sorted(kinds_of(pou))),
+            [v for v in pou.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP", "VAR_STAT")],
+            [v for mt in pou.methods.values() for v in mt.vars.values() if v.section == "VAR_INST"],
+            list(pou.actions.values()),
+            list(pou.methods.values()),
+            [acc for ps in pou.properties.values() for acc in (ps.get, ps.set) if acc is not None],
+            constructor(pou))
+    return out
+
+
+def super_calls(body: list) -> None:
+    """Decide, for every method and block call in `body`, which implementation runs."""
+    rewrite_exprs(body, _dispatch)
+
+
+def super_calls_outside_bodies(project) -> None:
+    rewrite_outside_bodies(project, _dispatch)
+
+
+def _dispatch(e):
+    if isinstance(e, A.Call) and isinstance(e.target, CallTarget):
+        tgt = e.target
+        if tgt.kind == "method":
+            tgt.nonvirtual = tgt.obj.base.ty.target if is_super(tgt.obj) else None
+        elif tgt.kind == "fb":
+            tgt.nonvirtual = tgt.pou if is_super(e.callee) else None
+    return e
+
+
+def kinds_of(pou: T.POUType) -> set:
+    """Lower-case names of what an instance is: its block, the blocks it extends and every
+    interface they provide (for __QUERYINTERFACE and ?=)."""
+    out, todo = set(), [pou]
+    while todo:
+        x = todo.pop()
+        if x is None or x.name.lower() in out:
+            continue
+        out.add(x.name.lower())
+        todo.extend(x.interfaces)
+        todo.append(x.base)
+    return out
