@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import re
-from typing import Optional
+from typing import Optional, cast
 
 from .. import ast as A
 from .. import types as T
@@ -167,7 +167,7 @@ class Calls(Part):
             if not statement:
                 self.err("E020", c.span, "__DELETE(p) is a statement; it has no value")
             t = self.stmts.lvalue(arg, scope)
-            if t is not None and not (isinstance(T.unalias(t), T.RefType) and T.unalias(t).ref_kind == "POINTER"):
+            if t is not None and not (isinstance(T.unalias(t), T.RefType) and cast(T.RefType, T.unalias(t)).ref_kind == "POINTER"):
                 self.err("E013", arg.span, f"__DELETE needs a POINTER, not {t}")
             c.target = CallTarget("delete", arg=arg)
             return None
@@ -330,7 +330,7 @@ class Calls(Part):
                     if not (isinstance(T.base_of(vt), T.StringType) and isinstance(T.base_of(p.type), T.StringType)):
                         self.err("E013", a.value.span, f"VAR_IN_OUT '{p.name}' is {p.type}; {vt} cannot be passed")
             elif T.is_reference(p.type):        # an input REFERENCE TO is bound to the argument
-                want = T.unalias(p.type).target
+                want = cast(T.RefType, T.unalias(p.type)).target
                 if not isinstance(a.value, (A.Name, A.Field, A.Index, A.Deref)):
                     self.err("E031", a.value.span, f"'{p.name}' is a REFERENCE TO {want}: pass a variable")
                     self.exprs.expr(a.value, scope)
@@ -538,5 +538,5 @@ def _size_of(t: T.Type):
 
 def _fits_conformant(arg, param) -> bool:
     """An array for an ARRAY[*] parameter: as many dimensions, the same element type."""
-    a, p = T.unalias(arg), T.unalias(param)
+    a, p = T.unalias(arg), cast(T.ArrayType, T.unalias(param))
     return isinstance(a, T.ArrayType) and len(a.dims) == len(p.dims) and same_type(a.element, p.element)

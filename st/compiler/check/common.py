@@ -51,7 +51,7 @@ class Scope:
         self.actions: dict = {}
         self.library = library
         self.test = False           # inside TEST/SETUP/TEARDOWN: test statements allowed
-        self.fb = None              # the function block whose body or METHOD this is (THIS, implicit calls)
+        self.fb: Optional[T.POUType] = None  # the function block whose body or METHOD this is (THIS, implicit calls)
 
 
 def _names_in(body):

@@ -3,7 +3,7 @@ declared, variable blocks declared, initial values checked. Resolution is on dem
 is resolved when first met, so declarations may come in any order."""
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, cast
 
 from ...source import Span
 from .. import ast as A
@@ -164,7 +164,7 @@ class Declarations(Part):
                 self.feature("vendor", spec.span, f"{spec.kind} TO")
             return T.RefType(self.resolve_type(spec.target, scope), spec.kind)
         if isinstance(spec, A.SubrangeType):
-            base = T.ELEMENTARY.get(spec.base.upper())
+            base = cast(Optional[T.ElemType], T.ELEMENTARY.get(spec.base.upper()))
             if base is None or not base.is_intlike:
                 self.err("E012", spec.span, f"a subrange needs an integer base type, not '{spec.base}'")
                 base = T.INT

@@ -1,7 +1,7 @@
 """Expressions: typing of literals, names, operators, fields, indices."""
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, cast
 
 from .. import ast as A
 from .. import types as T
@@ -49,7 +49,7 @@ class Expressions(Part):
             if not b.is_intlike:
                 self.err("E023", e.span, f"bit access needs an integer or bit-string variable, not {bt}")
                 return rt
-            if (e.index + 1) * width > b.bits:
+            if (e.index + 1) * width > cast(T.ElemType, b).bits:
                 self.err("E022", e.span, f"{bt} has no {'bit' if size == 'X' else size} {e.index}")
             return rt
         if isinstance(e, A.Deref):
@@ -169,7 +169,7 @@ class Expressions(Part):
         key = e.name.lower()
         sym = self.lookup(key, scope)
         if sym == "RESULT":
-            pou = scope.pou
+            pou = cast(T.POUType, scope.pou)
             e.sym = pou
             return pou.return_type
         if sym == "STEP":
@@ -184,16 +184,16 @@ class Expressions(Part):
             return sym.type
         if sym is SUPER:
             e.sym = SUPER
-            return T.RefType(scope.fb.base)
+            return T.RefType(cast(T.POUType, scope.fb).base)
         if isinstance(sym, T.VarSym) and expected is not None and isinstance(T.base_of(expected), T.EnumType) \
-                and key in T.base_of(expected).members and not isinstance(T.base_of(sym.type), T.EnumType):
+                and key in cast(T.EnumType, T.base_of(expected)).members and not isinstance(T.base_of(sym.type), T.EnumType):
             sym = None      # an enum value of the expected type wins over a same-named variable
         if isinstance(sym, T.VarSym) and sym.access:
             self.calls.check_access((sym.access,), sym.owner, f"variable {sym.name}", scope, e.span)
         if isinstance(sym, T.VarSym) and T.is_reference(sym.type):
             sym.used = True
             e.sym = sym
-            return T.unalias(sym.type).target          # REFERENCE TO: the variable it refers to
+            return cast(T.RefType, T.unalias(sym.type)).target          # REFERENCE TO: the variable it refers to
         if isinstance(sym, T.VarSym):
             sym.used = True
             e.sym = sym
@@ -252,9 +252,9 @@ class Expressions(Part):
         # CODESYS (non-strict enumerations): an enumeration value next to a number is its integer
         la, rb = T.base_of(lt), T.base_of(rt)
         if self.ctx.enum_as_int(la) and not isinstance(rb, T.EnumType) and (rb.is_num or rb is T.LIT_INT):
-            lt = la.base
+            lt = cast(T.EnumType, la).base
         elif self.ctx.enum_as_int(rb) and not isinstance(la, T.EnumType) and (la.is_num or la is T.LIT_INT):
-            rt = rb.base
+            rt = cast(T.EnumType, rb).base
         if op in ("=", "<>"):                   # CODESYS: p = 0 tests a POINTER for NULL
             if _zero_pointer(self.ctx, e.right, lt):
                 e.right, rt = _null_at(e.right), _NULL
@@ -316,7 +316,7 @@ class Expressions(Part):
                     return a
                 if a is T.LIT_REAL or a is T.LIT_INT:
                     return T.LIT_REAL if (b is T.LIT_INT or b is T.LIT_REAL) else T.LREAL
-                return T.REAL if a.bits <= 16 else T.LREAL
+                return T.REAL if cast(T.ElemType, a).bits <= 16 else T.LREAL
             return self._bad_operands(e, lt, rt)
         raise AssertionError(op)
 
@@ -361,7 +361,7 @@ class Expressions(Part):
                 return T.default_type_for_literal(b)
         else:
             if b.is_num or isinstance(b, T.LiteralType) or b.is_time:
-                if e.op == "-" and b.is_int and not b.signed:
+                if e.op == "-" and b.is_int and not cast(T.ElemType, b).signed:
                     self.warn("W005", e.span, f"negating an unsigned {t} wraps around")
                 return t
         self.err("E014", e.span, f"operator {e.op} cannot be applied to {t}")
@@ -372,7 +372,7 @@ class Expressions(Part):
             et = self.decls.resolve_named_type(e.base.name.lower(), e.base.span)
             if isinstance(T.unalias(et) if et is not None else None, T.EnumType):
                 # Color.Red: CODESYS's qualified enumeration value
-                et = T.unalias(et)
+                et = cast(T.EnumType, T.unalias(et))
                 m = et.members.get(e.name.lower())
                 if m is None:
                     self.err("E010", e.name_span, f"'{e.name}' is not a value of {et.name}")
@@ -425,7 +425,7 @@ class Expressions(Part):
             v.used = True
             e.sym = v
             if T.is_reference(v.type):                 # inst.r of a REFERENCE TO: what it refers to
-                return T.unalias(v.type).target
+                return cast(T.RefType, T.unalias(v.type)).target
             return v.type
         if isinstance(b, T.ElemType) and b.is_intlike and e.name.isdigit():
             return T.BOOL

@@ -1,7 +1,7 @@
 """Bodies: statements, SFC networks, assignability and lvalues."""
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, cast
 
 from ...source import Span
 from .. import ast as A
@@ -29,9 +29,9 @@ class Statements(Part):
             self.err("E013", tgt.span, "REF= binds a REFERENCE TO variable; this is not one")
             return
         sym.used = sym.written = True
-        tgt.sym = sym
+        cast(A.Name, tgt).sym = sym       # a Name or a Field
         tgt.ty = sym.type
-        want = T.unalias(sym.type).target
+        want = cast(T.RefType, T.unalias(sym.type)).target
         v = s.value
         if isinstance(v, A.Name) and v.name.upper() == "NULL":
             self.exprs.expr(v, scope)
@@ -86,7 +86,7 @@ class Statements(Part):
                 self.stmt(s, scope)
             except Exception as exc:
                 if not hasattr(exc, "st_span"):
-                    exc.st_span = s.span      # where the internal error happened, for the report
+                    exc.st_span = s.span  # type: ignore[attr-defined]  # where the internal error happened, for the report
                 raise
 
     def stmt(self, s: A.Stmt, scope: Scope) -> None:
@@ -214,7 +214,7 @@ class Statements(Part):
         if s is d:
             if isinstance(T.unalias(dst), T.SubrangeType) and isinstance(e, A.Expr):
                 c = self.consts.value(e, None) if isinstance(e, (A.Literal, A.Unary)) else None
-                sub = T.unalias(dst)
+                sub = cast(T.SubrangeType, T.unalias(dst))
                 if isinstance(c, int) and not (sub.lo <= c <= sub.hi):
                     self.err("E021", span, f"{c} is outside the range {sub.lo}..{sub.hi} of {dst}")
                     return False
@@ -225,7 +225,7 @@ class Statements(Part):
                 v = self.consts.value(e, None) if isinstance(e, A.Expr) else None
                 if isinstance(v, int) and not T.literal_fits(v, dst):
                     shown = v if v.bit_length() < 256 else f"a value of {v.bit_length()} bits"
-                    self.err("E021", span, f"{shown} does not fit in {dst} ({T.base_of(dst).lo}..{T.base_of(dst).hi})")
+                    self.err("E021", span, f"{shown} does not fit in {dst} ({cast(T.ElemType, T.base_of(dst)).lo}..{cast(T.ElemType, T.base_of(dst)).hi})")
                     return False
                 return True
             if d.is_real:
@@ -249,7 +249,8 @@ class Statements(Part):
         if T.widens_to(s, d):
             return True
         if self.ctx.enum_as_int(s) and \
-                (d.is_intlike or d.is_real) and (s.base is d or T.widens_to(s.base, d) or d.is_real):
+                (d.is_intlike or d.is_real) and (cast(T.EnumType, s).base is d or T.widens_to(cast(T.EnumType, s).base, d)
+                                                 or d.is_real):
             return True                 # CODESYS: a (non-strict) enumeration value as its integer
         if isinstance(s, T.ArrayType) and isinstance(d, T.ArrayType):
             if same_type(s, d):
@@ -285,12 +286,13 @@ class Statements(Part):
         while isinstance(root, (A.Field, A.Index, A.Bit)):
             root = root.base
         if isinstance(e.sym if isinstance(e, (A.Name, A.Field)) else None, T.PropSym):
-            if e.sym.set is None:
-                self.err("E018", e.span, f"property {e.sym.name} has no SET: it cannot be written")
+            prop = cast(T.PropSym, cast(A.Name, e).sym)
+            if prop.set is None:
+                self.err("E018", e.span, f"property {prop.name} has no SET: it cannot be written")
             return t
         if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym) or isinstance(root, A.Name) \
                 and isinstance(root.sym, T.VarSym):
-            sym = e.sym if isinstance(e, A.Name) else root.sym
+            sym = cast(T.VarSym, e.sym if isinstance(e, A.Name) else cast(A.Name, root).sym)
             sym.written = True
             g = sym.global_ref or sym
             if g.constant or sym.constant:

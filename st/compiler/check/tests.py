@@ -8,7 +8,7 @@ E033. What codegen and the test runner need is kept in `model.TestModel` and
 """
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, cast
 
 from .. import ast as A
 from .. import types as T
@@ -64,7 +64,7 @@ class TestStatements(Part):
     # ---------------------------------------------------------------- calls
     def test_call(self, c: A.Call, key: str, scope: Scope, statement: bool):
         """ASSERT_*, ADVANCE_TIME and MOCK_VERIFY_*: checked here, generated as runtime helper calls."""
-        name = c.callee.name.upper()
+        name = cast(A.Name, c.callee).name.upper()
         if not self._test_only(c.span, name, scope):
             return None
         if not statement:

@@ -63,7 +63,7 @@ def _check_method(sem: Semantics, fb: T.POUType, mt: T.POUType) -> None:
 def _check_sfc(sem: Semantics, pou: T.POUType, scope: Scope) -> None:
     ctx = sem.ctx
     d = pou.decl
-    steps = []
+    steps: list[StepModel] = []
     index = {}
     for s in d.steps:
         key = s.name.lower()
@@ -109,7 +109,8 @@ def _check_sfc(sem: Semantics, pou: T.POUType, scope: Scope) -> None:
             sm.actions.append((key, q, aa.time))
     transitions = []
     for i, t in enumerate(d.transitions):
-        srcs, dsts = [], []
+        srcs: list[int] = []
+        dsts: list[int] = []
         for names, out in ((t.sources, srcs), (t.targets, dsts)):
             for n, sp in names:
                 if n.lower() not in index:
