@@ -165,7 +165,7 @@ class Calls(Part):
         arg = c.args[0].value
         if key == "__delete":
             if not statement:
-                self.err("E020", c.span, "__DELETE(p) is a statement; it has no value")
+                self.err("E049", c.span, "__DELETE(p) is a statement; it has no value")
             t = self.stmts.lvalue(arg, scope)
             if t is not None and not (isinstance(T.unalias(t), T.RefType) and cast(T.RefType, T.unalias(t)).ref_kind == "POINTER"):
                 self.err("E013", arg.span, f"__DELETE needs a POINTER, not {t}")
@@ -246,7 +246,7 @@ class Calls(Part):
             return None
         self.decls.resolve_interface(fb)
         if not statement:
-            self.err("E020", c.span, "a function block call is a statement; it has no value",
+            self.err("E049", c.span, "a function block call is a statement; it has no value",
                      "call it, then read its outputs, e.g. inst(...); x := inst.Q;")
         bind = self._bind_args(c, fb, scope, is_fb=True)
         c.target = CallTarget("fb", pou=fb, bind=bind)

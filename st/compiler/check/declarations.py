@@ -23,7 +23,7 @@ class Declarations(Part):
         if key not in self.ctx.pending_types:
             return None
         if key in self.ctx.resolving:
-            self.err("E012", span, f"type '{key}' is defined in terms of itself")
+            self.err("E046", span, f"type '{key}' is defined in terms of itself")
             return None
         td, lib = self.ctx.pending_types[key]
         self.ctx.resolving.add(key)
@@ -282,12 +282,12 @@ class Declarations(Part):
             if base is None:
                 continue
             if T.implements(base, itf):
-                self.err("E012", d.span, f"INTERFACE {itf.name} extends itself through '{base.name}'")
+                self.err("E046", d.span, f"INTERFACE {itf.name} extends itself through '{base.name}'")
                 continue
             itf.interfaces.append(base)
         for m in d.methods:
             if m.body:
-                self.err("E012", m.span, f"a method of INTERFACE {itf.name} has no body; implement it in a "
+                self.err("E047", m.span, f"a method of INTERFACE {itf.name} has no body; implement it in a "
                          f"FUNCTION_BLOCK that IMPLEMENTS {itf.name}")
             self._declare_method(itf, m)
         for pr in d.properties:
@@ -306,7 +306,7 @@ class Declarations(Part):
                 if mine is None:
                     itf.methods[k] = bm
                 elif signature(mine) != signature(bm):
-                    self.err("E012", mine.decl.span, f"method {mine.name} of {itf.name} differs from "
+                    self.err("E047", mine.decl.span, f"method {mine.name} of {itf.name} differs from "
                              f"{base.name}.{bm.name}")
 
     def _declare_property(self, owner: T.POUType, pr) -> None:
@@ -358,13 +358,13 @@ class Declarations(Part):
         chain, b = {pou.name.lower()}, base
         while b is not None:
             if b.name.lower() in chain:
-                self.err("E012", d.span, f"{pou.name} extends itself through '{b.name}'")
+                self.err("E046", d.span, f"{pou.name} extends itself through '{b.name}'")
                 return None
             chain.add(b.name.lower())
             nxt = b.decl.extends if b.decl is not None else ""
             b = self.p.pous.get(nxt.lower()) if nxt else None
         if "FINAL" in (base.decl.modifiers if base.decl is not None else ()):
-            self.err("E012", d.span, f"'{base.name}' is FINAL and cannot be extended")
+            self.err("E047", d.span, f"'{base.name}' is FINAL and cannot be extended")
             return None
         self.resolve_interface(base)
         return base

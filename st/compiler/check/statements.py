@@ -301,7 +301,7 @@ class Statements(Part):
             if sym.section == "VAR_INPUT" and scope.pou is not None and sym.owner is scope.pou \
                     and not isinstance(T.unalias(sym.type), (T.POUType,)) and isinstance(e, A.Name) \
                     and not T.is_reference(sym.type) and not (self.ctx.dialect and self.ctx.dialect.writable_inputs):
-                self.err("E018", e.span, f"'{sym.name}' is an input of {scope.pou.name} and cannot be written here",
+                self.err("E048", e.span, f"'{sym.name}' is an input of {scope.pou.name} and cannot be written here",
                          "copy it into a local variable first")
                 return t
         elif isinstance(e, (A.Literal, A.Call, A.Binary, A.Unary, A.EnumLit)):

@@ -68,7 +68,7 @@ class TestStatements(Part):
         if not self._test_only(c.span, name, scope):
             return None
         if not statement:
-            self.err("E020", c.span, f"{name} is a statement; it has no value")
+            self.err("E049", c.span, f"{name} is a statement; it has no value")
             return None
         lo, hi = TEST_CALLS[key]
         args = c.args

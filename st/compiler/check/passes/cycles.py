@@ -36,7 +36,7 @@ def check_cycles(ctx: CheckContext) -> None:
                 continue
             if x is start:
                 span = ctx.decl_span.get(start.name.lower())
-                ctx.err("E012", span or Span("<types>", 0, 0), f"'{start.name}' contains itself")
+                ctx.err("E046", span or Span("<types>", 0, 0), f"'{start.name}' contains itself")
                 break
             seen.add(id(x))
             stack.extend(leaf(m) for m in members(x))

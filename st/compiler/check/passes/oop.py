@@ -18,7 +18,7 @@ def check_oop_rules(ctx: CheckContext) -> None:
             for k, bp in base.properties.items():
                 mine = fb.properties[k]
                 if mine is not bp and mine.owner is fb and str(mine.type) != str(bp.type):
-                    ctx.err("E012", mine.span, f"property {mine.name} overrides {base.name}.{bp.name} with "
+                    ctx.err("E047", mine.span, f"property {mine.name} overrides {base.name}.{bp.name} with "
                             f"another type")
             for k, bm in base.methods.items():
                 mine = fb.methods[k]
@@ -68,11 +68,11 @@ def _check_override(ctx: CheckContext, fb: T.POUType, mine: T.POUType, theirs: T
     """A method that replaces an inherited one must keep its signature; FINAL ones cannot be replaced."""
     m = mine.decl
     if "FINAL" in theirs.decl.modifiers:
-        ctx.err("E012", m.span, f"method {m.name} of {theirs.owner_fb.name} is FINAL and cannot be overridden")
+        ctx.err("E047", m.span, f"method {m.name} of {theirs.owner_fb.name} is FINAL and cannot be overridden")
         return
 
     if signature(mine) != signature(theirs):
-        ctx.err("E012", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a different "
+        ctx.err("E047", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a different "
                 f"signature (parameters and return type must be the same)")
     if _access_rank(m.modifiers) > _access_rank(theirs.decl.modifiers):
         ctx.err("E043", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a narrower "
@@ -90,16 +90,16 @@ def _check_implements(ctx: CheckContext, fb: T.POUType) -> None:
                     (ip.get and not mine.get) or (ip.set and not mine.set))):
                 if mine is None and abstract:
                     continue
-                ctx.err("E012", d.span, f"{fb.name} does not implement property {ip.name} of interface "
+                ctx.err("E047", d.span, f"{fb.name} does not implement property {ip.name} of interface "
                         f"{itf.name} (same type, GET and SET as declared there)")
         for k, im in itf.methods.items():
             mine = fb.methods.get(k)
             if mine is None:
                 if not abstract:
-                    ctx.err("E012", d.span, f"{fb.name} does not implement method {im.name} of interface "
+                    ctx.err("E047", d.span, f"{fb.name} does not implement method {im.name} of interface "
                             f"{itf.name}")
             elif signature(mine) != signature(im):
-                ctx.err("E012", mine.decl.span, f"method {mine.name} of {fb.name} does not match "
+                ctx.err("E047", mine.decl.span, f"method {mine.name} of {fb.name} does not match "
                         f"{itf.name}.{im.name} (parameters and return type must be the same)")
             elif {"PRIVATE", "PROTECTED"} & set(mine.decl.modifiers):
                 ctx.err("E043", mine.decl.span, f"method {mine.name} of {fb.name} implements "
