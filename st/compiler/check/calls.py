@@ -167,7 +167,8 @@ class Calls(Part):
             if not statement:
                 self.err("E049", c.span, "__DELETE(p) is a statement; it has no value")
             t = self.stmts.lvalue(arg, scope)
-            if t is not None and not (isinstance(T.unalias(t), T.RefType) and cast(T.RefType, T.unalias(t)).ref_kind == "POINTER"):
+            u = T.unalias(t) if t is not None else None
+            if t is not None and not (isinstance(u, T.RefType) and u.ref_kind == "POINTER"):
                 self.err("E013", arg.span, f"__DELETE needs a POINTER, not {t}")
             c.target = CallTarget("delete", arg=arg)
             return None

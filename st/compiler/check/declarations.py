@@ -9,7 +9,7 @@ from ...source import Span
 from .. import ast as A
 from .. import types as T
 from ..names import mangle, qualified
-from .common import _DIRECT, _DIRECT_TYPES, CONSTRUCTION, Scope, _names_in, image_problem, same_type, signature
+from .common import _DIRECT, _DIRECT_TYPES, CONSTRUCTION, Scope, _names_in, image_problem, signature
 from .part import Part
 
 MAX_ARRAY_ELEMENTS = 50_000_000

@@ -185,8 +185,9 @@ class Expressions(Part):
         if sym is SUPER:
             e.sym = SUPER
             return T.RefType(cast(T.POUType, scope.fb).base)
-        if isinstance(sym, T.VarSym) and expected is not None and isinstance(T.base_of(expected), T.EnumType) \
-                and key in cast(T.EnumType, T.base_of(expected)).members and not isinstance(T.base_of(sym.type), T.EnumType):
+        eb = T.base_of(expected) if expected is not None else None
+        if isinstance(sym, T.VarSym) and isinstance(eb, T.EnumType) and key in eb.members \
+                and not isinstance(T.base_of(sym.type), T.EnumType):
             sym = None      # an enum value of the expected type wins over a same-named variable
         if isinstance(sym, T.VarSym) and sym.access:
             self.calls.check_access((sym.access,), sym.owner, f"variable {sym.name}", scope, e.span)

@@ -225,7 +225,8 @@ class Statements(Part):
                 v = self.consts.value(e, None) if isinstance(e, A.Expr) else None
                 if isinstance(v, int) and not T.literal_fits(v, dst):
                     shown = v if v.bit_length() < 256 else f"a value of {v.bit_length()} bits"
-                    self.err("E021", span, f"{shown} does not fit in {dst} ({cast(T.ElemType, T.base_of(dst)).lo}..{cast(T.ElemType, T.base_of(dst)).hi})")
+                    b = cast(T.ElemType, T.base_of(dst))
+                    self.err("E021", span, f"{shown} does not fit in {dst} ({b.lo}..{b.hi})")
                     return False
                 return True
             if d.is_real:
@@ -248,9 +249,8 @@ class Statements(Part):
             return True
         if T.widens_to(s, d):
             return True
-        if self.ctx.enum_as_int(s) and \
-                (d.is_intlike or d.is_real) and (cast(T.EnumType, s).base is d or T.widens_to(cast(T.EnumType, s).base, d)
-                                                 or d.is_real):
+        if self.ctx.enum_as_int(s) and (d.is_intlike or d.is_real) and (
+                cast(T.EnumType, s).base is d or T.widens_to(cast(T.EnumType, s).base, d) or d.is_real):
             return True                 # CODESYS: a (non-strict) enumeration value as its integer
         if isinstance(s, T.ArrayType) and isinstance(d, T.ArrayType):
             if same_type(s, d):

@@ -8,7 +8,7 @@ E033. What codegen and the test runner need is kept in `model.TestModel` and
 """
 from __future__ import annotations
 
-from typing import Optional, cast
+from typing import cast
 
 from .. import ast as A
 from .. import types as T

@@ -22,7 +22,8 @@ def check_oop_rules(ctx: CheckContext) -> None:
                             f"another type")
             for k, bm in base.methods.items():
                 mine = fb.methods[k]
-                if mine is not bm and mine.owner_fb is fb and k not in CONSTRUCTION:  # each FB_init has its own inputs
+                # each block's FB_init has its own inputs
+                if mine is not bm and mine.owner_fb is fb and k not in CONSTRUCTION:
                     _check_override(ctx, fb, mine, bm)
         if d.implements:
             _check_implements(ctx, fb)
