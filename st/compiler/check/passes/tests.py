@@ -8,6 +8,7 @@ from ... import ast as A
 from ... import types as T
 from ...model import TestModel
 from ..common import Scope
+from ..context import CheckContext
 
 if TYPE_CHECKING:
     from ..semantics import Semantics
@@ -19,26 +20,25 @@ def check_tests(sem: Semantics) -> None:
     for tb in ctx.project.test_blocks:
         by_file.setdefault(tb.span.file, []).append(tb)
     for path, blocks in by_file.items():
-        setup = _single_block(sem, blocks, "SETUP")
-        teardown = _single_block(sem, blocks, "TEARDOWN")
+        setup = _single_block(ctx, blocks, "SETUP")
+        teardown = _single_block(ctx, blocks, "TEARDOWN")
         seen: dict = {}
         for tb in blocks:
             if tb.kind != "TEST":
                 continue
             if tb.name in seen:
                 ctx.err("E011", tb.span, f"a TEST named '{tb.name}' already exists in this file "
-                                          f"(line {seen[tb.name].line})")
+                        f"(line {seen[tb.name].line})")
                 continue
             seen[tb.name] = tb.span
             _check_test(sem, tb, setup, teardown)
 
 
-def _single_block(sem: Semantics, blocks, kind) -> Optional[A.TestBlock]:
-    ctx = sem.ctx
+def _single_block(ctx: CheckContext, blocks: list[A.TestBlock], kind: str) -> Optional[A.TestBlock]:
     found = [b for b in blocks if b.kind == kind]
     for extra in found[1:]:
         ctx.err("E011", extra.span, f"a file may have one {kind} block (the first is at line "
-                                     f"{found[0].span.line})")
+                f"{found[0].span.line})")
     return found[0] if found else None
 
 
