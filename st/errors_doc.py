@@ -20,7 +20,8 @@ def markdown() -> str:
     lines = ["# Diagnostic codes", "",
              "Every diagnostic is printed as `file:line:col: severity[CODE]: message`, then the source",
              "line with a caret under the spot and, for the usual slips, a `hint`. `st explain CODE` prints",
-             "the explanation below. Codes are stable.", "", "| code | meaning |", "|---|---|"]
+             "the explanation below. Codes are stable. This table is generated from `st.diagnostics.Code`",
+             "(`python -m st.errors_doc > docs/diagnostics.md`).", "", "| code | meaning |", "|---|---|"]
     lines += [f"| {c.value} | {c.explanation} |" for c in sorted(Code, key=lambda c: c.value)]
     return "\n".join(lines) + "\n"
 
