@@ -8,8 +8,8 @@ import time
 
 import click
 
-from .diagnostics import CompileError, render_all
-from .errors_doc import EXPLANATIONS
+from .diagnostics import Code, CompileError, render_all
+from .errors_doc import explain as explanation_of
 
 
 _DIALECT = None          # the --dialect of this command line (set by the @dialect decorator)
@@ -244,9 +244,9 @@ def test_cmd(files, keyword, exitfirst, quiet, timeout, cov, cov_html, time_unit
 @click.argument("code")
 def explain(code):
     """Explain a diagnostic code, e.g. `st explain E013`."""
-    text = EXPLANATIONS.get(code.upper())
+    text = explanation_of(code)
     if text is None:
-        click.echo(f"unknown code {code}; codes: {', '.join(sorted(EXPLANATIONS))}", err=True)
+        click.echo(f"unknown code {code}; codes: {', '.join(sorted(c.value for c in Code))}", err=True)
         sys.exit(1)
     click.echo(f"{code.upper()}: {text}")
 

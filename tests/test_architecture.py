@@ -18,7 +18,7 @@ PACKAGE = ROOT / "st"
 ALLOWED: dict[str, set[str]] = {
     "source": set(),
     "diagnostics": {"source"},
-    "errors_doc": set(),
+    "errors_doc": {"diagnostics"},
     "model": {"source", "diagnostics"},
     "grammar": {"source", "diagnostics"},
     "compiler": {"source", "diagnostics", "model", "grammar"},

@@ -79,7 +79,7 @@ def test_writes_to_inputs_and_constants():
     src = ("FUNCTION_BLOCK F\nVAR_INPUT i : INT; END_VAR\nVAR CONSTANT k : INT := 3; END_VAR\n"
            "i := 1;\nk := 2;\nEND_FUNCTION_BLOCK\n")
     e = diags(src)
-    assert codes(e) == [("E018", 4, 1), ("E018", 5, 1)]
+    assert codes(e) == [("E048", 4, 1), ("E018", 5, 1)]
 
 
 def test_non_bool_conditions():
@@ -166,7 +166,7 @@ def test_recursion_and_self_containing_types_are_errors():
            "FUNCTION F : INT\nVAR_INPUT n : INT; END_VAR\nF := G(n);\nEND_FUNCTION\n"
            "FUNCTION G : INT\nVAR_INPUT n : INT; END_VAR\nG := F(n - 1);\nEND_FUNCTION\n")
     e = diags(src)
-    assert sorted(codes(e)) == [("E012", 1, 6), ("E012", 2, 16), ("E032", 7, 6), ("E032", 11, 6)]
+    assert sorted(codes(e)) == [("E032", 7, 6), ("E032", 11, 6), ("E046", 1, 6), ("E046", 2, 16)]
 
 
 def test_initial_values_must_be_constants():

@@ -970,7 +970,7 @@ END_INTERFACE
 FUNCTION_BLOCK F IMPLEMENTS I
 END_FUNCTION_BLOCK
 PROGRAM main VAR f : F; END_VAR END_PROGRAM
-""", "conf.st:6:16: error[E012]: F does not implement method M of interface I"),
+""", "conf.st:6:16: error[E047]: F does not implement method M of interface I"),
     ("""
 FUNCTION_BLOCK A
   METHOD M : INT
@@ -985,7 +985,7 @@ FUNCTION_BLOCK B EXTENDS A
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; END_VAR END_PROGRAM
-""", "conf.st:9:10: error[E012]: method M overrides A.M with a different signature"),
+""", "conf.st:9:10: error[E047]: method M overrides A.M with a different signature"),
     ("""
 INTERFACE I
   METHOD M : INT
@@ -999,7 +999,7 @@ FUNCTION_BLOCK F IMPLEMENTS I
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main VAR f : F; END_VAR END_PROGRAM
-""", "conf.st:8:10: error[E012]: method M of F does not match I.M"),
+""", "conf.st:8:10: error[E047]: method M of F does not match I.M"),
     ("""
 FUNCTION_BLOCK ABSTRACT A
   METHOD ABSTRACT M : INT
@@ -1080,7 +1080,7 @@ END_FUNCTION_BLOCK
 FUNCTION_BLOCK B EXTENDS A
 END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; END_VAR END_PROGRAM
-""", "conf.st:4:16: error[E012]: 'A' is FINAL and cannot be extended"),
+""", "conf.st:4:16: error[E047]: 'A' is FINAL and cannot be extended"),
     ("""
 FUNCTION_BLOCK A
   METHOD FINAL M : INT
@@ -1093,7 +1093,7 @@ FUNCTION_BLOCK B EXTENDS A
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; END_VAR END_PROGRAM
-""", "conf.st:8:10: error[E012]: method M of A is FINAL and cannot be overridden"),
+""", "conf.st:8:10: error[E047]: method M of A is FINAL and cannot be overridden"),
     ("""
 FUNCTION_BLOCK A
   METHOD OVERRIDE M : INT
@@ -1184,7 +1184,7 @@ FUNCTION_BLOCK F IMPLEMENTS I
   END_PROPERTY
 END_FUNCTION_BLOCK
 PROGRAM main END_PROGRAM
-""", "conf.st:7:16: error[E012]: F does not implement property P of interface I"),
+""", "conf.st:7:16: error[E047]: F does not implement property P of interface I"),
     ("""
 FUNCTION_BLOCK F
   METHOD M : INT
@@ -1716,7 +1716,7 @@ PROGRAM main VAR a, b : INT; END_VAR a := Clamp(42); b := Clamp(3); END_PROGRAM
         plc = run(src, dialect=dialect)
         assert (plc["main.a"], plc["main.b"]) == (10, 3)
     else:
-        assert "conf.st:3:18: error[E018]: 'v' is an input of Clamp and cannot be written here" in errors(src, dialect)
+        assert "conf.st:3:18: error[E048]: 'v' is an input of Clamp and cannot be written here" in errors(src, dialect)
 
 
 def test_a_pointer_compared_with_and_assigned_zero_is_null():

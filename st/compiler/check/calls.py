@@ -2,24 +2,25 @@
 from __future__ import annotations
 
 import re
-from typing import Optional
+from typing import Optional, cast
 
 from .. import ast as A
 from ...model import types as T
 from ..library import FuncSig
-from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies, method_of, take_address
+from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies, method_of, same_type, take_address
+from .part import Part
 from .tests import TEST_CALLS
 
 
-class CallsMixin:
+class Calls(Part):
     # ---------------------------------------------------------------- calls
     def call(self, c: A.Call, scope: Scope, statement: bool = False, expected=None) -> Optional[T.Type]:
         callee = c.callee
         if isinstance(callee, A.Name):
             key = callee.name.lower()
-            sym = self._lookup(key, scope)
+            sym = self.exprs.lookup(key, scope)
             if isinstance(sym, T.VarSym) and not isinstance(T.unalias(sym.type), T.POUType) and (
-                    key in self.p.pous or self._native(key) is not None):
+                    key in self.p.pous or self.ctx.native(key) is not None):
                 sym = None      # LEN(x) is the function even where a variable is called len
             if isinstance(sym, T.VarSym):
                 sym.used = True
@@ -28,11 +29,11 @@ class CallsMixin:
                 return self._fb_call(c, sym.type, scope, statement)
             mt = method_of(scope.fb, key) if not isinstance(sym, T.VarSym) else None
             if mt is not None and len(c.args) > len(mt.params()) and (
-                    self._native(key) is not None or key in self.p.pous):
+                    self.ctx.native(key) is not None or key in self.p.pous):
                 mt = None       # LEN(s) inside a block with a method Len(): the arguments say which
             if mt is not None:                     # a method of this instance: THIS^.M(...)
                 fn = self.p.pous.get(key)
-                sig = self._native(key)
+                sig = self.ctx.native(key)
                 n = len([a for a in c.args if not a.name or a.name.lower() not in ("en", "eno")])
                 fits = (sig is not None and (n == len(sig.params) or (sig.extensible and n >= len(sig.params)))) \
                     or (fn is not None and fn.pou_kind == "FUNCTION"
@@ -58,7 +59,7 @@ class CallsMixin:
                 if len(c.args) != 1 or c.args[0].name:
                     self.err("E017", c.span, "__ISVALIDREF takes one reference")
                     return T.BOOL
-                t = self.expr(c.args[0].value, scope)
+                t = self.exprs.expr(c.args[0].value, scope)
                 arg = c.args[0].value
                 is_ref = isinstance(arg, A.Name) and isinstance(arg.sym, T.VarSym) and T.is_reference(arg.sym.type)
                 if not is_ref and not isinstance(T.unalias(t) if t is not None else None, T.RefType):
@@ -69,7 +70,7 @@ class CallsMixin:
             if key == "__queryinterface" and sym is None:
                 return self._query_interface(c, scope)
             if key in TEST_CALLS and sym is None and key not in self.p.pous:
-                return self._test_call(c, key, scope, statement)
+                return self.tests.test_call(c, key, scope, statement)
             if key in scope.actions or (scope.pou is not None and key in scope.pou.actions) or \
                     (scope.fb is not None and key in scope.fb.actions):     # from a method too
                 if c.args:
@@ -83,9 +84,9 @@ class CallsMixin:
                              f"declare an instance and call that",
                              f"VAR inst : {pou.name}; END_VAR ... inst(...);")
                     return None
-                self._resolve_interface(pou)
+                self.decls.resolve_interface(pou)
                 return self._function_call(c, pou, scope)
-            sig = self._native(key)
+            sig = self.ctx.native(key)
             if sig is not None:
                 return self._native_call(c, sig, scope, expected)
             if self.p.enum_members.get(key) or sym is not None:
@@ -94,14 +95,14 @@ class CallsMixin:
             self.err("E010", c.span, f"undeclared function or function block '{callee.name}'")
             for a in c.args:
                 if not a.output:
-                    self.expr(a.value, scope)
+                    self.exprs.expr(a.value, scope)
             return None
         # a method: inst.M(...), THIS^.M(...)
         if isinstance(callee, A.Field):
-            bt = self.expr(callee.base, scope)
+            bt = self.exprs.expr(callee.base, scope)
             b = T.unalias(bt) if bt is not None else None
             if isinstance(b, T.POUType) and b.pou_kind != "FUNCTION":
-                self._resolve_interface(b)
+                self.decls.resolve_interface(b)
                 mt = method_of(b, callee.name.lower())
                 if mt is not None:
                     return self._method_call(c, mt, scope, callee.base)
@@ -116,10 +117,10 @@ class CallsMixin:
                     self.err("E023", callee.name_span, f"{b.name} has no {what} '{callee.name}'")
                     for a in c.args:
                         if not a.output:
-                            self.expr(a.value, scope)
+                            self.exprs.expr(a.value, scope)
                     return None
         # a call through a path: inst.sub(...), arr[i](...)
-        t = self.expr(callee, scope)
+        t = self.exprs.expr(callee, scope)
         if t is None:
             return None
         return self._fb_call(c, t, scope, statement)
@@ -130,9 +131,9 @@ class CallsMixin:
         if len(c.args) != 2 or any(a.name or a.output for a in c.args):
             self.err("E017", c.span, f"{what} takes an array and a dimension: {what}(arr, 1)")
             return T.DINT
-        at = self.expr(c.args[0].value, scope)
-        dim = self.const_value(c.args[1].value, scope)
-        self.expr(c.args[1].value, scope, T.DINT)
+        at = self.exprs.expr(c.args[0].value, scope)
+        dim = self.consts.value(c.args[1].value, scope)
+        self.exprs.expr(c.args[1].value, scope, T.DINT)
         u = T.unalias(at) if at is not None else None
         if at is None:
             return T.DINT
@@ -164,14 +165,15 @@ class CallsMixin:
         arg = c.args[0].value
         if key == "__delete":
             if not statement:
-                self.err("E020", c.span, "__DELETE(p) is a statement; it has no value")
-            t = self.lvalue(arg, scope)
-            if t is not None and not (isinstance(T.unalias(t), T.RefType) and T.unalias(t).ref_kind == "POINTER"):
+                self.err("E049", c.span, "__DELETE(p) is a statement; it has no value")
+            t = self.stmts.lvalue(arg, scope)
+            u = T.unalias(t) if t is not None else None
+            if t is not None and not (isinstance(u, T.RefType) and u.ref_kind == "POINTER"):
                 self.err("E013", arg.span, f"__DELETE needs a POINTER, not {t}")
             c.target = CallTarget("delete", arg=arg)
             return None
         name = arg.name if isinstance(arg, A.Name) else ""
-        t = (T.ELEMENTARY.get(name.upper()) or self._resolve_named_type(name.lower(), arg.span)
+        t = (T.ELEMENTARY.get(name.upper()) or self.decls.resolve_named_type(name.lower(), arg.span)
              or self.p.pous.get(name.lower())) if name else None
         if t is None or (isinstance(t, T.POUType) and t.pou_kind not in ("FUNCTION_BLOCK",)):
             self.err("E012", arg.span, "__NEW needs a data type or a FUNCTION_BLOCK type")
@@ -188,14 +190,14 @@ class CallsMixin:
             return T.LIT_INT
         arg = c.args[0].value
         t = None
-        if isinstance(arg, A.Name) and self._lookup(arg.name.lower(), scope) is None:
-            t = T.ELEMENTARY.get(arg.name.upper()) or self._resolve_named_type(arg.name.lower(), arg.span) \
+        if isinstance(arg, A.Name) and self.exprs.lookup(arg.name.lower(), scope) is None:
+            t = T.ELEMENTARY.get(arg.name.upper()) or self.decls.resolve_named_type(arg.name.lower(), arg.span) \
                 or self.p.pous.get(arg.name.lower())
             if t is None:
                 self.err("E010", arg.span, f"'{arg.name}' is neither a variable nor a type")
                 return T.LIT_INT
         else:
-            t = self.expr(arg, scope)
+            t = self.exprs.expr(arg, scope)
         if t is None:
             return T.LIT_INT
         size, _align = _size_of(t)
@@ -210,8 +212,8 @@ class CallsMixin:
             self.err("E017", c.span, "__QUERYINTERFACE takes two arguments: an interface (or instance) and an "
                      "interface variable")
             return T.BOOL
-        st = self.expr(c.args[0].value, scope)
-        dt = self.lvalue(c.args[1].value, scope)
+        st = self.exprs.expr(c.args[0].value, scope)
+        dt = self.stmts.lvalue(c.args[1].value, scope)
         s, d = (T.unalias(x) if x is not None else None for x in (st, dt))
         if not (isinstance(s, T.POUType) and s.pou_kind in ("INTERFACE", "FUNCTION_BLOCK")):
             self.err("E013", c.args[0].span, f"__QUERYINTERFACE needs an interface or an instance, not {st}")
@@ -230,7 +232,7 @@ class CallsMixin:
         if not isinstance(arg, (A.Name, A.Field, A.Index)):
             self.err("E031", arg.span, "REF needs a variable")
             return None
-        t = self.lvalue(arg, scope)
+        t = self.stmts.lvalue(arg, scope)
         take_address(arg)
         c.target = CallTarget("ref", arg=arg)
         return T.RefType(t) if t is not None else None
@@ -243,9 +245,9 @@ class CallsMixin:
                 fb, T.POUType) and fb.decl is not None and "CLASS" in fb.decl.modifiers else f"a {t} is not callable"
             self.err("E020", c.span, what)
             return None
-        self._resolve_interface(fb)
+        self.decls.resolve_interface(fb)
         if not statement:
-            self.err("E020", c.span, "a function block call is a statement; it has no value",
+            self.err("E049", c.span, "a function block call is a statement; it has no value",
                      "call it, then read its outputs, e.g. inst(...); x := inst.Q;")
         bind = self._bind_args(c, fb, scope, is_fb=True)
         c.target = CallTarget("fb", pou=fb, bind=bind)
@@ -264,7 +266,7 @@ class CallsMixin:
 
     def _function_call(self, c: A.Call, pou: T.POUType, scope: Scope):
         if scope.pou is not None:
-            self._calls.setdefault(scope.pou.name.lower(), []).append((pou.name.lower(), c.span))
+            self.ctx.calls.setdefault(scope.pou.name.lower(), []).append((pou.name.lower(), c.span))
         bind = self._bind_args(c, pou, scope, is_fb=False)
         c.target = CallTarget("function", pou=pou, bind=bind)
         return pou.return_type
@@ -281,7 +283,7 @@ class CallsMixin:
             if not a.name:
                 if npos >= len(pos_params):
                     self.err("E017", a.span, f"too many arguments for {pou.name} (it has {len(pos_params)} parameters)")
-                    self.expr(a.value, scope)
+                    self.exprs.expr(a.value, scope)
                     continue
                 p = pos_params[npos]
                 npos += 1
@@ -298,7 +300,7 @@ class CallsMixin:
                     names = ", ".join(x.name for x in params) or "none"
                     self.err("E016", a.span, f"{pou.name} has no parameter '{a.name}' (parameters: {names})")
                     if not a.output:
-                        self.expr(a.value, scope)
+                        self.exprs.expr(a.value, scope)
                     continue
                 if key in bind:
                     self.err("E011", a.span, f"parameter '{a.name}' is given twice")
@@ -315,34 +317,34 @@ class CallsMixin:
                 if not isinstance(a.value, (A.Name, A.Field, A.Index, A.Bit, A.Deref, A.Direct)):
                     self.err("E031", a.value.span, "an output argument must be a variable")
                     continue
-                vt = self.lvalue(a.value, scope)
+                vt = self.stmts.lvalue(a.value, scope)
                 pt = p.type
                 if vt is not None and pt is not None and not (T.base_of(pt) is T.base_of(vt) or T.widens_to(pt, vt)):
-                    self.assignable(None, pt, vt, a.value.span, "assign output")
+                    self.stmts.assignable(None, pt, vt, a.value.span, "assign output")
             elif p.section == "VAR_IN_OUT":
                 if not isinstance(a.value, (A.Name, A.Field, A.Index, A.Bit, A.Deref, A.Direct)):
                     self.err("E031", a.value.span, f"VAR_IN_OUT '{p.name}' needs a variable, not an expression")
                     continue
-                vt = self.lvalue(a.value, scope)
-                if vt is not None and not self._same_type(vt, p.type) and not T.extends(vt, p.type) and not (
-                        T.is_conformant(p.type) and _fits_conformant(self, vt, p.type)):
+                vt = self.stmts.lvalue(a.value, scope)
+                if vt is not None and not same_type(vt, p.type) and not T.extends(vt, p.type) and not (
+                        T.is_conformant(p.type) and _fits_conformant(vt, p.type)):
                     if not (isinstance(T.base_of(vt), T.StringType) and isinstance(T.base_of(p.type), T.StringType)):
                         self.err("E013", a.value.span, f"VAR_IN_OUT '{p.name}' is {p.type}; {vt} cannot be passed")
             elif T.is_reference(p.type):        # an input REFERENCE TO is bound to the argument
-                want = T.unalias(p.type).target
+                want = cast(T.RefType, T.unalias(p.type)).target
                 if not isinstance(a.value, (A.Name, A.Field, A.Index, A.Deref)):
                     self.err("E031", a.value.span, f"'{p.name}' is a REFERENCE TO {want}: pass a variable")
-                    self.expr(a.value, scope)
+                    self.exprs.expr(a.value, scope)
                     continue
-                vt = self.lvalue(a.value, scope)
+                vt = self.stmts.lvalue(a.value, scope)
                 take_address(a.value)
-                if vt is not None and not self._same_type(vt, want) and not T.extends(vt, want):
+                if vt is not None and not same_type(vt, want) and not T.extends(vt, want):
                     self.err("E013", a.value.span, f"'{p.name}' is a REFERENCE TO {want}; {vt} cannot be bound to it")
             else:
-                vt = self.expr(a.value, scope, p.type)
-                self.assignable(a.value, vt, p.type, a.value.span, "pass")
+                vt = self.exprs.expr(a.value, scope, p.type)
+                self.stmts.assignable(a.value, vt, p.type, a.value.span, "pass")
         if "en" in extras:
-            et = self.expr(extras["en"].value, scope, T.BOOL)
+            et = self.exprs.expr(extras["en"].value, scope, T.BOOL)
             if et is not None and not T.base_of(et).is_bool:
                 self.err("E013", extras["en"].span, "EN must be BOOL")
         if "eno" in extras:
@@ -350,7 +352,7 @@ class CallsMixin:
             if not a.output:
                 self.err("E016", a.span, "ENO is an output; use 'ENO => var'")
             else:
-                self.lvalue(a.value, scope)
+                self.stmts.lvalue(a.value, scope)
         if not is_fb:
             if npos and not any(a.name and a.name.lower() not in ("en", "eno") for a in c.args):
                 # a non-formal call gives every input and in-out, in order (IEC 61131-3 6.6.1.4.2)
@@ -414,7 +416,7 @@ class CallsMixin:
             want = f"at least {nmin}" if sig.extensible else str(len(sig.params))
             self.err("E017", c.span, f"{sig.name} takes {want} argument(s), not {n}")
             for a in args:
-                self.expr(a.value, scope)
+                self.exprs.expr(a.value, scope)
             return None
         # types
         arg_types = []
@@ -422,7 +424,7 @@ class CallsMixin:
         for i, a in enumerate(args):
             p = sig.params[min(i, len(sig.params) - 1)]
             want = T.ELEMENTARY.get(p.constraint)
-            t = self.expr(a.value, scope, want)
+            t = self.exprs.expr(a.value, scope, want)
             arg_types.append(t)
             if t is None:
                 continue
@@ -445,7 +447,7 @@ class CallsMixin:
                     else:
                         groups[p.group] = ct
             elif want is not None:
-                self.assignable(a.value, t, want, a.value.span, "pass")
+                self.stmts.assignable(a.value, t, want, a.value.span, "pass")
         if any(t is None for t in arg_types):
             return None
         for g, t in list(groups.items()):
@@ -495,9 +497,9 @@ class CallsMixin:
         else:
             rt = T.ELEMENTARY[res]
         if en is not None:
-            self.expr(en.value, scope, T.BOOL)
+            self.exprs.expr(en.value, scope, T.BOOL)
         if eno is not None:
-            self.lvalue(eno.value, scope)
+            self.stmts.lvalue(eno.value, scope)
         c.target = CallTarget("native", sig=sig, args=args, arg_types=arg_types, en=en, eno=eno)
         return rt
 
@@ -535,7 +537,7 @@ def _size_of(t: T.Type):
     return n, n
 
 
-def _fits_conformant(chk, arg, param) -> bool:
+def _fits_conformant(arg, param) -> bool:
     """An array for an ARRAY[*] parameter: as many dimensions, the same element type."""
-    a, p = T.unalias(arg), T.unalias(param)
-    return isinstance(a, T.ArrayType) and len(a.dims) == len(p.dims) and chk._same_type(a.element, p.element)
+    a, p = T.unalias(arg), cast(T.ArrayType, T.unalias(param))
+    return isinstance(a, T.ArrayType) and len(a.dims) == len(p.dims) and same_type(a.element, p.element)

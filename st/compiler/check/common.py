@@ -12,6 +12,8 @@ _SECTIONS_PARAM = ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")
 _LOGIC = {"AND", "OR", "XOR", "AND_THEN", "OR_ELSE"}
 _CMP = {"=", "<>", "<", ">", "<=", ">="}
 _DIRECT = re.compile(r"%([IQM])([XBWDL]?)(\*|[0-9]+(?:\.[0-9]+)*)")
+# CODESYS's implicit methods: FB_init runs when an instance is created (before the first scan)
+CONSTRUCTION = ("fb_init", "fb_reinit", "fb_exit")
 _DIRECT_TYPES = {"X": T.BOOL, "": T.BOOL, "B": T.BYTE, "W": T.WORD, "D": T.DWORD, "L": T.LWORD}
 
 
@@ -49,7 +51,7 @@ class Scope:
         self.actions: dict = {}
         self.library = library
         self.test = False           # inside TEST/SETUP/TEARDOWN: test statements allowed
-        self.fb = None              # the function block whose body or METHOD this is (THIS, implicit calls)
+        self.fb: Optional[T.POUType] = None  # the function block whose body or METHOD this is (THIS, implicit calls)
 
 
 def _names_in(body):
@@ -156,3 +158,25 @@ def _satisfies(t: T.Type, constraint: str) -> bool:
     if c is None:
         return False
     return b is c or T.widens_to(b, c)
+
+
+def same_type(a: T.Type, b: T.Type) -> bool:
+    """Are these the same type (aliases seen through; strings of any length, subranges of one base)?"""
+    a, b = T.unalias(a), T.unalias(b)
+    if a is b:
+        return True
+    if isinstance(a, T.StringType) and isinstance(b, T.StringType):
+        return a.wide == b.wide
+    if isinstance(a, T.ArrayType) and isinstance(b, T.ArrayType):
+        return a.dims == b.dims and same_type(a.element, b.element)
+    if isinstance(a, T.SubrangeType) or isinstance(b, T.SubrangeType):
+        return T.base_of(a) is T.base_of(b)
+    if isinstance(a, T.RefType) and isinstance(b, T.RefType):
+        return same_type(a.target, b.target)
+    return False
+
+
+def signature(mt: T.POUType) -> tuple:
+    """A method's parameters and return type, as an override or an implementation must repeat them."""
+    return ([(v.name.lower(), v.section, str(v.type)) for v in mt.params()],
+            str(mt.return_type) if mt.return_type is not None else None)

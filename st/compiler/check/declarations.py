@@ -1,102 +1,36 @@
-"""Declarations: POUs and types collected, types resolved, interfaces and globals declared, constants evaluated."""
+"""Declarations: named types resolved, POU interfaces (variables, methods, properties, bases, interfaces)
+declared, variable blocks declared, initial values checked. Resolution is on demand: a type or a POU
+is resolved when first met, so declarations may come in any order."""
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, cast
 
 from ...model import types as T
 from ...source import Span
 from .. import ast as A
 from ..names import mangle, qualified
-from .common import _DIRECT, _DIRECT_TYPES, Scope, _names_in, image_problem
-
-
-def _access_rank(mods) -> int:
-    """PUBLIC/INTERNAL 0 < PROTECTED 1 < PRIVATE 2."""
-    return 2 if "PRIVATE" in mods else 1 if "PROTECTED" in mods else 0
-
-
-# CODESYS's implicit methods: FB_init runs when an instance is created (before the first scan)
-_CONSTRUCTION = ("fb_init", "fb_reinit", "fb_exit")
+from .common import _DIRECT, _DIRECT_TYPES, CONSTRUCTION, Scope, _names_in, image_problem, signature
+from .part import Part
 
 MAX_ARRAY_ELEMENTS = 50_000_000
 
 
-class DeclarationsMixin:
-    # ================================================================ collection
-    def _collect(self, u: A.Unit) -> None:
-        for item in u.items:
-            if isinstance(item, A.TypeBlock):
-                for td in item.types:
-                    key = td.name.lower()
-                    if key in self._pending_types or key in self.p.pous:
-                        self._dup(td.name, td.span)
-                        continue
-                    if key in T.ELEMENTARY:
-                        self.err("E011", td.span, f"'{td.name}' is an elementary type and cannot be redefined")
-                        continue
-                    self._pending_types[key] = (td, self._lib_of(td.span))
-                    self._decl_span[key] = td.span
-            elif isinstance(item, (A.POU, A.Interface)):
-                self._oop_features(item)
-                key = item.name.lower()
-                if key in self.p.pous or key in self._pending_types:
-                    old = self.p.pous.get(key)
-                    if old is not None and old.library and not self._lib_of(item.span):
-                        # a user POU replaces a library POU of the same name
-                        self.warn("W004", item.span, f"'{item.name}' replaces the standard library's {item.name}")
-                    else:
-                        self._dup(item.name, item.span)
-                        continue
-                pt = T.POUType(item.name, item.kind, decl=item, library=self._lib_of(item.span))
-                pt.pyname = {"FUNCTION": "_fn_", "FUNCTION_BLOCK": "_fb_", "PROGRAM": "_prg_",
-                             "INTERFACE": "_itf_"}[item.kind] + mangle(item.name)
-                self.p.pous[key] = pt
-                self._decl_span[key] = item.span
-            elif isinstance(item, A.Configuration):
-                self._configs.append(item)
-            elif isinstance(item, A.VarBlock):
-                if item.kind != "VAR_GLOBAL":
-                    self.err("E003", item.span, f"{item.kind} is not allowed outside a POU")
-                    continue
-                self._global_blocks.append(("", item))
-            elif isinstance(item, A.TestBlock):
-                self.p.test_blocks.append(item)
-
-    def _oop_features(self, item) -> None:
-        if isinstance(item, A.Interface):
-            self.feature("oop", item.span, "INTERFACE")
-            return
-        if "CLASS" in item.modifiers:
-            self.feature("oop", item.span, "CLASS")
-        if item.extends:
-            self.feature("oop", item.span, "EXTENDS")
-        if item.implements:
-            self.feature("oop", item.span, "IMPLEMENTS")
-        for m in item.methods:
-            self.feature("oop", m.span, "METHOD")
-        for pr in item.properties:
-            self.feature("oop", pr.span, "PROPERTY")
-
-    def _dup(self, name: str, span: Span) -> None:
-        prev = self._decl_span.get(name.lower())
-        where = f" (first declared at {prev.file}:{prev.line})" if prev else ""
-        self.err("E011", span, f"'{name}' is declared twice{where}")
-
+class Declarations(Part):
     # ================================================================ types
-    def _resolve_named_type(self, key: str, span: Span) -> Optional[T.Type]:
+    def resolve_named_type(self, key: str, span: Span) -> Optional[T.Type]:
         if key in self.p.types:
             return self.p.types[key]
-        if key not in self._pending_types:
+        if key not in self.ctx.pending_types:
             return None
-        if key in self._resolving:
-            self.err("E012", span, f"type '{key}' is defined in terms of itself")
+        if key in self.ctx.resolving:
+            self.err("E046", span, f"type '{key}' is defined in terms of itself")
             return None
-        td, lib = self._pending_types[key]
-        self._resolving.add(key)
+        td, lib = self.ctx.pending_types[key]
+        self.ctx.resolving.add(key)
         try:
             t = self._type_from_decl(td)
         finally:
-            self._resolving.discard(key)
+            self.ctx.resolving.discard(key)
         self.p.types[key] = t
         return t
 
@@ -154,7 +88,7 @@ class DeclarationsMixin:
         nxt = 0
         for v in spec.values:
             if v.value is not None:
-                c = self.const_value(v.value, None)
+                c = self.consts.value(v.value, None)
                 if not isinstance(c, int):
                     self.err("E029", v.span, f"the value of '{v.name}' must be an integer constant")
                     c = nxt
@@ -185,7 +119,7 @@ class DeclarationsMixin:
             up = spec.name.upper()
             if up in T.ELEMENTARY:
                 return T.ELEMENTARY[up]
-            t = self._resolve_named_type(key, spec.span)
+            t = self.resolve_named_type(key, spec.span)
             if t is not None:
                 return t
             pou = self.p.pous.get(key)
@@ -199,7 +133,7 @@ class DeclarationsMixin:
         if isinstance(spec, A.StringType):
             n = 80
             if spec.length is not None:
-                c = self.const_value(spec.length, scope)
+                c = self.consts.value(spec.length, scope)
                 if not isinstance(c, int) or c < 1:
                     self.err("E029", spec.span, "a string length must be a positive integer constant")
                 else:
@@ -211,7 +145,7 @@ class DeclarationsMixin:
                 if r is None:
                     dims.append((0, -1))      # ARRAY[*]: bounds come from the argument
                     continue
-                lo, hi = self.const_value(r[0], scope), self.const_value(r[1], scope)
+                lo, hi = self.consts.value(r[0], scope), self.consts.value(r[1], scope)
                 if not isinstance(lo, int) or not isinstance(hi, int):
                     self.err("E029", spec.span, "array bounds must be integer constants")
                     lo, hi = 0, 0
@@ -230,11 +164,11 @@ class DeclarationsMixin:
                 self.feature("vendor", spec.span, f"{spec.kind} TO")
             return T.RefType(self.resolve_type(spec.target, scope), spec.kind)
         if isinstance(spec, A.SubrangeType):
-            base = T.ELEMENTARY.get(spec.base.upper())
+            base = cast(Optional[T.ElemType], T.ELEMENTARY.get(spec.base.upper()))
             if base is None or not base.is_intlike:
                 self.err("E012", spec.span, f"a subrange needs an integer base type, not '{spec.base}'")
                 base = T.INT
-            lo, hi = self.const_value(spec.lo, scope), self.const_value(spec.hi, scope)
+            lo, hi = self.consts.value(spec.lo, scope), self.consts.value(spec.hi, scope)
             if not isinstance(lo, int) or not isinstance(hi, int):
                 self.err("E029", spec.span, "subrange bounds must be integer constants")
                 lo, hi = base.lo, base.hi
@@ -254,7 +188,7 @@ class DeclarationsMixin:
             self.err("E013", init.span, f"arguments in a declaration go to a function block's FB_init; "
                      f"{t} is not a function block")
             return
-        self._resolve_interface(bt)
+        self.resolve_interface(bt)
         mt = bt.methods.get("fb_init")
         if mt is None:
             self.err("E017", init.span, f"{bt.name} has no FB_init method to take these arguments")
@@ -274,7 +208,7 @@ class DeclarationsMixin:
             self.check_initializer(init.inner, t, scope)
 
     # ================================================================ interfaces
-    def _resolve_interface(self, pou: T.POUType) -> None:
+    def resolve_interface(self, pou: T.POUType) -> None:
         if pou.resolved or pou.decl is None:
             return
         pou.resolved = True
@@ -292,7 +226,7 @@ class DeclarationsMixin:
                 if k not in ("en", "eno"):
                     pou.vars[k] = v
         for block in d.var_blocks:
-            self._declare_block(block, pou.vars, scope, pou)
+            self.declare_block(block, pou.vars, scope, pou)
         if d.kind in ("FUNCTION", "FUNCTION_BLOCK"):
             # EN and ENO are implicit in every function and FB; declare them when the body uses them
             mentioned = {n.name.lower() for n in _names_in(d.body)}
@@ -313,51 +247,19 @@ class DeclarationsMixin:
             for k, ba in base.actions.items():
                 pou.actions.setdefault(k, ba)        # actions are inherited; a same-named one replaces it
             for k, bp in base.properties.items():
-                mine = pou.properties.get(k)
-                if mine is None:
-                    pou.properties[k] = bp
-                elif str(mine.type) != str(bp.type):
-                    self.err("E012", mine.span, f"property {mine.name} overrides {base.name}.{bp.name} with "
-                             f"another type")
+                pou.properties.setdefault(k, bp)     # an own property of that name overrides it
             for k, bm in base.methods.items():
-                mine = pou.methods.get(k)
-                if mine is None:
-                    pou.methods[k] = bm
-                elif k not in _CONSTRUCTION:           # each block's FB_init has its own inputs
-                    self._check_override(pou, mine, bm)
+                pou.methods.setdefault(k, bm)        # an own method of that name overrides it
         if d.kind == "FUNCTION_BLOCK" and d.implements:
-            self._check_implements(pou)
-        if d.kind == "FUNCTION_BLOCK":
-            self._check_abstract_and_override(pou, base)
+            self._link_interfaces(pou)
 
-    def _check_abstract_and_override(self, fb: T.POUType, base) -> None:
-        d = fb.decl
-        abstract_fb = "ABSTRACT" in d.modifiers
-        for mt in fb.methods.values():
-            mods = mt.decl.modifiers
-            if mt.owner_fb is fb:
-                if "OVERRIDE" in mods and (base is None or mt.name.lower() not in base.methods):
-                    self.err("E043", mt.decl.span, f"method {mt.name} is marked OVERRIDE but {fb.name} inherits "
-                             f"no method of that name")
-                if "ABSTRACT" in mods and not abstract_fb:
-                    self.err("E043", mt.decl.span, f"ABSTRACT method {mt.name} in {fb.name}, which is not ABSTRACT")
-                if "ABSTRACT" in mods and mt.decl.body:
-                    self.err("E043", mt.decl.span, f"ABSTRACT method {mt.name} has a body")
-            elif "ABSTRACT" in mods and not abstract_fb:
-                self.err("E043", d.span, f"{fb.name} does not implement the ABSTRACT method {mt.name} of "
-                         f"{mt.owner_fb.name}")
-        for ps in fb.properties.values():
-            acc = ps.get or ps.set
-            if acc is None or acc.decl is None or "ABSTRACT" not in acc.decl.modifiers:
-                continue
-            if ps.owner is fb:
-                if not abstract_fb:
-                    self.err("E043", ps.span, f"ABSTRACT property {ps.name} in {fb.name}, which is not ABSTRACT")
-                if any(a is not None and a.decl.body for a in (ps.get, ps.set)):
-                    self.err("E043", ps.span, f"ABSTRACT property {ps.name} has a body")
-            elif not abstract_fb:
-                self.err("E043", d.span, f"{fb.name} does not implement the ABSTRACT property {ps.name} of "
-                         f"{ps.owner.name}")
+    def _link_interfaces(self, fb: T.POUType) -> None:
+        """FUNCTION_BLOCK … IMPLEMENTS I1, I2: the interfaces it provides (whether it implements them
+        fully is an object-oriented rule, checked later)."""
+        for name in fb.decl.implements:
+            itf = self._interface_named(name, fb.decl.span, f"{fb.name} IMPLEMENTS")
+            if itf is not None:
+                fb.interfaces.append(itf)
 
     def _interface_named(self, name: str, span, who: str):
         if name.lower() == "__system.iqueryinterface":
@@ -369,7 +271,7 @@ class DeclarationsMixin:
             what = "not declared" if itf is None else f"a {itf.pou_kind.replace('_', ' ')}, not an INTERFACE"
             self.err("E012" if itf is not None else "E010", span, f"{who}: '{name}' is {what}")
             return None
-        self._resolve_interface(itf)
+        self.resolve_interface(itf)
         return itf
 
     def _resolve_itf(self, itf: T.POUType) -> None:
@@ -380,12 +282,12 @@ class DeclarationsMixin:
             if base is None:
                 continue
             if T.implements(base, itf):
-                self.err("E012", d.span, f"INTERFACE {itf.name} extends itself through '{base.name}'")
+                self.err("E046", d.span, f"INTERFACE {itf.name} extends itself through '{base.name}'")
                 continue
             itf.interfaces.append(base)
         for m in d.methods:
             if m.body:
-                self.err("E012", m.span, f"a method of INTERFACE {itf.name} has no body; implement it in a "
+                self.err("E047", m.span, f"a method of INTERFACE {itf.name} has no body; implement it in a "
                          f"FUNCTION_BLOCK that IMPLEMENTS {itf.name}")
             self._declare_method(itf, m)
         for pr in d.properties:
@@ -403,44 +305,9 @@ class DeclarationsMixin:
                 mine = itf.methods.get(k)
                 if mine is None:
                     itf.methods[k] = bm
-                elif self._signature(mine) != self._signature(bm):
-                    self.err("E012", mine.decl.span, f"method {mine.name} of {itf.name} differs from "
+                elif signature(mine) != signature(bm):
+                    self.err("E047", mine.decl.span, f"method {mine.name} of {itf.name} differs from "
                              f"{base.name}.{bm.name}")
-
-    def _check_implements(self, fb: T.POUType) -> None:
-        """FUNCTION_BLOCK … IMPLEMENTS I1, I2: every method of each interface, with its signature."""
-        d = fb.decl
-        abstract = "ABSTRACT" in d.modifiers
-        for name in d.implements:
-            itf = self._interface_named(name, d.span, f"{fb.name} IMPLEMENTS")
-            if itf is None:
-                continue
-            fb.interfaces.append(itf)
-            for k, ip in itf.properties.items():
-                mine = fb.properties.get(k)
-                if mine is None or str(mine.type) != str(ip.type) or (not ip.bare and (
-                        (ip.get and not mine.get) or (ip.set and not mine.set))):
-                    if mine is None and abstract:
-                        continue
-                    self.err("E012", d.span, f"{fb.name} does not implement property {ip.name} of interface "
-                             f"{itf.name} (same type, GET and SET as declared there)")
-            for k, im in itf.methods.items():
-                mine = fb.methods.get(k)
-                if mine is None:
-                    if not abstract:
-                        self.err("E012", d.span, f"{fb.name} does not implement method {im.name} of interface "
-                                 f"{itf.name}")
-                elif self._signature(mine) != self._signature(im):
-                    self.err("E012", mine.decl.span, f"method {mine.name} of {fb.name} does not match "
-                             f"{itf.name}.{im.name} (parameters and return type must be the same)")
-                elif {"PRIVATE", "PROTECTED"} & set(mine.decl.modifiers):
-                    self.err("E043", mine.decl.span, f"method {mine.name} of {fb.name} implements "
-                             f"{itf.name}.{im.name}: it must be PUBLIC")
-
-    @staticmethod
-    def _signature(mt: T.POUType):
-        return ([(v.name.lower(), v.section, str(v.type)) for v in mt.params()],
-                str(mt.return_type) if mt.return_type is not None else None)
 
     def _declare_property(self, owner: T.POUType, pr) -> None:
         """PROPERTY: GET is a method returning the property's type under its name; SET a method whose
@@ -473,7 +340,7 @@ class DeclarationsMixin:
         if m.return_type is not None:
             mt.return_type = self.resolve_type(m.return_type, scope)
         for block in m.var_blocks:
-            self._declare_block(block, mt.vars, scope, mt)
+            self.declare_block(block, mt.vars, scope, mt)
         return mt
 
     def _base_of(self, pou: T.POUType):
@@ -491,30 +358,16 @@ class DeclarationsMixin:
         chain, b = {pou.name.lower()}, base
         while b is not None:
             if b.name.lower() in chain:
-                self.err("E012", d.span, f"{pou.name} extends itself through '{b.name}'")
+                self.err("E046", d.span, f"{pou.name} extends itself through '{b.name}'")
                 return None
             chain.add(b.name.lower())
             nxt = b.decl.extends if b.decl is not None else ""
             b = self.p.pous.get(nxt.lower()) if nxt else None
         if "FINAL" in (base.decl.modifiers if base.decl is not None else ()):
-            self.err("E012", d.span, f"'{base.name}' is FINAL and cannot be extended")
+            self.err("E047", d.span, f"'{base.name}' is FINAL and cannot be extended")
             return None
-        self._resolve_interface(base)
+        self.resolve_interface(base)
         return base
-
-    def _check_override(self, fb: T.POUType, mine: T.POUType, theirs: T.POUType) -> None:
-        """A method that replaces an inherited one must keep its signature; FINAL ones cannot be replaced."""
-        m = mine.decl
-        if "FINAL" in theirs.decl.modifiers:
-            self.err("E012", m.span, f"method {m.name} of {theirs.owner_fb.name} is FINAL and cannot be overridden")
-            return
-
-        if self._signature(mine) != self._signature(theirs):
-            self.err("E012", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a different "
-                     f"signature (parameters and return type must be the same)")
-        if _access_rank(m.modifiers) > _access_rank(theirs.decl.modifiers):
-            self.err("E043", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a narrower "
-                     f"access (an override keeps the base's access or widens it)")
 
     def _declare_method(self, fb: T.POUType, m) -> None:
         """A METHOD: a function whose body also sees the instance's variables (and THIS)."""
@@ -532,18 +385,18 @@ class DeclarationsMixin:
         if m.return_type is not None:
             mt.return_type = self.resolve_type(m.return_type, scope)
         for block in m.var_blocks:
-            self._declare_block(block, mt.vars, scope, mt)
+            self.declare_block(block, mt.vars, scope, mt)
         for v in mt.vars.values():
             if v.name.lower() in fb.vars and v.section != "VAR_EXTERNAL":
                 self.warn("W006", v.span, f"'{v.name}' in method {m.name} hides the variable of {fb.name}")
             if v.section == "VAR_INST":               # kept in the instance between calls
                 self.feature("vendor", v.span, "VAR_INST")
                 v.pyname = "_mi_" + qualified(m.name, v.name)
-            if key in _CONSTRUCTION and v.section in ("VAR_IN_OUT", "VAR_OUTPUT"):
+            if key in CONSTRUCTION and v.section in ("VAR_IN_OUT", "VAR_OUTPUT"):
                 self.err("E017", v.span, f"{m.name} runs when the instance is created: it takes inputs only")
         fb.methods[key] = mt
 
-    def _declare_block(self, block: A.VarBlock, table: dict, scope: Optional[Scope], owner) -> None:
+    def declare_block(self, block: A.VarBlock, table: dict, scope: Optional[Scope], owner) -> None:
         kind = block.kind
         quals = set(block.qualifiers)
         if owner is not None:
@@ -563,7 +416,7 @@ class DeclarationsMixin:
                     return
                 kind = "VAR"                   # still declare the names: no cascade of 'undeclared' errors
             if kind == "VAR_GLOBAL":
-                self._global_blocks.append((owner.name, block))
+                self.ctx.global_blocks.append((owner.name, block))
                 return
         access = [q for q in block.qualifiers if q in ("PUBLIC", "PRIVATE", "PROTECTED", "INTERNAL")]
         if access:
@@ -612,20 +465,20 @@ class DeclarationsMixin:
                     self.p.globals[sym.pyname] = sym
                 table[key] = sym
                 if decl.location:
-                    self._check_location(decl.location, t, sp)
+                    self.check_location(decl.location, t, sp)
             if decl.init is not None and kind != "VAR_EXTERNAL" and owner is None:
-                self._deferred_inits.append((decl, t))
+                self.ctx.deferred_inits.append((decl, t))
             elif decl.init is not None and kind != "VAR_EXTERNAL":
                 self.check_initializer(decl.init, t, scope)
                 if "CONSTANT" in quals:
-                    cv = self.const_value(decl.init, scope) if isinstance(decl.init, A.Expr) else None
+                    cv = self.consts.value(decl.init, scope) if isinstance(decl.init, A.Expr) else None
                     if cv is not None:
                         for n, _ in decl.names:
                             table[n.lower()].const_value = cv
             if kind in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT") and owner is None:
                 self.err("E003", decl.span, f"{kind} is only allowed in a POU")
 
-    def _check_location(self, loc: str, t: T.Type, span: Span) -> None:
+    def check_location(self, loc: str, t: T.Type, span: Span) -> None:
         m = _DIRECT.fullmatch(loc.upper())
         if not m:
             self.err("E004", span, f"malformed address '{loc}'")
@@ -645,165 +498,6 @@ class DeclarationsMixin:
             return
         if isinstance(bt, T.ElemType) and bt.bits != want.bits and not (size in ("", "X") and bt.is_bool):
             self.err("E013", span, f"'{loc}' is {want.bits} bit(s) wide; it cannot hold a {t}")
-
-    def _resolve_globals(self) -> None:
-        for cfg in self._configs:
-            for b in cfg.var_blocks:
-                self._global_blocks.append((cfg.name, b))
-            for r in cfg.resources:
-                for b in r.var_blocks:
-                    self._global_blocks.append((cfg.name + "." + r.name, b))
-        declared: dict = {}           # scope + lower-case name → symbol (ST names ignore case)
-        for prefix, block in self._global_blocks:
-            table: dict = {}
-            if block.kind == "VAR_CONFIG":
-                continue
-            self._declare_block(block, table, None, None)
-            for key, sym in table.items():
-                sym.section = "VAR_GLOBAL"
-                sym.is_global = True
-                scope = prefix.split(".") if prefix else []
-                sym.pyname = "_g_" + qualified(*scope, sym.name)
-                uniq = sym.pyname.lower()
-                other = declared.get(uniq)
-                if other is not None:
-                    self.err("E011", sym.span, f"global '{sym.name}' is declared twice "
-                             f"(first at {other.span.file}:{other.span.line})")
-                    continue
-                declared[uniq] = sym
-                self.p.globals[sym.pyname] = sym
-                self.p.global_names.setdefault(key, []).append(sym)
-        # global initializers may name other globals: check them once all are declared
-        for decl, t in self._deferred_inits:
-            self.check_initializer(decl.init, t, None)
-        self._deferred_inits = []
-        # bind VAR_EXTERNAL declarations (of POUs, their methods and property accessors)
-        owners = []
-        for pou in self.p.pous.values():
-            owners.append(pou)
-            owners += [m for m in pou.methods.values() if m.owner_fb is pou]
-            owners += [a for ps in pou.properties.values() if ps.owner is pou for a in (ps.get, ps.set) if a]
-        for pou in owners:
-            for sym in pou.vars.values():
-                if sym.section == "VAR_EXTERNAL":
-                    cands = self.p.global_names.get(sym.name.lower())
-                    if not cands:
-                        self.err("E010", sym.span, f"VAR_EXTERNAL '{sym.name}' has no matching VAR_GLOBAL")
-                        continue
-                    g = cands[0]
-                    sym.global_ref = g
-                    sym.pyname = g.pyname
-                    if not self._same_type(g.type, sym.type):
-                        self.err("E013", sym.span, f"VAR_EXTERNAL '{sym.name}' is declared {sym.type} "
-                                 f"but the VAR_GLOBAL is {g.type}")
-
-    def _same_type(self, a: T.Type, b: T.Type) -> bool:
-        a, b = T.unalias(a), T.unalias(b)
-        if a is b:
-            return True
-        if isinstance(a, T.StringType) and isinstance(b, T.StringType):
-            return a.wide == b.wide
-        if isinstance(a, T.ArrayType) and isinstance(b, T.ArrayType):
-            return a.dims == b.dims and self._same_type(a.element, b.element)
-        if isinstance(a, T.SubrangeType) or isinstance(b, T.SubrangeType):
-            return T.base_of(a) is T.base_of(b)
-        if isinstance(a, T.RefType) and isinstance(b, T.RefType):
-            return self._same_type(a.target, b.target)
-        return False
-
-    # ================================================================ constants
-    def const_value(self, e, scope: Optional[Scope]):
-        """Evaluate a constant expression (literals, CONSTANT variables, enum values), or None."""
-        if isinstance(e, A.Field):
-            return e.const if isinstance(e.sym, T.EnumType) else None
-        if isinstance(e, A.Literal):
-            return e.value
-        if isinstance(e, A.EnumLit):
-            et = self._resolve_named_type(e.type_name.lower(), e.span)
-            if isinstance(et, T.EnumType):
-                m = et.members.get(e.member.lower())
-                return m[1] if m else None
-            return None
-        if isinstance(e, A.Name):
-            key = e.name.lower()
-            sym = scope.vars.get(key) if scope is not None else None
-            if sym is None:
-                gs = self.p.global_names.get(key)
-                sym = gs[0] if gs else None
-            if sym is not None:
-                if sym.global_ref is not None:
-                    sym = sym.global_ref
-                if sym.constant and sym.init is not None and isinstance(sym.init, A.Expr):
-                    sym.used = True
-                    return self.const_value(sym.init, None)
-                return None
-            mems = self.p.enum_members.get(key)
-            if mems and len({m[2] for m in mems}) == 1:
-                return mems[0][2]
-            return self._raw_global_constant(key)
-        if isinstance(e, A.Unary):
-            v = self.const_value(e.operand, scope)
-            if v is None or isinstance(v, str):
-                return None
-            if e.op == "-":
-                return -v
-            if e.op == "+":
-                return v
-            if e.op == "NOT" and isinstance(v, bool):
-                return not v
-            return None
-        if isinstance(e, A.Binary):
-            a, b = self.const_value(e.left, scope), self.const_value(e.right, scope)
-            if a is None or b is None or isinstance(a, str) or isinstance(b, str):
-                return None
-            try:
-                op = e.op
-                if op == "+":
-                    return a + b
-                if op == "-":
-                    return a - b
-                if op == "*":
-                    return a * b
-                if op == "/":
-                    if isinstance(a, int) and isinstance(b, int):
-                        q = abs(a) // abs(b)
-                        return q if (a >= 0) == (b >= 0) else -q
-                    return a / b
-                if op == "MOD":
-                    return 0 if b == 0 else a - b * int(a / b)
-                if op == "**":
-                    return float(a) ** b
-                if op == "AND":
-                    return a & b
-                if op == "OR":
-                    return a | b
-                if op == "XOR":
-                    return a ^ b
-            except (ZeroDivisionError, OverflowError):
-                return None
-            return None
-        return None
-
-    def _raw_global_constant(self, key: str):
-        """A VAR_GLOBAL CONSTANT not declared yet (types and POU interfaces are resolved first)."""
-        if key in self._raw_const_busy:
-            return None
-        blocks = list(self._global_blocks)
-        for cfg in getattr(self, "_configs", []):
-            blocks += [("", b) for b in cfg.var_blocks]
-            for r in cfg.resources:
-                blocks += [("", b) for b in r.var_blocks]
-        for _, b in blocks:
-            if "CONSTANT" not in b.qualifiers:
-                continue
-            for d in b.decls:
-                if any(n.lower() == key for n, _ in d.names) and isinstance(d.init, A.Expr):
-                    self._raw_const_busy.add(key)
-                    try:
-                        return self.const_value(d.init, None)
-                    finally:
-                        self._raw_const_busy.discard(key)
-        return None
 
     # ================================================================ initializers
     def check_initializer(self, init, t: T.Type, scope: Optional[Scope]) -> None:
@@ -830,7 +524,7 @@ class DeclarationsMixin:
             if isinstance(bt, T.StructType):
                 fields, what = bt.members, "field"
             elif isinstance(bt, T.POUType) and bt.pou_kind != "FUNCTION":
-                self._resolve_interface(bt)
+                self.resolve_interface(bt)
                 fields, what = bt.vars, "variable"
             else:
                 self.err("E013", init.span, f"a structure initializer cannot initialize a {t}")
@@ -847,10 +541,10 @@ class DeclarationsMixin:
                 # CODESYS-style: a single value initializes... no; IEC needs [..]
                 self.err("E013", init.span, f"an array needs an initializer in brackets, e.g. [{init.text}]")
                 return
-            st = self.expr(init, scope or Scope(None, {}), t)
+            st = self.exprs.expr(init, scope or Scope(None, {}), t)
             for n in _names_in([init]):
                 if isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
                     self.err("E029", n.span, f"an initial value must be a constant; '{n.name}' is a variable",
                              "assign it in the code instead, or declare it CONSTANT")
                     return
-            self.assignable(init, st, t, init.span)
+            self.stmts.assignable(init, st, t, init.span)

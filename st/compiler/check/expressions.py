@@ -1,16 +1,17 @@
 """Expressions: typing of literals, names, operators, fields, indices."""
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, cast
 
 from .. import ast as A
 from ...model import types as T
 from ...model.addresses import canonical
-from ..library import FuncSig
 from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, SUPER, THIS, Scope, image_problem
+from .context import CheckContext
+from .part import Part
 
 
-class ExpressionsMixin:
+class Expressions(Part):
     # ---------------------------------------------------------------- expressions
     def expr(self, e: A.Expr, scope: Optional[Scope], expected: Optional[T.Type] = None, *,
              lvalue: bool = False) -> Optional[T.Type]:
@@ -30,7 +31,7 @@ class ExpressionsMixin:
         if isinstance(e, A.Unary):
             return self._unary(e, scope, expected)
         if isinstance(e, A.Call):
-            return self.call(e, scope, expected=expected)
+            return self.calls.call(e, scope, expected=expected)
         if isinstance(e, A.Field):
             t = self._field(e, scope)
             self._property_read(e, lvalue)
@@ -48,7 +49,7 @@ class ExpressionsMixin:
             if not b.is_intlike:
                 self.err("E023", e.span, f"bit access needs an integer or bit-string variable, not {bt}")
                 return rt
-            if (e.index + 1) * width > b.bits:
+            if (e.index + 1) * width > cast(T.ElemType, b).bits:
                 self.err("E022", e.span, f"{bt} has no {'bit' if size == 'X' else size} {e.index}")
             return rt
         if isinstance(e, A.Deref):
@@ -60,7 +61,7 @@ class ExpressionsMixin:
                 return None
             return b.target
         if isinstance(e, A.EnumLit):
-            et = self._resolve_named_type(e.type_name.lower(), e.span)
+            et = self.decls.resolve_named_type(e.type_name.lower(), e.span)
             et = T.unalias(et) if et is not None else None
             if not isinstance(et, T.EnumType):
                 self.err("E012", e.span, f"'{e.type_name}' is not an enumeration type")
@@ -87,10 +88,6 @@ class ExpressionsMixin:
             return t
         raise AssertionError(e)
 
-    def feature_quiet(self, kind: str) -> bool:
-        d = self.dialect
-        return d is None or (d.oop if kind == "oop" else d.vendor_extensions)
-
     def _property_read(self, e, lvalue: bool) -> None:
         if isinstance(e.sym, T.PropSym) and not lvalue and e.sym.get is None:
             self.err("E023", e.span, f"property {e.sym.name} has no GET: it cannot be read")
@@ -107,7 +104,7 @@ class ExpressionsMixin:
                 return T.ELEMENTARY[name]
             t = T.ELEMENTARY.get(tn)
             if t is None:
-                at = self._resolve_named_type(tn.lower(), e.span)
+                at = self.decls.resolve_named_type(tn.lower(), e.span)
                 if at is not None and T.base_of(at).is_elementary:
                     t = at
             if t is None:
@@ -149,7 +146,7 @@ class ExpressionsMixin:
             return T.StringType(max(1, len(e.value)), True)
         return T.ELEMENTARY.get(k.upper(), T.TIME)
 
-    def _lookup(self, key: str, scope: Scope):
+    def lookup(self, key: str, scope: Scope):
         sym = scope.vars.get(key)
         if sym is not None:
             return sym
@@ -157,11 +154,11 @@ class ExpressionsMixin:
             return "RESULT"
         if key in scope.steps:
             return "STEP"
-        if key == "this" and scope.fb is not None and self.feature_quiet("oop"):
+        if key == "this" and scope.fb is not None and self.ctx.feature_quiet("oop"):
             return THIS
         if scope.fb is not None and key in scope.fb.properties:
             return scope.fb.properties[key]
-        if key == "super" and scope.fb is not None and scope.fb.base is not None and self.feature_quiet("oop"):
+        if key == "super" and scope.fb is not None and scope.fb.base is not None and self.ctx.feature_quiet("oop"):
             return SUPER
         gs = self.p.global_names.get(key)
         if gs:
@@ -170,9 +167,9 @@ class ExpressionsMixin:
 
     def _name(self, e: A.Name, scope: Scope, expected):
         key = e.name.lower()
-        sym = self._lookup(key, scope)
+        sym = self.lookup(key, scope)
         if sym == "RESULT":
-            pou = scope.pou
+            pou = cast(T.POUType, scope.pou)
             e.sym = pou
             return pou.return_type
         if sym == "STEP":
@@ -187,16 +184,17 @@ class ExpressionsMixin:
             return sym.type
         if sym is SUPER:
             e.sym = SUPER
-            return T.RefType(scope.fb.base)
-        if isinstance(sym, T.VarSym) and expected is not None and isinstance(T.base_of(expected), T.EnumType) \
-                and key in T.base_of(expected).members and not isinstance(T.base_of(sym.type), T.EnumType):
+            return T.RefType(cast(T.POUType, scope.fb).base)
+        eb = T.base_of(expected) if expected is not None else None
+        if isinstance(sym, T.VarSym) and isinstance(eb, T.EnumType) and key in eb.members \
+                and not isinstance(T.base_of(sym.type), T.EnumType):
             sym = None      # an enum value of the expected type wins over a same-named variable
         if isinstance(sym, T.VarSym) and sym.access:
-            self.check_access((sym.access,), sym.owner, f"variable {sym.name}", scope, e.span)
+            self.calls.check_access((sym.access,), sym.owner, f"variable {sym.name}", scope, e.span)
         if isinstance(sym, T.VarSym) and T.is_reference(sym.type):
             sym.used = True
             e.sym = sym
-            return T.unalias(sym.type).target          # REFERENCE TO: the variable it refers to
+            return cast(T.RefType, T.unalias(sym.type)).target          # REFERENCE TO: the variable it refers to
         if isinstance(sym, T.VarSym):
             sym.used = True
             e.sym = sym
@@ -222,10 +220,10 @@ class ExpressionsMixin:
             e.sym = pick[0]
             e.const = pick[2]
             return pick[0]
-        if key in self.p.pous or self._native(key) is not None:
+        if key in self.p.pous or self.ctx.native(key) is not None:
             self.err("E026", e.span, f"'{e.name}' is a POU, not a value")
             return None
-        if key in ("this", "super") and self.feature_quiet("oop"):
+        if key in ("this", "super") and self.ctx.feature_quiet("oop"):
             where = "a function block or one of its methods" if key == "this" else \
                 "a function block that EXTENDS another (or one of its methods)"
             self.err("E010", e.span, f"{e.name.upper()} exists only inside {where}")
@@ -243,13 +241,6 @@ class ExpressionsMixin:
                     return f"did you mean '{n}'?"
         return ""
 
-    def _native(self, key: str) -> Optional[FuncSig]:
-        for lib in self.libraries:
-            sig = lib.lookup(key)
-            if sig is not None:
-                return sig
-        return None
-
     def _binary(self, e: A.Binary, scope: Scope, expected):
         op = e.op
         hint = expected if op not in _CMP and op not in ("MOD", "**") else None
@@ -261,14 +252,14 @@ class ExpressionsMixin:
             return T.BOOL if op in _CMP else (lt or rt)
         # CODESYS (non-strict enumerations): an enumeration value next to a number is its integer
         la, rb = T.base_of(lt), T.base_of(rt)
-        if self.enum_as_int(la) and not isinstance(rb, T.EnumType) and (rb.is_num or rb is T.LIT_INT):
-            lt = la.base
-        elif self.enum_as_int(rb) and not isinstance(la, T.EnumType) and (la.is_num or la is T.LIT_INT):
-            rt = rb.base
+        if self.ctx.enum_as_int(la) and not isinstance(rb, T.EnumType) and (rb.is_num or rb is T.LIT_INT):
+            lt = cast(T.EnumType, la).base
+        elif self.ctx.enum_as_int(rb) and not isinstance(la, T.EnumType) and (la.is_num or la is T.LIT_INT):
+            rt = cast(T.EnumType, rb).base
         if op in ("=", "<>"):                   # CODESYS: p = 0 tests a POINTER for NULL
-            if _zero_pointer(self, e.right, lt):
+            if _zero_pointer(self.ctx, e.right, lt):
                 e.right, rt = _null_at(e.right), _NULL
-            elif _zero_pointer(self, e.left, rt):
+            elif _zero_pointer(self.ctx, e.left, rt):
                 e.left, lt = _null_at(e.left), _NULL
         a, b = T.base_of(lt), T.base_of(rt)
         if op in _LOGIC:
@@ -326,7 +317,7 @@ class ExpressionsMixin:
                     return a
                 if a is T.LIT_REAL or a is T.LIT_INT:
                     return T.LIT_REAL if (b is T.LIT_INT or b is T.LIT_REAL) else T.LREAL
-                return T.REAL if a.bits <= 16 else T.LREAL
+                return T.REAL if cast(T.ElemType, a).bits <= 16 else T.LREAL
             return self._bad_operands(e, lt, rt)
         raise AssertionError(op)
 
@@ -371,18 +362,18 @@ class ExpressionsMixin:
                 return T.default_type_for_literal(b)
         else:
             if b.is_num or isinstance(b, T.LiteralType) or b.is_time:
-                if e.op == "-" and b.is_int and not b.signed:
+                if e.op == "-" and b.is_int and not cast(T.ElemType, b).signed:
                     self.warn("W005", e.span, f"negating an unsigned {t} wraps around")
                 return t
         self.err("E014", e.span, f"operator {e.op} cannot be applied to {t}")
         return t
 
     def _field(self, e: A.Field, scope: Scope):
-        if isinstance(e.base, A.Name) and self._lookup(e.base.name.lower(), scope) is None:
-            et = self._resolve_named_type(e.base.name.lower(), e.base.span)
+        if isinstance(e.base, A.Name) and self.lookup(e.base.name.lower(), scope) is None:
+            et = self.decls.resolve_named_type(e.base.name.lower(), e.base.span)
             if isinstance(T.unalias(et) if et is not None else None, T.EnumType):
                 # Color.Red: CODESYS's qualified enumeration value
-                et = T.unalias(et)
+                et = cast(T.EnumType, T.unalias(et))
                 m = et.members.get(e.name.lower())
                 if m is None:
                     self.err("E010", e.name_span, f"'{e.name}' is not a value of {et.name}")
@@ -411,14 +402,14 @@ class ExpressionsMixin:
             e.sym = m
             return m.type
         if isinstance(b, T.POUType) and b.pou_kind != "FUNCTION":
-            self._resolve_interface(b)
+            self.decls.resolve_interface(b)
             v = b.vars.get(key)
             if v is None and key in b.properties:
                 e.sym = b.properties[key]
                 ps = e.sym
                 acc = ps.get or ps.set
                 if acc is not None and acc.decl is not None:
-                    self.check_access(acc.decl.modifiers, ps.owner, f"property {ps.name}", scope, e.name_span)
+                    self.calls.check_access(acc.decl.modifiers, ps.owner, f"property {ps.name}", scope, e.name_span)
                 return e.sym.type
             if v is None:
                 if key in b.actions or key in b.methods:
@@ -431,11 +422,11 @@ class ExpressionsMixin:
             # IEC hides an FB's internal variables; most dialects let you read them, so only an
             # explicit `VAR PRIVATE` / `VAR PROTECTED` section restricts them
             if v.access:
-                self.check_access((v.access,), v.owner, f"variable {v.name}", scope, e.name_span)
+                self.calls.check_access((v.access,), v.owner, f"variable {v.name}", scope, e.name_span)
             v.used = True
             e.sym = v
             if T.is_reference(v.type):                 # inst.r of a REFERENCE TO: what it refers to
-                return T.unalias(v.type).target
+                return cast(T.RefType, T.unalias(v.type)).target
             return v.type
         if isinstance(b, T.ElemType) and b.is_intlike and e.name.isdigit():
             return T.BOOL
@@ -462,19 +453,19 @@ class ExpressionsMixin:
             self.err("E023", e.span, f"this array has {len(b.dims)} dimension(s), not {len(e.indices)}")
             return b.element
         for i, (lo, hi) in zip(e.indices, b.dims):
-            c = self.const_value(i, scope)
+            c = self.consts.value(i, scope)
             if isinstance(c, int) and hi >= lo and not (lo <= c <= hi):
                 self.err("E022", i.span, f"index {c} is outside the bounds {lo}..{hi}")
         return b.element
 
 
-def _zero_pointer(chk, e, other) -> bool:
+def _zero_pointer(ctx: CheckContext, e, other) -> bool:
     """The literal 0 where a POINTER, a REF_TO or an interface is compared or assigned: NULL, as
     CODESYS and TwinCAT write it (a vendor extension)."""
     u = T.unalias(other) if other is not None else None
     is_link = isinstance(u, T.RefType) and u.ref_kind in ("POINTER", "REF_TO") or \
         isinstance(u, T.POUType) and u.pou_kind == "INTERFACE"
-    return isinstance(e, A.Literal) and e.value == 0 and e.kind == "int" and is_link and chk.feature_quiet("vendor")
+    return isinstance(e, A.Literal) and e.value == 0 and e.kind == "int" and is_link and ctx.feature_quiet("vendor")
 
 
 def _null_at(e) -> A.Name:

@@ -1,93 +1,56 @@
 """Bodies: statements, SFC networks, assignability and lvalues."""
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, cast
 
-from ...model import types as T
-from ...model.program import SfcModel, StepModel, TransitionModel
 from ...source import Span
 from .. import ast as A
-from .common import _NULL, STEP, Scope, take_address
+from ...model import types as T
+from .common import _NULL, STEP, Scope, same_type, take_address
 from .expressions import _null_at, _zero_pointer
+from .part import Part
 
 
-class StatementsMixin:
+class Statements(Part):
     # ================================================================ bodies
-    def _check_body(self, pou: T.POUType) -> None:
-        d = pou.decl
-        if pou.pou_kind == "INTERFACE":
-            return
-        if "CLASS" in getattr(d, "modifiers", ()) and d.body:
-            self.err("E003", d.body[0].span, f"a CLASS has no body; put the code in a METHOD of {pou.name}")
-        scope = Scope(pou, pou.vars, library=pou.library)
-        if pou.pou_kind in ("FUNCTION_BLOCK", "PROGRAM"):
-            scope.fb = pou
-        for mt in pou.methods.values():
-            if mt.owner_fb is pou:
-                self._check_method(pou, mt)
-        for ps in pou.properties.values():
-            if ps.owner is pou:
-                for acc in (ps.get, ps.set):
-                    if acc is not None:
-                        self._check_method(pou, acc)
-        if d.steps or d.transitions:
-            self._check_sfc(pou, scope)
-        for act in d.actions:
-            scope.actions[act.name.lower()] = act
-        self.stmts(d.body, scope)
-        for act in d.actions:
-            self.stmts(act.body, scope)
-        if pou.pou_kind == "FUNCTION" and pou.return_type is None and self._assigns_name(d.body, pou.name):
-            self.err("E013", d.span, f"FUNCTION {pou.name} has no return type but assigns a result")
-
     def _ref_assign(self, s: A.Assign, scope: Scope) -> None:
         """r REF= x: bind the REFERENCE TO variable r to the variable x."""
         self.feature("vendor", s.span, "REF=")
         tgt = s.target
-        sym = self._lookup(tgt.name.lower(), scope) if isinstance(tgt, A.Name) else None
+        sym = self.exprs.lookup(tgt.name.lower(), scope) if isinstance(tgt, A.Name) else None
         if isinstance(tgt, A.Field):                  # inst.r REF= x: an instance's REFERENCE TO
-            bt = self.expr(tgt.base, scope)
+            bt = self.exprs.expr(tgt.base, scope)
             b = T.unalias(bt) if bt is not None else None
             if isinstance(b, T.POUType):
                 sym = b.vars.get(tgt.name.lower())
                 if isinstance(sym, T.VarSym) and sym.access:
-                    self.check_access((sym.access,), sym.owner, f"variable {sym.name}", scope, tgt.name_span)
+                    self.calls.check_access((sym.access,), sym.owner, f"variable {sym.name}", scope, tgt.name_span)
         if not (isinstance(sym, T.VarSym) and T.is_reference(sym.type)):
             self.err("E013", tgt.span, "REF= binds a REFERENCE TO variable; this is not one")
             return
         sym.used = sym.written = True
-        tgt.sym = sym
+        cast(A.Name, tgt).sym = sym       # a Name or a Field
         tgt.ty = sym.type
-        want = T.unalias(sym.type).target
+        want = cast(T.RefType, T.unalias(sym.type)).target
         v = s.value
         if isinstance(v, A.Name) and v.name.upper() == "NULL":
-            self.expr(v, scope)
+            self.exprs.expr(v, scope)
             return
         if not isinstance(v, (A.Name, A.Field, A.Index, A.Deref)):
             self.err("E031", v.span, "REF= needs a variable to refer to")
-            self.expr(v, scope)
+            self.exprs.expr(v, scope)
             return
         vt = self.lvalue(v, scope)
         take_address(v)
-        if vt is not None and want is not None and not self._same_type(vt, want) and not T.extends(vt, want):
+        if vt is not None and want is not None and not same_type(vt, want) and not T.extends(vt, want):
             self.err("E013", v.span, f"REF= needs a {want} variable, not {vt}")
-
-    def _check_method(self, fb: T.POUType, mt: T.POUType) -> None:
-        """A METHOD's body: its own variables first, then the instance's."""
-        names = dict(fb.vars)
-        names.update(mt.vars)
-        scope = Scope(mt, names, library=fb.library)
-        scope.fb = fb
-        self.stmts(mt.decl.body, scope)
-        if mt.pyname.startswith("_m_") and mt.return_type is None and self._assigns_name(mt.decl.body, mt.name):
-            self.err("E013", mt.decl.span, f"METHOD {mt.name} has no return type but assigns a result")
 
     def _attempt_assign(self, s: A.Assign, scope: Scope) -> None:
         """dest ?= src (assignment attempt): dest, an interface or a REF_TO a block, receives src's
         instance when it is of dest's kind at run time, else NULL."""
         self.feature("oop", s.span, "?= (assignment attempt)")
         tt = self.lvalue(s.target, scope)
-        vt = self.expr(s.value, scope)
+        vt = self.exprs.expr(s.value, scope)
         if tt is None or vt is None:
             return
 
@@ -115,92 +78,15 @@ class StatementsMixin:
             return
         s.attempt = (kind.name.lower(), src_ref, dest_ref)
 
-    def _assigns_name(self, body, name) -> bool:
-        key = name.lower()
-        for s in body:
-            if isinstance(s, A.Assign) and isinstance(s.target, A.Name) and s.target.name.lower() == key:
-                return True
-        return False
-
     # ---------------------------------------------------------------- SFC
-    def _check_sfc(self, pou: T.POUType, scope: Scope) -> None:
-        d = pou.decl
-        steps = []
-        index = {}
-        for s in d.steps:
-            key = s.name.lower()
-            if key in index:
-                self.err("E011", s.span, f"step '{s.name}' is declared twice")
-                continue
-            if key in pou.vars:
-                self.err("E011", s.span, f"step '{s.name}' has the name of a variable")
-            index[key] = len(steps)
-            steps.append(StepModel(s.name, len(steps), s.initial, [], s.span))
-        initial = [s for s in steps if s.initial]
-        if len(initial) != 1:
-            self.err("E030", d.span, f"an SFC needs exactly one INITIAL_STEP (found {len(initial)})")
-        scope.steps = index
-        actions: dict = {}
-        for act in d.actions:
-            actions[act.name.lower()] = act
-        action_names: list = []
-        action_index: dict = {}
-        for s, sm in zip(d.steps, steps):
-            for aa in s.actions:
-                key = aa.action.lower()
-                if key not in actions:
-                    sym = pou.vars.get(key)
-                    if sym is None or not T.base_of(sym.type).is_bool:
-                        self.err("E030", aa.span, f"'{aa.action}' is neither an ACTION of {pou.name} nor a BOOL variable")
-                        continue
-                    sym.used = sym.written = True
-                q = aa.qualifier
-                if q not in ("N", "R", "S", "P", "L", "D", "SD", "DS", "SL", "P0", "P1"):
-                    self.err("E030", aa.span, f"unknown action qualifier '{q}'")
-                    continue
-                if q in ("L", "D", "SD", "DS", "SL"):
-                    if aa.time is None:
-                        self.err("E030", aa.span, f"qualifier {q} needs a time, e.g. {aa.action}({q}, T#1s)")
-                        continue
-                    tt = self.expr(aa.time, scope, T.TIME)
-                    if tt is not None and not T.base_of(tt).is_time:
-                        self.err("E013", aa.time.span, f"the time of qualifier {q} must be a TIME, not {tt}")
-                if key not in action_index:
-                    action_index[key] = len(action_names)
-                    action_names.append(key)
-                sm.actions.append((key, q, aa.time))
-        transitions = []
-        for i, t in enumerate(d.transitions):
-            srcs, dsts = [], []
-            for names, out in ((t.sources, srcs), (t.targets, dsts)):
-                for n, sp in names:
-                    if n.lower() not in index:
-                        self.err("E030", sp, f"unknown step '{n}'")
-                    else:
-                        out.append(index[n.lower()])
-            prio = 0
-            if t.priority is not None:
-                c = self.const_value(t.priority, scope)
-                prio = c if isinstance(c, int) else 0
-            if t.cond is not None:
-                ct = self.expr(t.cond, scope, T.BOOL)
-                if not T.base_of(ct).is_bool:
-                    self.err("E015", t.cond.span, f"a transition condition must be BOOL, not {ct}")
-                cond = t.cond
-            else:
-                cond = None
-                self.stmts(t.body or [], scope)
-            transitions.append(TransitionModel(i, srcs, dsts, cond, prio, t.span))
-        self.p.sfc[pou.name.lower()] = SfcModel(steps, transitions, action_names, action_index)
-
     # ---------------------------------------------------------------- statements
-    def stmts(self, body: list, scope: Scope) -> None:
+    def stmt_list(self, body: list, scope: Scope) -> None:
         for s in body:
             try:
                 self.stmt(s, scope)
             except Exception as exc:
                 if not hasattr(exc, "st_span"):
-                    exc.st_span = s.span      # where the internal error happened, for the report
+                    exc.st_span = s.span  # type: ignore[attr-defined]  # where the internal error happened, for the report
                 raise
 
     def stmt(self, s: A.Stmt, scope: Scope) -> None:
@@ -211,25 +97,25 @@ class StatementsMixin:
         if isinstance(s, A.Assign):
             tt = self.lvalue(s.target, scope)
             if s.kind in ("S=", "R="):
-                vt = self.expr(s.value, scope, T.BOOL)
+                vt = self.exprs.expr(s.value, scope, T.BOOL)
                 if not T.base_of(tt).is_bool or not T.base_of(vt).is_bool:
                     self.err("E013", s.span, f"'{s.kind}' needs BOOL operands")
                 return
-            vt = self.expr(s.value, scope, tt)
-            if _zero_pointer(self, s.value, tt):
+            vt = self.exprs.expr(s.value, scope, tt)
+            if _zero_pointer(self.ctx, s.value, tt):
                 s.value, vt = _null_at(s.value), _NULL       # p := 0 (CODESYS): NULL
             if tt is not None:
                 self.assignable(s.value, vt, tt, s.value.span)
         elif isinstance(s, A.CallStmt):
-            rt = self.call(s.call, scope, statement=True)
+            rt = self.calls.call(s.call, scope, statement=True)
             if s.call.ty is None:
                 s.call.ty = rt           # a function's result, unused: code generation still needs its type
         elif isinstance(s, A.If):
             for cond, body in s.branches:
                 self.condition(cond, scope, "IF")
-                self.stmts(body, scope)
+                self.stmt_list(body, scope)
             if s.orelse:
-                self.stmts(s.orelse, scope)
+                self.stmt_list(s.orelse, scope)
         elif isinstance(s, A.Case):
             self._case(s, scope)
         elif isinstance(s, A.For):
@@ -238,24 +124,24 @@ class StatementsMixin:
                 self.err("E025", s.var.span, f"a FOR variable must be an integer, not {vt}")
             for e in (s.start, s.end, s.step):
                 if e is not None:
-                    et = self.expr(e, scope, vt)
+                    et = self.exprs.expr(e, scope, vt)
                     if vt is not None:
                         self.assignable(e, et, vt, e.span)
             if isinstance(s.step, A.Expr):
-                c = self.const_value(s.step, scope)
+                c = self.consts.value(s.step, scope)
                 if c == 0:
                     self.err("E029", s.step.span, "a FOR step of 0 never ends")
             scope.loop_depth += 1
-            self.stmts(s.body, scope)
+            self.stmt_list(s.body, scope)
             scope.loop_depth -= 1
         elif isinstance(s, A.While):
             self.condition(s.cond, scope, "WHILE")
             scope.loop_depth += 1
-            self.stmts(s.body, scope)
+            self.stmt_list(s.body, scope)
             scope.loop_depth -= 1
         elif isinstance(s, A.Repeat):
             scope.loop_depth += 1
-            self.stmts(s.body, scope)
+            self.stmt_list(s.body, scope)
             scope.loop_depth -= 1
             self.condition(s.cond, scope, "UNTIL")
         elif isinstance(s, (A.Exit, A.Continue)):
@@ -264,20 +150,20 @@ class StatementsMixin:
         elif isinstance(s, (A.Return, A.Empty)):
             pass
         elif isinstance(s, A.Mock):
-            self._mock(s, scope)
+            self.tests.mock(s, scope)
         elif isinstance(s, A.MockFunction):
-            self._mock_function(s, scope)
+            self.tests.mock_function(s, scope)
         else:  # pragma: no cover
             raise AssertionError(s)
 
     def condition(self, e: A.Expr, scope: Scope, what: str) -> None:
-        t = self.expr(e, scope, T.BOOL)
+        t = self.exprs.expr(e, scope, T.BOOL)
         if t is not None and not T.base_of(t).is_bool:
             self.err("E015", e.span, f"the {what} condition must be BOOL, not {t}",
                      "compare explicitly, e.g. x <> 0" if T.base_of(t).is_num else "")
 
     def _case(self, s: A.Case, scope: Scope) -> None:
-        st = self.expr(s.selector, scope)
+        st = self.exprs.expr(s.selector, scope)
         bst = T.base_of(st) if st is not None else None
         if bst is not None and not (bst.is_intlike or isinstance(bst, T.EnumType)):
             self.err("E019", s.selector.span, f"a CASE selector must be an integer or enumeration, not {st}")
@@ -289,14 +175,14 @@ class StatementsMixin:
                 for e in (lo, hi):
                     if e is None:
                         continue
-                    et = self.expr(e, scope, st)
+                    et = self.exprs.expr(e, scope, st)
                     if bst is not None and et is not None:
                         if isinstance(bst, T.EnumType):
                             if T.base_of(et) is not bst:
                                 self.err("E019", e.span, f"CASE label of type {et} for a selector of type {st}")
                         elif not (T.base_of(et).is_intlike or et is T.LIT_INT):
                             self.err("E019", e.span, f"CASE label of type {et} for a selector of type {st}")
-                    v = self.const_value(e, scope)
+                    v = self.consts.value(e, scope)
                     if v is None:
                         self.err("E029", e.span, "a CASE label must be a constant")
                     vals.append(v)
@@ -316,9 +202,9 @@ class StatementsMixin:
                             self.err("E019", lo.span, f"duplicate CASE label {a}")
                             break
                     seen.append((a, a, lo.span))
-            self.stmts(br.body, scope)
+            self.stmt_list(br.body, scope)
         if s.orelse:
-            self.stmts(s.orelse, scope)
+            self.stmt_list(s.orelse, scope)
 
     # ---------------------------------------------------------------- assignability
     def assignable(self, e, src: Optional[T.Type], dst: Optional[T.Type], span: Span, what: str = "") -> bool:
@@ -327,8 +213,8 @@ class StatementsMixin:
         s, d = T.base_of(src), T.base_of(dst)
         if s is d:
             if isinstance(T.unalias(dst), T.SubrangeType) and isinstance(e, A.Expr):
-                c = self.const_value(e, None) if isinstance(e, (A.Literal, A.Unary)) else None
-                sub = T.unalias(dst)
+                c = self.consts.value(e, None) if isinstance(e, (A.Literal, A.Unary)) else None
+                sub = cast(T.SubrangeType, T.unalias(dst))
                 if isinstance(c, int) and not (sub.lo <= c <= sub.hi):
                     self.err("E021", span, f"{c} is outside the range {sub.lo}..{sub.hi} of {dst}")
                     return False
@@ -336,10 +222,11 @@ class StatementsMixin:
         what = what or "assign"
         if s is T.LIT_INT:
             if d.is_intlike or isinstance(T.unalias(dst), T.SubrangeType):
-                v = self.const_value(e, None) if isinstance(e, A.Expr) else None
+                v = self.consts.value(e, None) if isinstance(e, A.Expr) else None
                 if isinstance(v, int) and not T.literal_fits(v, dst):
                     shown = v if v.bit_length() < 256 else f"a value of {v.bit_length()} bits"
-                    self.err("E021", span, f"{shown} does not fit in {dst} ({T.base_of(dst).lo}..{T.base_of(dst).hi})")
+                    b = cast(T.ElemType, T.base_of(dst))
+                    self.err("E021", span, f"{shown} does not fit in {dst} ({b.lo}..{b.hi})")
                     return False
                 return True
             if d.is_real:
@@ -362,14 +249,14 @@ class StatementsMixin:
             return True
         if T.widens_to(s, d):
             return True
-        if self.enum_as_int(s) and \
-                (d.is_intlike or d.is_real) and (s.base is d or T.widens_to(s.base, d) or d.is_real):
+        if self.ctx.enum_as_int(s) and (d.is_intlike or d.is_real) and (
+                cast(T.EnumType, s).base is d or T.widens_to(cast(T.EnumType, s).base, d) or d.is_real):
             return True                 # CODESYS: a (non-strict) enumeration value as its integer
         if isinstance(s, T.ArrayType) and isinstance(d, T.ArrayType):
-            if self._same_type(s, d):
+            if same_type(s, d):
                 return True
         if isinstance(s, T.RefType) and isinstance(d, T.RefType):
-            if self._same_type(s.target, d.target) or s.target is None:
+            if same_type(s.target, d.target) or s.target is None:
                 return True
             st_, dt_ = T.unalias(s.target), T.unalias(d.target)
             if isinstance(st_, T.POUType) and isinstance(dt_, T.POUType) and T.implements(st_, dt_):
@@ -394,17 +281,18 @@ class StatementsMixin:
 
     # ---------------------------------------------------------------- lvalues
     def lvalue(self, e: A.Expr, scope: Scope) -> Optional[T.Type]:
-        t = self.expr(e, scope, lvalue=True)
+        t = self.exprs.expr(e, scope, lvalue=True)
         root = e
         while isinstance(root, (A.Field, A.Index, A.Bit)):
             root = root.base
         if isinstance(e.sym if isinstance(e, (A.Name, A.Field)) else None, T.PropSym):
-            if e.sym.set is None:
-                self.err("E018", e.span, f"property {e.sym.name} has no SET: it cannot be written")
+            prop = cast(T.PropSym, cast(A.Name, e).sym)
+            if prop.set is None:
+                self.err("E018", e.span, f"property {prop.name} has no SET: it cannot be written")
             return t
         if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym) or isinstance(root, A.Name) \
                 and isinstance(root.sym, T.VarSym):
-            sym = e.sym if isinstance(e, A.Name) else root.sym
+            sym = cast(T.VarSym, e.sym if isinstance(e, A.Name) else cast(A.Name, root).sym)
             sym.written = True
             g = sym.global_ref or sym
             if g.constant or sym.constant:
@@ -412,8 +300,8 @@ class StatementsMixin:
                 return t
             if sym.section == "VAR_INPUT" and scope.pou is not None and sym.owner is scope.pou \
                     and not isinstance(T.unalias(sym.type), (T.POUType,)) and isinstance(e, A.Name) \
-                    and not T.is_reference(sym.type) and not (self.dialect and self.dialect.writable_inputs):
-                self.err("E018", e.span, f"'{sym.name}' is an input of {scope.pou.name} and cannot be written here",
+                    and not T.is_reference(sym.type) and not (self.ctx.dialect and self.ctx.dialect.writable_inputs):
+                self.err("E048", e.span, f"'{sym.name}' is an input of {scope.pou.name} and cannot be written here",
                          "copy it into a local variable first")
                 return t
         elif isinstance(e, (A.Literal, A.Call, A.Binary, A.Unary, A.EnumLit)):

@@ -8,12 +8,13 @@ E033. What codegen and the test runner need is kept in `model.TestModel` and
 """
 from __future__ import annotations
 
-from typing import Optional
+from typing import cast
 
-from ...model import types as T
-from ...model.program import AssertInfo, TestModel
 from .. import ast as A
+from ...model import types as T
+from ...model.program import AssertInfo
 from .common import CallTarget, Scope
+from .part import Part
 
 # name → (minimum, maximum) number of arguments, the message included
 TEST_CALLS = {
@@ -26,47 +27,7 @@ _CMP_OF = {"assert_eq": "=", "assert_neq": "<>", "assert_gt": ">", "assert_lt": 
            "assert_le": "<="}
 
 
-class TestsMixin:
-    def _check_tests(self) -> None:
-        by_file: dict = {}
-        for tb in self.p.test_blocks:
-            by_file.setdefault(tb.span.file, []).append(tb)
-        for path, blocks in by_file.items():
-            setup = self._single_block(blocks, "SETUP")
-            teardown = self._single_block(blocks, "TEARDOWN")
-            seen: dict = {}
-            for tb in blocks:
-                if tb.kind != "TEST":
-                    continue
-                if tb.name in seen:
-                    self.err("E011", tb.span, f"a TEST named '{tb.name}' already exists in this file "
-                                              f"(line {seen[tb.name].line})")
-                    continue
-                seen[tb.name] = tb.span
-                self._check_test(tb, setup, teardown)
-
-    def _single_block(self, blocks, kind) -> Optional[A.TestBlock]:
-        found = [b for b in blocks if b.kind == kind]
-        for extra in found[1:]:
-            self.err("E011", extra.span, f"a file may have one {kind} block (the first is at line "
-                                         f"{found[0].span.line})")
-        return found[0] if found else None
-
-    def _check_test(self, tb: A.TestBlock, setup, teardown) -> None:
-        index = len(self.p.tests)
-        pou = T.POUType(f"TEST '{tb.name}'", "TEST", decl=None)
-        pou.pyname = f"_test_{index}"
-        scope = Scope(pou, pou.vars)
-        scope.test = True
-        for block in (setup.var_blocks if setup else []) + tb.var_blocks + (teardown.var_blocks if teardown else []):
-            self._declare_block(block, pou.vars, scope, pou)
-        parts = []
-        for block in (setup, tb, teardown):
-            body = block.body if block is not None else []
-            self.stmts(body, scope)
-            parts.append(body)
-        self.p.tests.append(TestModel(tb.name, tb.span, pou.pyname, pou, parts[0], parts[1], parts[2]))
-
+class TestStatements(Part):
     # ---------------------------------------------------------------- statements
     def _test_only(self, span, what: str, scope: Scope) -> bool:
         if getattr(scope, "test", False):
@@ -74,40 +35,40 @@ class TestsMixin:
         self.err("E033", span, f"{what} is only allowed inside a TEST, SETUP or TEARDOWN block")
         return False
 
-    def _mock(self, s: A.Mock, scope: Scope) -> None:
+    def mock(self, s: A.Mock, scope: Scope) -> None:
         if not self._test_only(s.span, "MOCK", scope):
             return
-        t = self.expr(s.target, scope)
+        t = self.exprs.expr(s.target, scope)
         if t is None:
             return
         if not _is_instance(t):
             self.err("E013", s.target.span, f"MOCK needs a function block or program instance, not a {t}",
                      "functions are mocked with MOCK_FUNCTION name RETURNS value;")
 
-    def _mock_function(self, s: A.MockFunction, scope: Scope) -> None:
+    def mock_function(self, s: A.MockFunction, scope: Scope) -> None:
         if not self._test_only(s.span, "MOCK_FUNCTION", scope):
             return
         pou = self.p.pous.get(s.name.lower())
         if pou is None or pou.pou_kind != "FUNCTION" or pou.decl is None:
-            what = "a standard function" if self._native(s.name.lower()) is not None else "not a FUNCTION"
+            what = "a standard function" if self.ctx.native(s.name.lower()) is not None else "not a FUNCTION"
             self.err("E020", s.span, f"'{s.name}' is {what}; MOCK_FUNCTION replaces a FUNCTION written in ST")
-            self.expr(s.value, scope)
+            self.exprs.expr(s.value, scope)
             return
         s.pou = pou
-        vt = self.expr(s.value, scope, pou.return_type)
+        vt = self.exprs.expr(s.value, scope, pou.return_type)
         if pou.return_type is None:
             self.err("E013", s.value.span, f"FUNCTION {pou.name} returns nothing")
         elif vt is not None:
-            self.assignable(s.value, vt, pou.return_type, s.value.span)
+            self.stmts.assignable(s.value, vt, pou.return_type, s.value.span)
 
     # ---------------------------------------------------------------- calls
-    def _test_call(self, c: A.Call, key: str, scope: Scope, statement: bool):
+    def test_call(self, c: A.Call, key: str, scope: Scope, statement: bool):
         """ASSERT_*, ADVANCE_TIME and MOCK_VERIFY_*: checked here, generated as runtime helper calls."""
-        name = c.callee.name.upper()
+        name = cast(A.Name, c.callee).name.upper()
         if not self._test_only(c.span, name, scope):
             return None
         if not statement:
-            self.err("E020", c.span, f"{name} is a statement; it has no value")
+            self.err("E049", c.span, f"{name} is a statement; it has no value")
             return None
         lo, hi = TEST_CALLS[key]
         args = c.args
@@ -118,7 +79,7 @@ class TestsMixin:
             want = str(lo) if lo == hi else f"{lo} or {hi}"
             self.err("E017", c.span, f"{name} takes {want} arguments, not {len(args)}")
             for a in args:
-                self.expr(a.value, scope)
+                self.exprs.expr(a.value, scope)
             return None
         values = [a.value for a in args]
         info = AssertInfo(name, c.span)
@@ -127,13 +88,13 @@ class TestsMixin:
             n_operands = {"assert_true": 1, "assert_false": 1, "assert_near": 3}.get(key, 2)
             if len(values) > n_operands:
                 msg = values[n_operands]
-                mt = self.expr(msg, scope)
+                mt = self.exprs.expr(msg, scope)
                 if mt is not None and T.base_of(mt).kind not in ("string",):
                     self.err("E013", msg.span, f"the message of {name} must be a STRING, not {mt}")
             values = values[:n_operands]
             ok = self._check_assert(key, name, values, scope, info)
         elif key == "advance_time":
-            t = self.expr(values[0], scope, T.TIME)
+            t = self.exprs.expr(values[0], scope, T.TIME)
             ok = t is not None
             if ok and not (T.base_of(t).is_time or T.base_of(t).is_intlike or
                            isinstance(T.base_of(t), T.LiteralType)):
@@ -150,14 +111,14 @@ class TestsMixin:
 
     def _check_assert(self, key, name, values, scope, info) -> bool:
         if key in ("assert_true", "assert_false"):
-            t = self.expr(values[0], scope, T.BOOL)
+            t = self.exprs.expr(values[0], scope, T.BOOL)
             info.types = [t]
             if t is not None and not T.base_of(t).is_bool:
                 self.err("E013", values[0].span, f"{name} needs a BOOL, not {t}")
                 return False
             return t is not None
         if key == "assert_near":
-            ts = [self.expr(v, scope) for v in values]
+            ts = [self.exprs.expr(v, scope) for v in values]
             info.types = ts
             for v, t in zip(values, ts):
                 if t is not None and not (T.base_of(t).is_num or isinstance(T.base_of(t), T.LiteralType)):
@@ -166,7 +127,7 @@ class TestsMixin:
             return None not in ts
         # a comparison: checked as `a OP b`, so every rule of the operator applies
         probe = A.Binary(values[0].span, _CMP_OF[key], values[0], values[1])
-        t = self.expr(probe, scope)
+        t = self.exprs.expr(probe, scope)
         info.types = [values[0].ty, values[1].ty]
         if t is None:
             return False
@@ -179,7 +140,7 @@ class TestsMixin:
 
     def _check_verify(self, key, name, values, scope, info) -> bool:
         target = values[0]
-        if isinstance(target, A.Name) and self._lookup(target.name.lower(), scope) is None:
+        if isinstance(target, A.Name) and self.exprs.lookup(target.name.lower(), scope) is None:
             pou = self.p.pous.get(target.name.lower())
             if pou is not None and pou.pou_kind == "FUNCTION" and pou.decl is not None:
                 target.sym = pou
@@ -189,7 +150,7 @@ class TestsMixin:
                 self.err("E010", target.span, f"'{target.name}' is neither an instance nor a FUNCTION")
                 return False
         else:
-            t = self.expr(target, scope)
+            t = self.exprs.expr(target, scope)
             if t is None:
                 return False
             if not _is_instance(t):
@@ -197,7 +158,7 @@ class TestsMixin:
                 return False
             info.types = [t]
         if key == "mock_verify_call_count":
-            ct = self.expr(values[1], scope, T.DINT)
+            ct = self.exprs.expr(values[1], scope, T.DINT)
             if ct is not None and not (T.base_of(ct).is_intlike or isinstance(T.base_of(ct), T.LiteralType)):
                 self.err("E013", values[1].span, f"the expected call count must be an integer, not {ct}")
                 return False

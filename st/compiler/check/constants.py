@@ -1,0 +1,105 @@
+"""Constant expressions: evaluated on demand wherever a constant is needed (array bounds, CASE
+labels, string lengths, initial values of CONSTANTs), before and after the globals are declared."""
+from __future__ import annotations
+
+from typing import Optional
+
+from .. import ast as A
+from ...model import types as T
+from .common import Scope
+from .part import Part
+
+
+class Constants(Part):
+    def value(self, e, scope: Optional[Scope]):
+        """Evaluate a constant expression (literals, CONSTANT variables, enum values), or None."""
+        if isinstance(e, A.Field):
+            return e.const if isinstance(e.sym, T.EnumType) else None
+        if isinstance(e, A.Literal):
+            return e.value
+        if isinstance(e, A.EnumLit):
+            et = self.decls.resolve_named_type(e.type_name.lower(), e.span)
+            if isinstance(et, T.EnumType):
+                m = et.members.get(e.member.lower())
+                return m[1] if m else None
+            return None
+        if isinstance(e, A.Name):
+            key = e.name.lower()
+            sym = scope.vars.get(key) if scope is not None else None
+            if sym is None:
+                gs = self.p.global_names.get(key)
+                sym = gs[0] if gs else None
+            if sym is not None:
+                if sym.global_ref is not None:
+                    sym = sym.global_ref
+                if sym.constant and sym.init is not None and isinstance(sym.init, A.Expr):
+                    sym.used = True
+                    return self.value(sym.init, None)
+                return None
+            mems = self.p.enum_members.get(key)
+            if mems and len({m[2] for m in mems}) == 1:
+                return mems[0][2]
+            return self._raw_global_constant(key)
+        if isinstance(e, A.Unary):
+            v = self.value(e.operand, scope)
+            if v is None or isinstance(v, str):
+                return None
+            if e.op == "-":
+                return -v
+            if e.op == "+":
+                return v
+            if e.op == "NOT" and isinstance(v, bool):
+                return not v
+            return None
+        if isinstance(e, A.Binary):
+            a, b = self.value(e.left, scope), self.value(e.right, scope)
+            if a is None or b is None or isinstance(a, str) or isinstance(b, str):
+                return None
+            try:
+                op = e.op
+                if op == "+":
+                    return a + b
+                if op == "-":
+                    return a - b
+                if op == "*":
+                    return a * b
+                if op == "/":
+                    if isinstance(a, int) and isinstance(b, int):
+                        q = abs(a) // abs(b)
+                        return q if (a >= 0) == (b >= 0) else -q
+                    return a / b
+                if op == "MOD":
+                    return 0 if b == 0 else a - b * int(a / b)
+                if op == "**":
+                    return float(a) ** b
+                if op == "AND":
+                    return a & b
+                if op == "OR":
+                    return a | b
+                if op == "XOR":
+                    return a ^ b
+            except (ZeroDivisionError, OverflowError):
+                return None
+            return None
+        return None
+
+    def _raw_global_constant(self, key: str):
+        """A VAR_GLOBAL CONSTANT not declared yet (types and POU interfaces are resolved first)."""
+        if key in self.ctx.raw_const_busy:
+            return None
+        blocks = list(self.ctx.global_blocks)
+        for cfg in self.ctx.configs:
+            blocks += [("", b) for b in cfg.var_blocks]
+            for r in cfg.resources:
+                blocks += [("", b) for b in r.var_blocks]
+        for _, b in blocks:
+            if "CONSTANT" not in b.qualifiers:
+                continue
+            for d in b.decls:
+                if any(n.lower() == key for n, _ in d.names) and isinstance(d.init, A.Expr):
+                    self.ctx.raw_const_busy.add(key)
+                    try:
+                        return self.value(d.init, None)
+                    finally:
+                        self.ctx.raw_const_busy.discard(key)
+        return None

@@ -1,0 +1,90 @@
+"""The state one checker run works on, passed explicitly to every pass and part of the checker."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+from ...diagnostics import DiagnosticSink
+from ...source import Span
+from .. import ast as A
+from ...model import types as T
+from ..dialect import PRESETS, Dialect
+from ..library import FuncSig, Library
+from ...model.program import Project
+
+
+@dataclass
+class CheckContext:
+    sink: DiagnosticSink
+    """Where every diagnostic goes (the checker never raises on bad input)."""
+    libraries: list[Library]
+    """The libraries of the compilation: their native functions are looked up here."""
+    project: Project
+    """What the checker builds: POUs, types, globals, configurations, tests."""
+    dialect: Optional[Dialect] = None
+    """The dialect preset whose switches the checker consults (None: every construct is allowed)."""
+    library_units: set[str] = field(default_factory=set)
+    """The file names of library sources: no warnings there, no dialect restrictions."""
+    strict_enums: set[str] = field(default_factory=set)
+    """{attribute 'strict'} enumerations (lower-case names): never read as integers."""
+    pending_types: dict[str, tuple[A.TypeDecl, str]] = field(default_factory=dict)
+    """TYPE declarations collected and not necessarily resolved yet: lower name → (declaration, library)."""
+    decl_span: dict[str, Span] = field(default_factory=dict)
+    """Where each type and POU is declared (lower name), for 'declared twice' and 'contains itself'."""
+    resolving: set[str] = field(default_factory=set)
+    """Named types being resolved right now: meeting one again means it is defined in terms of itself."""
+    raw_const_busy: set[str] = field(default_factory=set)
+    """Global constants being evaluated before the globals are declared (a cycle yields no value)."""
+    deferred_inits: list[tuple[A.VarDecl, T.Type]] = field(default_factory=list)
+    """Initial values of globals, checked once every global is declared (they may name each other)."""
+    calls: dict[str, list[tuple[str, Span]]] = field(default_factory=dict)
+    """The call graph: caller lower name → [(callee lower name, span)], for the recursion check."""
+    configs: list[A.Configuration] = field(default_factory=list)
+    """CONFIGURATION declarations collected, checked after the bodies."""
+    global_blocks: list[tuple[str, A.VarBlock]] = field(default_factory=list)
+    """VAR_GLOBAL blocks: (scope prefix, block); the prefix is '' or a configuration/resource path."""
+
+    # ---------------------------------------------------------------- reporting
+    def err(self, code: str, span: Span, msg: str, hint: str = "") -> None:
+        self.sink.error(code, span, msg, hint)
+
+    def warn(self, code: str, span: Span, msg: str, hint: str = "") -> None:
+        if span is not None and span.file in self.library_units:
+            return
+        self.sink.warning(code, span, msg, hint)
+
+    def lib_of(self, span: Optional[Span]) -> str:
+        """'lib' for a span in a library source, else ''."""
+        return "lib" if span is not None and span.file in self.library_units else ""
+
+    # ---------------------------------------------------------------- dialect
+    def feature(self, kind: str, span: Span, what: str) -> bool:
+        """Is this construct part of the chosen dialect? (No preset: everything is.) Reports E044 if not."""
+        d = self.dialect
+        if d is None or (span is not None and span.file in self.library_units):
+            return True
+        if (kind == "oop" and d.oop) or (kind == "vendor" and d.vendor_extensions):
+            return True
+        others = [n for n, p in PRESETS.items() if (p.oop if kind == "oop" else p.vendor_extensions)]
+        self.err("E044", span, f"{what} is not part of the {d.name} dialect",
+                 f"choose --dialect {' or '.join(others)} (or a {{dialect '…'}} pragma) to use it")
+        return False
+
+    def feature_quiet(self, kind: str) -> bool:
+        """`feature` without a report: does the dialect allow oop / vendor constructs?"""
+        d = self.dialect
+        return d is None or (d.oop if kind == "oop" else d.vendor_extensions)
+
+    def enum_as_int(self, t) -> bool:
+        """May this enumeration's values be read as integers (codesys/twincat, not 'strict')?"""
+        return self.dialect is not None and self.dialect.enum_as_int and isinstance(t, T.EnumType) \
+            and t.name.lower() not in self.strict_enums
+
+    # ---------------------------------------------------------------- libraries
+    def native(self, key: str) -> Optional[FuncSig]:
+        """The signature of a library's native function of this (lower-case) name, or None."""
+        for lib in self.libraries:
+            sig = lib.lookup(key)
+            if sig is not None:
+                return sig
+        return None

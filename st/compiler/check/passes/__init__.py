@@ -1,0 +1,1 @@
+"""The checker's passes, in the order `Checker.run` applies them."""

@@ -1,0 +1,76 @@
+"""Pass 1, collect: every TYPE, POU, INTERFACE, CONFIGURATION, global block and TEST block of the
+units, by name, before anything is resolved (so declarations may come in any order)."""
+from __future__ import annotations
+
+from ... import ast as A
+from ....model import types as T
+from ...names import mangle
+from ....source import Span
+from ..context import CheckContext
+
+
+def collect(ctx: CheckContext, units: list[A.Unit]) -> None:
+    for u in units:
+        _collect(ctx, u)
+
+
+def _collect(ctx: CheckContext, u: A.Unit) -> None:
+    for item in u.items:
+        if isinstance(item, A.TypeBlock):
+            for td in item.types:
+                key = td.name.lower()
+                if key in ctx.pending_types or key in ctx.project.pous:
+                    _dup(ctx, td.name, td.span)
+                    continue
+                if key in T.ELEMENTARY:
+                    ctx.err("E011", td.span, f"'{td.name}' is an elementary type and cannot be redefined")
+                    continue
+                ctx.pending_types[key] = (td, ctx.lib_of(td.span))
+                ctx.decl_span[key] = td.span
+        elif isinstance(item, (A.POU, A.Interface)):
+            _oop_features(ctx, item)
+            key = item.name.lower()
+            if key in ctx.project.pous or key in ctx.pending_types:
+                old = ctx.project.pous.get(key)
+                if old is not None and old.library and not ctx.lib_of(item.span):
+                    # a user POU replaces a library POU of the same name
+                    ctx.warn("W004", item.span, f"'{item.name}' replaces the standard library's {item.name}")
+                else:
+                    _dup(ctx, item.name, item.span)
+                    continue
+            pt = T.POUType(item.name, item.kind, decl=item, library=ctx.lib_of(item.span))
+            pt.pyname = {"FUNCTION": "_fn_", "FUNCTION_BLOCK": "_fb_", "PROGRAM": "_prg_",
+                         "INTERFACE": "_itf_"}[item.kind] + mangle(item.name)
+            ctx.project.pous[key] = pt
+            ctx.decl_span[key] = item.span
+        elif isinstance(item, A.Configuration):
+            ctx.configs.append(item)
+        elif isinstance(item, A.VarBlock):
+            if item.kind != "VAR_GLOBAL":
+                ctx.err("E003", item.span, f"{item.kind} is not allowed outside a POU")
+                continue
+            ctx.global_blocks.append(("", item))
+        elif isinstance(item, A.TestBlock):
+            ctx.project.test_blocks.append(item)
+
+
+def _oop_features(ctx: CheckContext, item) -> None:
+    if isinstance(item, A.Interface):
+        ctx.feature("oop", item.span, "INTERFACE")
+        return
+    if "CLASS" in item.modifiers:
+        ctx.feature("oop", item.span, "CLASS")
+    if item.extends:
+        ctx.feature("oop", item.span, "EXTENDS")
+    if item.implements:
+        ctx.feature("oop", item.span, "IMPLEMENTS")
+    for m in item.methods:
+        ctx.feature("oop", m.span, "METHOD")
+    for pr in item.properties:
+        ctx.feature("oop", pr.span, "PROPERTY")
+
+
+def _dup(ctx: CheckContext, name: str, span: Span) -> None:
+    prev = ctx.decl_span.get(name.lower())
+    where = f" (first declared at {prev.file}:{prev.line})" if prev else ""
+    ctx.err("E011", span, f"'{name}' is declared twice{where}")

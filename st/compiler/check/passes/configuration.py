@@ -1,0 +1,126 @@
+"""Configurations: tasks, program instances and their connections, VAR_CONFIG; without a
+CONFIGURATION, an implicit one runs every PROGRAM in one task."""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ... import ast as A
+from ....model import types as T
+from ....model.program import ConfigModel, InstanceModel, TaskModel
+from ..common import _SECTIONS_PARAM, Scope, same_type
+
+if TYPE_CHECKING:
+    from ..semantics import Semantics
+
+
+def check_configurations(sem: Semantics) -> None:
+    for cfg_decl in sem.ctx.configs:
+        _check_configuration(sem, cfg_decl)
+    if not sem.ctx.project.configs:
+        _implicit_configuration(sem)
+
+
+def _check_configuration(sem: Semantics, cfg: A.Configuration) -> None:
+    ctx = sem.ctx
+    cm = ConfigModel(cfg.name)
+    scope = Scope(None, {})
+    for res in cfg.resources:
+        for td in res.tasks:
+            tm = TaskModel(td.name, span=td.span)
+            for k, v in td.params.items():
+                if k == "INTERVAL":
+                    tt = sem.exprs.expr(v, scope, T.TIME)
+                    c = sem.consts.value(v, scope)
+                    if tt is None or not T.base_of(tt).is_time or not isinstance(c, int):
+                        ctx.err("E013", v.span, "INTERVAL must be a TIME constant, e.g. T#20ms")
+                    elif c <= 0:
+                        ctx.err("E029", v.span, "INTERVAL must be positive")
+                    else:
+                        tm.interval = c
+                elif k == "PRIORITY":
+                    c = sem.consts.value(v, scope)
+                    if not isinstance(c, int):
+                        ctx.err("E029", v.span, "PRIORITY must be an integer constant")
+                    else:
+                        tm.priority = c
+                elif k == "SINGLE":
+                    if isinstance(v, A.Name):
+                        gs = ctx.project.global_names.get(v.name.lower())
+                        if not gs:
+                            ctx.err("E010", v.span, f"SINGLE refers to unknown variable '{v.name}'")
+                        else:
+                            tm.single = gs[0].pyname
+                    else:
+                        ctx.err("E013", v.span, "SINGLE must name a BOOL variable")
+                else:
+                    ctx.err("E016", v.span, f"unknown task parameter '{k}' (INTERVAL, SINGLE, PRIORITY)")
+            if any(t.name.lower() == td.name.lower() for t in cm.tasks):
+                ctx.err("E011", td.span, f"task '{td.name}' is declared twice")
+            cm.tasks.append(tm)
+        for pc in res.programs:
+            pou = ctx.project.pous.get(pc.type_name.lower())
+            if pou is None or pou.pou_kind != "PROGRAM":
+                ctx.err("E028", pc.span, f"'{pc.type_name}' is not a PROGRAM")
+                continue
+            if pc.task and not any(t.name.lower() == pc.task.lower() for t in cm.tasks):
+                ctx.err("E028", pc.span, f"unknown task '{pc.task}'")
+                continue
+            if any(i.name.lower() == pc.instance.lower() for i in cm.instances):
+                ctx.err("E011", pc.span, f"program instance '{pc.instance}' is declared twice")
+                continue
+            im = InstanceModel(pc.instance, pou, pc.task, res.name, [], pc.span)
+            for a in pc.args:
+                p = pou.vars.get(a.name.lower())
+                if p is None or p.section not in _SECTIONS_PARAM:
+                    ctx.err("E016", a.span, f"{pou.name} has no parameter '{a.name}'")
+                    continue
+                if a.output:
+                    sem.exprs.expr(a.value, scope)
+                else:
+                    vt = sem.exprs.expr(a.value, scope, p.type)
+                    sem.stmts.assignable(a.value, vt, p.type, a.value.span, "pass")
+                im.args.append((p, a.value, a.output))
+            cm.instances.append(im)
+    for b in cfg.var_blocks:
+        if b.kind == "VAR_CONFIG":
+            for d in b.decls:
+                if _config_path_type(sem, cm, d) is not None:
+                    cm.var_config.append((d.path or [], d.location, d.init, d.type, d.span))
+    ctx.project.configs.append(cm)
+
+
+def _config_path_type(sem: Semantics, cm: ConfigModel, d: A.VarDecl):
+    """Check a VAR_CONFIG entry `inst.fb.var AT %QX0.0 : T := v;`; its variable's type or None."""
+    ctx = sem.ctx
+    path = d.path or []
+    inst = next((i for i in cm.instances if path and i.name.lower() == path[0].lower()), None)
+    if inst is None:
+        ctx.err("E010", d.span, f"VAR_CONFIG: no program instance named '{path[0] if path else ''}'")
+        return None
+    t: T.Type = inst.type
+    for name in path[1:]:
+        ut = T.unalias(t)
+        sym = ut.vars.get(name.lower()) if isinstance(ut, T.POUType) else None
+        if sym is None:
+            ctx.err("E010", d.span, f"VAR_CONFIG: {'.'.join(path)}: '{name}' is not a variable of {ut}")
+            return None
+        t = sym.type
+    want = sem.decls.resolve_type(d.type, None)
+    if not same_type(want, t):
+        ctx.err("E013", d.type.span, f"VAR_CONFIG: {'.'.join(path)} is {t}, not {want}")
+        return None
+    if d.location:
+        sem.decls.check_location(d.location, t, d.span)
+    if d.init is not None:
+        sem.decls.check_initializer(d.init, t, None)
+    return t
+
+
+def _implicit_configuration(sem: Semantics) -> None:
+    ctx = sem.ctx
+    progs = [p for p in ctx.project.pous.values() if p.pou_kind == "PROGRAM" and not p.library]
+    cm = ConfigModel("", implicit=True)
+    cm.tasks.append(TaskModel("main", 0, 0))
+    for p in progs:
+        cm.instances.append(InstanceModel(p.name, p, "main", "", [], p.decl.span if p.decl else None))
+    ctx.project.configs.append(cm)
