@@ -44,7 +44,8 @@ class Code(str, Enum):
     UNDECLARED = "E010", (
         "An identifier is used but never declared (or a VAR_EXTERNAL has no VAR_GLOBAL).")
     DECLARED_TWICE = "E011", (
-        "A name is declared twice in the same scope.")
+        "A name is declared twice in the same scope, or a user POU has the name of a standard library POU "
+        "of another kind (the library's own code uses it as what it is).")
     BAD_TYPE = "E012", (
         "A type name is unknown, or a type is used where it cannot be (a FUNCTION as a type, a STRUCT outside "
         "a TYPE declaration, ARRAY[*] outside a VAR_IN_OUT, EXTENDS or IMPLEMENTS naming the wrong kind of "
@@ -138,7 +139,7 @@ class Code(str, Enum):
     TRUNCATED_STRING = "W003", (
         "A string literal is longer than the variable and will be truncated.")
     REPLACES_LIBRARY_POU = "W004", (
-        "A user POU replaces a standard library POU of the same name.")
+        "A user POU replaces a standard library POU of the same name and kind.")
     UNSIGNED_NEGATION = "W005", (
         "Negating an unsigned value wraps around.")
     HIDDEN_VARIABLE = "W006", (

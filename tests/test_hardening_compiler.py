@@ -84,6 +84,24 @@ def test_a_statement_before_the_first_case_label_is_a_syntax_error_not_an_intern
     assert _errors(src) == [("E001", 4, 3, "a statement in a CASE needs a label before it")]
 
 
+def test_a_library_block_cannot_be_replaced_by_a_function():
+    # found by the fuzzer (bench/fuzz_programs.py, seed 2, mutant 19991): FUNCTION R_TRIG made the
+    # standard library's own code (F_TRIG's R_TRIG instance) fail inside the library file
+    src = "FUNCTION R_TRIG : REAL\nVAR_INPUT x : REAL; END_VAR\nR_TRIG := x;\nEND_FUNCTION\n" + _program("y := 1;")
+    assert _errors(src) == [("E011", 1, 10, "'R_TRIG' is a function block of the standard library; "
+                                            "a FUNCTION cannot replace it")]
+
+
+def test_a_library_block_replaced_by_a_block_is_a_warning_and_the_replacement_runs():
+    src = ("FUNCTION_BLOCK R_TRIG\nVAR_INPUT CLK : BOOL; END_VAR\nVAR_OUTPUT Q : BOOL; END_VAR\nQ := NOT CLK;\n"
+           "END_FUNCTION_BLOCK\n" + _program("t(CLK := FALSE); y := BOOL_TO_DINT(t.Q);", "y : DINT; t : R_TRIG;"))
+    r = compile_text(src, "t.st", raise_on_error=False, use_cache=False)
+    assert [(d.code, d.span.line) for d in r.diagnostics if d.span.file == "t.st"] == [("W004", 1)]
+    plc = PLC(r)
+    plc.scan()
+    assert plc["main.y"] == 1
+
+
 def test_a_parser_failure_is_an_internal_error_diagnostic_not_an_exception(monkeypatch):
     from st.compiler import driver
     parser, _ = driver._get_parser()

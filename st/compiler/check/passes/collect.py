@@ -32,6 +32,14 @@ def _collect(ctx: CheckContext, u: A.Unit) -> None:
             key = item.name.lower()
             if key in ctx.project.pous or key in ctx.pending_types:
                 old = ctx.project.pous.get(key)
+                if old is not None and old.library and not ctx.lib_of(item.span) and old.pou_kind != item.kind:
+                    # the library's own code uses it as what it is: another kind cannot stand in for it
+                    kinds = {"FUNCTION": "function", "FUNCTION_BLOCK": "function block", "PROGRAM": "program",
+                             "INTERFACE": "interface"}
+                    ctx.err("E011", item.span, f"'{item.name}' is a {kinds.get(old.pou_kind, old.pou_kind)} of the "
+                            f"standard library; a {item.kind} cannot replace it",
+                            f"rename it, or declare it as a {old.pou_kind} to replace the library's")
+                    continue
                 if old is not None and old.library and not ctx.lib_of(item.span):
                     # a user POU replaces a library POU of the same name
                     ctx.warn("W004", item.span, f"'{item.name}' replaces the standard library's {item.name}")
