@@ -46,17 +46,17 @@ def per_frame_us(n: int, frames: int, runs: int):
         seg = build_segment(from_dict(segment_cfg(n)))
         clock = [0.0]
 
-        def transport(frame):
+        def transport(frame, seg=seg, clock=clock):
             return seg.exchange(frame, clock[0])
-        m = FrameMaster(transport, pause=lambda s: clock.__setitem__(0, clock[0] + s),
-                        now_ns=lambda: int(clock[0] * 1e9))
+        m = FrameMaster(transport, pause=lambda s, clock=clock: clock.__setitem__(0, clock[0] + s),
+                        now_ns=lambda clock=clock: int(clock[0] * 1e9))
         m.scan()
         m.configure(dc_cycle_ns=1_000_000)
         m.set_state("OP")
         rx = PdoLayout(CIA402_RX)
         # enable every drive: 0x06, 0x07, 0x0F, a few cycles each
         for cw in (0x06, 0x07, 0x0F, 0x0F, 0x0F):
-            for k in range(3):
+            for _ in range(3):
                 clock[0] += 0.001
                 for i in range(n):
                     m.write_outputs(i, rx.pack([cw, 0, 0, 8]))
@@ -74,7 +74,7 @@ def per_frame_us(n: int, frames: int, runs: int):
         for s in seg.slaves:
             s.device.step = lambda t, dt: None
         t0 = time.perf_counter()
-        for k in range(frames):
+        for _ in range(frames):
             clock[0] += 0.001
             m.exchange()
         results["no_physics"].append((time.perf_counter() - t0) / frames * 1e6)
@@ -83,7 +83,7 @@ def per_frame_us(n: int, frames: int, runs: int):
         # the master's frame work alone: encode and decode without a segment behind it
         m.transport = lambda frame: frame
         t0 = time.perf_counter()
-        for k in range(frames):
+        for _ in range(frames):
             m.exchange()
         results["master"].append((time.perf_counter() - t0) / frames * 1e6)
         gc.enable()

@@ -72,7 +72,7 @@ def phase(program: Path, cycle: str, seconds: int, clients: int, port: int, rate
                 break
             except OSError:
                 if time.monotonic() > deadline or run.poll() is not None:
-                    raise RuntimeError("st run did not start its Modbus slave")
+                    raise RuntimeError("st run did not start its Modbus slave") from None
                 time.sleep(0.1)
         time.sleep(1.0)
         counter = mp.Value("q", 0)

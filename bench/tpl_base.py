@@ -1,6 +1,6 @@
 """The Template record shared by the tpl_*.py modules of the library generator."""
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Optional
 
 
 @dataclass
@@ -11,8 +11,8 @@ class Template:
     # For function blocks the program may call: the FB's name prefix and a call
     # snippet with {inst} (instance name) and {b}, {r}, {i} (a BOOL, a REAL and an
     # INT expression of the program).
-    fb: Optional[str] = None
-    call: Optional[str] = None
+    fb: str | None = None
+    call: str | None = None
 
     def render(self, rng, ctx: dict) -> str:
         values = dict(ctx)

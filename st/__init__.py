@@ -1,6 +1,6 @@
 """st: an IEC 61131-3 Structured Text toolchain and soft PLC."""
-from .diagnostics import CompileError
 from .api import PLC
+from .diagnostics import CompileError
 from .runtime.faults import PLCFaultError, PLCStartError
 from .runtime.online_change import OnlineChangeRefused
 

@@ -11,7 +11,6 @@ import click
 from .diagnostics import Code, CompileError, render_all
 from .errors_doc import explain as explanation_of
 
-
 _DIALECT = None          # the --dialect of this command line (set by the @dialect decorator)
 
 
@@ -294,7 +293,8 @@ def modbus_map(files, map_file, time_unit, f_trig_first_scan):
 @click.option("--seed", type=int, default=1, show_default=True)
 def experiment(name, out_dir, quick, seed):
     """Run one of the thesis's experiments (programs/thesis/README.md); without NAME, list them."""
-    from .experiments import EXPERIMENTS, run as run_experiment
+    from .experiments import EXPERIMENTS
+    from .experiments import run as run_experiment
     if not name:
         for key, (_mod, what) in EXPERIMENTS.items():
             click.echo(f"{key:<12}  {what}")

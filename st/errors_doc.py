@@ -2,12 +2,10 @@
 `python -m st.errors_doc > docs/diagnostics.md` regenerates it, a test checks it is current."""
 from __future__ import annotations
 
-from typing import Optional
-
 from .diagnostics import Code
 
 
-def explain(code: str) -> Optional[str]:
+def explain(code: str) -> str | None:
     """The explanation of a code (any case), or None for an unknown one."""
     try:
         return Code(code.upper()).explanation

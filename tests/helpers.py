@@ -5,15 +5,14 @@ source file in assertions binds the name once: `run = partial(helpers.run, name=
 """
 from __future__ import annotations
 
-from typing import Iterable, Optional
+from collections.abc import Iterable
 
 import pytest
 
 from st import PLC
 from st.api import compile_text
 from st.diagnostics import CompileError
-from st.runtime.faults import FaultInfo
-from st.runtime.faults import PLCFaultError
+from st.runtime.faults import FaultInfo, PLCFaultError
 
 
 def program(body: str, decls: str = "", extra: str = "") -> str:
@@ -21,7 +20,7 @@ def program(body: str, decls: str = "", extra: str = "") -> str:
     return f"{extra}\nPROGRAM main\nVAR\n{decls}\nEND_VAR\n{body}\nEND_PROGRAM\n"
 
 
-def run(src: str, scans: int = 1, dialect: Optional[str] = None, *, name: str = "t.st", **compile_kw) -> PLC:
+def run(src: str, scans: int = 1, dialect: str | None = None, *, name: str = "t.st", **compile_kw) -> PLC:
     """Compile `src` (uncached unless asked), start a PLC on virtual time and run `scans` base ticks."""
     compile_kw.setdefault("use_cache", False)
     plc = PLC(compile_text(src, name, dialect=dialect, **compile_kw))
@@ -29,19 +28,19 @@ def run(src: str, scans: int = 1, dialect: Optional[str] = None, *, name: str = 
     return plc
 
 
-def compile_error(src: str, dialect: Optional[str] = None, *, name: str = "t.st") -> CompileError:
+def compile_error(src: str, dialect: str | None = None, *, name: str = "t.st") -> CompileError:
     """The CompileError `src` must raise (the test fails if it compiles)."""
     with pytest.raises(CompileError) as info:
         compile_text(src, name, dialect=dialect, use_cache=False)
     return info.value
 
 
-def errors(src: str, dialect: Optional[str] = None, *, name: str = "t.st") -> str:
+def errors(src: str, dialect: str | None = None, *, name: str = "t.st") -> str:
     """The rendered diagnostics of a program that must not compile (as `st check` prints them)."""
     return str(compile_error(src, name=name, dialect=dialect))
 
 
-def fault(src: str, dialect: Optional[str] = None, *, scans: int = 1, name: str = "t.st") -> tuple[PLC, FaultInfo]:
+def fault(src: str, dialect: str | None = None, *, scans: int = 1, name: str = "t.st") -> tuple[PLC, FaultInfo]:
     """Run a program that must fault within `scans` ticks: (the PLC, its fault)."""
     plc = PLC(compile_text(src, name, dialect=dialect, use_cache=False))
     with pytest.raises(PLCFaultError) as info:
@@ -49,14 +48,14 @@ def fault(src: str, dialect: Optional[str] = None, *, scans: int = 1, name: str 
     return plc, info.value.fault
 
 
-def diagnostics(src: str, *, name: str = "t.st", dialect: Optional[str] = None) -> list[tuple[str, int, int]]:
+def diagnostics(src: str, *, name: str = "t.st", dialect: str | None = None) -> list[tuple[str, int, int]]:
     """Every diagnostic (errors and warnings) of `src` in its own file, as (code, line, column)."""
     result = compile_text(src, name, dialect=dialect, use_cache=False, raise_on_error=False)
     return [(d.code, d.span.line, d.span.col) for d in result.diagnostics if d.span is not None and d.span.file == name]
 
 
 def assert_diagnostics(src: str, expected: Iterable[tuple], *, allow: Iterable[str] = (), name: str = "t.st",
-                       dialect: Optional[str] = None) -> None:
+                       dialect: str | None = None) -> None:
     """Exactly the `expected` diagnostics, each (code, line) or (code, line, column), in any order:
     a missing one fails, and so does any other diagnostic unless its code is in `allow`."""
     got = diagnostics(src, name=name, dialect=dialect)

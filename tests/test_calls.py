@@ -1,9 +1,9 @@
 """Calls: functions (outputs, in-outs, EN/ENO, positional), FB instances, arrays of FBs, actions."""
 from __future__ import annotations
 
-import helpers
-
 from st import PLC
+
+import helpers
 
 run = helpers.run
 

@@ -3,13 +3,13 @@ STRUCT EXTENDS, methods/properties/actions after END_FUNCTION_BLOCK, methods of 
 qualified enums, calls chained on call results."""
 from functools import partial
 
-import helpers
 import pytest
 
-from st import PLC
+from st import PLC, PLCFaultError
 from st.api import compile_text
 from st.diagnostics import CompileError
-from st import PLCFaultError
+
+import helpers
 
 run = partial(helpers.run, name="tc.st", use_cache=True)
 errors = partial(helpers.errors, name="tc.st")

@@ -2,10 +2,9 @@
 indexes are checked against them, LOWER_BOUND / UPPER_BOUND read them."""
 import pytest
 
-from st import PLC
+from st import PLC, PLCFaultError
 from st.api import compile_text
 from st.diagnostics import CompileError
-from st import PLCFaultError
 
 SRC = """
 FUNCTION SumAll : DINT

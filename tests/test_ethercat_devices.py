@@ -9,8 +9,7 @@ import pytest
 from st.io.ethercat.devices import CiA402Drive, DigitalIO, MotorModel, MotorParams, State
 from st.io.ethercat.devices.cia402 import wrap32
 from st.io.ethercat.devices.motor import CSP, CST, CSV
-from st.io.ethercat.od import (ABORT_NOT_MAPPABLE, ABORT_READ_ONLY, ABORT_STATE, ABORT_VALUE_RANGE,
-                               SdoAbort)
+from st.io.ethercat.od import ABORT_NOT_MAPPABLE, ABORT_READ_ONLY, ABORT_STATE, ABORT_VALUE_RANGE, SdoAbort
 from st.io.ethercat.pdo import CIA402_RX, CIA402_TX, PdoLayout
 
 CPR = 1 << 23

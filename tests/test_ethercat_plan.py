@@ -10,8 +10,7 @@ import pytest
 
 from st.io.ethercat.esi import EsiError, load_esi, parse_esi, parse_number
 from st.io.ethercat.pdo import CIA402_RX, CIA402_TX, PdoLayout
-from st.io.ethercat.plan import (DriveTiming, SegmentTiming, SlaveTiming, format_plan, frame_bytes, plan,
-                                 wire_time_s)
+from st.io.ethercat.plan import DriveTiming, SegmentTiming, SlaveTiming, format_plan, frame_bytes, plan, wire_time_s
 
 ESI = Path(__file__).parent / "data" / "esi"
 US = 1e-6

@@ -11,14 +11,30 @@ import pytest
 from st.io.ethercat import wire
 from st.io.ethercat.coe import SdoServer, download_request, mbx_frame, parse_response, upload_request
 from st.io.ethercat.devices.base import Device
-from st.io.ethercat.esc import SlaveController
 from st.io.ethercat.master import FrameMaster, MasterError
 from st.io.ethercat.od import ABORT_NO_OBJECT, ABORT_READ_ONLY, ABORT_STATE, ObjectDictionary, SdoAbort
 from st.io.ethercat.pdo import CIA402_RX, CIA402_TX, PdoLayout
 from st.io.ethercat.segment import Segment
-from st.io.ethercat.sii import crc8, parse as parse_sii
-from st.io.ethercat.wire import (APRD, APRW, APWR, ARMW, BRD, BRW, BWR, FPRD, FPRW, FPWR, FRMW, LRD, LRW, LWR,
-                                 NOP, Datagram)
+from st.io.ethercat.sii import crc8
+from st.io.ethercat.sii import parse as parse_sii
+from st.io.ethercat.wire import (
+    APRD,
+    APRW,
+    APWR,
+    ARMW,
+    BRD,
+    BRW,
+    BWR,
+    FPRD,
+    FPRW,
+    FPWR,
+    FRMW,
+    LRD,
+    LRW,
+    LWR,
+    NOP,
+    Datagram,
+)
 
 
 class Echo(Device):
@@ -28,7 +44,7 @@ class Echo(Device):
     def __init__(self, name="echo"):
         super().__init__(name)
         od = self.od
-        for ix, sx, bits, dt, n in CIA402_RX + CIA402_TX:
+        for ix, sx, _bits, dt, n in CIA402_RX + CIA402_TX:
             od.add(ix, sx, n, dt, 0, "ro" if ix in (0x6041, 0x6064, 0x606C, 0x603F) else "rw", pdo=True,
                    writable_in=("PREOP", "SAFEOP", "OP"))
         od.add_pdo_mapping(0x1600, "RxPDO", [(a, b, c) for a, b, c, _, _ in CIA402_RX])

@@ -7,10 +7,10 @@ import importlib.util
 
 import pytest
 
-pytestmark = pytest.mark.slow      # every test here runs the thesis experiments end to end
-
 from st.api import compile_text
 from st.experiments import latency, scheduling
+
+pytestmark = pytest.mark.slow      # every test here runs the thesis experiments end to end
 
 HAVE_MPL = importlib.util.find_spec("matplotlib") is not None
 

@@ -52,7 +52,7 @@ def test_fb_handle_runs_one_call_and_reads_the_plc_clock():
     p.advance("10ms")
     assert ton(IN=True).Q is True
     with pytest.raises(AttributeError, match="TON has no variable 'QQ'"):
-        ton.QQ
+        _ = ton.QQ
     with pytest.raises(ValueError, match="32768 does not fit in INT"):
         p.fb("BatchCounter")(size=32768)
     with pytest.raises(KeyError, match="no FUNCTION_BLOCK or PROGRAM named 'Nope'"):

@@ -499,7 +499,7 @@ def test_regular_clients_are_never_evicted_and_new_connections_are_refused_inste
         for _ in range(5):
             r = connect(slave)
             assert closed_by_peer(r, 2.0)
-            refused.append("127.0.0.1:%d" % r.getsockname()[1])
+            refused.append(f"127.0.0.1:{r.getsockname()[1]}")
             r.close()
         for s in (h1, h2, m):
             assert raw(s, bytes([3, 0, 0, 0, 1])) == ok

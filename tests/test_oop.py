@@ -3,12 +3,13 @@ EXTENDS with virtual dispatch, SUPER^, interfaces, properties, access, ABSTRACT/
 CLASS, references and pointers, VAR_INST, VAR_STAT, __NEW/__DELETE, dialect presets."""
 from functools import partial
 
-import helpers
 import pytest
 
 from st import PLC
 from st.api import compile_text
 from st.diagnostics import CompileError
+
+import helpers
 
 run = partial(helpers.run, name="oop.st", use_cache=True)
 errors = partial(helpers.errors, name="oop.st")

@@ -5,10 +5,11 @@ __NEW/__DELETE, FB_init, dialect presets, and the located diagnostics for the us
 Every expected value was worked out by hand from the language semantics."""
 from functools import partial
 
-import helpers
 import pytest
 
 from st.api import compile_text
+
+import helpers
 
 run = partial(helpers.run, name="conf.st", use_cache=True)
 errors = partial(helpers.errors, name="conf.st")

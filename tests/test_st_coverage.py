@@ -4,8 +4,8 @@ import textwrap
 
 import pytest
 
-from st.api import compile_text
 from st import PLC
+from st.api import compile_text
 from st.testing.covreport import CoverageData, Point, html_report, terminal_report
 from st.testing.measure import coverage_data
 

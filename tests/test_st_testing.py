@@ -99,8 +99,9 @@ def test_passing_assertions_and_message():
     assert res["passes"].passed and res["passes"].report is None
     bad = res["fails with a message"]
     assert (bad.passed, bad.report.actual, bad.report.expected, bad.report.note) == (False, "2", "3", "math is broken")
-    assert str(bad.report) == ("t.st:%d:3: ASSERT_EQ(1 + 1, 3, CONCAT('math ', 'is broken')) failed\n"
-                               "  actual:   2\n  expected: 3\n  message:  math is broken") % (LIB.count("\n") + 10)
+    line = LIB.count("\n") + 10
+    assert str(bad.report) == (f"t.st:{line}:3: ASSERT_EQ(1 + 1, 3, CONCAT('math ', 'is broken')) failed\n"
+                               "  actual:   2\n  expected: 3\n  message:  math is broken")
 
 
 def test_setup_variables_are_fresh_for_every_test_and_teardown_runs():

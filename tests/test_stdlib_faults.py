@@ -100,7 +100,7 @@ def _functions():
         calls = []
         for types in itertools.product(*[GROUPS.get(p.constraint, [p.constraint]) for p in sig.params]):
             if len({t for t, p in zip(types, sig.params) if p.group}) <= 1:
-                calls.append((f"{name}({', '.join('{%d}' % i for i in range(len(types)))})", types))
+                calls.append((f"{name}({', '.join('{' + str(i) + '}' for i in range(len(types)))})", types))
         yield calls
 
 

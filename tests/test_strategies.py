@@ -50,12 +50,12 @@ TYPE Meters : LREAL; END_TYPE
 TYPE Point : STRUCT x : REAL; y : DINT; tag : STRING[4]; c : Color; END_STRUCT; END_TYPE
 PROGRAM main
 VAR
-%s
+{decls}
   col : Color; sr : Small; sr2 : USINT(10..20); m : Meters; p : Point; r : REF_TO INT;
   arr : ARRAY[1..4] OF INT; grid : ARRAY[0..1, 1..3] OF Color; pts : ARRAY[1..2] OF Point;
 END_VAR
 END_PROGRAM
-""" % "\n".join(f"  {var(t)} : {t};" for t in ELEMENTARY)
+""".format(decls="\n".join(f"  {var(t)} : {t};" for t in ELEMENTARY))
 
 
 @pytest.fixture(scope="module")

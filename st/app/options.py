@@ -2,52 +2,51 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional
 
 
 @dataclass
 class RunOptions:
     files: list = field(default_factory=list)
-    scans: Optional[int] = None
-    duration: Optional[str] = None
-    cycle: Optional[str] = None
+    scans: int | None = None
+    duration: str | None = None
+    cycle: str | None = None
     virtual: bool = False
     policy: str = "openplc"
     dump_json: bool = False
-    stats_json: Optional[str] = None
-    stats_plot: Optional[str] = None
+    stats_json: str | None = None
+    stats_plot: str | None = None
     on_fault: str = "stop"
-    watchdog: Optional[str] = None
-    retain_file: Optional[str] = None
+    watchdog: str | None = None
+    retain_file: str | None = None
     no_retain: bool = False
     retain_interval: str = "1s"
     cold: bool = False
     watch: bool = False
     rt: bool = True
     rt_priority: int = 30
-    cpu: Optional[int] = None
+    cpu: int | None = None
     sim_cost: list = field(default_factory=list)
     safe_outputs: list = field(default_factory=list)      # ["%QX0.1=TRUE", "%QW3=100"]
-    modbus: Optional[str] = None                          # "[HOST:]PORT"
-    modbus_map: Optional[str] = None
+    modbus: str | None = None                          # "[HOST:]PORT"
+    modbus_map: str | None = None
     modbus_read_only: bool = False
-    modbus_writable: Optional[str] = None
+    modbus_writable: str | None = None
     modbus_max_connections: int = 16
     modbus_idle_timeout: float = 60.0
     modbus_rate: float = 1000.0
-    modbus_unit_ids: Optional[str] = None
-    axes: Optional[str] = None                            # axis configuration (TOML)
+    modbus_unit_ids: str | None = None
+    axes: str | None = None                            # axis configuration (TOML)
     trace: list = field(default_factory=list)             # AXIS_REF paths
-    trace_plot: Optional[str] = None
-    trace_csv: Optional[str] = None
-    ethercat: Optional[str] = None                        # segment configuration (TOML)
+    trace_plot: str | None = None
+    trace_csv: str | None = None
+    ethercat: str | None = None                        # segment configuration (TOML)
     ethercat_backend: str = "sim"
-    ethercat_iface: Optional[str] = None
-    ethercat_capture: Optional[str] = None
+    ethercat_iface: str | None = None
+    ethercat_capture: str | None = None
     quiet: bool = False
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
-    compiled_mtimes: Optional[dict] = None                # the sources as compiled (see --watch)
+    compiled_mtimes: dict | None = None                # the sources as compiled (see --watch)
 
 
 def safe_values(specs: list) -> dict:

@@ -9,8 +9,9 @@ cached and an uncached compile give the same value.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
-from typing import Any, Callable, Optional
+from typing import Any
 
 from ..model import types as T
 from ..model.compiled import CompiledProgram
@@ -31,7 +32,7 @@ def libraries_only(libraries: list[Any]) -> Project:
     return Project(libraries=[_library(lib) for lib in libraries])
 
 
-def ast_free_state(obj: Any) -> Optional[dict]:
+def ast_free_state(obj: Any) -> dict | None:
     """The state `obj` has in the artefact, or None when it has no syntax to drop."""
     rule = _RULES.get(type(obj))
     if rule is None:
@@ -41,20 +42,20 @@ def ast_free_state(obj: Any) -> Optional[dict]:
     return state
 
 
-def initial_value(init: Any) -> Optional[InitialValue]:
+def initial_value(init: Any) -> InitialValue | None:
     """A literal initial value as data; an expression (code) as None."""
     if isinstance(init, A.Literal):
         return InitialValue(init.value)
     return init if isinstance(init, InitialValue) else None
 
 
-def _declaration(decl: Any) -> Optional[PouInfo]:
+def _declaration(decl: Any) -> PouInfo | None:
     if decl is None or isinstance(decl, PouInfo):
         return decl
     return PouInfo(decl.span, getattr(decl, "kind", type(decl).__name__.upper()), decl.name)
 
 
-def _action(decl: Any) -> Optional[PouInfo]:
+def _action(decl: Any) -> PouInfo | None:
     if decl is None or isinstance(decl, PouInfo):
         return decl
     return PouInfo(decl.span, "ACTION", decl.name)

@@ -7,7 +7,7 @@ what the source said.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any
 
 from ..source import Span
 
@@ -110,7 +110,7 @@ class AccessorCall(Expr):
     """A property read or written, after lowering (compiler/lower/properties.py): a call of
     `accessor` (its GET; its SET as an assignment's target) on `obj`, None for this instance.
     `nonvirtual`: SUPER^.Prop, the base block's accessor on this instance (obj is the SUPER^)."""
-    obj: Optional[Expr] = None
+    obj: Expr | None = None
     accessor: Any = field(default=None, repr=False)
     nonvirtual: bool = False
 
@@ -203,7 +203,7 @@ class For(Stmt):
     var: Expr = None
     start: Expr = None
     end: Expr = None
-    step: Optional[Expr] = None
+    step: Expr | None = None
     body: list = None
 
 
@@ -231,8 +231,8 @@ class CountedFor(Stmt):
     var: Expr = None
     start: Expr = None
     end: Expr = None
-    step: Optional[Expr] = None
-    step_value: Optional[int] = 1
+    step: Expr | None = None
+    step_value: int | None = 1
     form: str = "range"
     body: list = None
 
@@ -280,7 +280,7 @@ class NamedType(TypeSpec):
 @dataclass(slots=True, eq=False)
 class StringType(TypeSpec):
     wide: bool = False
-    length: Optional[Expr] = None
+    length: Expr | None = None
 
 
 @dataclass(slots=True, eq=False)
@@ -306,7 +306,7 @@ class SubrangeType(TypeSpec):
 class EnumValue:
     span: Span
     name: str
-    value: Optional[Expr] = None
+    value: Expr | None = None
 
 
 @dataclass(slots=True, eq=False)
@@ -363,7 +363,7 @@ class ActionAssoc:
     span: Span
     action: str
     qualifier: str
-    time: Optional[Expr] = None
+    time: Expr | None = None
 
 
 @dataclass(slots=True, eq=False)
@@ -378,11 +378,11 @@ class Step:
 class Transition:
     span: Span
     name: str
-    priority: Optional[Expr]
+    priority: Expr | None
     sources: list           # [(name, span)]
     targets: list
-    cond: Optional[Expr] = None
-    body: Optional[list] = None     # transition given as statements assigning the transition name
+    cond: Expr | None = None
+    body: list | None = None     # transition given as statements assigning the transition name
 
 
 @dataclass(slots=True, eq=False)
@@ -397,10 +397,10 @@ class Method:
     span: Span
     name: str
     modifiers: list = field(default_factory=list)
-    return_type: Optional[TypeSpec] = None
+    return_type: TypeSpec | None = None
     var_blocks: list = field(default_factory=list)
     body: list = field(default_factory=list)
-    end_span: Optional[Span] = None
+    end_span: Span | None = None
     kind: str = "FUNCTION"          # checked and generated as a function with the instance as `self`
     steps: list = field(default_factory=list)
     transitions: list = field(default_factory=list)
@@ -412,10 +412,10 @@ class Property:
     span: Span
     name: str
     modifiers: list = field(default_factory=list)
-    type: Optional[TypeSpec] = None
-    get: Optional["Method"] = None       # the accessors, as methods (GET: result = the property's name;
-    set: Optional["Method"] = None       # SET: an input with the property's name)
-    end_span: Optional[Span] = None
+    type: TypeSpec | None = None
+    get: Method | None = None       # the accessors, as methods (GET: result = the property's name;
+    set: Method | None = None       # SET: an input with the property's name)
+    end_span: Span | None = None
 
 
 @dataclass(slots=True, eq=False)
@@ -424,7 +424,7 @@ class Interface:
     name: str
     extends: list = field(default_factory=list)
     methods: list = field(default_factory=list)      # Method prototypes (no body)
-    end_span: Optional[Span] = None
+    end_span: Span | None = None
     kind: str = "INTERFACE"
     properties: list = field(default_factory=list)
     var_blocks: list = field(default_factory=list)
@@ -434,7 +434,7 @@ class Interface:
     actions: list = field(default_factory=list)
     modifiers: list = field(default_factory=list)
     implements: list = field(default_factory=list)
-    return_type: Optional[TypeSpec] = None
+    return_type: TypeSpec | None = None
 
 
 @dataclass(slots=True, eq=False)
@@ -442,7 +442,7 @@ class POU:
     span: Span
     kind: str               # FUNCTION, FUNCTION_BLOCK, PROGRAM
     name: str
-    return_type: Optional[TypeSpec] = None
+    return_type: TypeSpec | None = None
     var_blocks: list = field(default_factory=list)
     body: list = field(default_factory=list)
     steps: list = field(default_factory=list)
@@ -451,7 +451,7 @@ class POU:
     modifiers: list = field(default_factory=list)
     extends: str = ""
     implements: list = field(default_factory=list)
-    end_span: Optional[Span] = None
+    end_span: Span | None = None
     methods: list = field(default_factory=list)
     properties: list = field(default_factory=list)
 

@@ -7,11 +7,18 @@ from __future__ import annotations
 
 from lark import Token, Transformer
 
+from ..model.literals import (
+    LiteralError,
+    parse_date_literal,
+    parse_dt_literal,
+    parse_int,
+    parse_real,
+    parse_string,
+    parse_time_literal,
+    parse_tod_literal,
+)
 from ..source import Span
 from . import ast as A
-from ..model.literals import (LiteralError, parse_date_literal, parse_dt_literal, parse_int, parse_real,
-                       parse_string, parse_time_literal, parse_tod_literal)
-
 
 _PREC = {"OR": 1, "OR_ELSE": 1, "XOR": 2, "AND": 3, "&": 3, "AND_THEN": 3, "=": 4, "<>": 4,
          "<": 5, ">": 5, "<=": 5, ">=": 5, "+": 6, "-": 6, "*": 7, "/": 7, "MOD": 7, "**": 8}

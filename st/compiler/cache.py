@@ -13,7 +13,7 @@ import os
 import sys
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any
 
 from ..model.compiled import CompiledProgram, FormatError
 from ..source import SourceFile
@@ -21,10 +21,10 @@ from .library import Library
 from .options import CompileOptions
 
 COMPILER_VERSION = "0.1.0-9"
-_toolchain_digest: Optional[str] = None
+_toolchain_digest: str | None = None
 
 
-def cache_dir() -> Optional[Path]:
+def cache_dir() -> Path | None:
     """The directory of cached programs ($ST_CACHE_DIR, else ~/.cache/st), or None: ST_NO_CACHE is
     set or the directory cannot be made."""
     if os.environ.get("ST_NO_CACHE"):
@@ -60,7 +60,7 @@ def cache_key(sources: list[SourceFile], libraries: list[Library], options: Comp
     h.update(options.cache_token().encode() + b"\0")
     for lib in libraries:
         h.update(lib.name.encode() + lib.version.encode())
-        for path, text in lib.sources:
+        for _path, text in lib.sources:
             h.update(text.encode())
     for s in sources:
         h.update(s.path.encode() + b"\0" + s.text.encode() + b"\0")
@@ -68,7 +68,7 @@ def cache_key(sources: list[SourceFile], libraries: list[Library], options: Comp
 
 
 def load(directory: Path, key: str, *, sources: dict[str, SourceFile],
-         helpers: dict[str, Any]) -> Optional[CompiledProgram]:
+         helpers: dict[str, Any]) -> CompiledProgram | None:
     """The program stored under `key`, with the caller's sources and helpers, or None."""
     try:
         data = (directory / key).read_bytes()
@@ -86,7 +86,7 @@ def store(directory: Path, key: str, compiled: CompiledProgram) -> None:
     failure to write is silent."""
     try:
         path = directory / key
-        tmp = path.with_suffix(".tmp%d" % os.getpid())
+        tmp = path.with_suffix(f".tmp{os.getpid()}")
         tmp.write_bytes(compiled.to_bytes())
         os.replace(tmp, path)
     except Exception:  # noqa: BLE001 - never fail a compile for the cache

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Optional
 
 from ..diagnostics import CompileError, Diagnostic, Severity
 from ..source import Span
@@ -48,7 +47,7 @@ PRESETS = {
 _PRAGMA = re.compile(r"\{\s*dialect\s+'([A-Za-z]+)'\s*\}", re.I)
 
 
-def from_sources(sources) -> Optional[tuple[str, Span]]:
+def from_sources(sources) -> tuple[str, Span] | None:
     """The preset named by a `{dialect '…'}` pragma in the sources (the first one) and where the
     name stands, if any. The name is not checked here: see `pragma_preset`."""
     for src in sources:
@@ -58,7 +57,7 @@ def from_sources(sources) -> Optional[tuple[str, Span]]:
     return None
 
 
-def pragma_preset(sources) -> Optional[Dialect]:
+def pragma_preset(sources) -> Dialect | None:
     """The preset a pragma in the sources chooses; an unknown name is a located error (E045)."""
     found = from_sources(sources)
     if found is None:
@@ -85,7 +84,7 @@ def strict_types(texts) -> set:
     return out
 
 
-def preset(name: Optional[str]) -> Optional[Dialect]:
+def preset(name: str | None) -> Dialect | None:
     if name is None:
         return None
     d = PRESETS.get(name.lower())

@@ -11,7 +11,6 @@ import os
 import sys
 import threading
 from pathlib import Path
-from typing import Optional
 
 from ..diagnostics import CompileError, Diagnostic, DiagnosticSink, Severity
 from ..model.compiled import CompiledProgram
@@ -24,8 +23,8 @@ from .build import AstBuilder
 from .check import Checker
 from .codegen import ModuleGen
 from .codegen.source import python_text
-from .lower import lower
 from .library import Library
+from .lower import lower
 from .options import CompileOptions
 
 _parser_lock = threading.Lock()
@@ -42,7 +41,7 @@ def _get_parser():
     return _parser, _builder
 
 
-def parse_source(src: SourceFile, sink: DiagnosticSink) -> Optional[A.Unit]:
+def parse_source(src: SourceFile, sink: DiagnosticSink) -> A.Unit | None:
     """Parse one file; every problem becomes a diagnostic of that file (never an exception)."""
     with _parser_lock:
         parser, builder = _get_parser()
@@ -70,7 +69,7 @@ def parse_source(src: SourceFile, sink: DiagnosticSink) -> Optional[A.Unit]:
     return unit
 
 
-def compile_sources(sources: list[SourceFile], libraries: list[Library], options: Optional[CompileOptions] = None, *,
+def compile_sources(sources: list[SourceFile], libraries: list[Library], options: CompileOptions | None = None, *,
                     raise_on_error: bool = True) -> CompiledProgram:
     """Compile ST sources with the given libraries and options (st.api builds both)."""
     options = options or CompileOptions()
@@ -185,7 +184,7 @@ def _parse_all(sources: list[SourceFile], lib_sources: list[SourceFile], options
 
 
 def check_sources(sources: list[SourceFile], libraries: list[Library],
-                  options: Optional[CompileOptions] = None) -> tuple[Project, list[Diagnostic]]:
+                  options: CompileOptions | None = None) -> tuple[Project, list[Diagnostic]]:
     """The front end alone: parse and check, (the checked model with its AST, the diagnostics).
     For tools and tests that look at what the compiler works on; `compile_sources` returns the
     AST-free artefact instead."""

@@ -6,8 +6,9 @@ the same way.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional
+from typing import Any
 
 
 @dataclass
@@ -32,8 +33,8 @@ class FuncSig:
     result: Any
     extensible: bool = False
     helper: str = ""
-    extra: Optional[Callable] = None
-    emit: Optional[Callable] = None
+    extra: Callable | None = None
+    emit: Callable | None = None
     min_args: int = 0
     doc: str = ""
 
@@ -44,13 +45,13 @@ class Library:
     sources: list = field(default_factory=list)       # [(path, text)]
     functions: dict = field(default_factory=dict)     # upper name → FuncSig
     helpers: dict = field(default_factory=dict)       # python name → object (module namespace)
-    conversion: Optional[Callable] = None             # name → FuncSig | None (X_TO_Y family)
+    conversion: Callable | None = None             # name → FuncSig | None (X_TO_Y family)
     version: str = "1"
 
     def add(self, sig: FuncSig) -> None:
         self.functions[sig.name.upper()] = sig
 
-    def lookup(self, name: str) -> Optional[FuncSig]:
+    def lookup(self, name: str) -> FuncSig | None:
         sig = self.functions.get(name.upper())
         if sig is None and self.conversion is not None:
             sig = self.conversion(name.upper())

@@ -5,8 +5,8 @@ them to the checker and to code generation, and the compile cache keys on them.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable, Optional
 
 from ..source import SourceFile
 from .dialect import Dialect, pragma_preset, preset, strict_types
@@ -14,7 +14,7 @@ from .dialect import Dialect, pragma_preset, preset, strict_types
 
 @dataclass(frozen=True)
 class CompileOptions:
-    dialect: Optional[Dialect] = None       # a preset (st.compiler.dialect); None: everything accepted
+    dialect: Dialect | None = None       # a preset (st.compiler.dialect); None: everything accepted
     time_unit: str = "ms"                   # what TIME_TO_<int> counts: ms, or s as MatIEC
     f_trig_first_scan: bool = False         # F_TRIG pulses on the first scan (MatIEC)
     strict_types: frozenset[str] = frozenset()   # types declared {attribute 'strict'} (lower-case names)
@@ -23,7 +23,7 @@ class CompileOptions:
     use_cache: bool = True
 
     @classmethod
-    def for_sources(cls, sources: Iterable[SourceFile], *, dialect: Optional[str] = None, time_unit: str = "ms",
+    def for_sources(cls, sources: Iterable[SourceFile], *, dialect: str | None = None, time_unit: str = "ms",
                     f_trig_first_scan: bool = False, emit_python: bool = False, coverage: bool = False,
                     use_cache: bool = True) -> CompileOptions:
         """The options of a compile of `sources`. The preset is `dialect` (an unknown name is a

@@ -353,7 +353,7 @@ def _plot(rep: Report, results: dict) -> None:
             ax.plot(ns, [mean(x[k] for x in results[n]["ct"]) for n in ns], "s--", color=colour, alpha=0.6,
                     mfc="none", label=f"cyclictest {k}")
     sim = [n for n in ns if n in THESIS_SIM]
-    for k, colour in (("min", "tab:green"), ("max", "tab:red")):
+    for k in ("min", "max"):
         ax.errorbar(sim, [THESIS_SIM[n][k][0] for n in sim], [THESIS_SIM[n][k][1] for n in sim], fmt="k^",
                     ms=6, capsize=3, label="thesis 6.4" if k == "min" else None)
         hw = [n for n in ns if n in THESIS_HW]

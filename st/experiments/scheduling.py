@@ -201,7 +201,7 @@ release that finds the task's previous job not yet started replaces it (*skipped
     rep.table(f"Executions per task in {SECONDS:g} s (mean ± std over {runs} runs)", headers, rows)
     rows = []
     for p in POLICIES:
-        for a, per in zip(avg[p], PERIODS_MS):
+        for a, _period in zip(avg[p], PERIODS_MS):
             rows.append([LABEL[p], a["task"], a["jobs"], a["overruns"], a["skipped"], a["u_end"], a["u_mean"],
                          a["u_min"], int(math.floor(a["u_min"] * K + 1e-9))])
     rep.table(f"Deadlines and (m,k)-firm time utility, k = {K} (means over the runs)",

@@ -15,8 +15,9 @@ import io
 import marshal
 import pickle
 import types
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional
+from typing import Any
 
 from ..diagnostics import Diagnostic
 from ..source import SourceFile
@@ -31,9 +32,9 @@ _LEAF = ("st.model.", "st.source", "st.diagnostics")
 _MARSHAL = 2
 
 # An object's state in the payload instead of its own (`substitute`), or None to keep the object.
-Substitute = Callable[[Any], Optional[dict[str, Any]]]
+Substitute = Callable[[Any], dict[str, Any] | None]
 # pickle writes a NEWOBJ for this function (as for any object it pickles by its state)
-_NEWOBJ: Callable[..., Any] = getattr(copyreg, "__newobj__")
+_NEWOBJ: Callable[..., Any] = copyreg.__newobj__
 
 
 class FormatError(ValueError):
@@ -52,10 +53,10 @@ class CompiledProgram:
     python_source: dict[str, str] = field(default_factory=dict)     # path → Python text (emit python)
     from_cache: bool = False
     coverage_points: list[tuple[Any, ...]] = field(default_factory=list)  # [(file, line, kind, label, target)]
-    coverage_hits: Optional[bytearray] = None            # one byte per point, shared by every PLC of this build
+    coverage_hits: bytearray | None = None            # one byte per point, shared by every PLC of this build
     test_modules: list[tuple[str, types.CodeType]] = field(default_factory=list)  # `_test_<n>` functions (TESTs)
 
-    def to_bytes(self, substitute: Optional[Substitute] = None) -> bytes:
+    def to_bytes(self, substitute: Substitute | None = None) -> bytes:
         """The compiler's output as bytes (FORMAT, this Python). `substitute(obj)` may give the
         state an object has in the payload (the compiler drops its syntax that way)."""
         payload = {
@@ -71,8 +72,8 @@ class CompiledProgram:
         return buf.getvalue()
 
     @classmethod
-    def from_bytes(cls, data: bytes, *, sources: Optional[dict[str, SourceFile]] = None,
-                   helpers: Optional[dict[str, Any]] = None) -> CompiledProgram:
+    def from_bytes(cls, data: bytes, *, sources: dict[str, SourceFile] | None = None,
+                   helpers: dict[str, Any] | None = None) -> CompiledProgram:
         """A program from `to_bytes()` output, with the caller's sources and helpers."""
         if not data.startswith(_HEADER):
             raise FormatError(_why_refused(data))
@@ -101,7 +102,7 @@ def _why_refused(data: bytes) -> str:
 class _Writer(pickle.Pickler):
     """A pickler that applies `substitute` and lets no object of the compiler into the payload."""
 
-    def __init__(self, file: io.BytesIO, substitute: Optional[Substitute]):
+    def __init__(self, file: io.BytesIO, substitute: Substitute | None):
         super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
         self._substitute = substitute
 

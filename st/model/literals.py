@@ -6,7 +6,7 @@ TOD: ns since midnight.  These are also the runtime representations.
 from __future__ import annotations
 
 import re
-from datetime import date, datetime, timezone
+from datetime import UTC, date, datetime
 
 NS = 1
 US = 1_000
@@ -18,7 +18,7 @@ DAY = 24 * HOUR
 
 _UNITS = {"d": DAY, "h": HOUR, "m": MIN, "s": SEC, "ms": MS, "us": US, "ns": NS}
 _TIME_PART = re.compile(r"([0-9][0-9_]*(?:\.[0-9_]+)?)(ms|us|ns|d|h|m|s)", re.I)
-_EPOCH = datetime(1970, 1, 1, tzinfo=timezone.utc)
+_EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
 
 
 class LiteralError(ValueError):

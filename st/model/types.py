@@ -9,7 +9,7 @@ FB/program instances → instances of generated slotted classes.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any
 
 
 class Type:
@@ -240,7 +240,7 @@ class RefType(Type):
         return f"{'REF_TO' if self.ref_kind == 'REF_TO' else self.ref_kind + ' TO'} {self.target}"
 
 
-def is_reference(t: Optional[Type]) -> bool:
+def is_reference(t: Type | None) -> bool:
     """REFERENCE TO: a reference used as the variable it refers to (bound with REF=)."""
     u = unalias(t) if t is not None else None
     return isinstance(u, RefType) and u.ref_kind == "REFERENCE"
@@ -284,7 +284,7 @@ class POUType(Type):
     pou_kind: str = "FUNCTION_BLOCK"   # FUNCTION, FUNCTION_BLOCK, PROGRAM (TEST: a unit test's variables)
     decl: Any = None        # syntax: ast.POU / ast.Method (artefact: PouInfo); None for native
     vars: dict[str, VarSym] = field(default_factory=dict)      # lower → VarSym, declaration order
-    return_type: Optional[Type] = None
+    return_type: Type | None = None
     pyname: str = ""
     library: str = ""       # "" for user code, else the library name
     native: Any = None      # a native implementation (Python) for library POUs
@@ -327,7 +327,7 @@ class PropSym:
     bare: bool = False      # an interface prototype without accessors: GET, SET or both satisfy it
 
 
-def is_conformant(t: Optional[Type]) -> bool:
+def is_conformant(t: Type | None) -> bool:
     """ARRAY[*] (a VAR_IN_OUT whose bounds come from the argument: a runtime `_Conf`)."""
     u = unalias(t) if t is not None else None
     return isinstance(u, ArrayType) and any(hi < lo for lo, hi in u.dims)
@@ -360,7 +360,7 @@ def fb_init_chain(pou: POUType) -> list[POUType]:
     return chain[::-1]
 
 
-def implements(t: Type, itf: "POUType") -> bool:
+def implements(t: Type, itf: POUType) -> bool:
     """Does a function block or interface type provide interface `itf` (directly, through its
     base blocks, or through interfaces that extend it)?"""
     seen = set()
@@ -433,7 +433,7 @@ def widens_to(src: Type, dst: Type) -> bool:
 _RANK = ["SINT", "USINT", "INT", "UINT", "DINT", "UDINT", "LINT", "ULINT", "REAL", "LREAL"]
 
 
-def common_type(a: Type, b: Type) -> Optional[Type]:
+def common_type(a: Type, b: Type) -> Type | None:
     """The smallest type both operands widen to, or None."""
     a, b = base_of(a), base_of(b)
     if a is b:

@@ -7,7 +7,7 @@ job starts and ends; forces are asked for by path and applied again after a relo
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 from ..model import types as T
 from . import refnames
@@ -61,7 +61,7 @@ def force(plc: PLC, path: str, value: Any) -> None:
     apply_forced(plc)
 
 
-def unforce(plc: PLC, path: Optional[str] = None) -> None:
+def unforce(plc: PLC, path: str | None = None) -> None:
     if path is None:
         plc._forced.clear()
         plc._force_spec.clear()
@@ -160,7 +160,7 @@ def variables(plc: PLC) -> dict[str, Any]:
     """Every variable of every program instance, as JSON values keyed "instance.var"."""
     out = {}
     ref = refnames.namer(plc)
-    for lname, (name, obj, pou) in plc.instances.items():
+    for _lname, (name, obj, pou) in plc.instances.items():
         for sym in pou.vars.values():
             if sym.section == "VAR_TEMP":
                 continue

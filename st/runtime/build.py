@@ -10,7 +10,8 @@ nothing.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, Iterator, Optional
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, Any
 
 from ..model.compiled import CompiledProgram
 from .access import reapply_forces
@@ -41,7 +42,7 @@ class Build:
         self.compiled = compiled
         self.project = compiled.project
         self.ns: dict[str, Any] = {}
-        self.wd: Optional[Watchdog] = None
+        self.wd: Watchdog | None = None
         self.config: Any = None
         self.instances: dict[str, tuple[str, Any, Any]] = {}    # lower name → (display name, object, POUType)
         self.tasks: list[Task] = []
@@ -51,7 +52,7 @@ class Build:
         self.binding_of: dict[tuple[int, Any], Binding] = {}    # (id(container), key) → Binding
 
 
-def build(compiled: CompiledProgram, image: ProcessImage, *, cycle: Optional[int], watchdog: Optional[int],
+def build(compiled: CompiledProgram, image: ProcessImage, *, cycle: int | None, watchdog: int | None,
           policy: str, what: str = "start-up") -> Build:
     """The program ready to run, bound to `image`; PLCStartError says why it cannot start."""
     b = Build(compiled)
@@ -132,7 +133,7 @@ def install(plc: PLC, b: Build, first: bool = False) -> None:
 
 def _apply_var_config(cfg: Any, b: Build) -> None:
     """VAR_CONFIG initial values (literals) for variables inside program instances."""
-    for path, location, init, ty, span in cfg.var_config:
+    for path, _location, init, _ty, span in cfg.var_config:
         if init is None or not path or not hasattr(init, "value"):
             continue
         try:
@@ -142,9 +143,9 @@ def _apply_var_config(cfg: Any, b: Build) -> None:
             raise PLCStartError(f"{span.file}:{span.line}: VAR_CONFIG {'.'.join(path)}: {e}") from None
 
 
-def _located(b: Build) -> Iterator[tuple[str, Any, Any, Any, Optional[str]]]:
+def _located(b: Build) -> Iterator[tuple[str, Any, Any, Any, str | None]]:
     """(address, container, key, type, owning instance name or None) of every located variable."""
-    for lname, (name, obj, pou) in b.instances.items():
+    for lname, (_name, obj, pou) in b.instances.items():
         for sym in pou.vars.values():
             if sym.location and "*" not in sym.location:
                 yield sym.location, obj, sym.pyname, sym.type, lname
@@ -154,7 +155,7 @@ def _located(b: Build) -> Iterator[tuple[str, Any, Any, Any, Optional[str]]]:
     for addr, (pyname, t) in b.project.direct_vars.items():
         yield addr, b.ns, pyname, t, None
     if b.config is not None:
-        for path, location, init, ty, span in b.config.var_config:
+        for path, location, _init, _ty, _span in b.config.var_config:
             if location and "*" not in location:
                 try:
                     container, key, t = resolve(b, ".".join(path))
@@ -168,7 +169,7 @@ def _bind_image(b: Build, image: ProcessImage) -> None:
     owner_task = {}
     for t in b.tasks:
         t.ins, t.outs = [], []
-        for name, obj, im in t.instances:
+        for name, _obj, _im in t.instances:
             owner_task[name.lower()] = t
     for addr, container, key, t, inst in _located(b):
         try:

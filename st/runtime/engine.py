@@ -12,7 +12,8 @@ from __future__ import annotations
 import gc
 import math
 import threading
-from typing import TYPE_CHECKING, Any, Callable, Optional
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from .access import apply_forced
 from .clock import RealClock, VirtualClock
@@ -37,9 +38,9 @@ def run_virtual(plc: PLC, t_end: int) -> None:
     run(plc, t_end)
 
 
-def run_realtime(plc: PLC, scans: Optional[int] = None, duration: Any = None,
-                 on_idle: Optional[Callable[[PLC], None]] = None, phase: Any = "500us", gc_control: bool = True,
-                 stop: Optional[threading.Event] = None) -> None:
+def run_realtime(plc: PLC, scans: int | None = None, duration: Any = None,
+                 on_idle: Callable[[PLC], None] | None = None, phase: Any = "500us", gc_control: bool = True,
+                 stop: threading.Event | None = None) -> None:
     """See PLC.run_realtime."""
     if plc.state == FAULT:
         raise fault_error(plc)
@@ -203,7 +204,7 @@ def _job(plc: PLC, task: Task, release: int) -> None:
         plc._wd.start(plc.watchdog or (10 * (task.interval or plc.tick) if clock.real else
                                        max(10 * (task.interval or plc.tick), 1_000_000_000)))
         try:
-            for name, obj, cin, cout in task.calls:
+            for _name, obj, cin, cout in task.calls:
                 if cin is not None:
                     cin(obj)
                 obj._body()

@@ -8,7 +8,8 @@ from __future__ import annotations
 import math
 import struct
 from array import array
-from typing import Any, Callable, NoReturn
+from collections.abc import Callable
+from typing import Any, NoReturn
 
 from .faults import PLCFault
 

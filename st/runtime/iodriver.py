@@ -13,7 +13,7 @@ take over the state of the one it replaces.
 """
 from __future__ import annotations
 
-from typing import Any, Optional, Protocol
+from typing import Any, Protocol
 
 from .scheduler import Task
 
@@ -22,15 +22,15 @@ class IODriver(Protocol):
     name: str
     per_namespace: bool
 
-    def before_job(self, task: Optional[Task] = None) -> None: ...
+    def before_job(self, task: Task | None = None) -> None: ...
 
-    def after_job(self, task: Optional[Task] = None) -> None: ...
+    def after_job(self, task: Task | None = None) -> None: ...
 
     def rebind(self) -> None: ...
 
     def adopt(self, old: IODriver) -> None: ...
 
-    def stats(self) -> Optional[dict[str, Any]]: ...
+    def stats(self) -> dict[str, Any] | None: ...
 
 
 class IODriverBase:
@@ -39,10 +39,10 @@ class IODriverBase:
     name = ""                   # shown in reports ("" and stats() None: not reported)
     per_namespace = False       # True: made by the program's namespace, replaced on every reload
 
-    def before_job(self, task: Optional[Task] = None) -> None:
+    def before_job(self, task: Task | None = None) -> None:
         pass
 
-    def after_job(self, task: Optional[Task] = None) -> None:
+    def after_job(self, task: Task | None = None) -> None:
         pass
 
     def rebind(self) -> None:
@@ -51,6 +51,6 @@ class IODriverBase:
     def adopt(self, old: IODriver) -> None:
         """A per-namespace driver replacing `old` after a reload takes over what must survive it."""
 
-    def stats(self) -> Optional[dict[str, Any]]:
+    def stats(self) -> dict[str, Any] | None:
         """Counters for the end-of-run report, or None."""
         return None

@@ -5,7 +5,8 @@ another: globals, FB classes and mocks are all fresh).
 """
 from __future__ import annotations
 
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 from ..model.compiled import CompiledProgram
 from .helpers import BASE_NAMESPACE, make_f32
@@ -13,7 +14,7 @@ from .sfc import SfcDesc, SfcState
 
 
 def build_namespace(compiled: CompiledProgram,
-                    install: Optional[Callable[[dict[str, Any]], None]] = None) -> dict[str, Any]:
+                    install: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
     """`install(ns)` adds what must exist before module code runs (watchdog, test helpers)."""
     ns: dict[str, Any] = dict(BASE_NAMESPACE)
     ns.update(compiled.helpers)
@@ -24,7 +25,7 @@ def build_namespace(compiled: CompiledProgram,
         ns["_cov"] = compiled.coverage_hits
     if install is not None:
         install(ns)
-    for path, code in compiled.modules:
+    for _path, code in compiled.modules:
         exec(code, ns)
     for name in sorted(k for k in ns if k.startswith("_post_exec_")):
         ns[name](ns)            # libraries with native parts finish their classes here

@@ -59,7 +59,7 @@ def apply_change(plc: PLC, b: Build) -> str:
 def _carry_over(plc: PLC, b: Build) -> None:
     """Copy every variable whose path and type are unchanged from the running program into the
     built one, and re-aim interfaces and references at the new objects. Reads the old program only."""
-    for key, (name, obj, pou) in b.instances.items():
+    for key, (_name, obj, pou) in b.instances.items():
         old = plc.instances.get(key)
         if old is not None:
             store_python(Holder(obj), "v", pou, to_python(old[1], old[2]))
@@ -88,7 +88,7 @@ def _change_problems(plc: PLC, compiled: CompiledProgram) -> list[str]:
     if shape(plc.config) != shape(new_cfg):
         out.append("the configuration's tasks or program instances changed (restart the PLC to apply it)")
     new_pous = {i.name.lower(): i.type for i in (new_cfg.instances if new_cfg else [])}
-    for key, (name, obj, pou) in plc.instances.items():
+    for key, (name, _obj, pou) in plc.instances.items():
         if key in new_pous:
             _type_changes(pou, new_pous[key], name, out)
     new_globals = {g.pyname: g for g in compiled.project.globals.values()}

@@ -8,7 +8,8 @@ integer have no such slot, so they are reached through a small holder object wit
 from __future__ import annotations
 
 import re
-from typing import Any, Iterator, Protocol
+from collections.abc import Iterator
+from typing import Any, Protocol
 
 from ..model import types as T
 from .helpers import _setbit

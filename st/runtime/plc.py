@@ -9,7 +9,8 @@ paths.py (path resolution) and varref.py (`ref`).
 from __future__ import annotations
 
 import threading
-from typing import Any, Callable, Optional
+from collections.abc import Callable
+from typing import Any
 
 from ..model.compiled import CompiledProgram
 from . import access, engine, lifecycle, online_change
@@ -56,13 +57,13 @@ class PLC:
     _event_tasks: list[Task]
     _next_tick: int
 
-    _on_idle: Optional[Callable[[PLC], None]] = None
-    _stop_event: Optional[threading.Event] = None
+    _on_idle: Callable[[PLC], None] | None = None
+    _stop_event: threading.Event | None = None
     idle_slack: float = 0       # ns until the next release, as seen by an `on_idle` hook
 
     def __init__(self, compiled: CompiledProgram, cycle: Any = None, *, watchdog: Any = None,
-                 policy: str = "openplc", retain: Optional[str] = None, retain_interval: Any = "1s",
-                 cold: bool = False, safe_outputs: Optional[dict[str, Any]] = None):
+                 policy: str = "openplc", retain: str | None = None, retain_interval: Any = "1s",
+                 cold: bool = False, safe_outputs: dict[str, Any] | None = None):
         self.cycle = parse_duration_arg(cycle) if cycle is not None else None
         self.watchdog = parse_duration_arg(watchdog) if watchdog is not None else None
         self.policy_name = policy
@@ -73,7 +74,7 @@ class PLC:
         self.image = ProcessImage()
         self.image_lock = threading.Lock()      # held by a job under the frame policy (the thesis's semaphore)
         self.state = RUN
-        self.fault: Optional[FaultInfo] = None
+        self.fault: FaultInfo | None = None
         self.faults: list[FaultInfo] = []
         self._time = 0
         self.scans = 0
@@ -81,10 +82,10 @@ class PLC:
         self._stats: dict[str, TaskStats] = {}
         self.io: list[IODriver] = []            # see iodriver.py
         # (path, id(container), key) → (container, key, value, binding)
-        self._forced: dict[tuple[str, int, Any], tuple[Any, Any, Any, Optional[Binding]]] = {}
+        self._forced: dict[tuple[str, int, Any], tuple[Any, Any, Any, Binding | None]] = {}
         self._force_spec: dict[str, Any] = {}             # path → the value asked for (re-applied after a reload)
         self._stop_requested = False
-        self.retain_store: Optional[RetainStore] = None
+        self.retain_store: RetainStore | None = None
         install(self, build(compiled, self.image, cycle=self.cycle, watchdog=self.watchdog, policy=policy),
                 first=True)
         self.retain_store = RetainStore(retain) if retain else None
@@ -121,9 +122,9 @@ class PLC:
         d = parse_duration_arg(duration)
         engine.run_virtual(self, self._time + -(-d // self.tick) * self.tick)
 
-    def run_realtime(self, scans: Optional[int] = None, duration: Any = None,
-                     on_idle: Optional[Callable[[PLC], None]] = None, phase: Any = "500us", gc_control: bool = True,
-                     stop: Optional[threading.Event] = None) -> None:
+    def run_realtime(self, scans: int | None = None, duration: Any = None,
+                     on_idle: Callable[[PLC], None] | None = None, phase: Any = "500us", gc_control: bool = True,
+                     stop: threading.Event | None = None) -> None:
         """Pace the engine by CLOCK_MONOTONIC with absolute deadlines (no drift) until `scans` base ticks
         or `duration` have passed, `stop` is set, or Ctrl-C. `on_idle(plc)` runs between jobs when there
         is slack (status line, file watching). A fault ends the run with PLCFaultError."""
@@ -208,7 +209,7 @@ class PLC:
         starts and ends, whatever the program, the inputs or an HMI write it, until unforce()."""
         access.force(self, path, value)
 
-    def unforce(self, path: Optional[str] = None) -> None:
+    def unforce(self, path: str | None = None) -> None:
         """Release one forced variable, or all of them."""
         access.unforce(self, path)
 

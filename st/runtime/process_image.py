@@ -13,10 +13,10 @@ copies `%Q` and `%M` variables back into the image at the end.
 from __future__ import annotations
 
 import struct
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from ..model import types as T
-
 from ..model.addresses import SIZES, TABLE_LEN, AddressError, parse_address  # noqa: F401 (re-exported)
 
 __all__ = ["ProcessImage", "Binding", "to_raw", "from_raw", "AddressError", "parse_address", "SIZES", "TABLE_LEN"]

@@ -10,7 +10,6 @@ import ctypes
 import ctypes.util
 import os
 import struct
-from typing import Optional
 
 _MCL_CURRENT, _MCL_FUTURE = 1, 2
 _PR_SET_TIMERSLACK = 29
@@ -19,9 +18,9 @@ _PR_SET_TIMERSLACK = 29
 class RealtimeSetup:
     def __init__(self) -> None:
         self.granted: dict[str, str] = {}
-        self._dma_fd: Optional[int] = None
+        self._dma_fd: int | None = None
 
-    def apply(self, priority: int = 30, cpu: Optional[int] = None) -> dict[str, str]:
+    def apply(self, priority: int = 30, cpu: int | None = None) -> dict[str, str]:
         libc = _libc()
         try:
             # every thread of the process, not only the scan's: a helper thread (the watchdog monitor)
@@ -76,7 +75,7 @@ def _threads() -> list[int]:
         return [0]
 
 
-def _libc() -> Optional[ctypes.CDLL]:
+def _libc() -> ctypes.CDLL | None:
     name = ctypes.util.find_library("c")
     if not name:
         return None

@@ -4,7 +4,8 @@
 dump, only when a reference is met."""
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from ..model import types as T
 from .helpers import _AttrRef, _ItemRef, _ObjRef

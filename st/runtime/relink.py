@@ -6,7 +6,8 @@ reference at the new object in the same place. What has no counterpart any more 
 values made by __NEW (outside every variable) are kept as they are."""
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from ..model import types as T
 from .helpers import _AttrRef, _ItemRef, _NegRef, _ObjRef
@@ -122,7 +123,7 @@ def relink(instances: list[tuple[Any, Any, Any, Any]], globals_: list[tuple[str,
         else:
             _walk(old_ns.get(op), new_ns.get(np_), ot, nt, collect, seen, pairs)
     moved = 0
-    for oc, nc, key, t in leaves:
+    for oc, nc, key, _t in leaves:
         v = _read(oc, key)
         nv = _moved(v, pairs)
         if nv is not None:

@@ -6,7 +6,8 @@ snapshots in SQLite.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Iterator
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, Any
 
 from ..model import types as T
 from .access import store_python
@@ -18,7 +19,7 @@ if TYPE_CHECKING:
 
 def retained_paths(plc: PLC) -> Iterator[tuple[str, Any, Any, Any]]:
     """(path, container, key, type) of every RETAIN/PERSISTENT variable of the instances and globals."""
-    for lname, (name, obj, pou) in plc.instances.items():
+    for _lname, (name, obj, pou) in plc.instances.items():
         yield from _retained_in(name, obj, pou)
     for g in plc.project.globals.values():
         if g.retain or g.persistent:

@@ -24,8 +24,9 @@ An overrun (a job that ends after its next release) never starts a second copy o
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional
+from typing import Any
 
 from .stats import TaskStats
 
@@ -42,12 +43,12 @@ class Task:
     index: int = 0              # declaration order
     prev_single: bool = False
     runs: int = 0
-    calls: list[tuple[str, Any, Optional[Callable[[Any], None]], Optional[Callable[[Any], None]]]] = \
+    calls: list[tuple[str, Any, Callable[[Any], None] | None, Callable[[Any], None] | None]] = \
         field(default_factory=list)             # [(name, object, copy-in fn, copy-out fn)]
     cost: Any = 0               # simulated execution time on virtual time (ns), or a callable giving it
     stats: TaskStats = None     # type: ignore[assignment]     # set when the program is installed
     next_release: int = 0
-    pending: Optional[int] = None       # release time of a released job not yet started
+    pending: int | None = None       # release time of a released job not yet started
     ins: list[Any] = field(default_factory=list)     # process image bindings latched before the job
     outs: list[Any] = field(default_factory=list)    # … published after it
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import Any, Optional
+from typing import Any
 
 
 class TaskStats:
@@ -35,7 +35,7 @@ class TaskStats:
         self.exec_sum = 0
         self.latencies: deque[int] = deque(maxlen=keep)  # the latest `keep` samples (ns)
         self.periods: deque[int] = deque(maxlen=keep)    # start-to-start intervals (ns)
-        self._last_start: Optional[int] = None
+        self._last_start: int | None = None
         self.utility_window: deque[int] = deque(maxlen=k)
         self.mk_violations = 0     # windows (after the first k jobs) with U < m/k
 

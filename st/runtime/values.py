@@ -2,11 +2,21 @@
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, NoReturn, Optional
+from collections.abc import Callable
+from typing import Any, NoReturn
 
 from ..model import types as T
-from ..model.literals import (format_date, format_dt, format_duration, format_tod, parse_date_literal,
-                                 parse_dt_literal, parse_duration, parse_time_literal, parse_tod_literal)
+from ..model.literals import (
+    format_date,
+    format_dt,
+    format_duration,
+    format_tod,
+    parse_date_literal,
+    parse_dt_literal,
+    parse_duration,
+    parse_time_literal,
+    parse_tod_literal,
+)
 from .helpers import round_f32
 
 
@@ -14,7 +24,7 @@ class ValueError_(ValueError):
     pass
 
 
-def _convert(v: Any, t: T.Type, leaf: Callable[[Any, Any], Any], ref: Optional[Callable[[Any], str]] = None) -> Any:
+def _convert(v: Any, t: T.Type, leaf: Callable[[Any, Any], Any], ref: Callable[[Any], str] | None = None) -> Any:
     """Walk a value by its type: aggregates become lists/dicts, scalars go through `leaf`,
     references through `ref` (None when not given: a reference is shown as null)."""
     t = T.unalias(t)
@@ -35,7 +45,7 @@ def _convert(v: Any, t: T.Type, leaf: Callable[[Any, Any], Any], ref: Optional[C
     return leaf(v, t)
 
 
-def to_python(v: Any, t: T.Type, ref: Optional[Callable[[Any], str]] = None) -> Any:
+def to_python(v: Any, t: T.Type, ref: Callable[[Any], str] | None = None) -> Any:
     """A runtime value as a plain Python value (API reads). TIME etc. stay ns integers."""
     return _convert(v, t, lambda v, t: v, ref)
 
@@ -56,12 +66,12 @@ def _json_leaf(v: Any, t: Any) -> Any:
     return v
 
 
-def to_json(v: Any, t: T.Type, ref: Optional[Callable[[Any], str]] = None) -> Any:
+def to_json(v: Any, t: T.Type, ref: Callable[[Any], str] | None = None) -> Any:
     """A runtime value as JSON: times and dates as IEC literal text, enums by name."""
     return _convert(v, t, _json_leaf, ref)
 
 
-def to_st_literal(v: Any, t: Optional[T.Type]) -> str:
+def to_st_literal(v: Any, t: T.Type | None) -> str:
     """A runtime value as ST source text (TRUE, 16#FF stays 255, 0.1, T#1s500ms, 'text'), for reports."""
     if t is None:
         return repr(v)

@@ -7,7 +7,7 @@ new objects.
 """
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import Any
 
 from ..model import types as T
 from .paths import read, write
@@ -19,7 +19,7 @@ class VarRef:
 
     __slots__ = ("path", "type", "_container", "_key", "_binding")
 
-    def __init__(self, path: str, container: Any, key: Any, type_: T.Type, binding: Optional[Binding]):
+    def __init__(self, path: str, container: Any, key: Any, type_: T.Type, binding: Binding | None):
         self.path = path
         self.type = type_
         self._container = container
@@ -36,7 +36,7 @@ class VarRef:
         write(self._container, self._key, value)
 
     @property
-    def binding(self) -> Optional[Binding]:
+    def binding(self) -> Binding | None:
         """The process-image binding of a located variable (`AT %QW0`), or None."""
         return self._binding
 

@@ -81,12 +81,12 @@ class _Monitor:
     _lock = threading.Lock()
 
     def __init__(self) -> None:
-        self.dogs: "weakref.WeakSet[Watchdog]" = weakref.WeakSet()
+        self.dogs: weakref.WeakSet[Watchdog] = weakref.WeakSet()
         t = threading.Thread(target=self._run, name="st-watchdog", daemon=True)
         t.start()
 
     @classmethod
-    def get(cls) -> "_Monitor":
+    def get(cls) -> _Monitor:
         with cls._lock:
             if cls._instance is None:
                 cls._instance = _Monitor()

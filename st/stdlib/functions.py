@@ -8,8 +8,17 @@ from __future__ import annotations
 import math
 from datetime import date
 
-from ..model.literals import (DAY, LiteralError, format_date, format_dt, format_duration, format_tod,
-                                 parse_duration, parse_int, parse_real)
+from ..model.literals import (
+    DAY,
+    LiteralError,
+    format_date,
+    format_dt,
+    format_duration,
+    format_tod,
+    parse_duration,
+    parse_int,
+    parse_real,
+)
 from ..runtime.faults import PLCFault
 from ..runtime.helpers import round_f32
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import ast as py
 import re
-from functools import lru_cache
+from functools import cache, lru_cache
 from pathlib import Path
 
 from ..compiler.codegen.emit import call, const, wrap
@@ -317,7 +317,7 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
 _TYPE_NAMES = sorted(T.ELEMENTARY, key=len, reverse=True)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _conversion(name: str, time_unit: str):
     up = name.upper()
     m = re.fullmatch(r"(?:([A-Z_]+)_)?TRUNC_([A-Z_]+)", up)

@@ -30,7 +30,7 @@ class CoverageData:
         self.points: list = list(points or [])
         self.hits = bytearray(hits) if hits is not None else bytearray(len(self.points))
 
-    def merge(self, other: "CoverageData") -> None:
+    def merge(self, other: CoverageData) -> None:
         if other.points == self.points:
             for i, h in enumerate(other.hits):
                 if h:
@@ -51,7 +51,7 @@ class CoverageData:
                 "hits": list(self.hits)}
 
     @classmethod
-    def from_json(cls, d: dict) -> "CoverageData":
+    def from_json(cls, d: dict) -> CoverageData:
         return cls([Point(*p) for p in d["points"]], bytearray(d["hits"]))
 
     def files(self) -> list:

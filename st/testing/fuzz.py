@@ -34,9 +34,9 @@ import subprocess
 import sys
 import time
 import traceback
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Optional
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = Path(__file__).resolve().parents[1]
@@ -166,7 +166,7 @@ _KEYWORDS = {
     "READ_ONLY", "READ_WRITE", "VAR_CONFIG", "VAR_ACCESS", "AND_THEN", "OR_ELSE"}
 
 
-def _lit_kind(tok: str) -> Optional[str]:
+def _lit_kind(tok: str) -> str | None:
     u = tok.upper()
     if u in ("TRUE", "FALSE"):
         return "bool"
@@ -255,7 +255,7 @@ MUTATIONS = {
 _KINDS, _WEIGHTS = list(MUTATIONS), list(MUTATIONS.values())
 
 
-def _mutate_once(toks: list, rng: random.Random, kind: Optional[str] = None) -> list:
+def _mutate_once(toks: list, rng: random.Random, kind: str | None = None) -> list:
     sig = _significant(toks)
     if not sig:
         return toks
@@ -337,7 +337,7 @@ def _replace(toks, i, new):
     return toks[:i] + [new] + toks[i + 1:]
 
 
-def mutate(text: str, rng: random.Random, n: Optional[int] = None) -> str:
+def mutate(text: str, rng: random.Random, n: int | None = None) -> str:
     """One to four mutations (or n) of the text, drawn from rng."""
     toks = tokens(text)
     for _ in range(n if n is not None else rng.randint(1, 4)):
@@ -345,7 +345,7 @@ def mutate(text: str, rng: random.Random, n: Optional[int] = None) -> str:
     return "".join(toks)
 
 
-def mutant(seed: int, index: int, programs: Optional[list] = None) -> tuple:
+def mutant(seed: int, index: int, programs: list | None = None) -> tuple:
     """(base program name, mutated text): a pure function of (seed, index) and the corpus."""
     programs = programs if programs is not None else corpus()
     rng = random.Random(f"st-fuzz:{seed}:{index}")
@@ -395,8 +395,8 @@ def _fault_outcome(f) -> Outcome:
     return Outcome(f"fault:{f.kind}")
 
 
-def run_one(source: str, filename: str = "fuzz.st", scans: int = 20, timeout: Optional[float] = None,
-            watchdog="100ms", phase: Optional[Callable] = None) -> Outcome:
+def run_one(source: str, filename: str = "fuzz.st", scans: int = 20, timeout: float | None = None,
+            watchdog="100ms", phase: Callable | None = None) -> Outcome:
     """Compile `source` as `st check`/`st run` do; if it compiles, start a PLC on virtual time with
     the watchdog budget `watchdog` per job and run `scans` base ticks. With `timeout` (seconds),
     do it in a fresh isolated worker process that is killed after that long (a `timeout` or `crash`
@@ -518,7 +518,7 @@ class Worker:
         self.watchdog = watchdog
         self.scans = scans
         self.mem_limit = mem_limit
-        self.proc: Optional[subprocess.Popen] = None
+        self.proc: subprocess.Popen | None = None
         self.restarts = 0
 
     def _start(self) -> None:

@@ -8,10 +8,10 @@ and handles to call a single FUNCTION_BLOCK or FUNCTION from Python.
 """
 from __future__ import annotations
 
-from typing import Callable, Optional, Union
+from collections.abc import Callable
 
-from ..compiler.codegen.pyast import default_value
 from ..api import PLC
+from ..compiler.codegen.pyast import default_value
 from ..model import types as T
 from ..runtime.values import from_python, parse_duration_arg, to_python
 
@@ -21,13 +21,13 @@ class TestPLC(PLC):
 
     __test__ = False        # not a pytest test class
 
-    def set(self, values: Optional[dict] = None, **kw) -> "TestPLC":
+    def set(self, values: dict | None = None, **kw) -> TestPLC:
         """Write several variables: p.set({"main.start": True, "main.speed": 3})."""
         for path, v in {**(values or {}), **kw}.items():
             self[path] = v
         return self
 
-    def pulse(self, path: str, width=None, value=True) -> "TestPLC":
+    def pulse(self, path: str, width=None, value=True) -> TestPLC:
         """Hold `path` at `value` for `width` of PLC time (default: one base tick), then restore it."""
         old = self[path]
         self[path] = value
@@ -38,7 +38,7 @@ class TestPLC(PLC):
         self[path] = old
         return self
 
-    def run_until(self, condition: Union[str, Callable], timeout="10s") -> int:
+    def run_until(self, condition: str | Callable, timeout="10s") -> int:
         """Scan until `condition` (a BOOL variable path, or a callable taking the PLC) holds.
         Returns the PLC time it took (ns); AssertionError when `timeout` of PLC time passes first."""
         test = (lambda p: bool(p[condition])) if isinstance(condition, str) else condition
@@ -61,7 +61,7 @@ class TestPLC(PLC):
             out.append((self.time, {p: self[p] for p in paths}))
         return out
 
-    def fb(self, type_name: str) -> "FBHandle":
+    def fb(self, type_name: str) -> FBHandle:
         """A fresh instance of a FUNCTION_BLOCK (or PROGRAM) type, driven from Python."""
         pou = self.project.pous.get(type_name.lower())
         if pou is None or pou.pou_kind not in ("FUNCTION_BLOCK", "PROGRAM"):
@@ -114,7 +114,7 @@ class FBHandle:
         object.__setattr__(self, "_pou", pou)
         object.__setattr__(self, "_obj", obj)
 
-    def __call__(self, **inputs) -> "FBHandle":
+    def __call__(self, **inputs) -> FBHandle:
         for name, v in inputs.items():
             setattr(self, name, v)
         self._plc.ns["_now"] = self._plc.time

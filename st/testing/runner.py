@@ -13,9 +13,9 @@ from __future__ import annotations
 import fnmatch
 import time
 import types
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterable, Optional
 
 from ..model.compiled import CompiledProgram
 from ..runtime.faults import PLCFault, fault_from_exception
@@ -77,7 +77,7 @@ class TestResult:
 
     case: TestCase
     passed: bool
-    report: Optional[Report]
+    report: Report | None
     duration: float             # seconds of wall time
 
 
@@ -93,14 +93,14 @@ class TestSuite:
         self.cases = [TestCase(t.name, t.span.file, t.span.line, t.pyname) for t in compiled.project.tests]
         # the test functions' code, defined once; each run binds one of them to its fresh namespace
         self._code: dict = {}
-        for path, code in compiled.test_modules:
+        for _path, code in compiled.test_modules:
             scratch: dict = {}
             exec(code, scratch)
             self._code.update({k: f.__code__ for k, f in scratch.items() if k.startswith("_test_")})
 
     @classmethod
     def from_paths(cls, paths: Iterable, *, coverage: bool = False, timeout=DEFAULT_TIMEOUT,
-                   **compile_kw) -> "TestSuite":
+                   **compile_kw) -> TestSuite:
         """Compile the files (plus the sources each test file names by convention) into one suite."""
         from ..api import compile_paths
         return cls(compile_paths(resolve_sources(paths), coverage=coverage, **compile_kw), timeout)
@@ -111,7 +111,7 @@ class TestSuite:
         pat = keyword if any(c in keyword for c in "*?[") else f"*{keyword}*"
         return [c for c in self.cases if fnmatch.fnmatch(c.name.lower(), pat.lower())]
 
-    def run_all(self, cases=None, on_result: Optional[Callable] = None, stop_first: bool = False) -> list:
+    def run_all(self, cases=None, on_result: Callable | None = None, stop_first: bool = False) -> list:
         results = []
         for case in self.cases if cases is None else cases:
             r = self.run(case)
@@ -151,7 +151,7 @@ class _TestContext:
         self.asserts = suite.asserts
         self.ns: dict = {}
         self.function_calls: dict = {}
-        self.watchdog: Optional[Watchdog] = None
+        self.watchdog: Watchdog | None = None
 
     def install(self, ns: dict) -> None:
         self.ns = ns

@@ -2,10 +2,10 @@
 from __future__ import annotations
 
 import re
-from typing import Optional, cast
+from typing import cast
 
-from .. import ast as A
 from ...model import types as T
+from .. import ast as A
 from ..library import FuncSig
 from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies, method_of, same_type, take_address
 from .part import Part
@@ -14,7 +14,7 @@ from .tests import TEST_CALLS
 
 class Calls(Part):
     # ---------------------------------------------------------------- calls
-    def call(self, c: A.Call, scope: Scope, statement: bool = False, expected=None) -> Optional[T.Type]:
+    def call(self, c: A.Call, scope: Scope, statement: bool = False, expected=None) -> T.Type | None:
         callee = c.callee
         if isinstance(callee, A.Name):
             key = callee.name.lower()
@@ -398,7 +398,7 @@ class Calls(Part):
                                  f"(parameters: {', '.join(p.name for p in sig.params)})")
                         return None
             pos = [a for a in args if not a.name]
-            for i, p in enumerate(sig.params):
+            for p in sig.params:
                 a = named.get(p.name.lower())
                 if a is None and pos:
                     a = pos.pop(0)

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import re
-from typing import Optional
 
 from ...model import types as T
 from ...model.addresses import AddressError, parse_address
@@ -43,7 +42,7 @@ STEP = StepType()
 
 
 class Scope:
-    def __init__(self, pou: Optional[T.POUType], vars: dict, *, library: str = ""):
+    def __init__(self, pou: T.POUType | None, vars: dict, *, library: str = ""):
         self.pou = pou
         self.vars = vars
         self.loop_depth = 0
@@ -51,7 +50,7 @@ class Scope:
         self.actions: dict = {}
         self.library = library
         self.test = False           # inside TEST/SETUP/TEARDOWN: test statements allowed
-        self.fb: Optional[T.POUType] = None  # the function block whose body or METHOD this is (THIS, implicit calls)
+        self.fb: T.POUType | None = None  # the function block whose body or METHOD this is (THIS, implicit calls)
 
 
 def _names_in(body):

@@ -2,16 +2,14 @@
 labels, string lengths, initial values of CONSTANTs), before and after the globals are declared."""
 from __future__ import annotations
 
-from typing import Optional
-
-from .. import ast as A
 from ...model import types as T
+from .. import ast as A
 from .common import Scope
 from .part import Part
 
 
 class Constants(Part):
-    def value(self, e, scope: Optional[Scope]):
+    def value(self, e, scope: Scope | None):
         """Evaluate a constant expression (literals, CONSTANT variables, enum values), or None."""
         if isinstance(e, A.Field):
             return e.const if isinstance(e.sym, T.EnumType) else None

@@ -2,15 +2,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional
 
 from ...diagnostics import DiagnosticSink
+from ...model import types as T
+from ...model.program import Project
 from ...source import Span
 from .. import ast as A
-from ...model import types as T
 from ..dialect import PRESETS, Dialect
 from ..library import FuncSig, Library
-from ...model.program import Project
 
 
 @dataclass
@@ -21,7 +20,7 @@ class CheckContext:
     """The libraries of the compilation: their native functions are looked up here."""
     project: Project
     """What the checker builds: POUs, types, globals, configurations, tests."""
-    dialect: Optional[Dialect] = None
+    dialect: Dialect | None = None
     """The dialect preset whose switches the checker consults (None: every construct is allowed)."""
     library_units: set[str] = field(default_factory=set)
     """The file names of library sources: no warnings there, no dialect restrictions."""
@@ -53,7 +52,7 @@ class CheckContext:
             return
         self.sink.warning(code, span, msg, hint)
 
-    def lib_of(self, span: Optional[Span]) -> str:
+    def lib_of(self, span: Span | None) -> str:
         """'lib' for a span in a library source, else ''."""
         return "lib" if span is not None and span.file in self.library_units else ""
 
@@ -81,7 +80,7 @@ class CheckContext:
             and t.name.lower() not in self.strict_enums
 
     # ---------------------------------------------------------------- libraries
-    def native(self, key: str) -> Optional[FuncSig]:
+    def native(self, key: str) -> FuncSig | None:
         """The signature of a library's native function of this (lower-case) name, or None."""
         for lib in self.libraries:
             sig = lib.lookup(key)

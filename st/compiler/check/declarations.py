@@ -3,7 +3,7 @@ declared, variable blocks declared, initial values checked. Resolution is on dem
 is resolved when first met, so declarations may come in any order."""
 from __future__ import annotations
 
-from typing import Optional, cast
+from typing import cast
 
 from ...model import types as T
 from ...source import Span
@@ -17,7 +17,7 @@ MAX_ARRAY_ELEMENTS = 50_000_000
 
 class Declarations(Part):
     # ================================================================ types
-    def resolve_named_type(self, key: str, span: Span) -> Optional[T.Type]:
+    def resolve_named_type(self, key: str, span: Span) -> T.Type | None:
         if key in self.p.types:
             return self.p.types[key]
         if key not in self.ctx.pending_types:
@@ -110,7 +110,7 @@ class Declarations(Part):
                 et.default_value = m[1]
         return et
 
-    def resolve_type(self, spec: A.TypeSpec, scope: Optional[Scope]) -> T.Type:
+    def resolve_type(self, spec: A.TypeSpec, scope: Scope | None) -> T.Type:
         if isinstance(spec, A.NamedType):
             if spec.ctor_args:
                 self.err("E013", spec.span, "FB_init arguments belong where an instance is declared "
@@ -164,7 +164,7 @@ class Declarations(Part):
                 self.feature("vendor", spec.span, f"{spec.kind} TO")
             return T.RefType(self.resolve_type(spec.target, scope), spec.kind)
         if isinstance(spec, A.SubrangeType):
-            base = cast(Optional[T.ElemType], T.ELEMENTARY.get(spec.base.upper()))
+            base = cast(T.ElemType | None, T.ELEMENTARY.get(spec.base.upper()))
             if base is None or not base.is_intlike:
                 self.err("E012", spec.span, f"a subrange needs an integer base type, not '{spec.base}'")
                 base = T.INT
@@ -180,7 +180,7 @@ class Declarations(Part):
             return T.INT
         raise AssertionError(spec)
 
-    def _check_ctor_args(self, init: A.CtorInit, t: T.Type, scope: Optional[Scope]) -> None:
+    def _check_ctor_args(self, init: A.CtorInit, t: T.Type, scope: Scope | None) -> None:
         """`inst : FB(a := 1)`: the arguments go to the inputs of FB's FB_init (CODESYS)."""
         self.feature("vendor", init.span, "FB_init arguments in a declaration")
         bt = T.unalias(t)
@@ -396,7 +396,7 @@ class Declarations(Part):
                 self.err("E017", v.span, f"{m.name} runs when the instance is created: it takes inputs only")
         fb.methods[key] = mt
 
-    def declare_block(self, block: A.VarBlock, table: dict, scope: Optional[Scope], owner) -> None:
+    def declare_block(self, block: A.VarBlock, table: dict, scope: Scope | None, owner) -> None:
         kind = block.kind
         quals = set(block.qualifiers)
         if owner is not None:
@@ -500,7 +500,7 @@ class Declarations(Part):
             self.err("E013", span, f"'{loc}' is {want.bits} bit(s) wide; it cannot hold a {t}")
 
     # ================================================================ initializers
-    def check_initializer(self, init, t: T.Type, scope: Optional[Scope]) -> None:
+    def check_initializer(self, init, t: T.Type, scope: Scope | None) -> None:
         bt = T.unalias(t)
         if isinstance(init, A.CtorInit):
             return self._check_ctor_args(init, t, scope)

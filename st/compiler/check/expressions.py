@@ -1,11 +1,11 @@
 """Expressions: typing of literals, names, operators, fields, indices."""
 from __future__ import annotations
 
-from typing import Optional, cast
+from typing import cast
 
-from .. import ast as A
 from ...model import types as T
 from ...model.addresses import canonical
+from .. import ast as A
 from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, SUPER, THIS, Scope, image_problem
 from .context import CheckContext
 from .part import Part
@@ -13,8 +13,8 @@ from .part import Part
 
 class Expressions(Part):
     # ---------------------------------------------------------------- expressions
-    def expr(self, e: A.Expr, scope: Optional[Scope], expected: Optional[T.Type] = None, *,
-             lvalue: bool = False) -> Optional[T.Type]:
+    def expr(self, e: A.Expr, scope: Scope | None, expected: T.Type | None = None, *,
+             lvalue: bool = False) -> T.Type | None:
         t = self._expr(e, scope or Scope(None, {}), expected, lvalue)
         e.ty = t
         return t

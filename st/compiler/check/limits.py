@@ -8,7 +8,7 @@ times its element's; a STRUCT or block the sum of its parts.
 """
 from __future__ import annotations
 
-from typing import Callable, Iterator
+from collections.abc import Callable, Iterator
 
 from ...model import types as T
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ...source import Span
 from ...model.program import Project
+from ...source import Span
 from .context import CheckContext
 
 if TYPE_CHECKING:

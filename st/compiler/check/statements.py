@@ -1,11 +1,11 @@
 """Bodies: statements, SFC networks, assignability and lvalues."""
 from __future__ import annotations
 
-from typing import Optional, cast
+from typing import cast
 
+from ...model import types as T
 from ...source import Span
 from .. import ast as A
-from ...model import types as T
 from .common import _NULL, STEP, Scope, same_type, take_address
 from .expressions import _null_at, _zero_pointer
 from .part import Part
@@ -190,14 +190,14 @@ class Statements(Part):
                     continue        # a wrong label type was reported above
                 if len(vals) == 2:
                     a, b = vals
-                    for (c, d, sp) in seen:
+                    for (c, d, _sp) in seen:
                         if a <= d and c <= b:
                             self.err("E019", lo.span, f"CASE label {a}..{b} overlaps an earlier label")
                             break
                     seen.append((a, b, lo.span))
                 elif len(vals) == 1:
                     a = vals[0]
-                    for (c, d, sp) in seen:
+                    for (c, d, _sp) in seen:
                         if c <= a <= d:
                             self.err("E019", lo.span, f"duplicate CASE label {a}")
                             break
@@ -207,7 +207,7 @@ class Statements(Part):
             self.stmt_list(s.orelse, scope)
 
     # ---------------------------------------------------------------- assignability
-    def assignable(self, e, src: Optional[T.Type], dst: Optional[T.Type], span: Span, what: str = "") -> bool:
+    def assignable(self, e, src: T.Type | None, dst: T.Type | None, span: Span, what: str = "") -> bool:
         if src is None or dst is None:
             return True
         s, d = T.base_of(src), T.base_of(dst)
@@ -280,7 +280,7 @@ class Statements(Part):
         return False
 
     # ---------------------------------------------------------------- lvalues
-    def lvalue(self, e: A.Expr, scope: Scope) -> Optional[T.Type]:
+    def lvalue(self, e: A.Expr, scope: Scope) -> T.Type | None:
         t = self.exprs.expr(e, scope, lvalue=True)
         root = e
         while isinstance(root, (A.Field, A.Index, A.Bit)):

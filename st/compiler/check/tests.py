@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from typing import cast
 
-from .. import ast as A
 from ...model import types as T
 from ...model.program import AssertInfo
+from .. import ast as A
 from .common import CallTarget, Scope
 from .part import Part
 

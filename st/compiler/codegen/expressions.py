@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import ast as py
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
 from ...model import types as T
 from .. import ast as A
@@ -49,7 +49,7 @@ class InitGen:
                 keys, values = [], []
                 if ctor is not None:
                     inputs = block.constructor.inputs
-                    for name, sp, val in ctor.args:
+                    for name, _sp, val in ctor.args:
                         keys.append(_const(name.lower()))
                         values.append(self.initial(inputs[name.lower()].type, val))
                 obj = _call(_attr(obj, "_ctor"), py.Dict(keys, values))
@@ -61,7 +61,7 @@ class InitGen:
     def _with_fields(self, obj: py.expr, init: A.StructInit, lookup) -> py.expr:
         # _init_fields(obj, (('name', value), ...)) returns obj
         pairs = []
-        for name, sp, val in init.fields:
+        for name, _sp, val in init.fields:
             m = lookup(name)
             if m is None:
                 continue
@@ -111,7 +111,7 @@ def _member_of_pou(pou: T.POUType, name: str):
 class ExprGen:
     """Expression and statement generation shared by functions and FB bodies."""
 
-    def __init__(self, mod: ModuleGen, pou: Optional[T.POUType]):
+    def __init__(self, mod: ModuleGen, pou: T.POUType | None):
         self.mod = mod
         self.pou = pou
         self.cached: set = set()        # VarSyms held in Python locals
@@ -156,7 +156,7 @@ class ExprGen:
         return _attr(_name(self.self_name), sym.pyname, py.Store())
 
     # ------------------------------------------------------------------ conversions
-    def coerce(self, node: py.expr, e, dst: Optional[T.Type]) -> py.expr:
+    def coerce(self, node: py.expr, e, dst: T.Type | None) -> py.expr:
         """Make a value of `e`'s type fit `dst`: widen, wrap, round, truncate, check."""
         if dst is None:
             return node
@@ -392,7 +392,7 @@ class ExprGen:
         dims = at.dims
         if T.is_conformant(at):
             return _call("_cix", self.expr(e.base), *[self.expr(i) for i in e.indices])
-        flat: Optional[py.expr] = None
+        flat: py.expr | None = None
         parts = []
         for i, (lo, hi) in zip(e.indices, dims):
             parts.append((i, lo, hi))

@@ -52,7 +52,7 @@ class ModuleGen:
         def add(path, node):
             by_file.setdefault(path, []).append(node)
 
-        for key, t in self.p.types.items():
+        for _key, t in self.p.types.items():
             if isinstance(t, T.StructType):
                 span = t.members and next(iter(t.members.values())).span
                 path = span.file if span else "<types>"
@@ -85,7 +85,7 @@ class ModuleGen:
             gen = InitGen(self)
             val = gen.initial(g.type, g.init)
             init_stmts.append(_set_lines(py.Assign([_name(g.pyname, py.Store())], val), g.span.line if g.span else 1))
-        for addr, (pyname, t) in self.p.direct_vars.items():
+        for _addr, (pyname, t) in self.p.direct_vars.items():
             init_stmts.append(_set_lines(py.Assign([_name(pyname, py.Store())], _const(default_value(t))), 1))
         for cfg in self.p.configs:
             for im in cfg.instances:

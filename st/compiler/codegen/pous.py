@@ -292,7 +292,7 @@ class BodyGen(StmtGen):
             out.append(fn)
         # timed qualifiers' durations are constant expressions or variables: a method returns them
         for s in sfc.steps:
-            for i, (act, q, texpr) in enumerate(s.actions):
+            for i, (_act, _q, texpr) in enumerate(s.actions):
                 if texpr is not None:
                     g = BodyGen(self.mod, self.pou)
                     fn = py.FunctionDef(f"_at_{s.index}_{i}", _args(["self"]), [py.Return(g.expr(texpr))], [], None, None)

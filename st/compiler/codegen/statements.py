@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import ast as py
 
-from .. import ast as A
 from ...model import types as T
+from .. import ast as A
 from ..check import CallTarget
 from ..lower.walk import walk_stmts
 from .expressions import ExprGen, wrap
-from .pyast import (Unsupported, _attr, _call, _const, _name, _set_lines)
+from .pyast import Unsupported, _attr, _call, _const, _name, _set_lines
 
 
 class StmtGen(ExprGen):
@@ -255,7 +255,7 @@ class StmtGen(ExprGen):
             orelse = self._arm(s.orelse, s, "ELSE") if s.orelse or self.covered else []
         else:
             orelse = self._arm([], s, "implicit ELSE") if self.covered else []
-        for (cond, body), arm in reversed(list(zip(s.branches[1:], arms[1:]))):
+        for (cond, _body), arm in reversed(list(zip(s.branches[1:], arms[1:]))):
             node = py.If(self.expr(cond), arm, orelse)
             _set_lines(node, cond.span.line)
             orelse = [node]

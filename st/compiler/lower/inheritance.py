@@ -14,8 +14,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .. import ast as A
 from ...model import types as T
+from .. import ast as A
 from ..check import CallTarget
 from .fb_init import Constructor, constructor
 from .walk import is_super, rewrite_exprs, rewrite_outside_bodies

@@ -6,8 +6,8 @@ calls the base block's accessor on this instance, not the most derived one.
 """
 from __future__ import annotations
 
-from .. import ast as A
 from ...model import types as T
+from .. import ast as A
 from .walk import is_super, rewrite_exprs, rewrite_outside_bodies, walk_stmts
 
 

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 
+from ...model.program import Project
 from .. import ast as A
 from ..check import CallTarget
-from ...model.program import Project
 
 
 def bodies(project: Project) -> Iterator[list]:

@@ -13,7 +13,8 @@ and the scan binding that moves PLCopen axes with CiA 402 drives.
     config.py   the segment configuration (TOML);  plan.py  the cycle-time arithmetic;  esi.py  ESI XML
     driver.py   EtherCATDriver: the per-scan exchange, DriveLink: CiA 402 ↔ PLCopen axis
 """
-from .config import ConfigError, SegmentConfig, load as load_segment
+from .config import ConfigError, SegmentConfig
+from .config import load as load_segment
 from .driver import DriveLink, EtherCATDriver
 from .master import FrameMaster, MasterError
 

@@ -36,7 +36,6 @@ from __future__ import annotations
 import re
 import tomllib
 from dataclasses import dataclass, field
-from typing import Optional
 
 
 class ConfigError(ValueError):
@@ -50,17 +49,17 @@ class SlaveConfig:
     axis: int = 0
     encoder_bits: int = 23
     esi: str = ""
-    product_code: Optional[int] = None
-    vendor_id: Optional[int] = None
-    forwarding_delay_us: Optional[float] = None
+    product_code: int | None = None
+    vendor_id: int | None = None
+    forwarding_delay_us: float | None = None
     inputs: int = 8
     outputs: int = 8
     inputs_at: str = ""
     outputs_at: str = ""
     bind: dict = field(default_factory=dict)          # "0xIIII:SS" or entry name → "%I…"/"%Q…"
     motor: dict = field(default_factory=dict)
-    rx_pdos: Optional[list] = None
-    tx_pdos: Optional[list] = None
+    rx_pdos: list | None = None
+    tx_pdos: list | None = None
     enable_delay: float = 0.0
 
 

@@ -14,8 +14,6 @@ that fell out of OP are brought back; the axes wait for MC_Reset as the standard
 """
 from __future__ import annotations
 
-from typing import Optional
-
 from ...runtime.iodriver import IODriverBase
 from ...runtime.process_image import parse_address
 from ...runtime.scheduler import Task
@@ -41,7 +39,7 @@ def drive_state(statusword: int) -> str:
 class DriveLink:
     """The drive side of one PLCopen axis (attached as `Axis.drive`)."""
 
-    def __init__(self, driver: "EtherCATDriver", slave: int, axis_no: int, increments_per_rev: int):
+    def __init__(self, driver: EtherCATDriver, slave: int, axis_no: int, increments_per_rev: int):
         self.driver = driver
         self.slave = slave
         self.axis_no = axis_no
@@ -53,7 +51,7 @@ class DriveLink:
         self.status = 0
         self.state = "NOT_READY_TO_SWITCH_ON"
         self.was_enabled = False
-        self.raw_pos: Optional[int] = None  # the last 32-bit actual position, for unwrapping
+        self.raw_pos: int | None = None  # the last 32-bit actual position, for unwrapping
         self.turns = 0                      # multiples of 2**32 increments
         self.actual = 0                     # unwrapped increments
         self.velocity = 0
@@ -304,7 +302,7 @@ class EtherCATDriver(IODriverBase):
         for link in self.links:
             reg.add_drive(link)
 
-    def after_job(self, task: Optional[Task] = None) -> None:
+    def after_job(self, task: Task | None = None) -> None:
         if task is None:                            # stop or fault: outputs safe, drives disabled
             for link in self.links:
                 link.want = False
@@ -327,7 +325,7 @@ class EtherCATDriver(IODriverBase):
             outs[link.slave] = link.pack()
         if self.io_out:
             per = {}
-            for i, pos, table, idx, size in self.io_out:
+            for i, pos, table, idx, _size in self.io_out:
                 lay = m.slaves[i].rx_layout
                 vals = per.get(i)
                 if vals is None:

@@ -24,7 +24,6 @@ from __future__ import annotations
 import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
-from typing import Optional
 
 # ESI data type names → the CoE type names pdo.PdoLayout and od.DTYPES know
 _DTYPE_ALIASES = {
@@ -42,7 +41,7 @@ _DTYPE_ALIASES = {
 class EsiError(Exception):
     """An ESI file that cannot be used. line/column (1-based) are set for XML syntax errors."""
 
-    def __init__(self, message: str, path: str = "", line: Optional[int] = None, column: Optional[int] = None):
+    def __init__(self, message: str, path: str = "", line: int | None = None, column: int | None = None):
         self.path, self.line, self.column = path, line, column
         where = path
         if line is not None:
@@ -69,7 +68,7 @@ class EsiPdo:
     index: int
     name: str
     entries: list
-    sm: Optional[int] = None    # the SyncManager it is assigned to by default; None: not assigned
+    sm: int | None = None    # the SyncManager it is assigned to by default; None: not assigned
     fixed: bool = False
     mandatory: bool = False
     excludes: list = field(default_factory=list)
@@ -88,11 +87,11 @@ class EsiOpMode:
     name: str
     desc: str = ""
     assign_activate: int = 0            # value for register 0x0980 (0x0300: SYNC0 on)
-    cycle_time_sync0: Optional[int] = None      # ns; 0 means "the master's cycle"
-    cycle_time_sync0_factor: Optional[int] = None
-    shift_time_sync0: Optional[int] = None
-    cycle_time_sync1: Optional[int] = None
-    cycle_time_sync1_factor: Optional[int] = None
+    cycle_time_sync0: int | None = None      # ns; 0 means "the master's cycle"
+    cycle_time_sync0_factor: int | None = None
+    shift_time_sync0: int | None = None
+    cycle_time_sync1: int | None = None
+    cycle_time_sync1_factor: int | None = None
 
 
 @dataclass
@@ -127,7 +126,7 @@ class EsiDevice:
     def tx_entries(self) -> list:
         return [e.as_tuple() for p in self.assigned_tx for e in p.entries]
 
-    def pdo(self, index: int) -> Optional[EsiPdo]:
+    def pdo(self, index: int) -> EsiPdo | None:
         for p in self.rx_pdos + self.tx_pdos:
             if p.index == index:
                 return p
@@ -144,7 +143,7 @@ def parse_number(text) -> int:
     return int(t, 10)
 
 
-def load_esi(path, product_code: Optional[int] = None, revision: Optional[int] = None) -> list:
+def load_esi(path, product_code: int | None = None, revision: int | None = None) -> list:
     """The devices of an ESI file, optionally only those with this product code (and revision).
 
     EsiError with the file name if the file cannot be read or parsed, holds no device, a value

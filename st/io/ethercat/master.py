@@ -15,10 +15,11 @@ from __future__ import annotations
 
 import struct
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable, Optional
 
-from . import coe, sii as siimod, wire
+from . import coe, wire
+from . import sii as siimod
 from .esc import INIT, OP, STATE_NAMES
 from .od import DTYPES
 from .pdo import KNOWN_NAMES, KNOWN_TYPES, PdoLayout
@@ -54,8 +55,8 @@ class SlaveInfo:
     in_bytes: int = 0
     out_offset: int = 0               # byte offsets in the logical image
     in_offset: int = 0
-    rx_layout: Optional[PdoLayout] = None
-    tx_layout: Optional[PdoLayout] = None
+    rx_layout: PdoLayout | None = None
+    tx_layout: PdoLayout | None = None
     delay_ns: int = 0
     sii_pdos: tuple = ((), ())        # the SII PDO categories (RxPDOs, TxPDOs)
     emergencies: list = field(default_factory=list)
@@ -74,8 +75,8 @@ class Master:
     def open(self) -> None: ...
     def close(self) -> None: ...
     def scan(self) -> list: ...
-    def configure(self, pdo_assign: Optional[dict] = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
-                  preop_hook: Optional[Callable] = None) -> None: ...
+    def configure(self, pdo_assign: dict | None = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
+                  preop_hook: Callable | None = None) -> None: ...
     def set_state(self, state: str, timeout: float = 2.0) -> str: ...
     def exchange(self) -> int: ...
     def sdo_read(self, slave: int, index: int, sub: int, complete: bool = False) -> bytes: ...
@@ -93,7 +94,7 @@ class FrameMaster(Master):
     `clock()` gives the time stamps the sim backend passes to the segment; `pause(seconds)` lets
     simulated time pass while the master polls (state changes, mailboxes)."""
 
-    def __init__(self, transport: Callable, pause: Optional[Callable] = None, now_ns: Optional[Callable] = None):
+    def __init__(self, transport: Callable, pause: Callable | None = None, now_ns: Callable | None = None):
         self.transport = transport
         self.pause = pause or (lambda s: time.sleep(s))
         self.now_ns = now_ns or (lambda: time.time_ns() - 946_684_800_000_000_000)   # DC epoch: 2000-01-01
@@ -102,13 +103,13 @@ class FrameMaster(Master):
         self.out_size = self.in_size = 0
         self.expected_wkc = 0
         self.dc_time = 0
-        self.dc_ref: Optional[int] = None
+        self.dc_ref: int | None = None
         self._idx = 0
         self.lost = 0
-        self._lrw: Optional[Datagram] = None
+        self._lrw: Datagram | None = None
 
     # ------------------------------------------------------------------ frames
-    def _send(self, dgs) -> Optional[list]:
+    def _send(self, dgs) -> list | None:
         for d in dgs:
             self._idx = (self._idx + 1) & 0xFF
             d.idx = self._idx
@@ -298,8 +299,8 @@ class FrameMaster(Master):
         return out
 
     # ------------------------------------------------------------------ configuration
-    def configure(self, pdo_assign: Optional[dict] = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
-                  preop_hook: Optional[Callable] = None) -> None:
+    def configure(self, pdo_assign: dict | None = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
+                  preop_hook: Callable | None = None) -> None:
         """INIT → PREOP → PDO mapping, SyncManagers, FMMUs, DC → SAFEOP.
 
         pdo_assign: {slave: (rx_pdos, tx_pdos)} written to 0x1C12/0x1C13 before mapping;
@@ -462,7 +463,7 @@ def _dtype(bits: int, index: int, sub: int) -> str:
     return {1: "BOOL", 8: "USINT", 16: "UINT", 32: "UDINT", 64: "ULINT"}.get(bits, "OCTETS")
 
 
-def _sii_end(image: bytes) -> Optional[int]:
+def _sii_end(image: bytes) -> int | None:
     """The byte length of the SII image once the category chain's end marker has been read."""
     pos = 0x80
     while pos + 2 <= len(image):

@@ -8,8 +8,8 @@ little endian as on the wire.
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Optional
 
 # CoE data types: name → (struct format or None, bit length, CoE data type index)
 DTYPES = {
@@ -55,7 +55,7 @@ class Entry:
     access: str = "rw"                 # ro, rw, wo
     pdo: bool = False                  # may be mapped into process data
     size: int = 0                      # bytes, for STRING/OCTETS
-    on_write: Optional[Callable] = None    # f(entry, new_value) → abort code or 0 (before the store)
+    on_write: Callable | None = None    # f(entry, new_value) → abort code or 0 (before the store)
     writable_in: tuple = ("PREOP", "SAFEOP", "OP")
 
     @property

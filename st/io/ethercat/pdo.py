@@ -59,7 +59,7 @@ class PdoLayout:
                 self._struct = struct.Struct(fmt)
 
     @classmethod
-    def from_od(cls, od, assign_index: int) -> "PdoLayout":
+    def from_od(cls, od, assign_index: int) -> PdoLayout:
         items = []
         for entry, bits in od.pdo_entries(assign_index):
             if entry is None:

@@ -48,7 +48,6 @@ Delays (thesis eq. 3.5-3.6 and 4.5-4.7)
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional
 
 # Frame arithmetic (bytes)
 ETH_HEADER = 14             # destination, source, EtherType 0x88A4
@@ -100,11 +99,11 @@ class SlaveTiming:
     forwarding_delay_s: float = FORWARDING_DELAY_S
     cable_m: float = 1.0
     is_drive: bool = False
-    drive_delay_s: Optional[float] = None          # overrides drive_timing when given
+    drive_delay_s: float | None = None          # overrides drive_timing when given
     drive_timing: DriveTiming = field(default_factory=DriveTiming)
 
     @property
-    def d_drive_s(self) -> Optional[float]:
+    def d_drive_s(self) -> float | None:
         if not self.is_drive:
             return None
         return self.drive_delay_s if self.drive_delay_s is not None else self.drive_timing.total_s
@@ -122,7 +121,7 @@ class SegmentTiming:
     dc: bool = True
     link_bps: float = LINK_BPS
     propagation_s_per_m: float = PROPAGATION_S_PER_M
-    master_budget_s: Optional[float] = None
+    master_budget_s: float | None = None
 
     @property
     def budget_s(self) -> float:
@@ -133,8 +132,8 @@ class SegmentTiming:
 class DatagramPlan:
     cmd: str                # "LRW" or "FRMW"
     data_bytes: int
-    logical: Optional[int] = None       # LRW: logical address (offset into the image)
-    register: Optional[int] = None      # FRMW: register offset (0x0910)
+    logical: int | None = None       # LRW: logical address (offset into the image)
+    register: int | None = None      # FRMW: register offset (0x0910)
 
 
 @dataclass
@@ -161,8 +160,8 @@ class SlavePlan:
     propagation_s: float                # of the cable into this slave
     forwarding_s: float
     d_comm_s: float                     # D_comm(n)
-    d_drive_s: Optional[float]          # D_drive, drives only
-    d_s: Optional[float]                # D(n) = D_comm(n) + D_drive, drives only
+    d_drive_s: float | None          # D_drive, drives only
+    d_s: float | None                # D(n) = D_comm(n) + D_drive, drives only
     is_drive: bool = False
 
 
@@ -313,8 +312,8 @@ def format_plan(p: Plan) -> str:
              "-" if s.d_s is None else f"{s.d_s * 1e6:.3f}") for s in p.slaves]
     widths = [max(len(r[i]) for r in [head] + rows) for i in range(len(head))]
     left = {1}
-    fmt_row = lambda r: "  ".join(c.ljust(w) if i in left else c.rjust(w)
-                                  for i, (c, w) in enumerate(zip(r, widths))).rstrip()
+    def fmt_row(r):
+        return "  ".join(c.ljust(w) if i in left else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths))).rstrip()
     lines.append(fmt_row(head))
     lines.append("  ".join("-" * w for w in widths))
     lines += [fmt_row(r) for r in rows]

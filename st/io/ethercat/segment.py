@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from . import wire
 from .esc import SlaveController
-from .wire import (APRD, APRW, APWR, ARMW, BRD, BRW, BWR, FPRD, FPRW, FPWR, FRMW, LRD, LRW, LWR, FrameError)
+from .wire import APRD, APRW, APWR, ARMW, BRD, BRW, BWR, FPRD, FPRW, FPWR, FRMW, LRD, LRW, LWR, FrameError
 
 _READ_OR_RW = {APRD, FPRD, BRD, APRW, FPRW, BRW}
 _WRITE_OR_RW = {APWR, FPWR, BWR, APRW, FPRW, BRW}

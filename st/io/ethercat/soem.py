@@ -9,7 +9,6 @@ checks, so an emulated segment must be served from another process (`st ethercat
 from __future__ import annotations
 
 import struct
-from typing import Optional
 
 from .master import Master, MasterError, SlaveInfo
 from .pdo import KNOWN_NAMES, KNOWN_TYPES, PdoLayout
@@ -18,7 +17,7 @@ _STATES = {"INIT": 1, "PREOP": 2, "BOOT": 3, "SAFEOP": 4, "OP": 8}
 _NAMES = {v: k for k, v in _STATES.items()}
 
 
-def available() -> Optional[str]:
+def available() -> str | None:
     """None when pysoem can be used, else why not."""
     try:
         import pysoem  # noqa: F401
@@ -76,7 +75,7 @@ class SoemMaster(Master):
             out.append(info.state)
         return out
 
-    def configure(self, pdo_assign: Optional[dict] = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
+    def configure(self, pdo_assign: dict | None = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
                   preop_hook=None) -> None:
         assign = pdo_assign or {}
         if preop_hook is not None:                  # config_init left the slaves in PREOP

@@ -53,7 +53,7 @@ class Datagram:
         return self.adp | (self.ado << 16)
 
     @classmethod
-    def logical_dg(cls, cmd: int, addr: int, data, idx: int = 0) -> "Datagram":
+    def logical_dg(cls, cmd: int, addr: int, data, idx: int = 0) -> Datagram:
         return cls(cmd, idx, addr & 0xFFFF, (addr >> 16) & 0xFFFF, bytearray(data))
 
     def __repr__(self):

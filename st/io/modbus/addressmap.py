@@ -32,9 +32,8 @@ import re
 import struct
 import tomllib
 from dataclasses import dataclass
-from typing import Optional
 
-from .exchange import COILS, DISCRETE, HOLDING, INPUT, N, TABLE_NAMES
+from .exchange import COILS, DISCRETE, HOLDING, INPUT, TABLE_NAMES, N
 
 TABLES = {"coil": COILS, "coils": COILS, "discrete": DISCRETE, "discrete_input": DISCRETE,
           "discrete_inputs": DISCRETE, "input": INPUT, "input_register": INPUT, "input_registers": INPUT,
@@ -275,7 +274,7 @@ class Row:
     writable: bool
 
 
-def located_cells(plc, entries: Optional[list] = None):
+def located_cells(plc, entries: list | None = None):
     """(bindings, table, first address, registers) of every located variable OpenPLC's map serves,
     except where a map-file entry claims the address."""
     claimed = {(e.table, a) for e in entries or [] for a in range(e.address, e.end)}
@@ -289,7 +288,7 @@ def located_cells(plc, entries: Optional[list] = None):
             yield binds, table, first, n
 
 
-def effective_map(plc, entries: Optional[list] = None) -> list:
+def effective_map(plc, entries: list | None = None) -> list:
     """Every served range: OpenPLC's located variables, then the map file's entries."""
     rows = []
     for binds, table, first, n in located_cells(plc, entries):

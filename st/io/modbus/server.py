@@ -101,7 +101,8 @@ class Handler:
             return bytes(((fc & 0x7F) | 0x80, SERVER_FAILURE))
 
     def _dispatch(self, fc: int, pdu: bytes) -> bytes:
-        from pymodbus.pdu import bit_message as B, register_message as R
+        from pymodbus.pdu import bit_message as B
+        from pymodbus.pdu import register_message as R
         n = len(pdu)
         if fc in (1, 2, 3, 4):
             if n != 5:
@@ -239,7 +240,7 @@ class Server:
         self.refused_last = "?"
         self.refused_reported = float("-inf")
 
-    def admit(self, new: "Connection") -> bool:
+    def admit(self, new: Connection) -> bool:
         """Make room for `new` under the connection limit: evict one connection that is not regular,
         or refuse `new` (close it, False) when every other connection is regular. O(connections)."""
         others = [c for c in self.conns if c is not new]

@@ -13,7 +13,6 @@ import pickle
 import subprocess
 import sys
 import time
-from typing import Optional
 
 from ...runtime.iodriver import IODriverBase
 from ...runtime.scheduler import Task
@@ -76,10 +75,10 @@ class ModbusSlave(IODriverBase):
     unit_ids: the unit ids answered (None = all; others get exception 0x0B); log_path: append the
     server's log there instead of to stderr."""
 
-    def __init__(self, plc, host: str = "127.0.0.1", port: int = 5020, map_file: Optional[str] = None,
+    def __init__(self, plc, host: str = "127.0.0.1", port: int = 5020, map_file: str | None = None,
                  read_only: bool = False, writable=None, max_connections: int = 16, idle_timeout: float = 60.0,
-                 max_rate: float = 1000.0, unit_ids=None, identity: Optional[dict] = None,
-                 log_path: Optional[str] = None):
+                 max_rate: float = 1000.0, unit_ids=None, identity: dict | None = None,
+                 log_path: str | None = None):
         self.plc = plc
         self.log_path = log_path
         self.entries = load_map(map_file, plc) if map_file else []
@@ -89,7 +88,7 @@ class ModbusSlave(IODriverBase):
                                 max_connections=max_connections, idle_timeout=idle_timeout, max_rate=max_rate,
                                 unit_ids=set(unit_ids) if unit_ids is not None else None,
                                 identity={**DEFAULT_IDENTITY, **(identity or {})})
-        self.ex: Optional[Exchange] = None
+        self.ex: Exchange | None = None
         self.proc = None
         self.writes_applied = 0
         self._bits: list = []
@@ -98,7 +97,7 @@ class ModbusSlave(IODriverBase):
         self._route: dict = {}
 
     # ------------------------------------------------------------------ life cycle
-    def start(self, timeout: float = 10.0) -> "ModbusSlave":
+    def start(self, timeout: float = 10.0) -> ModbusSlave:
         self.ex = Exchange(create=True)
         self.rebind()
         self._set_ranges()
@@ -189,7 +188,7 @@ class ModbusSlave(IODriverBase):
         self._bits, self._words, self._vars, self._route = bits, words, varcells, route
 
     # ------------------------------------------------------------------ the job boundary
-    def after_job(self, task: Optional[Task] = None) -> None:
+    def after_job(self, task: Task | None = None) -> None:
         """Publish every owned cell into the snapshot (seqlock: readers retry while it moves)."""
         ex = self.ex
         if ex is None:
@@ -215,7 +214,7 @@ class ModbusSlave(IODriverBase):
         finally:
             ex.end_write()
 
-    def before_job(self, task: Optional[Task] = None) -> None:
+    def before_job(self, task: Task | None = None) -> None:
         """Apply the queued HMI writes, oldest first."""
         ex = self.ex
         if ex is None or not ex.pending():

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional, Protocol
+from typing import Protocol
 
 from .errors import E
 from .profiles import Profile, RuckigProfile, position_profile, velocity_profile
@@ -31,12 +31,12 @@ class Drive(Protocol):
     """A drive that moves an axis (EtherCAT's DriveLink): claimed for its AxisNo with
     MotionRegistry.add_drive, attached as `Axis.drive`. An axis without one is virtual."""
     axis_no: int
-    axis: Optional["Axis"]
+    axis: Axis | None
 
     @property
     def enabled(self) -> bool: ...             # the power stage is on (CiA 402 Operation Enabled)
 
-    def attach(self, ax: "Axis") -> None: ...
+    def attach(self, ax: Axis) -> None: ...
 
     def request_enable(self, on: bool) -> None: ...
 
@@ -99,15 +99,15 @@ class Command:
 
 
 class Axis:
-    def __init__(self, handle: int, config: Optional[AxisConfig] = None):
+    def __init__(self, handle: int, config: AxisConfig | None = None):
         self.handle = handle
         self.cfg = config or AxisConfig()
         self.state = DISABLED
         self.set_pos = self.set_vel = self.set_acc = 0.0
         self.act_pos = self.act_vel = 0.0
-        self.active: Optional[Command] = None
+        self.active: Command | None = None
         self.queue: list = []
-        self.stop_cmd: Optional[Command] = None
+        self.stop_cmd: Command | None = None
         self.power_owner = 0            # id of the MC_Power instance that owns the axis
         self.power_on = False           # MC_Power.Status
         self.power_request = False
@@ -118,7 +118,7 @@ class Axis:
         self.task = None
         self._next_id = 1
         self.commands: dict = {}        # id → Command, for the FBs' ledgers
-        self.drive: Optional[Drive] = None      # an attached drive (EtherCAT); None: virtual axis
+        self.drive: Drive | None = None      # an attached drive (EtherCAT); None: virtual axis
         self.home_signal = None         # callable → bool: the reference switch (config home_switch)
         self.axis_no = 0
 

@@ -7,12 +7,25 @@ task's job it advances the axes that task commands (the kernel phase).
 """
 from __future__ import annotations
 
-from typing import Optional
-
 from ...runtime.iodriver import IODriver, IODriverBase
 from ...runtime.scheduler import Task
-from .axis import (ABORTED, ACTIVE, CONTINUOUS, DISABLED, DISCRETE, DONE, ERROR, ERRORSTOP, HOMING, QUEUED,
-                   STANDSTILL, STOPPING, Axis, AxisConfig, Drive)
+from .axis import (
+    ABORTED,
+    ACTIVE,
+    CONTINUOUS,
+    DISABLED,
+    DISCRETE,
+    DONE,
+    ERROR,
+    ERRORSTOP,
+    HOMING,
+    QUEUED,
+    STANDSTILL,
+    STOPPING,
+    Axis,
+    AxisConfig,
+    Drive,
+)
 
 DEFAULT_CYCLE_S = 0.001
 
@@ -70,10 +83,10 @@ class MotionRegistry(IODriverBase):
             ax.task = None                  # the new program's tasks claim their axes on the next call
 
     # the I/O driver interface
-    def before_job(self, task: Optional[Task] = None) -> None:
+    def before_job(self, task: Task | None = None) -> None:
         self.task = task
 
-    def after_job(self, task: Optional[Task] = None) -> None:
+    def after_job(self, task: Task | None = None) -> None:
         if task is None:
             return
         for ax in self.axes.values():
@@ -130,7 +143,7 @@ def _edge(fb) -> bool:
     return rising
 
 
-def _lookup(ax: Axis, fb) -> Optional[object]:
+def _lookup(ax: Axis, fb) -> object | None:
     return ax.commands.get(fb.CmdId) if fb.CmdId else None
 
 

@@ -7,7 +7,6 @@ position, velocity and acceleration over time (matplotlib).
 from __future__ import annotations
 
 import csv
-from typing import Optional
 
 from . import registry
 
@@ -64,7 +63,7 @@ def write_csv(traces: list, path: str) -> None:
                 w.writerow([f"{row[0]:.6f}", tr.path, *(f"{x:.9g}" for x in row[1:6]), row[6]])
 
 
-def plot(traces: list, path: str, title: Optional[str] = None) -> None:
+def plot(traces: list, path: str, title: str | None = None) -> None:
     try:
         import matplotlib
         matplotlib.use("Agg")

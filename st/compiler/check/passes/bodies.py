@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ... import ast as A
 from ....model import types as T
 from ....model.program import SfcModel, StepModel, TransitionModel
+from ... import ast as A
 from ..common import Scope
 
 if TYPE_CHECKING:

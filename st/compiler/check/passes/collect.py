@@ -2,10 +2,10 @@
 units, by name, before anything is resolved (so declarations may come in any order)."""
 from __future__ import annotations
 
-from ... import ast as A
 from ....model import types as T
-from ...names import mangle
 from ....source import Span
+from ... import ast as A
+from ...names import mangle
 from ..context import CheckContext
 
 

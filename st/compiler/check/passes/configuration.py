@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ... import ast as A
 from ....model import types as T
 from ....model.program import ConfigModel, InstanceModel, TaskModel
+from ... import ast as A
 from ..common import _SECTIONS_PARAM, Scope, same_type
 
 if TYPE_CHECKING:

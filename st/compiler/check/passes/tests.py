@@ -2,11 +2,11 @@
 SETUP variables, its own and TEARDOWN's; its statements may use the test statements."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING
 
-from ... import ast as A
 from ....model import types as T
 from ....model.program import TestModel
+from ... import ast as A
 from ..common import Scope
 from ..context import CheckContext
 
@@ -19,7 +19,7 @@ def check_tests(sem: Semantics) -> None:
     by_file: dict = {}
     for tb in ctx.project.test_blocks:
         by_file.setdefault(tb.span.file, []).append(tb)
-    for path, blocks in by_file.items():
+    for _path, blocks in by_file.items():
         setup = _single_block(ctx, blocks, "SETUP")
         teardown = _single_block(ctx, blocks, "TEARDOWN")
         seen: dict = {}
@@ -34,7 +34,7 @@ def check_tests(sem: Semantics) -> None:
             _check_test(sem, tb, setup, teardown)
 
 
-def _single_block(ctx: CheckContext, blocks: list[A.TestBlock], kind: str) -> Optional[A.TestBlock]:
+def _single_block(ctx: CheckContext, blocks: list[A.TestBlock], kind: str) -> A.TestBlock | None:
     found = [b for b in blocks if b.kind == kind]
     for extra in found[1:]:
         ctx.err("E011", extra.span, f"a file may have one {kind} block (the first is at line "

@@ -84,7 +84,7 @@ class Device:
         if new in ("SAFEOP", "OP") and old in ("PREOP", "INIT"):
             self.remap()
             try:
-                self.rx_layout, self.tx_layout
+                _ = (self.rx_layout, self.tx_layout)          # both layouts must be computable
             except (KeyError, TypeError):
                 return AL_INVALID_OUTPUT_CONFIG
         return AL_OK

@@ -33,7 +33,6 @@ no factor group).
 from __future__ import annotations
 
 from enum import IntEnum
-from typing import Optional
 
 from ..od import ABORT_NOT_MAPPABLE, ABORT_PDO_TOO_LONG, ABORT_VALUE_RANGE, DTYPES
 from ..pdo import CIA402_RX, CIA402_TX
@@ -102,10 +101,10 @@ class CiA402Drive(Device):
     group = "Drive"
     has_mailbox = True
 
-    def __init__(self, name: str = "", *, vendor_id: Optional[int] = None, product_code: Optional[int] = None,
-                 revision: Optional[int] = None, serial: Optional[int] = None,
-                 motor: Optional[MotorParams] = None, encoder_bits: Optional[int] = None,
-                 rx_mapping: Optional[list] = None, tx_mapping: Optional[list] = None,
+    def __init__(self, name: str = "", *, vendor_id: int | None = None, product_code: int | None = None,
+                 revision: int | None = None, serial: int | None = None,
+                 motor: MotorParams | None = None, encoder_bits: int | None = None,
+                 rx_mapping: list | None = None, tx_mapping: list | None = None,
                  enable_delay: float = 0.0, substep: float = 125e-6, modes: tuple = (CSP, CSV, CST)):
         """`motor`: the motor's parameters (the model itself is `self.motor`); `encoder_bits`
         overrides theirs. `rx_mapping` / `tx_mapping`: the default contents of 0x1600 / 0x1A00 as

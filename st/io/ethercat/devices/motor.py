@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 import random
 from dataclasses import dataclass
-from typing import Optional
 
 TWO_PI = 2.0 * math.pi
 
@@ -40,8 +39,8 @@ class MotorParams:
     torque_constant: float = 0.29         # N·m/A (only used for `current`)
     encoder_bits: int = 23
     velocity_bandwidth_hz: float = 500.0  # used when velocity_kp / velocity_ki are None
-    velocity_kp: Optional[float] = None   # N·m per rad/s
-    velocity_ki: Optional[float] = None   # N·m per rad (integral gain, per second)
+    velocity_kp: float | None = None   # N·m per rad/s
+    velocity_ki: float | None = None   # N·m per rad (integral gain, per second)
     position_kp: float = 300.0            # 1/s (velocity reference per position error)
     current_tau: float = 1e-4             # s, first-order lag of the current loop (0 = ideal)
     torque_noise: float = 0.0             # N·m standard deviation per substep; 0 = no randomness
@@ -77,7 +76,7 @@ class MotorModel:
     `target_torque`, offsets and limits. Outputs: `position`, `velocity`, `torque` (drive units)
     and the SI state `turns`, `omega`, `torque_nm`."""
 
-    def __init__(self, params: Optional[MotorParams] = None, substep: float = 62.5e-6):
+    def __init__(self, params: MotorParams | None = None, substep: float = 62.5e-6):
         p = self.params = params or MotorParams()
         if substep <= 0:
             raise ValueError("substep must be positive")
@@ -169,7 +168,7 @@ class MotorModel:
         return self.mode in (_STOP, _HOLD) and self._stop_done
 
     # ------------------------------------------------------------------ inputs
-    def enable(self, mode: Optional[int] = None) -> None:
+    def enable(self, mode: int | None = None) -> None:
         """Switch the power stage on. The position demand starts at the actual position, the
         integrator at zero (no jump on enabling)."""
         if mode is not None:
@@ -209,7 +208,7 @@ class MotorModel:
         if self._ip_period == 0.0:
             self._demand = self._ip_target
 
-    def stop(self, decel: Optional[float] = None) -> None:
+    def stop(self, decel: float | None = None) -> None:
         """Decelerate to rest, `decel` in increments/s² (None: at the current limit), then hold
         the position where the shaft came to rest."""
         if self.mode in (_STOP, _HOLD):
