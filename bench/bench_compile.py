@@ -8,6 +8,7 @@ the goals (cold < 5 s, cached < 0.3 s for 20,000 lines; ratio < 1 meets the goal
 linearly for other sizes), and the split of one cold compile into its stages.
 Never fails: it prints what it measured and exits 0.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -21,7 +22,7 @@ _HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, _HERE)
 from gen_library import generate  # noqa: E402
 
-GOAL_COLD_S = 5.0      # for 20,000 lines
+GOAL_COLD_S = 5.0  # for 20,000 lines
 GOAL_CACHED_S = 0.3
 
 TIMED = """\
@@ -116,7 +117,7 @@ def main(argv=None) -> int:
         try:
             cold = _timed(path, dict(base, ST_NO_CACHE="1"), a.repeat)
             cache_env = dict(base, ST_CACHE_DIR=os.path.join(tmp, "cache"))
-            _run(TIMED, path, cache_env)                      # fill the cache
+            _run(TIMED, path, cache_env)  # fill the cache
             cached = _timed(path, cache_env, a.repeat)
         except RuntimeError as e:
             print(f"compile failed: {e}")
@@ -147,6 +148,6 @@ def main(argv=None) -> int:
 if __name__ == "__main__":
     try:
         sys.exit(main())
-    except Exception as exc:          # a benchmark reports, it does not fail
+    except Exception as exc:  # a benchmark reports, it does not fail
         print(f"bench_compile: error: {type(exc).__name__}: {exc}")
         sys.exit(0)

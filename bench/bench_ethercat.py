@@ -11,6 +11,7 @@
    for `--seconds` of PLC time: scans per wall second and the ratio to real time (goal ≥ 10×).
 Never fails: it prints what it measured and exits 0.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -48,8 +49,12 @@ def per_frame_us(n: int, frames: int, runs: int):
 
         def transport(frame, seg=seg, clock=clock):
             return seg.exchange(frame, clock[0])
-        m = FrameMaster(transport, pause=lambda s, clock=clock: clock.__setitem__(0, clock[0] + s),
-                        now_ns=lambda clock=clock: int(clock[0] * 1e9))
+
+        m = FrameMaster(
+            transport,
+            pause=lambda s, clock=clock: clock.__setitem__(0, clock[0] + s),
+            now_ns=lambda clock=clock: int(clock[0] * 1e9),
+        )
         m.scan()
         m.configure(dc_cycle_ns=1_000_000)
         m.set_state("OP")
@@ -110,14 +115,18 @@ END_RESOURCE END_CONFIGURATION
 def program(n: int) -> str:
     decl, body = [], []
     for i in range(1, n + 1):
-        decl.append(f"    ax{i} : AXIS_REF := (AxisNo := {i}); pw{i} : MC_Power; mv{i} : MC_MoveAbsolute;"
-                    f" rs{i} : MC_ReadStatus; rp{i} : MC_ReadActualPosition; pos{i} : LREAL;")
-        body += [f"  pw{i}(Axis := ax{i}, Enable := TRUE);",
-                 f"  mv{i}(Axis := ax{i}, Execute := t.Q AND pw{i}.Status, Position := SEL(go, 0.0, 90.0),"
-                 f" Velocity := 720.0, Acceleration := 7200.0, Deceleration := 7200.0);",
-                 f"  rs{i}(Axis := ax{i}, Enable := TRUE);",
-                 f"  rp{i}(Axis := ax{i}, Enable := TRUE);",
-                 f"  pos{i} := rp{i}.Position;"]
+        decl.append(
+            f"    ax{i} : AXIS_REF := (AxisNo := {i}); pw{i} : MC_Power; mv{i} : MC_MoveAbsolute;"
+            f" rs{i} : MC_ReadStatus; rp{i} : MC_ReadActualPosition; pos{i} : LREAL;"
+        )
+        body += [
+            f"  pw{i}(Axis := ax{i}, Enable := TRUE);",
+            f"  mv{i}(Axis := ax{i}, Execute := t.Q AND pw{i}.Status, Position := SEL(go, 0.0, 90.0),"
+            f" Velocity := 720.0, Acceleration := 7200.0, Deceleration := 7200.0);",
+            f"  rs{i}(Axis := ax{i}, Enable := TRUE);",
+            f"  rp{i}(Axis := ax{i}, Enable := TRUE);",
+            f"  pos{i} := rp{i}.Position;",
+        ]
     return PROGRAM.format(decl="\n".join(decl), body="\n".join(body))
 
 
@@ -128,7 +137,7 @@ def scans_per_second(n: int, seconds: float, runs: int):
         plc = PLC(compile_text(program(n), f"bench_ethercat_{n}.st"))
         configure_axes(plc, {i: {"following_error_window": 5.0} for i in range(1, n + 1)})
         drv = EtherCATDriver(plc, from_dict(segment_cfg(n)), backend="sim")
-        plc.scan(200)                                 # enable sequence, first moves
+        plc.scan(200)  # enable sequence, first moves
         scans = int(seconds * 1000)
         gc.collect()
         t0 = time.perf_counter()
@@ -149,15 +158,21 @@ def main() -> None:
     print(f"{'drives':>7} {'µs/frame':>9} {'without physics':>16} {'master only':>12} {'physics µs/drive':>17}")
     for n in (1, 4, 16):
         r = per_frame_us(n, a.frames if n < 16 else a.frames // 4, a.runs)
-        print(f"{n:>7} {r['total']:>9.1f} {r['no_physics']:>16.1f} {r['master']:>12.1f} "
-              f"{(r['total'] - r['no_physics']) / n:>17.1f}")
+        print(
+            f"{n:>7} {r['total']:>9.1f} {r['no_physics']:>16.1f} {r['master']:>12.1f} "
+            f"{(r['total'] - r['no_physics']) / n:>17.1f}"
+        )
     n = 4
     sps, (strokes, pos, stats) = scans_per_second(n, a.seconds, a.runs)
     print(f"\n{n}-axis program on the sim backend, 1 ms task, {a.seconds:g} s of PLC time, median of {a.runs}")
-    print(f"  {sps:,.0f} scans/s = {sps / 1000:.1f}× real time (goal ≥ {GOAL_RATIO:g}×: "
-          f"{'met' if sps / 1000 >= GOAL_RATIO else 'missed'})")
-    print(f"  strokes {strokes}, final positions {pos}, frames {stats['frames']}, lost {stats['lost_frames']}, "
-          f"wkc errors {stats['wkc_errors']}")
+    print(
+        f"  {sps:,.0f} scans/s = {sps / 1000:.1f}× real time (goal ≥ {GOAL_RATIO:g}×: "
+        f"{'met' if sps / 1000 >= GOAL_RATIO else 'missed'})"
+    )
+    print(
+        f"  strokes {strokes}, final positions {pos}, frames {stats['frames']}, lost {stats['lost_frames']}, "
+        f"wkc errors {stats['wkc_errors']}"
+    )
 
 
 if __name__ == "__main__":

@@ -18,6 +18,7 @@ The measuring code lives in st/experiments/latency.py (`st experiment latency` r
     python bench/bench_latency.py                      # 1 ms and 4 ms, idle and loaded, 20 s each (~3 min)
     python bench/bench_latency.py --seconds 60 --cycles 1ms --loads idle
 """
+
 from __future__ import annotations
 
 import argparse
@@ -51,10 +52,14 @@ def main() -> int:
         print(f"needs {' and '.join(missing)} (Debian: apt-get install rt-tests stress-ng)")
         return 0
     prio = a.priority if os.geteuid() == 0 else 0
-    print(f"st run vs cyclictest, {a.seconds} s per run, {'SCHED_FIFO ' + str(prio) if prio else 'SCHED_OTHER (not root)'}, "
-          f"{os.cpu_count()} CPUs, program {Path(a.program).name}; latency in µs")
-    print(f"{'load':6} {'cycle':5} {'tool':10} {'min':>8} {'avg':>8} {'p99':>8} {'p99.9':>8} {'max':>8}  "
-          f"{'samples':>7} {'overruns':>8} {'cpu':>5}")
+    print(
+        f"st run vs cyclictest, {a.seconds} s per run, {'SCHED_FIFO ' + str(prio) if prio else 'SCHED_OTHER (not root)'}, "
+        f"{os.cpu_count()} CPUs, program {Path(a.program).name}; latency in µs"
+    )
+    print(
+        f"{'load':6} {'cycle':5} {'tool':10} {'min':>8} {'avg':>8} {'p99':>8} {'p99.9':>8} {'max':>8}  "
+        f"{'samples':>7} {'overruns':>8} {'cpu':>5}"
+    )
     results = []
     for load in a.loads.split(","):
         stress = start_load() if load == "stress" else None
@@ -66,11 +71,15 @@ def main() -> int:
                 ct = run_cyclictest(us, a.seconds, prio)
                 st = run_st(Path(a.program), a.seconds, prio, cycle=cycle)
                 print(f"{load:6} {cycle:5} {'cyclictest':10} {fmt(ct)}  {ct['samples']:>7} {ct['overruns']:>8}")
-                print(f"{'':6} {'':5} {'st run':10} {fmt(st)}  {st['samples']:>7} {st['overruns']:>8} "
-                      f"{st['cpu'] * 100:>4.0f}%")
+                print(
+                    f"{'':6} {'':5} {'st run':10} {fmt(st)}  {st['samples']:>7} {st['overruns']:>8} "
+                    f"{st['cpu'] * 100:>4.0f}%"
+                )
                 ratio = {k: (st[k] / ct[k] if ct[k] else float("inf")) for k in ("p99", "p99.9", "max")}
-                print(f"{'':6} {'':5} {'ratio':10} {'':>8} {'':>8} {ratio['p99']:>8.2f} {ratio['p99.9']:>8.2f} "
-                      f"{ratio['max']:>8.2f}   (goal: p99.9 ratio ≤ 2; exec avg {st['exec_avg']:.0f} µs)")
+                print(
+                    f"{'':6} {'':5} {'ratio':10} {'':>8} {'':>8} {ratio['p99']:>8.2f} {ratio['p99.9']:>8.2f} "
+                    f"{ratio['max']:>8.2f}   (goal: p99.9 ratio ≤ 2; exec avg {st['exec_avg']:.0f} µs)"
+                )
                 results.append({"load": load, "cycle": cycle, "cyclictest": ct, "st": st, "ratio": ratio})
         finally:
             if stress is not None:

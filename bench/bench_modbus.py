@@ -11,6 +11,7 @@ statistics per phase, and the ratio of p99.9 under load to p99.9 without.
 
 Goal: at least 2,000 requests/s with 10 clients while p99.9 stays within 1.2× of the idle figure.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -62,9 +63,28 @@ def phase(program: Path, cycle: str, seconds: int, clients: int, port: int, rate
         prog = Path(d) / program.name
         prog.write_text(src)
         stats = Path(d) / "stats.json"
-        run = subprocess.Popen([sys.executable, "-m", "st.cli", "run", str(prog), "--duration", f"{seconds + 3}s",
-                                "--no-retain", "--rt-priority", "80", "--modbus", f"127.0.0.1:{port}",
-                                "--modbus-rate", "0", "--stats-json", str(stats), "-q"], cwd=ROOT)
+        run = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "st.cli",
+                "run",
+                str(prog),
+                "--duration",
+                f"{seconds + 3}s",
+                "--no-retain",
+                "--rt-priority",
+                "80",
+                "--modbus",
+                f"127.0.0.1:{port}",
+                "--modbus-rate",
+                "0",
+                "--stats-json",
+                str(stats),
+                "-q",
+            ],
+            cwd=ROOT,
+        )
         deadline = time.monotonic() + 20
         while True:
             try:
@@ -77,8 +97,10 @@ def phase(program: Path, cycle: str, seconds: int, clients: int, port: int, rate
         time.sleep(1.0)
         counter = mp.Value("q", 0)
         t0 = time.monotonic()
-        procs = [mp.Process(target=client, args=(port, t0 + seconds, counter, rate / clients if rate else 0.0))
-                 for _ in range(clients)]
+        procs = [
+            mp.Process(target=client, args=(port, t0 + seconds, counter, rate / clients if rate else 0.0))
+            for _ in range(clients)
+        ]
         for p in procs:
             p.start()
         for p in procs:
@@ -86,8 +108,14 @@ def phase(program: Path, cycle: str, seconds: int, clients: int, port: int, rate
         elapsed = time.monotonic() - t0
         run.wait()
         task = json.loads(stats.read_text())["tasks"][0]
-    return {"clients": clients, "rate": rate, "requests_per_s": counter.value / elapsed if clients else 0.0,
-            "latency_us": task["latency_us"], "jobs": task["jobs"], "overruns": task["overruns"] + task["skipped"]}
+    return {
+        "clients": clients,
+        "rate": rate,
+        "requests_per_s": counter.value / elapsed if clients else 0.0,
+        "latency_us": task["latency_us"],
+        "jobs": task["jobs"],
+        "overruns": task["overruns"] + task["skipped"],
+    }
 
 
 def main() -> int:
@@ -97,14 +125,22 @@ def main() -> int:
     ap.add_argument("--clients", default="1,10")
     ap.add_argument("--program", default=str(ROOT / "programs" / "conveyor_sorter.st"))
     ap.add_argument("--port", type=int, default=15020)
-    ap.add_argument("--paced", type=float, default=3000.0,
-                    help="total requests/s of the last phase: 10 clients at an HMI-like steady rate")
+    ap.add_argument(
+        "--paced",
+        type=float,
+        default=3000.0,
+        help="total requests/s of the last phase: 10 clients at an HMI-like steady rate",
+    )
     a = ap.parse_args()
     phases = [(0, 0.0)] + [(int(c), 0.0) for c in a.clients.split(",")] + [(10, a.paced)]
-    print(f"Modbus slave under load: {Path(a.program).name} at {a.cycle}, {a.seconds} s per phase, "
-          f"{os.cpu_count()} CPUs, {'SCHED_FIFO 80' if os.geteuid() == 0 else 'not root: SCHED_OTHER'}")
-    print(f"{'clients':>7} {'offered':>8} {'req/s':>9} {'lat min':>8} {'avg':>7} {'p99':>7} {'p99.9':>8} {'max':>8} "
-          f"{'jobs':>6} {'overruns':>8} {'p99.9 ratio':>11}")
+    print(
+        f"Modbus slave under load: {Path(a.program).name} at {a.cycle}, {a.seconds} s per phase, "
+        f"{os.cpu_count()} CPUs, {'SCHED_FIFO 80' if os.geteuid() == 0 else 'not root: SCHED_OTHER'}"
+    )
+    print(
+        f"{'clients':>7} {'offered':>8} {'req/s':>9} {'lat min':>8} {'avg':>7} {'p99':>7} {'p99.9':>8} {'max':>8} "
+        f"{'jobs':>6} {'overruns':>8} {'p99.9 ratio':>11}"
+    )
     base = None
     for n, rate in phases:
         r = phase(Path(a.program), a.cycle, a.seconds, n, a.port, rate)
@@ -112,9 +148,11 @@ def main() -> int:
         base = lat["p99.9"] if base is None else base
         ratio = lat["p99.9"] / base if base else float("nan")
         offered = f"{rate:.0f}/s" if rate else ("max" if n else "-")
-        print(f"{n:>7} {offered:>8} {r['requests_per_s']:>9.0f} {lat['min']:>8.1f} {lat['avg']:>7.1f} "
-              f"{lat['p99']:>7.1f} {lat['p99.9']:>8.1f} {lat['max']:>8.1f} {r['jobs']:>6} {r['overruns']:>8} "
-              f"{ratio:>11.2f}")
+        print(
+            f"{n:>7} {offered:>8} {r['requests_per_s']:>9.0f} {lat['min']:>8.1f} {lat['avg']:>7.1f} "
+            f"{lat['p99']:>7.1f} {lat['p99.9']:>8.1f} {lat['max']:>8.1f} {r['jobs']:>6} {r['overruns']:>8} "
+            f"{ratio:>11.2f}"
+        )
     print("goal: >= 2000 req/s with 10 clients, p99.9 ratio <= 1.2")
     return 0
 

@@ -11,6 +11,7 @@
    The same program without the motion blocks gives the ST part's cost.
 Never fails: it prints what it measured and exits 0.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -33,10 +34,11 @@ def _moving_axes(n: int, jerk: float) -> list:
         ax = Axis(i + 1, AxisConfig(name=f"axis{i + 1}"))
         ax.cycle = CYCLE
         ax.power(1, True)
-        cmd = ax.new_command("move_abs", {"pos": 1e6, "vel": 100.0 + i, "acc": 1000.0, "dec": 1000.0,
-                                          "jerk": jerk, "dir": 0})
+        cmd = ax.new_command(
+            "move_abs", {"pos": 1e6, "vel": 100.0 + i, "acc": 1000.0, "dec": 1000.0, "jerk": jerk, "dir": 0}
+        )
         ax.submit(cmd)
-        for _ in range(50):           # into the profile: accelerating, then cruising
+        for _ in range(50):  # into the profile: accelerating, then cruising
             ax.step()
         axes.append(ax)
     return axes
@@ -64,8 +66,9 @@ def planning_us(jerk: float, runs: int, n: int = 300) -> float:
         ax = _moving_axes(1, jerk)[0]
         t0 = time.perf_counter()
         for i in range(n):
-            cmd = ax.new_command("move_abs", {"pos": 500.0 + (i % 7), "vel": 80.0, "acc": 900.0, "dec": 700.0,
-                                              "jerk": jerk, "dir": 0})
+            cmd = ax.new_command(
+                "move_abs", {"pos": 500.0 + (i % 7), "vel": 80.0, "acc": 900.0, "dec": 700.0, "jerk": jerk, "dir": 0}
+            )
             ax.submit(cmd)
             ax.forget(cmd.id)
         results.append((time.perf_counter() - t0) / n * 1e6)
@@ -77,28 +80,41 @@ def program(n: int, motion: bool = True) -> str:
     body = ["  t(IN := NOT t.Q, PT := T#500ms);", "  IF t.Q THEN go := NOT go; END_IF;"]
     for i in range(1, n + 1):
         if motion:
-            v.append(f"    ax{i} : AXIS_REF := (AxisNo := {i}); pw{i} : MC_Power; mv{i} : MC_MoveAbsolute;"
-                     f" rs{i} : MC_ReadStatus; rp{i} : MC_ReadActualPosition; pos{i} : LREAL;")
-            body += [f"  pw{i}(Axis := ax{i}, Enable := TRUE);",
-                     f"  mv{i}(Axis := ax{i}, Execute := t.Q, Position := SEL(go, 0.0, 100.0), Velocity := 400.0,"
-                     f" Acceleration := 4000.0, Deceleration := 4000.0);",
-                     f"  rs{i}(Axis := ax{i}, Enable := TRUE);",
-                     f"  rp{i}(Axis := ax{i}, Enable := TRUE);",
-                     f"  pos{i} := rp{i}.Position;"]
+            v.append(
+                f"    ax{i} : AXIS_REF := (AxisNo := {i}); pw{i} : MC_Power; mv{i} : MC_MoveAbsolute;"
+                f" rs{i} : MC_ReadStatus; rp{i} : MC_ReadActualPosition; pos{i} : LREAL;"
+            )
+            body += [
+                f"  pw{i}(Axis := ax{i}, Enable := TRUE);",
+                f"  mv{i}(Axis := ax{i}, Execute := t.Q, Position := SEL(go, 0.0, 100.0), Velocity := 400.0,"
+                f" Acceleration := 4000.0, Deceleration := 4000.0);",
+                f"  rs{i}(Axis := ax{i}, Enable := TRUE);",
+                f"  rp{i}(Axis := ax{i}, Enable := TRUE);",
+                f"  pos{i} := rp{i}.Position;",
+            ]
         else:
             v.append(f"    pos{i} : LREAL; b{i} : BOOL;")
             body += [f"  b{i} := t.Q;", f"  pos{i} := SEL(go, 0.0, 100.0);"]
     v.append("  END_VAR")
-    return "\n".join(v + body + ["END_PROGRAM",
-                                 "CONFIGURATION c RESOURCE r ON PLC",
-                                 "  TASK tk (INTERVAL := T#1ms, PRIORITY := 1);",
-                                 "  PROGRAM main WITH tk : main;",
-                                 "END_RESOURCE END_CONFIGURATION"]) + "\n"
+    return (
+        "\n".join(
+            v
+            + body
+            + [
+                "END_PROGRAM",
+                "CONFIGURATION c RESOURCE r ON PLC",
+                "  TASK tk (INTERVAL := T#1ms, PRIORITY := 1);",
+                "  PROGRAM main WITH tk : main;",
+                "END_RESOURCE END_CONFIGURATION",
+            ]
+        )
+        + "\n"
+    )
 
 
 def scan_us(n: int, cycles: int, runs: int, motion: bool = True) -> float:
     plc = PLC(compile_text(program(n, motion), f"bench_motion_{n}.st"))
-    plc.scan(600)                    # powered, first moves under way
+    plc.scan(600)  # powered, first moves under way
     results = []
     for _ in range(runs):
         gc.disable()
@@ -109,6 +125,7 @@ def scan_us(n: int, cycles: int, runs: int, motion: bool = True) -> float:
         results.append(t / cycles * 1e6)
     if motion:
         from st.stdlib.plcopen import axis_of
+
         assert axis_of(plc, "main.ax1").state in ("DiscreteMotion", "Standstill")
     return statistics.median(results)
 

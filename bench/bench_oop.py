@@ -8,6 +8,7 @@ Each kind is a PROGRAM making --calls calls per scan in a FOR loop; the time per
 median over --runs of (scan time - the same loop's scan time with an empty body) / calls. Ratios
 are to the plain FB call. Never fails: it prints what it measured and exits 0.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -57,7 +58,9 @@ KINDS = {
 
 
 def program(body: str, calls: int) -> str:
-    return COMMON + f"""
+    return (
+        COMMON
+        + f"""
 PROGRAM main
   VAR a, b : Acc; it : I_Acc; arr : ARRAY[0..1] OF I_Acc; r : REF_TO Acc; x, i : INT; END_VAR
   it := a; arr[0] := a; arr[1] := b; r := REF(a);
@@ -66,6 +69,7 @@ PROGRAM main
   END_FOR;
 END_PROGRAM
 """
+    )
 
 
 def scan_ns(src: str, scans: int, runs: int) -> float:
@@ -90,11 +94,16 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=5)
     a = ap.parse_args()
     base = scan_ns(program(KINDS["empty loop"], a.calls), a.scans, a.runs)
-    per_call = {k: (scan_ns(program(body, a.calls), a.scans, a.runs) - base) / a.calls
-                for k, body in KINDS.items() if k != "empty loop"}
+    per_call = {
+        k: (scan_ns(program(body, a.calls), a.scans, a.runs) - base) / a.calls
+        for k, body in KINDS.items()
+        if k != "empty loop"
+    }
     ref = per_call["FB call"]
-    print(f"{a.calls} calls per scan, {a.scans} scans, median of {a.runs} runs; "
-          f"empty loop {base / a.calls:.0f} ns per iteration")
+    print(
+        f"{a.calls} calls per scan, {a.scans} scans, median of {a.runs} runs; "
+        f"empty loop {base / a.calls:.0f} ns per iteration"
+    )
     print(f"{'kind':28} {'ns/call':>8} {'vs FB call':>11}")
     for k, ns in per_call.items():
         print(f"{k:28} {ns:8.0f} {ns / ref:10.2f}x")

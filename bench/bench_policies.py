@@ -13,6 +13,7 @@ time utility U(T_i) with k = 10. Never fails: it prints what it measured.
 The simulation lives in st/experiments/scheduling.py (`st experiment scheduling` writes it up
 with CSV, plots and a summary); this script prints the table only.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -33,10 +34,14 @@ def main() -> None:
     costs = [float(x) for x in a.costs.split(",")]
     ideal = [int(a.seconds * 1000 / p) for p in PERIODS_MS]
     load = sum(c / p for c, p in zip(costs, PERIODS_MS))
-    print(f"three tasks at 10/20/40 ms, execution times {a.costs} ms (±{a.jitter:.0%}), CPU load {load:.2f}; "
-          f"{a.seconds:g} s of virtual time, mean of {a.runs} runs")
-    print(f"{'policy':<26}{'thread_1':>10}{'thread_2':>10}{'thread_3':>10}   {'overruns':>18}   {'skipped':>14}"
-          f"   {'U(T_i), k=10':>18}   thesis (Table 6.5)")
+    print(
+        f"three tasks at 10/20/40 ms, execution times {a.costs} ms (±{a.jitter:.0%}), CPU load {load:.2f}; "
+        f"{a.seconds:g} s of virtual time, mean of {a.runs} runs"
+    )
+    print(
+        f"{'policy':<26}{'thread_1':>10}{'thread_2':>10}{'thread_3':>10}   {'overruns':>18}   {'skipped':>14}"
+        f"   {'U(T_i), k=10':>18}   thesis (Table 6.5)"
+    )
     print(f"{'ideal (no overload)':<26}{ideal[0]:>10}{ideal[1]:>10}{ideal[2]:>10}")
     results = compare(runs=a.runs, seconds=a.seconds, costs_ms=costs, jitter=a.jitter)
     for policy in POLICIES:

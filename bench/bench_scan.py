@@ -8,6 +8,7 @@ cyclic GC disabled while timing). Then a micro benchmark as in ../shared/notes/r
 a generated program of 200 assignments and 10 TON calls, in µs per scan, beside the notes'
 13-16 µs for compiled Python. Never fails: it prints what it measured and exits 0.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -24,7 +25,7 @@ _HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, _HERE)
 from gen_library import generate  # noqa: E402
 
-NOTES_US = (13.0, 16.0)     # realtime.md: 200 assignments + 10 TON, ast + compile()
+NOTES_US = (13.0, 16.0)  # realtime.md: 200 assignments + 10 TON, ast + compile()
 
 
 def micro_program(n_assign: int = 200, n_ton: int = 10, seed: int = 1) -> str:
@@ -41,7 +42,7 @@ def micro_program(n_assign: int = 200, n_ton: int = 10, seed: int = 1) -> str:
     ton_at = set(rng.sample(range(n_assign), n_ton))
     ton = 0
     for n in range(n_assign):
-        if n in ton_at:                      # a TON call, then an assignment reading its output
+        if n in ton_at:  # a TON call, then an assignment reading its output
             body.append(f"  t{ton}(IN := b{ton}, PT := T#{rng.randrange(50, 500, 10)}ms);")
             body.append(f"  b{ton + 10} := t{ton}.Q;")
             ton += 1
@@ -106,27 +107,32 @@ def main(argv=None) -> int:
     ap.add_argument("--lines", type=int, default=20000, help="size of the generated library")
     a = ap.parse_args(argv)
     from st import PLC
+
     root = os.path.dirname(_HERE)
     with tempfile.TemporaryDirectory(prefix="st-bench-") as tmp:
-        os.environ.setdefault("ST_CACHE_DIR", os.path.join(tmp, "cache"))   # keep ~/.cache clean
+        os.environ.setdefault("ST_CACHE_DIR", os.path.join(tmp, "cache"))  # keep ~/.cache clean
         lib = os.path.join(tmp, "plantlib.st")
         with open(lib, "w") as f:
             f.write(generate(a.lines))
-        paths = sorted(p for p in glob.glob(os.path.join(root, "programs", "*.st"))
-                       if not os.path.basename(p).startswith("test_")) + [lib]
-        print(f"ns per scan: median of {a.runs} runs of {a.scans} scans, gc disabled "
-              f"(Python {sys.version.split()[0]})\n")
+        paths = sorted(
+            p for p in glob.glob(os.path.join(root, "programs", "*.st")) if not os.path.basename(p).startswith("test_")
+        ) + [lib]
+        print(
+            f"ns per scan: median of {a.runs} runs of {a.scans} scans, gc disabled (Python {sys.version.split()[0]})\n"
+        )
         print(f"{'program':28} {'lines':>6} {'tick':>6} {'ns/scan':>10} {'min':>10} {'max':>10}")
         for path in paths:
             name = os.path.relpath(path, root) if path != lib else "generated library program0"
             try:
                 plc = PLC.from_files(path)
                 runs = time_scans(plc, a.scans, a.runs)
-            except Exception as exc:       # a fault or a compile error is a result, not a failure
+            except Exception as exc:  # a fault or a compile error is a result, not a failure
                 print(f"{name:28} error: {type(exc).__name__}: {str(exc).splitlines()[0]}")
                 continue
-            print(f"{name:28} {_count_lines(path):6} {plc.tick // 1_000_000:4}ms "
-                  f"{statistics.median(runs):10,.0f} {min(runs):10,.0f} {max(runs):10,.0f}")
+            print(
+                f"{name:28} {_count_lines(path):6} {plc.tick // 1_000_000:4}ms "
+                f"{statistics.median(runs):10,.0f} {min(runs):10,.0f} {max(runs):10,.0f}"
+            )
 
         print("\nmicro benchmark (../shared/notes/realtime.md): 200 assignments + 10 TON calls")
         try:
@@ -139,14 +145,18 @@ def main(argv=None) -> int:
         lo, hi = NOTES_US
         mid = (lo + hi) / 2
         print(f"  {'':34} {'µs/scan':>8}   ratio to the notes' {lo:.0f}-{hi:.0f} µs")
-        print(f"  {'plc.scan() (task dispatch + body)':34} {scan:8.2f}   {scan / hi:.2f}-{scan / lo:.2f} (x{scan / mid:.2f} of the middle)")
-        print(f"  {'program body alone (_body())':34} {body:8.2f}   {body / hi:.2f}-{body / lo:.2f} (x{body / mid:.2f} of the middle)")
+        print(
+            f"  {'plc.scan() (task dispatch + body)':34} {scan:8.2f}   {scan / hi:.2f}-{scan / lo:.2f} (x{scan / mid:.2f} of the middle)"
+        )
+        print(
+            f"  {'program body alone (_body())':34} {body:8.2f}   {body / hi:.2f}-{body / lo:.2f} (x{body / mid:.2f} of the middle)"
+        )
     return 0
 
 
 if __name__ == "__main__":
     try:
         sys.exit(main())
-    except Exception as exc:          # a benchmark reports, it does not fail
+    except Exception as exc:  # a benchmark reports, it does not fail
         print(f"bench_scan: error: {type(exc).__name__}: {exc}")
         sys.exit(0)

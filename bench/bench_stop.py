@@ -9,6 +9,7 @@
 
     python bench/bench_stop.py [--runs 3]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -46,10 +47,29 @@ def _stop_latency(src: str, watchdog: str, sig: signal.Signals, twice: bool) -> 
     with tempfile.TemporaryDirectory() as d:
         prog = Path(d) / "p.st"
         prog.write_text(src)
-        child = subprocess.Popen([sys.executable, "-m", "st.cli", "run", str(prog), "--no-rt", "--cycle", "10ms",
-                                  "--watchdog", watchdog, "--retain", str(Path(d) / "r.db"), "--duration", "600s",
-                                  "-q"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=ROOT)
-        time.sleep(2.0)                       # start-up, then the runaway scan is under way
+        child = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "st.cli",
+                "run",
+                str(prog),
+                "--no-rt",
+                "--cycle",
+                "10ms",
+                "--watchdog",
+                watchdog,
+                "--retain",
+                str(Path(d) / "r.db"),
+                "--duration",
+                "600s",
+                "-q",
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            cwd=ROOT,
+        )
+        time.sleep(2.0)  # start-up, then the runaway scan is under way
         t0 = time.perf_counter()
         child.send_signal(sig)
         if twice:
@@ -65,6 +85,7 @@ def _stop_latency(src: str, watchdog: str, sig: signal.Signals, twice: bool) -> 
 def _loop_ns(guarded: bool, n: int = 2_000_000) -> float:
     from st import PLC
     from st.compiler.lower import loops
+
     src = f"PROGRAM main\nVAR i, x : DINT; END_VAR\nFOR i := 1 TO {n} DO x := x + i MOD 7; END_FOR;\nEND_PROGRAM\n"
     saved = loops.guard_loops
     if not guarded:
@@ -95,8 +116,10 @@ def main() -> None:
     ts = [_stop_latency(HEALTHY, "100ms", signal.SIGTERM, False) for _ in range(args.runs)]
     print(f"  a healthy program, SIGTERM: {statistics.median(ts) * 1e3:.0f} ms (process exit included)")
     g, u = _loop_ns(True), _loop_ns(False)
-    print(f"FOR loop iteration (x := x + i MOD 7): {g:.1f} ns guarded, {u:.1f} ns without the guard "
-          f"(+{g - u:.1f} ns, {g / u:.2f}x)")
+    print(
+        f"FOR loop iteration (x := x + i MOD 7): {g:.1f} ns guarded, {u:.1f} ns without the guard "
+        f"(+{g - u:.1f} ns, {g / u:.2f}x)"
+    )
 
 
 if __name__ == "__main__":

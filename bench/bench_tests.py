@@ -9,6 +9,7 @@ test projects are never cached), then run every test (a fresh namespace per test
 median of the runs, the split compile/run, and the ratio to the goal (1,000 tests in < 10 s).
 Never fails: it prints what it measured and exits 0.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -109,11 +110,14 @@ def main() -> None:
     total = med["compile"] + med["run"]
     r0 = runs[0]
     print(f"{r0['tests']} TEST blocks, {lines} lines, {r0['failed']} failed (expected 0)")
-    print(f"median of {a.runs} fresh processes: compile {med['compile']:.2f} s, run {med['run']:.2f} s "
-          f"({med['run'] / r0['tests'] * 1e3:.2f} ms per test), total {total:.2f} s "
-          f"(+ import {med['import']:.2f} s)")
-    print(f"goal: {a.tests} tests in < {GOAL_S:g} s; ratio {total / GOAL_S:.2f} "
-          f"({'met' if total < GOAL_S else 'missed'})")
+    print(
+        f"median of {a.runs} fresh processes: compile {med['compile']:.2f} s, run {med['run']:.2f} s "
+        f"({med['run'] / r0['tests'] * 1e3:.2f} ms per test), total {total:.2f} s "
+        f"(+ import {med['import']:.2f} s)"
+    )
+    print(
+        f"goal: {a.tests} tests in < {GOAL_S:g} s; ratio {total / GOAL_S:.2f} ({'met' if total < GOAL_S else 'missed'})"
+    )
 
 
 if __name__ == "__main__":

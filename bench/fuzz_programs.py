@@ -12,6 +12,7 @@ its count; writes a shrunk reproducer per signature (DIR/NN.st, the unshrunk mut
 DIR/NN.orig.st), every defective mutant as a line of DIR/defects.jsonl, and DIR/summary.md.
 Exit code 0 either way (a benchmark); the summary says whether a defect was found.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -44,16 +45,19 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     programs = corpus()
     counts: collections.Counter = collections.Counter()
-    defects: dict = {}                      # signature → [count, index, base, source, outcome]
+    defects: dict = {}  # signature → [count, index, base, source, outcome]
     lock = threading.Lock()
     indexes = iter(range(args.start, args.start + args.mutants))
     log = (out / "defects.jsonl").open("w")
     t0 = time.perf_counter()
-    done = [0, t0]                          # mutants done, time of the last progress line
+    done = [0, t0]  # mutants done, time of the last progress line
     restarts = [0]
-    stop = threading.Event()                # Ctrl-C: finish the mutants under way, then report
-    print(f"fuzz: {args.mutants} mutants of {len(programs)} programs, seed {args.seed}, {args.workers} worker(s), "
-          f"timeout {args.timeout} s, {args.scans} scans, watchdog {args.watchdog}", flush=True)
+    stop = threading.Event()  # Ctrl-C: finish the mutants under way, then report
+    print(
+        f"fuzz: {args.mutants} mutants of {len(programs)} programs, seed {args.seed}, {args.workers} worker(s), "
+        f"timeout {args.timeout} s, {args.scans} scans, watchdog {args.watchdog}",
+        flush=True,
+    )
 
     def work():
         w = Worker(args.timeout, watchdog=args.watchdog, scans=args.scans)
@@ -71,17 +75,24 @@ def main() -> None:
                     if o.defect:
                         d = defects.setdefault(o.signature, [0, i, base, src, o])
                         d[0] += 1
-                        log.write(json.dumps({"index": i, "base": base, "class": o.cls, "signature": o.signature,
-                                              "detail": o.detail}) + "\n")
+                        log.write(
+                            json.dumps(
+                                {"index": i, "base": base, "class": o.cls, "signature": o.signature, "detail": o.detail}
+                            )
+                            + "\n"
+                        )
                         log.flush()
                     now = time.perf_counter()
                     if done[0] % 500 == 0 or now - done[1] > 60 or done[0] == args.mutants:
                         done[1] = now
                         bad = sum(counts[c] for c in DEFECTS)
-                        print(f"{done[0]:6d}/{args.mutants} mutants, {done[0] / (now - t0):5.1f}/s, "
-                              f"{counts['ok']} ok, {counts['diagnostics']} diagnostics, "
-                              f"{sum(n for c, n in counts.items() if c.startswith('fault:'))} faults, "
-                              f"{bad} defects in {len(defects)} signature(s)", flush=True)
+                        print(
+                            f"{done[0]:6d}/{args.mutants} mutants, {done[0] / (now - t0):5.1f}/s, "
+                            f"{counts['ok']} ok, {counts['diagnostics']} diagnostics, "
+                            f"{sum(n for c, n in counts.items() if c.startswith('fault:'))} faults, "
+                            f"{bad} defects in {len(defects)} signature(s)",
+                            flush=True,
+                        )
         finally:
             with lock:
                 restarts[0] += w.restarts
@@ -104,23 +115,38 @@ def main() -> None:
     total = done[0]
     rate = total / elapsed
     faults = sum(n for c, n in counts.items() if c.startswith("fault:"))
-    print(f"\n{total} mutants (seed {args.seed}, indexes {args.start}..{args.start + total - 1}) "
-          f"in {elapsed:.0f} s: {rate:.1f} mutants/s with {args.workers} worker(s)")
+    print(
+        f"\n{total} mutants (seed {args.seed}, indexes {args.start}..{args.start + total - 1}) "
+        f"in {elapsed:.0f} s: {rate:.1f} mutants/s with {args.workers} worker(s)"
+    )
     for cls, n in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0])):
         print(f"  {cls:<20} {n:6d}  {100 * n / max(total, 1):5.1f} %")
-    lines = [f"# Fuzz run: {total} mutants, seed {args.seed}" + ("" if total == args.mutants else
-             f" (interrupted: {args.mutants} asked)"), "",
-             f"`python bench/fuzz_programs.py --mutants {args.mutants} --seed {args.seed} --start {args.start} "
-             f"--timeout {args.timeout:g} --workers {args.workers} --scans {args.scans} --watchdog {args.watchdog}`",
-             "", f"{elapsed:.0f} s, {rate:.1f} mutants/s, {args.workers} worker(s) "
-             f"({restarts[0]} worker restart(s)); {len(programs)} base programs", "",
-             f"{counts['ok']} ran clean, {counts['diagnostics']} were refused with located diagnostics, "
-             f"{faults} ended in a located PLC fault.", "", "| outcome | mutants | % |", "|---|---:|---:|"]
-    lines += [f"| {cls} | {n} | {100 * n / max(total, 1):.1f} |"
-              for cls, n in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))]
+    lines = [
+        f"# Fuzz run: {total} mutants, seed {args.seed}"
+        + ("" if total == args.mutants else f" (interrupted: {args.mutants} asked)"),
+        "",
+        f"`python bench/fuzz_programs.py --mutants {args.mutants} --seed {args.seed} --start {args.start} "
+        f"--timeout {args.timeout:g} --workers {args.workers} --scans {args.scans} --watchdog {args.watchdog}`",
+        "",
+        f"{elapsed:.0f} s, {rate:.1f} mutants/s, {args.workers} worker(s) "
+        f"({restarts[0]} worker restart(s)); {len(programs)} base programs",
+        "",
+        f"{counts['ok']} ran clean, {counts['diagnostics']} were refused with located diagnostics, "
+        f"{faults} ended in a located PLC fault.",
+        "",
+        "| outcome | mutants | % |",
+        "|---|---:|---:|",
+    ]
+    lines += [
+        f"| {cls} | {n} | {100 * n / max(total, 1):.1f} |"
+        for cls, n in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))
+    ]
     total_bad = sum(counts[c] for c in DEFECTS)
-    lines += ["", f"**{total_bad} defective mutant(s) in {len(defects)} signature(s)**" +
-              (":" if defects else ": none found."), ""]
+    lines += [
+        "",
+        f"**{total_bad} defective mutant(s) in {len(defects)} signature(s)**" + (":" if defects else ": none found."),
+        "",
+    ]
     if defects:
         print(f"\n{total_bad} defective mutant(s) in {len(defects)} signature(s); shrinking:")
     w = Worker(args.timeout, watchdog=args.watchdog, scans=args.scans)
@@ -133,12 +159,23 @@ def main() -> None:
             path = out / f"{k + 1:02d}.st"
             path.write_text(small)
             (out / f"{k + 1:02d}.orig.st").write_text(src)
-            print(f"  [{k + 1:02d}] x{n} {o.cls}: {sig}\n       first: mutant {i} of {base}; shrunk to {path.name} "
-                  f"({len(src)} -> {len(small)} chars, {time.perf_counter() - t1:.0f} s)\n       {o.detail[:200]}",
-                  flush=True)
-            lines += [f"## {k + 1}. {o.cls}: `{sig}` (x{n})", "",
-                      f"first: mutant {i} of {base} (`mutant({args.seed}, {i})`); {o.detail[:300]}", "",
-                      f"shrunk ({path.name}):", "", "```", small[:3000], "```", ""]
+            print(
+                f"  [{k + 1:02d}] x{n} {o.cls}: {sig}\n       first: mutant {i} of {base}; shrunk to {path.name} "
+                f"({len(src)} -> {len(small)} chars, {time.perf_counter() - t1:.0f} s)\n       {o.detail[:200]}",
+                flush=True,
+            )
+            lines += [
+                f"## {k + 1}. {o.cls}: `{sig}` (x{n})",
+                "",
+                f"first: mutant {i} of {base} (`mutant({args.seed}, {i})`); {o.detail[:300]}",
+                "",
+                f"shrunk ({path.name}):",
+                "",
+                "```",
+                small[:3000],
+                "```",
+                "",
+            ]
     finally:
         w.close()
     (out / "summary.md").write_text("\n".join(lines) + "\n")

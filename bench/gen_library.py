@@ -10,6 +10,7 @@ POU only refers to POUs before it. Modules are added until the line budget is re
 last module may be cut short after any template. A PROGRAM program0 calling a sample of the
 function blocks and an OpenPLC style CONFIGURATION close the file.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -29,12 +30,37 @@ import tpl_func_misc  # noqa: E402
 import tpl_types  # noqa: E402
 from tpl_base import fnum  # noqa: E402
 
-TEMPLATES = (tpl_types.TEMPLATES + tpl_func_math.TEMPLATES + tpl_func_misc.TEMPLATES
-             + tpl_fb_basic.TEMPLATES + tpl_fb_ctrl.TEMPLATES + tpl_fb_station.TEMPLATES)
+TEMPLATES = (
+    tpl_types.TEMPLATES
+    + tpl_func_math.TEMPLATES
+    + tpl_func_misc.TEMPLATES
+    + tpl_fb_basic.TEMPLATES
+    + tpl_fb_ctrl.TEMPLATES
+    + tpl_fb_station.TEMPLATES
+)
 
-STEMS = ["PUMP", "VALVE", "FAN", "MIXER", "HEATER", "CONVEYOR", "COMPRESSOR", "CHILLER",
-         "DOSER", "BOILER", "AGITATOR", "DRYER", "FILTER", "SCREW", "BLOWER", "KILN",
-         "PRESS", "WINDER", "SILO", "HOIST"]
+STEMS = [
+    "PUMP",
+    "VALVE",
+    "FAN",
+    "MIXER",
+    "HEATER",
+    "CONVEYOR",
+    "COMPRESSOR",
+    "CHILLER",
+    "DOSER",
+    "BOILER",
+    "AGITATOR",
+    "DRYER",
+    "FILTER",
+    "SCREW",
+    "BLOWER",
+    "KILN",
+    "PRESS",
+    "WINDER",
+    "SILO",
+    "HOIST",
+]
 
 HEADER = """\
 (* ==========================================================================
@@ -92,10 +118,19 @@ def _module_ctx(k: int, rng: random.Random) -> dict:
     xs = sorted(rng.sample(range(0, 101), npts))
     coefs = [rng.uniform(-0.5, 0.5) for _ in range(ncoef + 1)]
     coefs[1] = rng.uniform(0.8, 1.2)
-    return dict(stem=stem, k=k, sfx=f"_{stem}{k}", ep=f"{stem[:3]}{k}",
-                size=size, size_m1=size - 1, nbytes=rng.choice([8, 12, 16, 24]),
-                ncoef=ncoef, npts=npts, coefs=", ".join(fnum(c) for c in coefs),
-                points=", ".join(f"(x := {fnum(x)}, y := {fnum(rng.uniform(0, 100))})" for x in xs))
+    return dict(
+        stem=stem,
+        k=k,
+        sfx=f"_{stem}{k}",
+        ep=f"{stem[:3]}{k}",
+        size=size,
+        size_m1=size - 1,
+        nbytes=rng.choice([8, 12, 16, 24]),
+        ncoef=ncoef,
+        npts=npts,
+        coefs=", ".join(fnum(c) for c in coefs),
+        points=", ".join(f"(x := {fnum(x)}, y := {fnum(rng.uniform(0, 100))})" for x in xs),
+    )
 
 
 def _program(instances: list, sfx0: str) -> str:
@@ -120,8 +155,8 @@ def generate(n_lines: int = 20000, seed: int = 1) -> str:
     rng = random.Random(seed)
     parts = [HEADER.format(seed=seed)]
     lines = parts[0].count("\n")
-    program_budget = 90          # the program and configuration at the end
-    fbs = []                     # (template, suffix) of every FUNCTION_BLOCK with a call
+    program_budget = 90  # the program and configuration at the end
+    fbs = []  # (template, suffix) of every FUNCTION_BLOCK with a call
     k = 0
     done = False
     while not done:
@@ -145,6 +180,7 @@ def check_templates(seed: int = 1) -> int:
     """`st check` each template on its own (with the templates it builds on); returns errors."""
     import subprocess
     import tempfile
+
     rng = random.Random(seed)
     ctx = _module_ctx(1, rng)
     text, bad = "", 0
@@ -169,8 +205,9 @@ def main(argv=None) -> int:
     ap.add_argument("--lines", type=int, default=20000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("-o", "--output", help="write here instead of stdout")
-    ap.add_argument("--check-templates", action="store_true",
-                    help="run `st check` on each template in turn (needs the st CLI)")
+    ap.add_argument(
+        "--check-templates", action="store_true", help="run `st check` on each template in turn (needs the st CLI)"
+    )
     a = ap.parse_args(argv)
     if a.check_templates:
         return 1 if check_templates(a.seed) else 0

@@ -1,13 +1,14 @@
 """The Template record shared by the tpl_*.py modules of the library generator."""
+
 from collections.abc import Callable
 from dataclasses import dataclass
 
 
 @dataclass
 class Template:
-    key: str                       # short name, e.g. "filter_pt1"
-    text: str                      # ST text with str.format placeholders
-    params: Callable = None        # rng -> dict of constants (optional)
+    key: str  # short name, e.g. "filter_pt1"
+    text: str  # ST text with str.format placeholders
+    params: Callable = None  # rng -> dict of constants (optional)
     # For function blocks the program may call: the FB's name prefix and a call
     # snippet with {inst} (instance name) and {b}, {r}, {i} (a BOOL, a REAL and an
     # INT expression of the program).

@@ -1,4 +1,5 @@
 """Templates: small FUNCTION_BLOCKs (filters, hysteresis, debounce, averaging, ramps, blink)."""
+
 from tpl_base import Template, fnum
 
 FILTER_PT1 = """\
@@ -190,15 +191,30 @@ END_FUNCTION_BLOCK
 
 
 TEMPLATES = [
-    Template("filter_pt1", FILTER_PT1, lambda rng: dict(tf=rng.randrange(100, 10000, 50)),
-             fb="FILTER_PT1", call="{inst}(x := {r}, t_cycle := T#20ms);"),
+    Template(
+        "filter_pt1",
+        FILTER_PT1,
+        lambda rng: dict(tf=rng.randrange(100, 10000, 50)),
+        fb="FILTER_PT1",
+        call="{inst}(x := {r}, t_cycle := T#20ms);",
+    ),
     Template("hyst", HYST, _hyst_params, fb="HYST", call="{inst}(x := {r});"),
-    Template("debounce", DEBOUNCE, lambda rng: dict(ton=rng.randrange(10, 200, 10), toff=rng.randrange(10, 500, 10)),
-             fb="DEBOUNCE", call="{inst}(in := {b});"),
+    Template(
+        "debounce",
+        DEBOUNCE,
+        lambda rng: dict(ton=rng.randrange(10, 200, 10), toff=rng.randrange(10, 500, 10)),
+        fb="DEBOUNCE",
+        call="{inst}(in := {b});",
+    ),
     Template("mov_avg", MOV_AVG, fb="MOV_AVG", call="{inst}(x := {r});"),
-    Template("ramp", RAMP, lambda rng: dict(rate=fnum(rng.uniform(0.5, 25))), fb="RAMP",
-             call="{inst}(target := {r});"),
-    Template("blink", BLINK, lambda rng: dict(pon=rng.randrange(100, 2000, 20), poff=rng.randrange(100, 2000, 20),
-                                              ppulse=rng.randrange(20, 100, 20)),
-             fb="BLINK", call="{inst}(enable := {b});"),
+    Template("ramp", RAMP, lambda rng: dict(rate=fnum(rng.uniform(0.5, 25))), fb="RAMP", call="{inst}(target := {r});"),
+    Template(
+        "blink",
+        BLINK,
+        lambda rng: dict(
+            pon=rng.randrange(100, 2000, 20), poff=rng.randrange(100, 2000, 20), ppulse=rng.randrange(20, 100, 20)
+        ),
+        fb="BLINK",
+        call="{inst}(enable := {b});",
+    ),
 ]

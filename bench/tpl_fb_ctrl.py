@@ -1,4 +1,5 @@
 """Templates: control FUNCTION_BLOCKs (PI controller, totalizer, motor, alarm)."""
+
 from tpl_base import Template, fnum
 
 PI_CTRL = """\
@@ -210,9 +211,19 @@ def _alarm_params(rng):
 
 TEMPLATES = [
     Template("pi_ctrl", PI_CTRL, fb="PI_CTRL", call="{inst}(sp := 50.0, pv := {r});"),
-    Template("totalizer", TOTALIZER, lambda rng: dict(unit=fnum(rng.choice([0.1, 1, 10, 0.5]))),
-             fb="TOTALIZER", call="{inst}(flow := {r}, run := {b});"),
-    Template("motor", MOTOR, lambda rng: dict(fbtime=rng.randrange(500, 5000, 100), errcode=rng.randint(100, 999)),
-             fb="MOTOR", call="{inst}(start := {b}, stop := NOT {b}, feedback := TRUE);"),
+    Template(
+        "totalizer",
+        TOTALIZER,
+        lambda rng: dict(unit=fnum(rng.choice([0.1, 1, 10, 0.5]))),
+        fb="TOTALIZER",
+        call="{inst}(flow := {r}, run := {b});",
+    ),
+    Template(
+        "motor",
+        MOTOR,
+        lambda rng: dict(fbtime=rng.randrange(500, 5000, 100), errcode=rng.randint(100, 999)),
+        fb="MOTOR",
+        call="{inst}(start := {b}, stop := NOT {b}, feedback := TRUE);",
+    ),
     Template("alarm", ALARM, _alarm_params, fb="ALARM", call="{inst}(value := {r});"),
 ]

@@ -1,4 +1,5 @@
 """Templates: the sequencer and the station FB that nests the module's other FBs."""
+
 from tpl_base import Template, fnum
 
 SEQUENCER = """\
@@ -144,6 +145,7 @@ def _station_params(rng):
 
 TEMPLATES = [
     Template("sequencer", SEQUENCER, _seq_params, fb="SEQUENCER", call="{inst}(run := {b});"),
-    Template("station", STATION, _station_params, fb="STATION",
-             call="{inst}(enable := {b}, raw_pv := {i}, now := {t});"),
+    Template(
+        "station", STATION, _station_params, fb="STATION", call="{inst}(enable := {b}, raw_pv := {i}, now := {t});"
+    ),
 ]

@@ -1,4 +1,5 @@
 """Templates: numeric FUNCTIONs (scaling, limits, polynomials, array statistics, curves)."""
+
 from tpl_base import Template, fnum
 
 SCALE_LIN = """\
@@ -31,8 +32,12 @@ END_FUNCTION
 def _scale_params(rng):
     lo = rng.choice([0, 4, -10, 0])
     olo = rng.choice([0, -50, 0, 10])
-    return dict(in_lo=fnum(lo), in_hi=fnum(lo + rng.choice([16, 20, 100, 27648])),
-                out_lo=fnum(olo), out_hi=fnum(olo + rng.uniform(10, 500)))
+    return dict(
+        in_lo=fnum(lo),
+        in_hi=fnum(lo + rng.choice([16, 20, 100, 27648])),
+        out_lo=fnum(olo),
+        out_hi=fnum(olo + rng.uniform(10, 500)),
+    )
 
 
 RAW_TO_ENG = """\

@@ -1,4 +1,5 @@
 """Templates: FUNCTIONs on bits, strings, times and calendars."""
+
 from tpl_base import Template
 
 CRC16 = """\
@@ -180,9 +181,13 @@ END_FUNCTION
 
 TEMPLATES = [
     Template("crc16", CRC16, _crc_params),
-    Template("state_text", STATE_TEXT, lambda rng: (lambda m: dict(maxlen=m, maxlen_m3=m - 3))(rng.choice([48, 56, 60]))),
+    Template(
+        "state_text", STATE_TEXT, lambda rng: (lambda m: dict(maxlen=m, maxlen_m3=m - 3))(rng.choice([48, 56, 60]))
+    ),
     Template("parse_kv", PARSE_KV),
     Template("time_left", TIME_LEFT, lambda rng: dict(grace=rng.choice([10, 20, 50, 100]))),
     Template("days_in_month", DAYS_IN_MONTH),
-    Template("pack_bits", PACK_BITS, lambda rng: dict(parity=rng.randint(0, 1), pmask=rng.choice(["0100", "8000", "0200"]))),
+    Template(
+        "pack_bits", PACK_BITS, lambda rng: dict(parity=rng.randint(0, 1), pmask=rng.choice(["0100", "8000", "0200"]))
+    ),
 ]

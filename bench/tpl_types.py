@@ -4,6 +4,7 @@ Every template module exports TEMPLATES, a list of `Template`s (see gen_library.
 Placeholders: {sfx} (POU name suffix), {ep} (enum member prefix), {stem}, {k}, plus the
 constants returned by the template's params function.
 """
+
 from tpl_base import Template, fnum
 
 TYPES = """\
@@ -49,9 +50,14 @@ END_TYPE
 
 def _types_params(rng):
     omin = rng.choice([0, -10, -100, 0, 4])
-    return dict(kp=fnum(rng.uniform(0.2, 8.0)), ti=rng.randrange(500, 20000, 100),
-                omin=fnum(omin), omax=fnum(omin + rng.choice([100, 20, 1000])),
-                sdelay=rng.randrange(200, 5000, 50), runon=rng.randrange(100, 3000, 50))
+    return dict(
+        kp=fnum(rng.uniform(0.2, 8.0)),
+        ti=rng.randrange(500, 20000, 100),
+        omin=fnum(omin),
+        omax=fnum(omin + rng.choice([100, 20, 1000])),
+        sdelay=rng.randrange(200, 5000, 50),
+        runon=rng.randrange(100, 3000, 50),
+    )
 
 
 TEMPLATES = [Template("types", TYPES, _types_params)]

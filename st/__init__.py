@@ -1,4 +1,5 @@
 """st: an IEC 61131-3 Structured Text toolchain and soft PLC."""
+
 from .api import PLC
 from .diagnostics import CompileError
 from .runtime.faults import PLCFaultError, PLCStartError

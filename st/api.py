@@ -5,6 +5,7 @@ that compile first).
     plc = PLC.from_source(text, cycle="10ms")
     plc.scan(); plc.advance("2.5s"); plc["main.x"]
 """
+
 from __future__ import annotations
 
 from .compiler.driver import compile_sources, load_files
@@ -33,20 +34,53 @@ def _refused(e: CompileError, raise_on_error: bool) -> CompiledProgram:
     return CompiledProgram([], Project(), e.diagnostics, e.sources)
 
 
-def compile_text(text: str, name: str = "<source>.st", *, f_trig_first_scan: bool = False,
-                 time_unit: str = "ms", use_cache: bool = True, emit_python: bool = False,
-                 raise_on_error: bool = True, coverage: bool = False, dialect: str | None = None) -> CompiledProgram:
+def compile_text(
+    text: str,
+    name: str = "<source>.st",
+    *,
+    f_trig_first_scan: bool = False,
+    time_unit: str = "ms",
+    use_cache: bool = True,
+    emit_python: bool = False,
+    raise_on_error: bool = True,
+    coverage: bool = False,
+    dialect: str | None = None,
+) -> CompiledProgram:
     src = SourceFile(name, text.replace("\r\n", "\n"))
-    return _compile([src], raise_on_error, dialect=dialect, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan,
-                    use_cache=use_cache, emit_python=emit_python, coverage=coverage)
+    return _compile(
+        [src],
+        raise_on_error,
+        dialect=dialect,
+        time_unit=time_unit,
+        f_trig_first_scan=f_trig_first_scan,
+        use_cache=use_cache,
+        emit_python=emit_python,
+        coverage=coverage,
+    )
 
 
-def compile_paths(paths: list, *, f_trig_first_scan: bool = False, time_unit: str = "ms",
-                  use_cache: bool = True, emit_python: bool = False, raise_on_error: bool = True,
-                  coverage: bool = False, dialect: str | None = None) -> CompiledProgram:
+def compile_paths(
+    paths: list,
+    *,
+    f_trig_first_scan: bool = False,
+    time_unit: str = "ms",
+    use_cache: bool = True,
+    emit_python: bool = False,
+    raise_on_error: bool = True,
+    coverage: bool = False,
+    dialect: str | None = None,
+) -> CompiledProgram:
     sources = load_files([str(p) for p in paths])
-    return _compile(sources, raise_on_error, dialect=dialect, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan,
-                    use_cache=use_cache, emit_python=emit_python, coverage=coverage)
+    return _compile(
+        sources,
+        raise_on_error,
+        dialect=dialect,
+        time_unit=time_unit,
+        f_trig_first_scan=f_trig_first_scan,
+        use_cache=use_cache,
+        emit_python=emit_python,
+        coverage=coverage,
+    )
 
 
 def _compile(sources: list[SourceFile], raise_on_error: bool, **options) -> CompiledProgram:

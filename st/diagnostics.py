@@ -3,6 +3,7 @@
 They are collected, never raised one by one, so a run reports all its errors
 together; `render` is the one place that turns them into text.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -27,128 +28,168 @@ class Code(str, Enum):
     __format__ = str.__format__
     __hash__ = str.__hash__
 
-    UNREADABLE_FILE = "E000", (
-        "A source file could not be read.")
-    SYNTAX = "E001", (
-        "Syntax error: the parser met a token it did not expect. The hint names the usual slips: a missing "
-        "';', '=' written for ':=', 'ELSE IF' (a nested IF that needs its own END_IF) instead of ELSIF, a "
-        "missing END_*.")
-    UNCLOSED_COMMENT = "E002", (
-        "A comment '(*', '/*' or a pragma '{' is never closed.")
-    MISPLACED_SECTION = "E003", (
-        "A declaration section is in a place where it is not allowed (e.g. VAR_INPUT outside a POU).")
-    MALFORMED_LITERAL = "E004", (
-        "A literal or address is malformed (e.g. T#5x, D#2024-13-01, %QX0.), an integer literal has more than"
-        " 128 digits, or an address is outside the process image (1024 entries per table and size; bits "
-        "%IX0.0..%IX1023.7).")
-    UNDECLARED = "E010", (
-        "An identifier is used but never declared (or a VAR_EXTERNAL has no VAR_GLOBAL).")
-    DECLARED_TWICE = "E011", (
-        "A name is declared twice in the same scope, or a user POU has the name of a standard library POU "
-        "of another kind (the library's own code uses it as what it is).")
-    BAD_TYPE = "E012", (
-        "A type name is unknown, or a type is used where it cannot be (a FUNCTION as a type, a STRUCT outside "
-        "a TYPE declaration, ARRAY[*] outside a VAR_IN_OUT, EXTENDS or IMPLEMENTS naming the wrong kind of "
-        "POU, ...).")
-    TYPE_MISMATCH = "E013", (
-        "Type mismatch: the value's type cannot be assigned or passed to the target's type.")
-    BAD_OPERANDS = "E014", (
-        "The operands of an operator have types it cannot combine; convert one side explicitly.")
-    CONDITION_NOT_BOOL = "E015", (
-        "A condition (IF, ELSIF, WHILE, UNTIL, transition) is not BOOL.")
-    BAD_PARAMETER = "E016", (
-        "A call names a parameter the POU does not have, or uses ':=' for an output / '=>' for an input.")
-    ARGUMENT_COUNT = "E017", (
-        "A call has too many or too few arguments.")
-    WRITE_TO_CONSTANT = "E018", (
-        "A write to something that cannot be written: a CONSTANT, an enumeration value, a property without "
-        "SET.")
-    BAD_CASE_LABEL = "E019", (
-        "A CASE label has the wrong type, or repeats / overlaps an earlier label.")
-    NOT_CALLABLE = "E020", (
-        "Something that is not callable is called (e.g. an FB type instead of an instance).")
-    OUT_OF_RANGE = "E021", (
-        "A literal does not fit the range of its type.")
-    INDEX_OUT_OF_BOUNDS = "E022", (
-        "A constant array index (or bit number) is outside the bounds.")
-    BAD_ACCESS = "E023", (
-        "A field, index or bit access on a value that has no such field, is not an array, ...")
-    EXIT_OUTSIDE_LOOP = "E024", (
-        "EXIT or CONTINUE outside a loop.")
-    FOR_NOT_INTEGER = "E025", (
-        "A FOR loop variable must be an integer.")
-    POU_AS_VALUE = "E026", (
-        "A POU name is used where a value is expected.")
-    NARROWING = "E027", (
-        "An implicit narrowing conversion (e.g. INT := DINT, REAL := LREAL): IEC allows only widening; "
-        "convert explicitly with *_TO_*.")
-    BAD_CONFIGURATION = "E028", (
-        "A configuration names an unknown PROGRAM type or task.")
-    NOT_CONSTANT = "E029", (
-        "A constant expression is required (array bounds, CASE labels, string lengths, ...).")
-    SFC = "E030", (
-        "An SFC error: unknown step or action, missing INITIAL_STEP, a bad qualifier.")
-    NOT_A_VARIABLE = "E031", (
-        "An output (=>) or VAR_IN_OUT argument must be a variable.")
-    RECURSION = "E032", (
-        "A POU calls itself, directly or through others: IEC 61131-3 does not allow recursion.")
-    TEST_STATEMENT_OUTSIDE_TEST = "E033", (
-        "A unit-test statement (ASSERT_*, ADVANCE_TIME, MOCK, MOCK_FUNCTION, MOCK_VERIFY_*) outside a TEST, "
-        "SETUP or TEARDOWN block. Move it into a test, or rename the POU or variable it was meant to be.")
-    UNSUPPORTED = "E040", (
-        "A construct the code generator does not support yet.")
-    TOO_DEEP = "E041", (
-        "Code or data nested too deeply: an expression of tens of thousands of terms, more than about 20 "
-        "nested loops, or types and function blocks nested more than 100 levels inside each other.")
-    TOO_LARGE = "E042", (
-        "An array is too large (more than 50,000,000 elements), or one declaration holds more than 50,000,000"
-        " values (arrays of arrays or of structures).")
-    OOP_RULE = "E043", (
-        "An object-oriented rule is broken: a PRIVATE or PROTECTED method, property or variable used from "
-        "outside, an ABSTRACT function block instantiated or an ABSTRACT method or property called or left "
-        "unimplemented, an OVERRIDE that overrides nothing.")
-    NOT_IN_DIALECT = "E044", (
-        "A construct is not part of the chosen dialect preset (--dialect or a {dialect '…'} pragma): object-"
-        "oriented ST in openplc, vendor extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, "
-        "__QUERYINTERFACE, __ISVALIDREF, __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of "
-        "programs, FB_init arguments) in iec or openplc.")
-    UNKNOWN_DIALECT = "E045", (
-        "A {dialect '…'} pragma names a preset st does not know (the presets: openplc, iec, codesys, "
-        "twincat).")
-    SELF_CONTAINING_TYPE = "E046", (
-        "A type is defined in terms of itself: a structure or function block contains itself (directly or "
-        "through its members), a named type is defined through itself, or a function block or interface "
-        "extends itself.")
-    INHERITANCE_CONTRACT = "E047", (
-        "An inheritance or interface contract is broken: a FINAL function block extended or a FINAL method "
-        "overridden, an override or an interface method implemented with other parameters or return type, "
-        "a property overridden with another type, a method or property of an implemented interface missing, "
-        "a method of an INTERFACE with a body.")
-    WRITE_TO_INPUT = "E048", (
-        "A VAR_INPUT is written inside its own POU: IEC 61131-3 makes inputs read-only there (the codesys and "
-        "twincat dialects allow it). Copy it into a local variable first.")
-    CALL_WITHOUT_VALUE = "E049", (
-        "A call that has no value (a function block call, __DELETE, a test statement such as ASSERT_EQ) is "
-        "used inside an expression; call it as a statement.")
-    INTERNAL = "E099", (
-        "An internal compiler error (a bug in st): please report it with the source file.")
-    IGNORED_PRAGMA = "W001", (
-        "A pragma { ... } is ignored.")
-    UNUSED_VARIABLE = "W002", (
-        "A variable is declared but never used.")
-    TRUNCATED_STRING = "W003", (
-        "A string literal is longer than the variable and will be truncated.")
-    REPLACES_LIBRARY_POU = "W004", (
-        "A user POU replaces a standard library POU of the same name and kind.")
-    UNSIGNED_NEGATION = "W005", (
-        "Negating an unsigned value wraps around.")
-    HIDDEN_VARIABLE = "W006", (
-        "A variable of a METHOD has the name of a variable of its function block and hides it inside the "
-        "method.")
-    METHOD_SHADOWS_FUNCTION = "W007", (
-        "A call without an instance inside a function block reaches one of its METHODs although a standard or"
-        " global function of the same name would take the same arguments (write THIS^.M() to say so, or "
-        "rename the method).")
+    UNREADABLE_FILE = "E000", ("A source file could not be read.")
+    SYNTAX = (
+        "E001",
+        (
+            "Syntax error: the parser met a token it did not expect. The hint names the usual slips: a missing "
+            "';', '=' written for ':=', 'ELSE IF' (a nested IF that needs its own END_IF) instead of ELSIF, a "
+            "missing END_*."
+        ),
+    )
+    UNCLOSED_COMMENT = "E002", ("A comment '(*', '/*' or a pragma '{' is never closed.")
+    MISPLACED_SECTION = (
+        "E003",
+        ("A declaration section is in a place where it is not allowed (e.g. VAR_INPUT outside a POU)."),
+    )
+    MALFORMED_LITERAL = (
+        "E004",
+        (
+            "A literal or address is malformed (e.g. T#5x, D#2024-13-01, %QX0.), an integer literal has more than"
+            " 128 digits, or an address is outside the process image (1024 entries per table and size; bits "
+            "%IX0.0..%IX1023.7)."
+        ),
+    )
+    UNDECLARED = "E010", ("An identifier is used but never declared (or a VAR_EXTERNAL has no VAR_GLOBAL).")
+    DECLARED_TWICE = (
+        "E011",
+        (
+            "A name is declared twice in the same scope, or a user POU has the name of a standard library POU "
+            "of another kind (the library's own code uses it as what it is)."
+        ),
+    )
+    BAD_TYPE = (
+        "E012",
+        (
+            "A type name is unknown, or a type is used where it cannot be (a FUNCTION as a type, a STRUCT outside "
+            "a TYPE declaration, ARRAY[*] outside a VAR_IN_OUT, EXTENDS or IMPLEMENTS naming the wrong kind of "
+            "POU, ...)."
+        ),
+    )
+    TYPE_MISMATCH = "E013", ("Type mismatch: the value's type cannot be assigned or passed to the target's type.")
+    BAD_OPERANDS = "E014", ("The operands of an operator have types it cannot combine; convert one side explicitly.")
+    CONDITION_NOT_BOOL = "E015", ("A condition (IF, ELSIF, WHILE, UNTIL, transition) is not BOOL.")
+    BAD_PARAMETER = (
+        "E016",
+        ("A call names a parameter the POU does not have, or uses ':=' for an output / '=>' for an input."),
+    )
+    ARGUMENT_COUNT = "E017", ("A call has too many or too few arguments.")
+    WRITE_TO_CONSTANT = (
+        "E018",
+        ("A write to something that cannot be written: a CONSTANT, an enumeration value, a property without SET."),
+    )
+    BAD_CASE_LABEL = "E019", ("A CASE label has the wrong type, or repeats / overlaps an earlier label.")
+    NOT_CALLABLE = "E020", ("Something that is not callable is called (e.g. an FB type instead of an instance).")
+    OUT_OF_RANGE = "E021", ("A literal does not fit the range of its type.")
+    INDEX_OUT_OF_BOUNDS = "E022", ("A constant array index (or bit number) is outside the bounds.")
+    BAD_ACCESS = "E023", ("A field, index or bit access on a value that has no such field, is not an array, ...")
+    EXIT_OUTSIDE_LOOP = "E024", ("EXIT or CONTINUE outside a loop.")
+    FOR_NOT_INTEGER = "E025", ("A FOR loop variable must be an integer.")
+    POU_AS_VALUE = "E026", ("A POU name is used where a value is expected.")
+    NARROWING = (
+        "E027",
+        (
+            "An implicit narrowing conversion (e.g. INT := DINT, REAL := LREAL): IEC allows only widening; "
+            "convert explicitly with *_TO_*."
+        ),
+    )
+    BAD_CONFIGURATION = "E028", ("A configuration names an unknown PROGRAM type or task.")
+    NOT_CONSTANT = "E029", ("A constant expression is required (array bounds, CASE labels, string lengths, ...).")
+    SFC = "E030", ("An SFC error: unknown step or action, missing INITIAL_STEP, a bad qualifier.")
+    NOT_A_VARIABLE = "E031", ("An output (=>) or VAR_IN_OUT argument must be a variable.")
+    RECURSION = "E032", ("A POU calls itself, directly or through others: IEC 61131-3 does not allow recursion.")
+    TEST_STATEMENT_OUTSIDE_TEST = (
+        "E033",
+        (
+            "A unit-test statement (ASSERT_*, ADVANCE_TIME, MOCK, MOCK_FUNCTION, MOCK_VERIFY_*) outside a TEST, "
+            "SETUP or TEARDOWN block. Move it into a test, or rename the POU or variable it was meant to be."
+        ),
+    )
+    UNSUPPORTED = "E040", ("A construct the code generator does not support yet.")
+    TOO_DEEP = (
+        "E041",
+        (
+            "Code or data nested too deeply: an expression of tens of thousands of terms, more than about 20 "
+            "nested loops, or types and function blocks nested more than 100 levels inside each other."
+        ),
+    )
+    TOO_LARGE = (
+        "E042",
+        (
+            "An array is too large (more than 50,000,000 elements), or one declaration holds more than 50,000,000"
+            " values (arrays of arrays or of structures)."
+        ),
+    )
+    OOP_RULE = (
+        "E043",
+        (
+            "An object-oriented rule is broken: a PRIVATE or PROTECTED method, property or variable used from "
+            "outside, an ABSTRACT function block instantiated or an ABSTRACT method or property called or left "
+            "unimplemented, an OVERRIDE that overrides nothing."
+        ),
+    )
+    NOT_IN_DIALECT = (
+        "E044",
+        (
+            "A construct is not part of the chosen dialect preset (--dialect or a {dialect '…'} pragma): object-"
+            "oriented ST in openplc, vendor extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, "
+            "__QUERYINTERFACE, __ISVALIDREF, __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of "
+            "programs, FB_init arguments) in iec or openplc."
+        ),
+    )
+    UNKNOWN_DIALECT = (
+        "E045",
+        ("A {dialect '…'} pragma names a preset st does not know (the presets: openplc, iec, codesys, twincat)."),
+    )
+    SELF_CONTAINING_TYPE = (
+        "E046",
+        (
+            "A type is defined in terms of itself: a structure or function block contains itself (directly or "
+            "through its members), a named type is defined through itself, or a function block or interface "
+            "extends itself."
+        ),
+    )
+    INHERITANCE_CONTRACT = (
+        "E047",
+        (
+            "An inheritance or interface contract is broken: a FINAL function block extended or a FINAL method "
+            "overridden, an override or an interface method implemented with other parameters or return type, "
+            "a property overridden with another type, a method or property of an implemented interface missing, "
+            "a method of an INTERFACE with a body."
+        ),
+    )
+    WRITE_TO_INPUT = (
+        "E048",
+        (
+            "A VAR_INPUT is written inside its own POU: IEC 61131-3 makes inputs read-only there (the codesys and "
+            "twincat dialects allow it). Copy it into a local variable first."
+        ),
+    )
+    CALL_WITHOUT_VALUE = (
+        "E049",
+        (
+            "A call that has no value (a function block call, __DELETE, a test statement such as ASSERT_EQ) is "
+            "used inside an expression; call it as a statement."
+        ),
+    )
+    INTERNAL = "E099", ("An internal compiler error (a bug in st): please report it with the source file.")
+    IGNORED_PRAGMA = "W001", ("A pragma { ... } is ignored.")
+    UNUSED_VARIABLE = "W002", ("A variable is declared but never used.")
+    TRUNCATED_STRING = "W003", ("A string literal is longer than the variable and will be truncated.")
+    REPLACES_LIBRARY_POU = "W004", ("A user POU replaces a standard library POU of the same name and kind.")
+    UNSIGNED_NEGATION = "W005", ("Negating an unsigned value wraps around.")
+    HIDDEN_VARIABLE = (
+        "W006",
+        ("A variable of a METHOD has the name of a variable of its function block and hides it inside the method."),
+    )
+    METHOD_SHADOWS_FUNCTION = (
+        "W007",
+        (
+            "A call without an instance inside a function block reaches one of its METHODs although a standard or"
+            " global function of the same name would take the same arguments (write THIS^.M() to say so, or "
+            "rename the method)."
+        ),
+    )
 
 
 class Severity(str, Enum):
@@ -164,7 +205,7 @@ class Diagnostic:
     span: Span
     message: str
     hint: str = ""
-    data: tuple[tuple[str, str], ...] = ()   # facts as (name, value) pairs, e.g. W001: (("pragma", "dialect"),)
+    data: tuple[tuple[str, str], ...] = ()  # facts as (name, value) pairs, e.g. W001: (("pragma", "dialect"),)
 
     def datum(self, name: str) -> str:
         """A fact about this diagnostic ("" if it has none of that name): what tools and filters
@@ -185,7 +226,7 @@ class Diagnostic:
             col = max(s.col, 1)
             if len(text) > max_width:  # OpenPLC's debug lines can be megabytes long
                 lo = max(0, col - max_width // 2)
-                text = text[lo:lo + max_width]
+                text = text[lo : lo + max_width]
                 col -= lo
             width = 1
             if s.end_line == s.line and s.end_col > s.col:

@@ -1,5 +1,6 @@
 """docs/diagnostics.md, generated from the `Code` enum (the one place codes are explained);
 `python -m st.errors_doc > docs/diagnostics.md` regenerates it, a test checks it is current."""
+
 from __future__ import annotations
 
 from .diagnostics import Code
@@ -15,11 +16,17 @@ def explain(code: str) -> str | None:
 
 def markdown() -> str:
     """docs/diagnostics.md."""
-    lines = ["# Diagnostic codes", "",
-             "Every diagnostic is printed as `file:line:col: severity[CODE]: message`, then the source",
-             "line with a caret under the spot and, for the usual slips, a `hint`. `st explain CODE` prints",
-             "the explanation below. Codes are stable. This table is generated from `st.diagnostics.Code`",
-             "(`python -m st.errors_doc > docs/diagnostics.md`).", "", "| code | meaning |", "|---|---|"]
+    lines = [
+        "# Diagnostic codes",
+        "",
+        "Every diagnostic is printed as `file:line:col: severity[CODE]: message`, then the source",
+        "line with a caret under the spot and, for the usual slips, a `hint`. `st explain CODE` prints",
+        "the explanation below. Codes are stable. This table is generated from `st.diagnostics.Code`",
+        "(`python -m st.errors_doc > docs/diagnostics.md`).",
+        "",
+        "| code | meaning |",
+        "|---|---|",
+    ]
     lines += [f"| {c.value} | {c.explanation} |" for c in sorted(Code, key=lambda c: c.value)]
     return "\n".join(lines) + "\n"
 

@@ -1,4 +1,5 @@
 """Source files and spans: where every token, node and diagnostic comes from."""
+
 from __future__ import annotations
 
 import bisect
@@ -57,8 +58,8 @@ class SourceFile:
     def text_of(self, span: Span) -> str:
         """The source text a span covers (one line's rest when the span has no end)."""
         if not span.end_line:
-            return self.line_text(span.line)[span.col - 1:].strip()
-        return self.text[self.offset(span.line, span.col):self.offset(span.end_line, span.end_col)]
+            return self.line_text(span.line)[span.col - 1 :].strip()
+        return self.text[self.offset(span.line, span.col) : self.offset(span.end_line, span.end_col)]
 
     def line_text(self, line: int) -> str:
         starts = self._starts()

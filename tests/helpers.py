@@ -3,6 +3,7 @@
 Import with `from helpers import ...` (pytest puts tests/ on sys.path). A module that names its
 source file in assertions binds the name once: `run = partial(helpers.run, name="oop.st")`.
 """
+
 from __future__ import annotations
 
 from collections.abc import Iterable
@@ -54,8 +55,9 @@ def diagnostics(src: str, *, name: str = "t.st", dialect: str | None = None) -> 
     return [(d.code, d.span.line, d.span.col) for d in result.diagnostics if d.span is not None and d.span.file == name]
 
 
-def assert_diagnostics(src: str, expected: Iterable[tuple], *, allow: Iterable[str] = (), name: str = "t.st",
-                       dialect: str | None = None) -> None:
+def assert_diagnostics(
+    src: str, expected: Iterable[tuple], *, allow: Iterable[str] = (), name: str = "t.st", dialect: str | None = None
+) -> None:
     """Exactly the `expected` diagnostics, each (code, line) or (code, line, column), in any order:
     a missing one fails, and so does any other diagnostic unless its code is in `allow`."""
     got = diagnostics(src, name=name, dialect=dialect)
@@ -63,7 +65,7 @@ def assert_diagnostics(src: str, expected: Iterable[tuple], *, allow: Iterable[s
     unmatched = list(got)
     missing = []
     for e in want:
-        hit = next((g for g in unmatched if g[:len(e)] == e), None)
+        hit = next((g for g in unmatched if g[: len(e)] == e), None)
         if hit is None:
             missing.append(e)
         else:

@@ -3,6 +3,7 @@
 Read from the source with `ast`, so imports inside functions count as much as those at the top
 of a module: a function-level import may delay loading an optional dependency, never hide a cycle.
 """
+
 from __future__ import annotations
 
 import ast
@@ -29,8 +30,20 @@ ALLOWED: dict[str, set[str]] = {
     "testing": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api"},
     "app": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api"},
     "experiments": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "app"},
-    "cli": {"source", "diagnostics", "errors_doc", "model", "compiler", "runtime", "stdlib", "io", "api", "app",
-            "testing", "experiments"},
+    "cli": {
+        "source",
+        "diagnostics",
+        "errors_doc",
+        "model",
+        "compiler",
+        "runtime",
+        "stdlib",
+        "io",
+        "api",
+        "app",
+        "testing",
+        "experiments",
+    },
     "__init__": {"api", "runtime", "diagnostics"},
     "__main__": {"cli"},
 }
@@ -73,7 +86,7 @@ def _imports(name: str, path: Path) -> list[tuple[str, list[str], int, bool]]:
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = name.split(".") if is_pkg else name.split(".")[:-1]
-                base = base[:len(base) - (node.level - 1)]
+                base = base[: len(base) - (node.level - 1)]
                 target = ".".join(base + ([node.module] if node.module else []))
             elif node.module and (node.module == "st" or node.module.startswith("st.")):
                 target = node.module
@@ -121,16 +134,23 @@ def test_the_layering_itself_has_no_cycle():
 
 
 def test_each_stage_imports_only_the_stages_below_it():
-    wrong = [f"{MODULES[m].relative_to(ROOT)}:{line}: {_layer(m)} imports {target}"
-             for m, imports in GRAPH.items() for target, _, line, _ in imports
-             if _layer(target) != _layer(m) and _layer(target) not in ALLOWED[_layer(m)]]
+    wrong = [
+        f"{MODULES[m].relative_to(ROOT)}:{line}: {_layer(m)} imports {target}"
+        for m, imports in GRAPH.items()
+        for target, _, line, _ in imports
+        if _layer(target) != _layer(m) and _layer(target) not in ALLOWED[_layer(m)]
+    ]
     assert not wrong, "\n".join(wrong)
 
 
 def test_no_private_name_is_imported_from_another_package():
-    wrong = [f"{MODULES[m].relative_to(ROOT)}:{line}: from {target} import {n}"
-             for m, imports in GRAPH.items() for target, names, line, _ in imports for n in names
-             if n.startswith("_") and not n.startswith("__") and _layer(target) != _layer(m)]
+    wrong = [
+        f"{MODULES[m].relative_to(ROOT)}:{line}: from {target} import {n}"
+        for m, imports in GRAPH.items()
+        for target, names, line, _ in imports
+        for n in names
+        if n.startswith("_") and not n.startswith("__") and _layer(target) != _layer(m)
+    ]
     assert not wrong, "\n".join(wrong)
 
 
@@ -139,8 +159,9 @@ def test_no_module_outside_the_runtime_imports_a_private_runtime_name():
     for f in sorted((ROOT / "tests").glob("*.py")) + sorted((ROOT / "bench").glob("*.py")):
         for node in ast.walk(ast.parse(f.read_text())):
             if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("st.runtime"):
-                wrong += [f"{f.relative_to(ROOT)}:{node.lineno}: {a.name}" for a in node.names
-                          if a.name.startswith("_")]
+                wrong += [
+                    f"{f.relative_to(ROOT)}:{node.lineno}: {a.name}" for a in node.names if a.name.startswith("_")
+                ]
     assert not wrong, "\n".join(wrong)
 
 
@@ -166,7 +187,7 @@ def test_imports_inside_functions_hide_no_cycle():
         state[n] = 1
         for t in sorted(edges[n]):
             if state.get(t) == 1:
-                cycles.append(" → ".join(path[path.index(t):] + [t]) if t in path else f"{n} → {t}")
+                cycles.append(" → ".join(path[path.index(t) :] + [t]) if t in path else f"{n} → {t}")
             elif t not in state:
                 visit(t, path + [t])
         state[n] = 2
@@ -187,9 +208,17 @@ def test_the_lower_layers_import_no_optional_dependency_at_module_level(layer):
             continue
         tree = ast.parse(p.read_text())
         for node in tree.body:
-            mods = [a.name for a in node.names] if isinstance(node, ast.Import) else \
-                [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else []
-            wrong += [f"{p.relative_to(ROOT)}: {x}" for x in mods
-                      if x.split(".")[0] in ("matplotlib", "pysoem", "ruckig", "pymodbus", "lark", "click", "rich")
-                      and x.split(".")[0] not in third_party_ok]
+            mods = (
+                [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else [node.module or ""]
+                if isinstance(node, ast.ImportFrom) and not node.level
+                else []
+            )
+            wrong += [
+                f"{p.relative_to(ROOT)}: {x}"
+                for x in mods
+                if x.split(".")[0] in ("matplotlib", "pysoem", "ruckig", "pymodbus", "lark", "click", "rich")
+                and x.split(".")[0] not in third_party_ok
+            ]
     assert not wrong, "\n".join(wrong)

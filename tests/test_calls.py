@@ -1,4 +1,5 @@
 """Calls: functions (outputs, in-outs, EN/ENO, positional), FB instances, arrays of FBs, actions."""
+
 from __future__ import annotations
 
 from st import PLC
@@ -46,13 +47,20 @@ m := MAX(EN := TRUE, IN1 := 3, IN2 := 9);
 END_PROGRAM
 """)
     v = plc.variables()
-    assert (v["main.y"], v["main.e1"], v["main.z"], v["main.e2"], v["main.e3"], v["main.m"]) == \
-        (11, True, 5, False, False, 9)
+    assert (v["main.y"], v["main.e1"], v["main.z"], v["main.e2"], v["main.e3"], v["main.m"]) == (
+        11,
+        True,
+        5,
+        False,
+        False,
+        9,
+    )
     assert v["main.t"]["IN"] is False
 
 
 def test_arrays_of_fb_instances_nested_instances_and_struct_results():
-    plc = run("""
+    plc = run(
+        """
 TYPE Pair : STRUCT lo : INT; hi : INT; END_STRUCT; END_TYPE
 FUNCTION Order : Pair
   VAR_INPUT a, b : INT; END_VAR
@@ -74,7 +82,9 @@ END_FOR;
 total := p[1].n + p[2].n * 10 + p[3].n * 100;
 pr := Order(9, 4);
 END_PROGRAM
-""", scans=6)
+""",
+        scans=6,
+    )
     v = plc.variables()
     # p[1] sees TRUE every scan: one rising edge; p[2] edges at k=2,4,6; p[3] at k=3,6
     assert v["main.total"] == 1 + 3 * 10 + 2 * 100
@@ -96,8 +106,14 @@ ACTION bump: n := n + 1; END_ACTION
 END_PROGRAM
 """)
     v = plc.variables()
-    assert (v["main.w"], v["main.d"], v["main.i"], v["main.b"], v["main.hb"], v["main.n"]) == \
-        (0x8001, 0xAB0000, 32767, True, 0x80, 2)
+    assert (v["main.w"], v["main.d"], v["main.i"], v["main.b"], v["main.hb"], v["main.n"]) == (
+        0x8001,
+        0xAB0000,
+        32767,
+        True,
+        0x80,
+        2,
+    )
 
 
 def test_string_functions_and_truncation():
@@ -113,8 +129,13 @@ w := "größe";
 END_PROGRAM
 """)
     v = plc.variables()
-    assert (v["main.s"], v["main.t"], v["main.n"], v["main.p"], v["main.w"]) == \
-        ("Hello, wor", "abXYcdef|abef|abefbcd", 10, 3, "größe")
+    assert (v["main.s"], v["main.t"], v["main.n"], v["main.p"], v["main.w"]) == (
+        "Hello, wor",
+        "abXYcdef|abef|abefbcd",
+        10,
+        3,
+        "größe",
+    )
 
 
 def test_split_and_concat_date_time_functions():
@@ -128,17 +149,33 @@ dow := DAY_OF_WEEK(D#2026-11-22);
 END_PROGRAM
 """)
     assert plc.variables() == {
-        "main.y": 2024, "main.mo": 2, "main.d": 29, "main.h": 23, "main.mi": 59, "main.s": 58, "main.ms": 250,
-        "main.y2": 1969, "main.mo2": 12, "main.d2": 31, "main.dt1": "DT#2000-01-02-03:04:05.006", "main.dow": 0}
+        "main.y": 2024,
+        "main.mo": 2,
+        "main.d": 29,
+        "main.h": 23,
+        "main.mi": 59,
+        "main.s": 58,
+        "main.ms": 250,
+        "main.y2": 1969,
+        "main.mo2": 12,
+        "main.d2": 31,
+        "main.dt1": "DT#2000-01-02-03:04:05.006",
+        "main.dow": 0,
+    }
 
 
 def test_openplc_editor_ld_export_with_function_form_operators():
     """What the OpenPLC Editor emits for LD/FBD: AND(...), ADD(EN := ..., ENO => ...), GT(...)."""
     from pathlib import Path
+
     plc = PLC.from_files(str(Path(__file__).parent / "fixtures" / "openplc_ld_export.st"), use_cache=False)
     plc["%IX0.0"] = True
     plc.advance("3s")
     # the motor latches at once; 2 s later the timer enables the counter, which then counts every 20 ms scan
-    assert (plc["%QX0.0"], plc["%MW0"], plc["instance0._TMP_GT7_OUT"], plc["instance0._TMP_OR2_OUT"]) == \
-        (True, 50, True, 255)
+    assert (plc["%QX0.0"], plc["%MW0"], plc["instance0._TMP_GT7_OUT"], plc["instance0._TMP_OR2_OUT"]) == (
+        True,
+        50,
+        True,
+        255,
+    )
     assert plc["instance0.CTU0.CV"] == 1

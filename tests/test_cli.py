@@ -1,4 +1,5 @@
 """The `st` command line, run as a user would (a subprocess)."""
+
 from __future__ import annotations
 
 import json
@@ -12,8 +13,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def st(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "st", *args], capture_output=True, text=True,
-                          cwd=cwd or ROOT, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "st", *args], capture_output=True, text=True, cwd=cwd or ROOT, timeout=120
+    )
 
 
 def test_run_openplc_export_and_dump_json():
@@ -57,8 +59,10 @@ def test_missing_file_is_a_clean_error(tmp_path):
 
 def test_emit_python_is_readable(tmp_path):
     f = tmp_path / "e.st"
-    f.write_text("FUNCTION Twice : INT\nVAR_INPUT x : INT; END_VAR\nTwice := x * 2;\nEND_FUNCTION\n"
-                 "PROGRAM p\nVAR y : INT; END_VAR\ny := Twice(y + 1);\nEND_PROGRAM\n")
+    f.write_text(
+        "FUNCTION Twice : INT\nVAR_INPUT x : INT; END_VAR\nTwice := x * 2;\nEND_FUNCTION\n"
+        "PROGRAM p\nVAR y : INT; END_VAR\ny := Twice(y + 1);\nEND_PROGRAM\n"
+    )
     r = st("compile", str(f), "--emit", "python")
     assert r.returncode == 0, r.stderr
     assert "def _fn_Twice(x):" in r.stdout
@@ -81,4 +85,5 @@ def test_explain():
 
 def test_diagnostics_doc_is_current():
     from st.errors_doc import markdown
+
     assert (ROOT / "docs" / "diagnostics.md").read_text() == markdown()

@@ -1,6 +1,7 @@
 """Sources laid out as CODESYS and TwinCAT write them: DUTs without ';' after END_STRUCT,
 STRUCT EXTENDS, methods/properties/actions after END_FUNCTION_BLOCK, methods of programs,
 qualified enums, calls chained on call results."""
+
 from functools import partial
 
 import pytest
@@ -111,10 +112,10 @@ def test_a_twincat_layout_compiles_and_runs(dialect):
     assert plc["MAIN.bBefore"] is False and plc["MAIN.bMoved"] is True
     assert plc["MAIN.fPos"] == 12.5 and plc["MAIN.fParked"] == 0.0
     assert plc["MAIN.fbAxis._eState"] == "DONE" and plc["MAIN.fbAxis._nMoves"] == 1
-    assert plc["MAIN.stS.id"] == 7 and plc["MAIN.stS.value"] == 0.5      # inherited and own field
-    assert plc["MAIN.nTotal"] == 7                                        # a PROGRAM's method
+    assert plc["MAIN.stS.id"] == 7 and plc["MAIN.stS.value"] == 0.5  # inherited and own field
+    assert plc["MAIN.nTotal"] == 7  # a PROGRAM's method
     plc.scan()
-    assert plc["MAIN.bMoved"] is False and plc["MAIN.nTotal"] == 14       # parked: DONE, not RUNNING
+    assert plc["MAIN.bMoved"] is False and plc["MAIN.nTotal"] == 14  # parked: DONE, not RUNNING
 
 
 def test_struct_extends_needs_a_structure_and_a_vendor_dialect():
@@ -235,16 +236,31 @@ def test_fb_init_runs_once_per_instance_with_declaration_arguments_base_first():
     assert plc["main.arr[1].id"] == 9 and plc["main.calls"] == 3
 
 
-@pytest.mark.parametrize("old, new, message", [
-    ("b : Base(nId := 5);", "b : Base(nSize := 5);",
-     "tc.st:23:14: error[E017]: FB_init of Base has no input 'nSize' to set here"),
-    ("calls : INT;", "calls : INT(n := 1);",
-     "tc.st:26:13: error[E013]: arguments in a declaration go to a function block's FB_init; INT is not a function block"),
-    ("nId : INT := 9; END_VAR", "nId : INT := 9; END_VAR VAR_OUTPUT o : INT; END_VAR",
-     "tc.st:5:91: error[E017]: FB_init runs when the instance is created: it takes inputs only"),
-    ("b : Base(nId := 5);", "b : Base(nId := 'abc');",
-     "tc.st:23:21: error[E013]: type mismatch: cannot assign STRING[3] to INT"),
-])
+@pytest.mark.parametrize(
+    "old, new, message",
+    [
+        (
+            "b : Base(nId := 5);",
+            "b : Base(nSize := 5);",
+            "tc.st:23:14: error[E017]: FB_init of Base has no input 'nSize' to set here",
+        ),
+        (
+            "calls : INT;",
+            "calls : INT(n := 1);",
+            "tc.st:26:13: error[E013]: arguments in a declaration go to a function block's FB_init; INT is not a function block",
+        ),
+        (
+            "nId : INT := 9; END_VAR",
+            "nId : INT := 9; END_VAR VAR_OUTPUT o : INT; END_VAR",
+            "tc.st:5:91: error[E017]: FB_init runs when the instance is created: it takes inputs only",
+        ),
+        (
+            "b : Base(nId := 5);",
+            "b : Base(nId := 'abc');",
+            "tc.st:23:21: error[E013]: type mismatch: cannot assign STRING[3] to INT",
+        ),
+    ],
+)
 def test_fb_init_errors_are_located(old, new, message):
     assert message in errors(FB_INIT.replace(old, new))
 

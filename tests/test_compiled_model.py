@@ -1,5 +1,6 @@
 """The compiled artefact: AST-free, the same from the cache as from the compiler, a versioned
 serialisation, and st/model a leaf package."""
+
 from __future__ import annotations
 
 import ast
@@ -137,7 +138,7 @@ def test_an_old_or_foreign_payload_is_refused_and_the_cache_compiles_again(tmp_p
     with pytest.raises(FormatError, match="not a compiled st program"):
         CompiledProgram.from_bytes(b"\x80\x05garbage")
     with pytest.raises(FormatError, match="damaged"):
-        CompiledProgram.from_bytes(data[:len(data) // 2])
+        CompiledProgram.from_bytes(data[: len(data) // 2])
     monkeypatch.setenv("ST_CACHE_DIR", str(tmp_path))
     compile_text(PROGRAM, "m.st")
     (entry,) = (tmp_path / "compiled").iterdir()
@@ -150,6 +151,7 @@ def test_an_old_or_foreign_payload_is_refused_and_the_cache_compiles_again(tmp_p
 def test_the_serialisation_lets_no_compiler_object_in():
     compiled = compile_text(PROGRAM, "m.st", use_cache=False)
     from st.compiler import ast as A
+
     compiled.project.pous["p"].decl = A.Empty(compiled.project.pous["p"].decl.span)
     with pytest.raises(TypeError, match="st.compiler.ast.Empty cannot be part of a compiled program"):
         compiled.to_bytes()
@@ -173,11 +175,11 @@ def test_the_model_is_a_leaf_package():
                     assert a.name.split(".")[0] in sys.stdlib_module_names, (f.name, a.name)
 
 
-
 def test_a_compiler_object_left_in_the_model_is_an_internal_error(monkeypatch):
     from st.compiler import artefact
     from st.diagnostics import CompileError
-    monkeypatch.setattr(artefact, "_RULES", {})      # nothing dropped: the AST stays in the model
+
+    monkeypatch.setattr(artefact, "_RULES", {})  # nothing dropped: the AST stays in the model
     r = compile_text(PROGRAM, "m.st", use_cache=False, raise_on_error=False)
     assert [d.code for d in r.diagnostics if d.is_error] == ["E099"]
     assert "cannot be part of a compiled program" in r.diagnostics[0].message and r.project.pous == {}

@@ -1,5 +1,6 @@
 """ARRAY[*] parameters (IEC 61131-3 3rd edition): the bounds come from the caller's array,
 indexes are checked against them, LOWER_BOUND / UPPER_BOUND read them."""
+
 import pytest
 
 from st import PLC, PLCFaultError
@@ -48,12 +49,14 @@ def test_conformant_arrays_index_by_the_callers_bounds():
     plc = PLC(compile_text(SRC, "conf.st"))
     plc.scan()
     assert (plc["main.s1"], plc["main.s2"], plc["main.d"]) == (6, 30, 1 + 4 + 2000)
-    assert plc["main.x"] == [0, 2, 3] and plc["main.y"] == [0, 20]       # written through a[lo]
+    assert plc["main.x"] == [0, 2, 3] and plc["main.y"] == [0, 20]  # written through a[lo]
     assert (plc["main.lo"], plc["main.hi"], plc["main.cnt"]) == (2, 6, 2)
 
 
 def test_an_index_outside_the_callers_bounds_is_an_index_fault():
-    plc = PLC(compile_text("""
+    plc = PLC(
+        compile_text(
+            """
 FUNCTION Get : INT
   VAR_IN_OUT a : ARRAY[*] OF INT; END_VAR
   VAR_INPUT i : DINT; END_VAR
@@ -63,24 +66,38 @@ PROGRAM main VAR x : ARRAY[2..4] OF INT := [1, 2, 3]; v : INT; END_VAR
   v := Get(x, 4);
   v := Get(x, 1);
 END_PROGRAM
-""", "conf.st"))
+""",
+            "conf.st",
+        )
+    )
     with pytest.raises(PLCFaultError) as e:
         plc.scan()
     assert (e.value.fault.kind, e.value.fault.line) == ("INDEX", 5)
     assert plc["main.v"] == 3
 
 
-@pytest.mark.parametrize("src, diagnostic", [
-    ("FUNCTION F : INT VAR_INPUT a : ARRAY[*] OF INT; END_VAR F := 1; END_FUNCTION",
-     "conf.st:1:32: error[E012]: ARRAY[*] takes its bounds from an argument: it is only allowed for a VAR_IN_OUT"),
-    ("FUNCTION F : INT VAR_IN_OUT a : ARRAY[*] OF INT; END_VAR F := 1; END_FUNCTION\n"
-     "PROGRAM main VAR m : ARRAY[0..1, 0..1] OF INT; r : INT; END_VAR r := F(m); END_PROGRAM",
-     "conf.st:2:72: error[E013]: VAR_IN_OUT 'a' is ARRAY[*] OF INT; ARRAY[0..1, 0..1] OF INT cannot be passed"),
-    ("PROGRAM main VAR x : ARRAY[0..1] OF INT; r : DINT; END_VAR r := UPPER_BOUND(x, 2); END_PROGRAM",
-     "conf.st:1:80: error[E029]: the dimension must be a constant from 1 to 1"),
-    ("PROGRAM main VAR x : INT; r : DINT; END_VAR r := LOWER_BOUND(x, 1); END_PROGRAM",
-     "conf.st:1:62: error[E013]: LOWER_BOUND needs an array, not INT"),
-])
+@pytest.mark.parametrize(
+    "src, diagnostic",
+    [
+        (
+            "FUNCTION F : INT VAR_INPUT a : ARRAY[*] OF INT; END_VAR F := 1; END_FUNCTION",
+            "conf.st:1:32: error[E012]: ARRAY[*] takes its bounds from an argument: it is only allowed for a VAR_IN_OUT",
+        ),
+        (
+            "FUNCTION F : INT VAR_IN_OUT a : ARRAY[*] OF INT; END_VAR F := 1; END_FUNCTION\n"
+            "PROGRAM main VAR m : ARRAY[0..1, 0..1] OF INT; r : INT; END_VAR r := F(m); END_PROGRAM",
+            "conf.st:2:72: error[E013]: VAR_IN_OUT 'a' is ARRAY[*] OF INT; ARRAY[0..1, 0..1] OF INT cannot be passed",
+        ),
+        (
+            "PROGRAM main VAR x : ARRAY[0..1] OF INT; r : DINT; END_VAR r := UPPER_BOUND(x, 2); END_PROGRAM",
+            "conf.st:1:80: error[E029]: the dimension must be a constant from 1 to 1",
+        ),
+        (
+            "PROGRAM main VAR x : INT; r : DINT; END_VAR r := LOWER_BOUND(x, 1); END_PROGRAM",
+            "conf.st:1:62: error[E013]: LOWER_BOUND needs an array, not INT",
+        ),
+    ],
+)
 def test_conformant_array_errors_are_located(src, diagnostic):
     with pytest.raises(CompileError) as e:
         compile_text(src, "conf.st")

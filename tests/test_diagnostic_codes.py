@@ -1,5 +1,6 @@
 """Diagnostic codes: every code the source emits is a `Code`, every `Code` is documented in
 docs/diagnostics.md, every documented code is a `Code`, and the docs are generated from the enum."""
+
 from __future__ import annotations
 
 import ast

@@ -1,4 +1,5 @@
 """Diagnostics: exact codes and locations, hints, all errors together, never a traceback."""
+
 from __future__ import annotations
 
 import pytest
@@ -49,8 +50,7 @@ def test_equals_instead_of_assign_hint():
 
 
 def test_else_if_hint():
-    src = ("PROGRAM p\nVAR a : INT; END_VAR\nIF a > 1 THEN a := 1;\nELSE IF a < 0 THEN a := 2;\n"
-           "END_IF;\nEND_PROGRAM\n")
+    src = "PROGRAM p\nVAR a : INT; END_VAR\nIF a > 1 THEN a := 1;\nELSE IF a < 0 THEN a := 2;\nEND_IF;\nEND_PROGRAM\n"
     e = diags(src)
     assert e.errors[0].code == "E001"
     assert e.errors[0].span.line == 6
@@ -64,8 +64,10 @@ def test_missing_end_at_end_of_file():
 
 
 def test_narrowing_needs_explicit_conversion():
-    e = diags("PROGRAM p\nVAR i : INT; d : DINT; r : REAL; l : LREAL; END_VAR\ni := d;\nr := l;\ni := r;\n"
-              "d := i; l := r;\nEND_PROGRAM\n")
+    e = diags(
+        "PROGRAM p\nVAR i : INT; d : DINT; r : REAL; l : LREAL; END_VAR\ni := d;\nr := l;\ni := r;\n"
+        "d := i; l := r;\nEND_PROGRAM\n"
+    )
     assert codes(e) == [("E027", 3, 6), ("E027", 4, 6), ("E027", 5, 6)]
     assert e.errors[0].hint == "convert explicitly with DINT_TO_INT(...)"
 
@@ -76,32 +78,40 @@ def test_literal_out_of_range():
 
 
 def test_writes_to_inputs_and_constants():
-    src = ("FUNCTION_BLOCK F\nVAR_INPUT i : INT; END_VAR\nVAR CONSTANT k : INT := 3; END_VAR\n"
-           "i := 1;\nk := 2;\nEND_FUNCTION_BLOCK\n")
+    src = (
+        "FUNCTION_BLOCK F\nVAR_INPUT i : INT; END_VAR\nVAR CONSTANT k : INT := 3; END_VAR\n"
+        "i := 1;\nk := 2;\nEND_FUNCTION_BLOCK\n"
+    )
     e = diags(src)
     assert codes(e) == [("E048", 4, 1), ("E018", 5, 1)]
 
 
 def test_non_bool_conditions():
-    src = ("PROGRAM p\nVAR i : INT; END_VAR\nIF i THEN i := 1; END_IF;\nWHILE i + 1 DO i := 0; END_WHILE;\n"
-           "REPEAT i := 1; UNTIL 5 END_REPEAT;\nEND_PROGRAM\n")
+    src = (
+        "PROGRAM p\nVAR i : INT; END_VAR\nIF i THEN i := 1; END_IF;\nWHILE i + 1 DO i := 0; END_WHILE;\n"
+        "REPEAT i := 1; UNTIL 5 END_REPEAT;\nEND_PROGRAM\n"
+    )
     e = diags(src)
     assert codes(e) == [("E015", 3, 4), ("E015", 4, 7), ("E015", 5, 22)]
 
 
 def test_wrong_argument_names_and_counts():
-    src = ("FUNCTION F : INT\nVAR_INPUT a : INT; END_VAR\nF := a;\nEND_FUNCTION\n"
-           "PROGRAM p\nVAR x : INT; t : TON; END_VAR\nx := F(b := 1);\nx := F(1, 2);\nt(IN := TRUE, PX := T#1s);\n"
-           "x := LIMIT(1, 2);\nEND_PROGRAM\n")
+    src = (
+        "FUNCTION F : INT\nVAR_INPUT a : INT; END_VAR\nF := a;\nEND_FUNCTION\n"
+        "PROGRAM p\nVAR x : INT; t : TON; END_VAR\nx := F(b := 1);\nx := F(1, 2);\nt(IN := TRUE, PX := T#1s);\n"
+        "x := LIMIT(1, 2);\nEND_PROGRAM\n"
+    )
     e = diags(src)
     assert codes(e) == [("E016", 7, 8), ("E017", 8, 11), ("E016", 9, 15), ("E017", 10, 6)]
     assert "parameters: a" in e.errors[0].message
 
 
 def test_case_label_checks():
-    src = ("TYPE C : (Red, Green); END_TYPE\nPROGRAM p\nVAR i : INT; c : C; END_VAR\n"
-           "CASE i OF 1: i := 0; 1: i := 2; 3..5: i := 1; 4: i := 3; END_CASE;\n"
-           "CASE c OF Red: i := 0; 2: i := 1; END_CASE;\nEND_PROGRAM\n")
+    src = (
+        "TYPE C : (Red, Green); END_TYPE\nPROGRAM p\nVAR i : INT; c : C; END_VAR\n"
+        "CASE i OF 1: i := 0; 1: i := 2; 3..5: i := 1; 4: i := 3; END_CASE;\n"
+        "CASE c OF Red: i := 0; 2: i := 1; END_CASE;\nEND_PROGRAM\n"
+    )
     e = diags(src)
     assert [c for c, _, _ in codes(e)] == ["E019", "E019", "E019"]
     assert [l for _, l, _ in codes(e)] == [4, 4, 5]
@@ -119,15 +129,17 @@ def test_exit_outside_loop():
 
 
 def test_unused_variable_and_truncation_warnings():
-    r = compile_text("PROGRAM p\nVAR s : STRING[3]; u : INT; END_VAR\ns := 'abcdef';\nEND_PROGRAM\n",
-                     "w.st", use_cache=False)
+    r = compile_text(
+        "PROGRAM p\nVAR s : STRING[3]; u : INT; END_VAR\ns := 'abcdef';\nEND_PROGRAM\n", "w.st", use_cache=False
+    )
     got = [(d.code, d.span.line, d.span.col) for d in r.diagnostics]
     assert got == [("W002", 2, 20), ("W003", 3, 6)]
 
 
 def test_pragma_is_accepted_with_a_warning():
-    r = compile_text("PROGRAM p\n{attribute 'hide'}\nVAR a : INT; END_VAR\na := 1;\nEND_PROGRAM\n", "w.st",
-                     use_cache=False)
+    r = compile_text(
+        "PROGRAM p\n{attribute 'hide'}\nVAR a : INT; END_VAR\na := 1;\nEND_PROGRAM\n", "w.st", use_cache=False
+    )
     assert [(d.code, d.span.line) for d in r.diagnostics] == [("W001", 2)]
 
 
@@ -153,18 +165,28 @@ def test_output_argument_must_be_a_variable():
 
 
 def test_no_traceback_for_garbage():
-    for text in ["\x00\x01 PROGRAM", "PROGRAM", "END_PROGRAM", "PROGRAM p VAR x : ARRAY[1..] OF INT; END_VAR END_PROGRAM",
-                 "FUNCTION_BLOCK", "TYPE X : STRUCT END_TYPE", "PROGRAM p x := ; END_PROGRAM", "'unterminated"]:
+    for text in [
+        "\x00\x01 PROGRAM",
+        "PROGRAM",
+        "END_PROGRAM",
+        "PROGRAM p VAR x : ARRAY[1..] OF INT; END_VAR END_PROGRAM",
+        "FUNCTION_BLOCK",
+        "TYPE X : STRUCT END_TYPE",
+        "PROGRAM p x := ; END_PROGRAM",
+        "'unterminated",
+    ]:
         e = diags(text)
         assert e.errors, text
         assert "Traceback" not in e.render()
 
 
 def test_recursion_and_self_containing_types_are_errors():
-    src = ("TYPE S : STRUCT a : INT; s : ARRAY[1..2] OF S; END_STRUCT; END_TYPE\n"
-           "FUNCTION_BLOCK FB\nVAR inner : FB; END_VAR\nEND_FUNCTION_BLOCK\n"
-           "FUNCTION F : INT\nVAR_INPUT n : INT; END_VAR\nF := G(n);\nEND_FUNCTION\n"
-           "FUNCTION G : INT\nVAR_INPUT n : INT; END_VAR\nG := F(n - 1);\nEND_FUNCTION\n")
+    src = (
+        "TYPE S : STRUCT a : INT; s : ARRAY[1..2] OF S; END_STRUCT; END_TYPE\n"
+        "FUNCTION_BLOCK FB\nVAR inner : FB; END_VAR\nEND_FUNCTION_BLOCK\n"
+        "FUNCTION F : INT\nVAR_INPUT n : INT; END_VAR\nF := G(n);\nEND_FUNCTION\n"
+        "FUNCTION G : INT\nVAR_INPUT n : INT; END_VAR\nG := F(n - 1);\nEND_FUNCTION\n"
+    )
     e = diags(src)
     assert sorted(codes(e)) == [("E032", 7, 6), ("E032", 11, 6), ("E046", 1, 6), ("E046", 2, 16)]
 
@@ -175,10 +197,12 @@ def test_initial_values_must_be_constants():
 
 
 def test_configuration_errors():
-    src = ("PROGRAM P\nVAR x : INT; END_VAR\nx := 1;\nEND_PROGRAM\n"
-           "CONFIGURATION C\n RESOURCE R ON PLC\n  TASK t(INTERVAL := 10, PRIORITY := 0);\n"
-           "  PROGRAM a WITH nope : P;\n  PROGRAM b WITH t : Q;\n END_RESOURCE\n"
-           " VAR_CONFIG\n  a.x : INT := 1;\n  c.x : INT := 2;\n END_VAR\nEND_CONFIGURATION\n")
+    src = (
+        "PROGRAM P\nVAR x : INT; END_VAR\nx := 1;\nEND_PROGRAM\n"
+        "CONFIGURATION C\n RESOURCE R ON PLC\n  TASK t(INTERVAL := 10, PRIORITY := 0);\n"
+        "  PROGRAM a WITH nope : P;\n  PROGRAM b WITH t : Q;\n END_RESOURCE\n"
+        " VAR_CONFIG\n  a.x : INT := 1;\n  c.x : INT := 2;\n END_VAR\nEND_CONFIGURATION\n"
+    )
     e = diags(src)
     assert [(c, l) for c, l, _ in codes(e)] == [("E013", 7), ("E028", 8), ("E028", 9), ("E010", 12), ("E010", 13)]
 

@@ -1,6 +1,7 @@
 """EtherCAT bound to the scan: CiA 402 drives moving PLCopen axes through the `sim` backend — the
 enable sequence, CSP setpoints, faults and recovery, lost frames, I/O bindings, the gantry
 example, delay compensation, and `st run --ethercat`."""
+
 import json
 import os
 import subprocess
@@ -55,10 +56,14 @@ END_RESOURCE END_CONFIGURATION
 """
 _COMPILED = None
 
-SEGMENT = {"segment": {"cycle": "1ms", "dc": True, "lost_frame_limit": 3},
-           "slave": [{"name": "d1", "type": "cia402", "axis": 1},
-                     {"name": "d2", "type": "cia402", "axis": 2},
-                     {"name": "io", "type": "dio", "inputs_at": "%IX0.0", "outputs_at": "%QX0.0"}]}
+SEGMENT = {
+    "segment": {"cycle": "1ms", "dc": True, "lost_frame_limit": 3},
+    "slave": [
+        {"name": "d1", "type": "cia402", "axis": 1},
+        {"name": "d2", "type": "cia402", "axis": 2},
+        {"name": "io", "type": "dio", "inputs_at": "%IX0.0", "outputs_at": "%QX0.0"},
+    ],
+}
 
 
 def make(segment=None, **axis_cfg):
@@ -92,12 +97,13 @@ def test_enable_sequence_holds_the_target_at_the_actual_position():
     def record():
         seen.append((d1.od[0x6040], d1.od[0x607A], d1.position))
         orig()
+
     d1.on_outputs = record
     n = until(plc, lambda: plc["main.pw1.Status"])
     cws = [c for c, _, _ in seen]
     # 0x06 → 0x07 → 0x0F, each sent until the statusword shows the state it asks for
     assert [cws[0], cws[cws.index(0x07)], cws[-1]] == [0x06, 0x07, 0x0F] and sorted(set(cws)) == [0x06, 0x07, 0x0F]
-    assert all(target == pos for _, target, pos in seen)          # never a jump on enabling
+    assert all(target == pos for _, target, pos in seen)  # never a jump on enabling
     # the first SYNC0 pulse comes 10 cycles after DC start-up; then each command takes effect at the
     # next pulse and its state is read back in the frame after
     assert n == 19 and axis_of(plc, "main.a1").state == "Standstill"
@@ -109,13 +115,13 @@ def test_two_axes_move_through_the_drives_and_arrive_together():
     until(plc, lambda: plc["main.pw1.Status"] and plc["main.pw2.Status"])
     plc["main.go"] = True
     n = until(plc, lambda: plc["main.mv1.Done"] and plc["main.mv2.Done"])
-    assert n == 351                                   # 90° at 360°/s with 3600°/s²: 0.35 s, + the exchange
+    assert n == 351  # 90° at 360°/s with 3600°/s²: 0.35 s, + the exchange
     a1, a2 = axis_of(plc, "main.a1"), axis_of(plc, "main.a2")
     assert a1.set_pos == 90.0 and a2.set_pos == 90.0
-    plc.scan(100)                                     # the drives settle on the last setpoint
+    plc.scan(100)  # the drives settle on the last setpoint
     cpr = 1 << 23
     for i in (0, 1):
-        assert abs(drive(drv, i).position - cpr // 4) <= 64          # within 0.003°
+        assert abs(drive(drv, i).position - cpr // 4) <= 64  # within 0.003°
     assert abs(a1.act_pos - 90.0) < 0.003 and plc["main.lamp"] is False
     s = drv.stats()
     assert s["lost_frames"] == 0 and s["wkc_errors"] == 0 and s["frames"] == plc.scans + 2
@@ -130,7 +136,7 @@ def test_digital_terminal_bits_reach_located_variables():
     until(plc, lambda: plc["main.pw1.Status"])
     plc["main.go"] = True
     plc.scan(5)
-    assert bool(io.outputs[1]) is True                       # %QX0.1 = mv1.Busy
+    assert bool(io.outputs[1]) is True  # %QX0.1 = mv1.Busy
 
 
 def test_a_drive_fault_stops_the_axis_and_reset_recovers_it():
@@ -142,7 +148,7 @@ def test_a_drive_fault_stops_the_axis_and_reset_recovers_it():
     n = until(plc, lambda: plc["main.st1.ErrorStop"])
     assert n <= 3 and plc["main.err1.AxisErrorID"] == E.DRIVE_FAULT
     assert plc["main.vel1.Error"] and plc["main.vel1.ErrorID"] == E.AXIS_ERRORSTOP
-    assert axis_of(plc, "main.a2").state == "ContinuousMotion"        # the other axis goes on
+    assert axis_of(plc, "main.a2").state == "ContinuousMotion"  # the other axis goes on
     plc["main.spin"] = False
     plc["main.reset"] = True
     n = until(plc, lambda: plc["main.st1.Standstill"])
@@ -153,7 +159,7 @@ def test_loss_of_operation_enabled_is_power_stage_lost():
     plc, drv = make()
     until(plc, lambda: plc["main.pw1.Status"])
     d = drive(drv, 0)
-    d._set_state(State.SWITCH_ON_DISABLED)            # the drive drops its power stage on its own
+    d._set_state(State.SWITCH_ON_DISABLED)  # the drive drops its power stage on its own
     d._publish()
     until(plc, lambda: plc["main.st1.ErrorStop"], 5)
     assert plc["main.err1.AxisErrorID"] == E.POWER_STAGE_LOST
@@ -162,12 +168,12 @@ def test_loss_of_operation_enabled_is_power_stage_lost():
 def test_lost_frames_put_the_axes_in_errorstop_and_the_segment_recovers():
     plc, drv = make()
     until(plc, lambda: plc["main.pw1.Status"] and plc["main.pw2.Status"])
-    drv.segment.drop_frames(2)                       # fewer than lost_frame_limit: tolerated
+    drv.segment.drop_frames(2)  # fewer than lost_frame_limit: tolerated
     plc.scan(5)
     assert axis_of(plc, "main.a1").state == "Standstill"
     assert drv.stats()["lost_frames"] == 2 and drv.stats()["outages"] == 0
-    drv.segment.drop_frames(150)                     # 150 ms: the drives' SyncManager watchdog fires too
-    plc.scan(4)                                      # the third lost frame; ReadStatus sees it in the next scan
+    drv.segment.drop_frames(150)  # 150 ms: the drives' SyncManager watchdog fires too
+    plc.scan(4)  # the third lost frame; ReadStatus sees it in the next scan
     assert plc["main.st1.ErrorStop"] and plc["main.err1.AxisErrorID"] == E.COMMUNICATION_LOST
     assert axis_of(plc, "main.a2").state == "ErrorStop"
     plc.scan(200)
@@ -195,14 +201,16 @@ def test_working_counter_errors_from_a_broken_cable_count_as_lost():
 
 
 def _offset_after(compensate: bool) -> float:
-    seg = {"segment": {"cycle": "1ms", "dc": False, "forwarding_delay_us": 200.0, "compensate_delay": compensate},
-           "slave": [{"name": "d1", "type": "cia402", "axis": 1}, {"name": "d2", "type": "cia402", "axis": 2}]}
+    seg = {
+        "segment": {"cycle": "1ms", "dc": False, "forwarding_delay_us": 200.0, "compensate_delay": compensate},
+        "slave": [{"name": "d1", "type": "cia402", "axis": 1}, {"name": "d2", "type": "cia402", "axis": 2}],
+    }
     plc, drv = make(seg)
     until(plc, lambda: plc["main.pw1.Status"] and plc["main.pw2.Status"])
     plc["main.spin"] = True
-    plc.scan(500)                                    # both at 360°/s
+    plc.scan(500)  # both at 360°/s
     t = drv.segment.t + 0.0005
-    drv.segment.advance(t)                           # both drives at the same instant
+    drv.segment.advance(t)  # both drives at the same instant
     return (drive(drv, 0).position - drive(drv, 1).position) / (1 << 23) * 360.0
 
 
@@ -231,17 +239,39 @@ def test_configuration_errors_name_the_file_and_the_slave(tmp_path):
 @pytest.mark.slow
 def test_gantry_program_runs_with_st_run(tmp_path):
     stats = tmp_path / "stats.json"
-    out = subprocess.run([sys.executable, "-m", "st", "run", "programs/gantry.st", "--ethercat",
-                          "programs/gantry.segment.toml", "--axes", "programs/gantry.axes.toml", "--virtual",
-                          "--duration", "3s", "--dump-json", "--stats-json", str(stats)],
-                         cwd=ROOT, capture_output=True, text=True, timeout=300)
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "st",
+            "run",
+            "programs/gantry.st",
+            "--ethercat",
+            "programs/gantry.segment.toml",
+            "--axes",
+            "programs/gantry.axes.toml",
+            "--virtual",
+            "--duration",
+            "3s",
+            "--dump-json",
+            "--stats-json",
+            str(stats),
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert out.returncode == 0, out.stderr
     v = json.loads(out.stdout)
-    assert v["gantry.strokes"] == 3 and v["gantry.fault"] is False     # 200 mm strokes of 0.9 s
-    assert v["gantry.max_offset"] < 0.01                               # mm between the two sides
+    assert v["gantry.strokes"] == 3 and v["gantry.fault"] is False  # 200 mm strokes of 0.9 s
+    assert v["gantry.max_offset"] < 0.01  # mm between the two sides
     io = json.loads(stats.read_text())["io"]["ethercat"]
-    assert io["lost_frames"] == 0 and io["wkc_errors"] == 0 and io["drives"] == {"axis1": "OPERATION_ENABLED",
-                                                                                  "axis2": "OPERATION_ENABLED"}
+    assert (
+        io["lost_frames"] == 0
+        and io["wkc_errors"] == 0
+        and io["drives"] == {"axis1": "OPERATION_ENABLED", "axis2": "OPERATION_ENABLED"}
+    )
     assert "ethercat: 3 slave(s) in OP (sim backend), 2 drive(s) bound" in out.stderr
 
 
@@ -253,10 +283,14 @@ def test_pdo_mapping_changed_in_preop_resizes_the_process_data():
     from st.io.ethercat.config import build_segment
     from st.io.ethercat.master import FrameMaster
     from st.io.ethercat.od import ABORT_NOT_MAPPABLE
+
     seg = build_segment(from_dict({"slave": [{"name": "d1", "type": "cia402"}]}))
     clock = [0.0]
-    m = FrameMaster(lambda f: seg.exchange(f, clock[0]), pause=lambda s: clock.__setitem__(0, clock[0] + s),
-                    now_ns=lambda: int(clock[0] * 1e9))
+    m = FrameMaster(
+        lambda f: seg.exchange(f, clock[0]),
+        pause=lambda s: clock.__setitem__(0, clock[0] + s),
+        now_ns=lambda: int(clock[0] * 1e9),
+    )
     m.scan()
     refused = []
 
@@ -265,8 +299,9 @@ def test_pdo_mapping_changed_in_preop_resizes_the_process_data():
         master.sdo_write(0, 0x1A00, 5, struct.pack("<I", 0x60770010))
         master.sdo_write(0, 0x1A00, 0, b"\x05")
         with pytest.raises(Exception, match=f"{ABORT_NOT_MAPPABLE:#010x}"):
-            master.sdo_write(0, 0x1A00, 6, struct.pack("<I", 0x10180120))   # the identity is not process data
+            master.sdo_write(0, 0x1A00, 6, struct.pack("<I", 0x10180120))  # the identity is not process data
         refused.append(True)
+
     m.configure(preop_hook=remap)
     assert refused == [True]
     assert (m.slaves[0].out_bytes, m.slaves[0].in_bytes) == (11, 14)
@@ -276,13 +311,29 @@ def test_pdo_mapping_changed_in_preop_resizes_the_process_data():
 
 
 def test_a_drive_layout_from_an_esi_file():
-    seg_cfg = {"slave": [{"name": "xd", "type": "cia402", "axis": 1, "esi": "tests/data/esi/example_drive.xml",
-                          "product_code": 0x00D20001}]}
+    seg_cfg = {
+        "slave": [
+            {
+                "name": "xd",
+                "type": "cia402",
+                "axis": 1,
+                "esi": "tests/data/esi/example_drive.xml",
+                "product_code": 0x00D20001,
+            }
+        ]
+    }
     from st.io.ethercat.config import build_devices
+
     [dev] = build_devices(from_dict(seg_cfg))
     assert (dev.vendor_id, dev.product_code) == (0xABC, 0x00D20001)
     assert (dev.rx_layout.size, dev.tx_layout.size) == (11, 12)
-    plc, drv = make({"slave": [{**seg_cfg["slave"][0], "esi": os.path.join(ROOT, "tests/data/esi/example_drive.xml")},
-                               {"name": "d2", "type": "cia402", "axis": 2}]})
+    plc, drv = make(
+        {
+            "slave": [
+                {**seg_cfg["slave"][0], "esi": os.path.join(ROOT, "tests/data/esi/example_drive.xml")},
+                {"name": "d2", "type": "cia402", "axis": 2},
+            ]
+        }
+    )
     assert drv.master.slaves[0].vendor_id == 0xABC
     until(plc, lambda: plc["main.pw1.Status"])

@@ -1,6 +1,7 @@
 """The `soem` backend (pysoem) against the emulated segment served on one end of a veth pair:
 SOEM brings it to OP, reads SDOs, exchanges process data, and `st run` moves an axis with it.
 Needs root (raw sockets, creating the veth pair) and pysoem; skipped with the reason otherwise."""
+
 import json
 import os
 import shutil
@@ -70,8 +71,9 @@ def served(tmp_path):
     """A veth pair with the emulated segment answering on one end; yields the master's end."""
     tag = f"{os.getpid() % 10000}"
     master_if, slave_if = f"ecm{tag}", f"ecs{tag}"
-    made = subprocess.run(["ip", "link", "add", master_if, "type", "veth", "peer", "name", slave_if],
-                          capture_output=True, text=True)
+    made = subprocess.run(
+        ["ip", "link", "add", master_if, "type", "veth", "peer", "name", slave_if], capture_output=True, text=True
+    )
     if made.returncode:
         pytest.skip(f"cannot create a veth pair: {made.stderr.strip()}")
     for i in (master_if, slave_if):
@@ -80,9 +82,26 @@ def served(tmp_path):
     cfg.write_text(SEGMENT)
     ready = tmp_path / "ready"
     cap = tmp_path / "served.pcap"
-    server = subprocess.Popen([sys.executable, "-m", "st", "ethercat", "serve", "--iface", slave_if, "--config",
-                               str(cfg), "--ready-file", str(ready), "--capture", str(cap)], cwd=ROOT,
-                              stderr=subprocess.PIPE, text=True)
+    server = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "st",
+            "ethercat",
+            "serve",
+            "--iface",
+            slave_if,
+            "--config",
+            str(cfg),
+            "--ready-file",
+            str(ready),
+            "--capture",
+            str(cap),
+        ],
+        cwd=ROOT,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         for _ in range(200):
             if ready.exists() or server.poll() is not None:
@@ -103,6 +122,7 @@ def test_soem_reaches_op_reads_sdo_and_exchanges_process_data(served):
     from st.io.ethercat.driver import drive_state
     from st.io.ethercat.pdo import CIA402_RX, CIA402_TX, PdoLayout
     from st.io.ethercat.soem import SoemMaster
+
     iface, _cfg, cap = served
     m = SoemMaster(iface)
     m.open()
@@ -124,14 +144,15 @@ def test_soem_reaches_op_reads_sdo_and_exchanges_process_data(served):
             state = drive_state(status)
             if state == "OPERATION_ENABLED":
                 break
-            cw = {"SWITCH_ON_DISABLED": 0x06, "READY_TO_SWITCH_ON": 0x07}.get(state, 0x0F if state == "SWITCHED_ON"
-                                                                             else 0x06)
+            cw = {"SWITCH_ON_DISABLED": 0x06, "READY_TO_SWITCH_ON": 0x07}.get(
+                state, 0x0F if state == "SWITCHED_ON" else 0x06
+            )
             m.write_outputs(0, rx.pack([cw, 0, 0, 8]))
             wkcs.append(m.exchange())
             status = tx.unpack(m.read_inputs(0))[0]
             time.sleep(0.004)
-        assert status & 0x6F == 0x27                                   # Operation enabled
-        assert wkcs.count(3) >= len(wkcs) - 3                           # single misses tolerated
+        assert status & 0x6F == 0x27  # Operation enabled
+        assert wkcs.count(3) >= len(wkcs) - 3  # single misses tolerated
     finally:
         m.close()
 
@@ -141,9 +162,30 @@ def test_st_run_moves_an_axis_through_soem(served, tmp_path):
     iface, cfg, cap = served
     prog = tmp_path / "move.st"
     prog.write_text(PROGRAM)
-    out = subprocess.run([sys.executable, "-m", "st", "run", str(prog), "--ethercat", str(cfg),
-                          "--ethercat-backend", "soem", "--ethercat-iface", iface, "--duration", "2.5s",
-                          "--no-rt", "--quiet", "--dump-json"], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "st",
+            "run",
+            str(prog),
+            "--ethercat",
+            str(cfg),
+            "--ethercat-backend",
+            "soem",
+            "--ethercat-iface",
+            iface,
+            "--duration",
+            "2.5s",
+            "--no-rt",
+            "--quiet",
+            "--dump-json",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert out.returncode == 0, out.stderr
     v = json.loads(out.stdout)
     assert v["main.moved"] is True
@@ -153,6 +195,7 @@ def test_st_run_moves_an_axis_through_soem(served, tmp_path):
 @pytest.mark.skipif(shutil.which("tshark") is None, reason="tshark is not installed")
 def test_the_served_capture_decodes_in_tshark(served):
     from st.io.ethercat.soem import SoemMaster
+
     iface, _cfg, cap = served
     m = SoemMaster(iface)
     m.open()
@@ -163,7 +206,11 @@ def test_the_served_capture_decodes_in_tshark(served):
         m.exchange()
     m.close()
     time.sleep(0.3)
-    out = subprocess.run(["tshark", "-r", str(cap), "-T", "fields", "-e", "_ws.col.Protocol", "-e", "_ws.col.Info"],
-                         capture_output=True, text=True, timeout=60)
+    out = subprocess.run(
+        ["tshark", "-r", str(cap), "-T", "fields", "-e", "_ws.col.Protocol", "-e", "_ws.col.Info"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     lines = out.stdout.splitlines()
     assert len(lines) > 100 and not [x for x in lines if "Malformed" in x]

@@ -2,6 +2,7 @@
 
 Scheduling runs on virtual time and must be bit-for-bit reproducible; latency runs in real time
 (SCHED_FIFO only when root), so only its shape is checked."""
+
 import csv
 import importlib.util
 
@@ -10,7 +11,7 @@ import pytest
 from st.api import compile_text
 from st.experiments import latency, scheduling
 
-pytestmark = pytest.mark.slow      # every test here runs the thesis experiments end to end
+pytestmark = pytest.mark.slow  # every test here runs the thesis experiments end to end
 
 HAVE_MPL = importlib.util.find_spec("matplotlib") is not None
 
@@ -48,17 +49,19 @@ def test_scheduling_summary_has_tables_and_thesis_numbers(sched_runs):
 
 def test_scheduling_pinned_counts(sched_runs):
     rows = _rows(sched_runs[0] / "runs.csv")
-    assert len(rows) == 4 * 20 * 3                      # policies × runs × tasks
+    assert len(rows) == 4 * 20 * 3  # policies × runs × tasks
     frame_1x = [int(r["executions"]) for r in rows if r["policy"] == "frame" and r["task"] == "thread_1"]
     assert len(frame_1x) == 20
-    assert sum(frame_1x) == 9000                        # 450.0 per run on average (seed 1, 20 runs)
+    assert sum(frame_1x) == 9000  # 450.0 per run on average (seed 1, 20 runs)
     assert frame_1x[0] == 449
     # frame keeps every release of the slower tasks; FCFS drops none but falls behind
     for task, n in (("thread_2", 300), ("thread_3", 150)):
         assert all(int(r["executions"]) == n for r in rows if r["policy"] == "frame" and r["task"] == task)
     assert all(int(r["skipped"]) == 0 for r in rows if r["policy"] == "openplc")
-    assert "| frame (semaphore-based) | 450.0 ± 0.9 | 300.0 ± 0.0 | 150.0 ± 0.0 |" in \
-        (sched_runs[0] / "summary.md").read_text()
+    assert (
+        "| frame (semaphore-based) | 450.0 ± 0.9 | 300.0 ± 0.0 | 150.0 ± 0.0 |"
+        in (sched_runs[0] / "summary.md").read_text()
+    )
 
 
 @pytest.mark.skipif(not HAVE_MPL, reason="matplotlib is not installed")
@@ -88,7 +91,7 @@ def test_latency_quick(tmp_path):
     assert rep.write() == summary and summary.exists()
     text = summary.read_text()
     assert "not reproducible" in text
-    assert "1.2802" in text and "533.034" in text and "23.47" in text      # Table 6.2 beside ours
+    assert "1.2802" in text and "533.034" in text and "23.47" in text  # Table 6.2 beside ours
     rows = _rows(tmp_path / "latency.csv")
     st_rows = [r for r in rows if r["tool"] == "st run"]
     assert len(st_rows) == 1

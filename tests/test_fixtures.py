@@ -5,6 +5,7 @@ tests/fixtures/run/**.st   header comments:  (* @scans N *)  (* @cycle T#10ms *)
 tests/fixtures/errors/*.st  a line that must report an error ends with (* @error E013 *); nothing else may
                            be reported unless the file says (* @allow W005 *) or the line @cascade E013
 """
+
 from __future__ import annotations
 
 import json
@@ -83,6 +84,7 @@ def test_run_fixture(path: Path):
     plc = PLC.from_files(str(path), cycle=cycle)
     plc.scan(scans)
     from st.runtime.values import to_json
+
     failures = []
     for var, raw in expects:
         expected = json.loads(raw)

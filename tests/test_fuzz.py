@@ -1,6 +1,7 @@
 """The fuzzer (st/testing/fuzz.py): a seeded, time-bounded run over mutated example programs finds
 no defect (no traceback, no internal error, no raw fault, no hang); and the fuzzer's own parts
 do what they say. The long run is bench/fuzz_programs.py (bench/README.md)."""
+
 import random
 import threading
 import time
@@ -53,14 +54,18 @@ def test_mutated_example_programs_never_crash_the_compiler_or_the_runtime():
                 reports.append(f"mutant({SEED}, {i}) of {base}: {o.cls}: {sig}\n  {o.detail}\n--- shrunk:\n{small}")
         finally:
             w.close()
-        pytest.fail(f"{len(defects)} defect signature(s) in {MUTANTS} mutants of seed {SEED} "
-                    f"(outcomes {counts}):\n\n" + "\n\n".join(reports), pytrace=False)
+        pytest.fail(
+            f"{len(defects)} defect signature(s) in {MUTANTS} mutants of seed {SEED} "
+            f"(outcomes {counts}):\n\n" + "\n\n".join(reports),
+            pytrace=False,
+        )
     assert sum(counts.values()) == MUTANTS
-    assert counts.get("diagnostics", 0) > 0 and counts.get("ok", 0) > 0      # both sides were reached
+    assert counts.get("diagnostics", 0) > 0 and counts.get("ok", 0) > 0  # both sides were reached
     assert sum(n for c, n in counts.items() if c.startswith("fault:")) > 0
 
 
 # ---------------------------------------------------------------------- the mutator
+
 
 def test_mutants_are_a_pure_function_of_seed_and_index():
     programs = corpus()
@@ -101,8 +106,16 @@ def test_a_fault_statement_comes_with_its_variables():
     m = "".join(fuzz._mutate_once(fuzz.tokens(text), random.Random(3), "fault-statement"))
     k = next(w for w in fuzz.tokens(m) if w.startswith("x_f"))[3:]
     assert f"x_f{k} : DINT := 7" in m
-    assert run_one(m).cls in ("ok", "fault:DIV0", "fault:INDEX", "fault:RANGE", "fault:CONVERSION", "fault:NULL",
-                              "fault:WATCHDOG", "fault:LOOP")
+    assert run_one(m).cls in (
+        "ok",
+        "fault:DIV0",
+        "fault:INDEX",
+        "fault:RANGE",
+        "fault:CONVERSION",
+        "fault:NULL",
+        "fault:WATCHDOG",
+        "fault:LOOP",
+    )
 
 
 def test_literals_are_replaced_by_extremes_of_their_kind_most_of_the_time():
@@ -115,30 +128,39 @@ def test_literals_are_replaced_by_extremes_of_their_kind_most_of_the_time():
 
 # ---------------------------------------------------------------------- the classifier
 
-PROGRAM = ("PROGRAM main\nVAR x : DINT := 1; d : DINT; a : ARRAY[0..3] OF INT; r : LREAL := 1.0E30; "
-           "p : REF_TO DINT; w : WORD := 1; END_VAR\n{}\nEND_PROGRAM\n")
-RECURSIVE = ("FUNCTION_BLOCK FB_r\nMETHOD m : DINT\nVAR_INPUT n : DINT; END_VAR\nm := THIS^.m(n + 1);\n"
-             "END_METHOD\nEND_FUNCTION_BLOCK\n"
-             "PROGRAM main\nVAR f : FB_r; x : DINT; END_VAR\nx := f.m(0);\nEND_PROGRAM\n")
-SELF_CALL = ("FUNCTION F : DINT\nVAR_INPUT n : DINT; END_VAR\nF := F(n + 1);\nEND_FUNCTION\n"
-             "PROGRAM main\nVAR x : DINT; END_VAR\nx := F(0);\nEND_PROGRAM\n")
+PROGRAM = (
+    "PROGRAM main\nVAR x : DINT := 1; d : DINT; a : ARRAY[0..3] OF INT; r : LREAL := 1.0E30; "
+    "p : REF_TO DINT; w : WORD := 1; END_VAR\n{}\nEND_PROGRAM\n"
+)
+RECURSIVE = (
+    "FUNCTION_BLOCK FB_r\nMETHOD m : DINT\nVAR_INPUT n : DINT; END_VAR\nm := THIS^.m(n + 1);\n"
+    "END_METHOD\nEND_FUNCTION_BLOCK\n"
+    "PROGRAM main\nVAR f : FB_r; x : DINT; END_VAR\nx := f.m(0);\nEND_PROGRAM\n"
+)
+SELF_CALL = (
+    "FUNCTION F : DINT\nVAR_INPUT n : DINT; END_VAR\nF := F(n + 1);\nEND_FUNCTION\n"
+    "PROGRAM main\nVAR x : DINT; END_VAR\nx := F(0);\nEND_PROGRAM\n"
+)
 
 
-@pytest.mark.parametrize("source, cls", [
-    (PROGRAM.format("x := x + 1;"), "ok"),
-    (PROGRAM.format("x := x + ;"), "diagnostics"),
-    (PROGRAM.format("x := y;"), "diagnostics"),
-    (PROGRAM.format("x := x / d;"), "fault:DIV0"),
-    (PROGRAM.format("WHILE TRUE DO x := x + 1; END_WHILE;"), "fault:WATCHDOG"),
-    (PROGRAM.format("a[x + 10] := 1;"), "fault:INDEX"),
-    (PROGRAM.format("x := p^;"), "fault:NULL"),
-    (PROGRAM.format("x := LREAL_TO_DINT(r);"), "fault:CONVERSION"),
-    (PROGRAM.format("w := SHL(w, d - 1);"), "fault:RANGE"),
-    (PROGRAM.format("FOR x := 0 TO 10 BY d DO END_FOR;"), "fault:LOOP"),
-    (RECURSIVE, "fault:RECURSION"),
-    (SELF_CALL, "diagnostics"),                                    # E032
-    ("PROGRAM main\nVAR x : DINT; END_VAR\nx := 1;\n", "diagnostics"),                    # cut short
-])
+@pytest.mark.parametrize(
+    "source, cls",
+    [
+        (PROGRAM.format("x := x + 1;"), "ok"),
+        (PROGRAM.format("x := x + ;"), "diagnostics"),
+        (PROGRAM.format("x := y;"), "diagnostics"),
+        (PROGRAM.format("x := x / d;"), "fault:DIV0"),
+        (PROGRAM.format("WHILE TRUE DO x := x + 1; END_WHILE;"), "fault:WATCHDOG"),
+        (PROGRAM.format("a[x + 10] := 1;"), "fault:INDEX"),
+        (PROGRAM.format("x := p^;"), "fault:NULL"),
+        (PROGRAM.format("x := LREAL_TO_DINT(r);"), "fault:CONVERSION"),
+        (PROGRAM.format("w := SHL(w, d - 1);"), "fault:RANGE"),
+        (PROGRAM.format("FOR x := 0 TO 10 BY d DO END_FOR;"), "fault:LOOP"),
+        (RECURSIVE, "fault:RECURSION"),
+        (SELF_CALL, "diagnostics"),  # E032
+        ("PROGRAM main\nVAR x : DINT; END_VAR\nx := 1;\n", "diagnostics"),  # cut short
+    ],
+)
 def test_the_classifier_names_each_outcome(source, cls):
     assert run_one(source).cls == cls
 
@@ -148,22 +170,25 @@ def test_an_exception_out_of_the_compiler_is_an_internal_defect(monkeypatch):
 
     def broken(*a, **k):
         raise KeyError("boom")
+
     monkeypatch.setattr(st.api, "compile_text", broken)
     o = run_one(PROGRAM.format("x := 1;"))
     assert (o.cls, o.defect) == ("internal", True)
-    assert o.signature == "compile: KeyError"           # no frame of st/ below run_one
+    assert o.signature == "compile: KeyError"  # no frame of st/ below run_one
 
 
 def test_an_error_without_a_location_is_an_internal_defect(monkeypatch):
     import st.api
     from st.diagnostics import Diagnostic, Severity
     from st.source import Span
+
     real = st.api.compile_text
 
     def unlocated(*a, **k):
         c = real(*a, **k)
         c.diagnostics = [Diagnostic("E013", Severity.ERROR, Span("fuzz.st", 0, 0), "type mismatch 'x'")]
         return c
+
     monkeypatch.setattr(st.api, "compile_text", unlocated)
     o = run_one(PROGRAM.format("x := x + ;"))
     assert (o.cls, o.signature) == ("internal", "unlocated E013 type mismatch '…'")
@@ -174,7 +199,8 @@ def test_python_text_in_a_fault_is_a_raw_fault_defect(monkeypatch):
 
     def leaky(x):
         raise ValueError("math domain error")
-    monkeypatch.setitem(default_library(False, "ms").helpers, "_std_sin", leaky)   # the one compiles use
+
+    monkeypatch.setitem(default_library(False, "ms").helpers, "_std_sin", leaky)  # the one compiles use
     o = run_one(PROGRAM.format("x := LREAL_TO_DINT(SIN(DINT_TO_LREAL(x)));"))
     assert (o.cls, o.signature) == ("raw-fault", "[FAULT] ValueError: math domain error")
 
@@ -182,14 +208,14 @@ def test_python_text_in_a_fault_is_a_raw_fault_defect(monkeypatch):
 @pytest.mark.slow
 def test_a_mutant_that_outlasts_the_timeout_is_a_timeout_and_the_worker_is_replaced():
     endless = PROGRAM.format("WHILE TRUE DO x := x + 1; END_WHILE;")
-    worker = Worker(timeout=3, watchdog="60s")        # the PLC's own watchdog would come too late
+    worker = Worker(timeout=3, watchdog="60s")  # the PLC's own watchdog would come too late
     try:
         assert worker.classify(endless) == Outcome("timeout", "timeout in scan", "more than 3 s")
-        assert worker.classify(PROGRAM.format("x := 2;")).cls == "ok"             # a fresh worker answers
+        assert worker.classify(PROGRAM.format("x := 2;")).cls == "ok"  # a fresh worker answers
         assert worker.restarts == 1
     finally:
         worker.close()
-    assert run_one(endless, timeout=20).cls == "fault:WATCHDOG"                  # the usual 100 ms watchdog
+    assert run_one(endless, timeout=20).cls == "fault:WATCHDOG"  # the usual 100 ms watchdog
 
 
 @pytest.mark.slow
@@ -198,7 +224,7 @@ def test_a_worker_that_dies_is_a_crash_and_is_replaced():
     try:
         assert worker.classify(PROGRAM.format("x := 2;")).cls == "ok"
         proc = worker.proc
-        threading.Timer(1.0, proc.kill).start()                                   # dies in the endless scan
+        threading.Timer(1.0, proc.kill).start()  # dies in the endless scan
         t0 = time.monotonic()
         o = worker.classify(PROGRAM.format("WHILE TRUE DO x := x + 1; END_WHILE;"))
         assert (o.cls, o.signature) == ("crash", "worker died in scan (exit -9)")
@@ -211,6 +237,7 @@ def test_a_worker_that_dies_is_a_crash_and_is_replaced():
 def test_shrinking_keeps_the_signature_and_drops_the_rest():
     def check(text):
         return Outcome("internal", "boom") if "BOOM" in text else Outcome("ok")
+
     src = "line one;\nline two;\nx := BOOM + 1;\nline four;\n"
     assert shrink(src, "boom", check) == "BOOM"
     calls = []
@@ -218,6 +245,6 @@ def test_shrinking_keeps_the_signature_and_drops_the_rest():
     def counted(text):
         calls.append(text)
         return check(text)
+
     shrink(src * 50, "boom", counted, budget=25)
     assert len(calls) <= 25
-

@@ -4,6 +4,7 @@ A change to code generation shows here as a diff of the Python it prints. When t
 meant, rewrite the files with `ST_UPDATE_GOLDEN=1 pytest tests/test_golden.py` and review the
 diff in version control.
 """
+
 from __future__ import annotations
 
 import difflib
@@ -34,10 +35,14 @@ def test_generated_python_is_the_golden_one(name):
         return
     want = py_path.read_text() if py_path.exists() else ""
     if got != want:
-        diff = "".join(difflib.unified_diff(want.splitlines(True), got.splitlines(True),
-                                            f"golden/{name}.py", f"generated from golden/{name}.st"))
-        pytest.fail(f"the generated Python of golden/{name}.st changed "
-                    f"(ST_UPDATE_GOLDEN=1 rewrites it):\n{diff}", pytrace=False)
+        diff = "".join(
+            difflib.unified_diff(
+                want.splitlines(True), got.splitlines(True), f"golden/{name}.py", f"generated from golden/{name}.st"
+            )
+        )
+        pytest.fail(
+            f"the generated Python of golden/{name}.st changed (ST_UPDATE_GOLDEN=1 rewrites it):\n{diff}", pytrace=False
+        )
 
 
 def test_there_are_golden_programs():
@@ -46,26 +51,31 @@ def test_there_are_golden_programs():
 
 def test_emit_python_marks_each_statement_with_its_st_line(tmp_path):
     f = tmp_path / "e.st"
-    f.write_text("FUNCTION Twice : INT\n"
-                 "VAR_INPUT x : INT; END_VAR\n"
-                 "IF x > 10 THEN\n"
-                 "  Twice := 0;\n"
-                 "ELSIF x > 5 THEN\n"
-                 "  Twice := 1;\n"
-                 "ELSE\n"
-                 "  Twice := x * 2;\n"
-                 "END_IF;\n"
-                 "END_FUNCTION\n"
-                 "PROGRAM p\n"
-                 "VAR y : INT; i : INT; END_VAR\n"
-                 "FOR i := 1 TO 3 DO\n"
-                 "  y := Twice(y + 1);\n"
-                 "END_FOR;\n"
-                 "END_PROGRAM\n")
-    r = subprocess.run([sys.executable, "-m", "st", "compile", str(f), "--emit", "python"],
-                       capture_output=True, text=True, timeout=120)
+    f.write_text(
+        "FUNCTION Twice : INT\n"
+        "VAR_INPUT x : INT; END_VAR\n"
+        "IF x > 10 THEN\n"
+        "  Twice := 0;\n"
+        "ELSIF x > 5 THEN\n"
+        "  Twice := 1;\n"
+        "ELSE\n"
+        "  Twice := x * 2;\n"
+        "END_IF;\n"
+        "END_FUNCTION\n"
+        "PROGRAM p\n"
+        "VAR y : INT; i : INT; END_VAR\n"
+        "FOR i := 1 TO 3 DO\n"
+        "  y := Twice(y + 1);\n"
+        "END_FOR;\n"
+        "END_PROGRAM\n"
+    )
+    r = subprocess.run(
+        [sys.executable, "-m", "st", "compile", str(f), "--emit", "python"], capture_output=True, text=True, timeout=120
+    )
     assert r.returncode == 0, r.stderr
-    assert r.stdout == f"""\
+    assert (
+        r.stdout
+        == f"""\
 # ---- generated from {f}
 def _fn_Twice(x):  # st:1
     Twice = 0  # st:1
@@ -100,3 +110,4 @@ class _prg_p(_FB):  # st:11
             self.i = i  # st:16
             self.y = y  # st:16
 """
+    )

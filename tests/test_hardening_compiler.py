@@ -1,5 +1,6 @@
 """Hardening of the compiler: no input crashes it, resource limits are located errors, `st check`
 refuses what `st run` could not start, and generated names never collide."""
+
 import keyword
 import subprocess
 import sys
@@ -25,6 +26,7 @@ def _program(body: str, decls: str = "y : DINT;") -> str:
 
 # ---------------------------------------------------------------------- inputs that crashed it
 
+
 def test_an_unknown_dialect_pragma_is_a_located_error(tmp_path):
     src = "(* a header *)\n  {dialect 'foo'}\n" + _program("y := 1;")
     f = tmp_path / "p.st"
@@ -40,36 +42,50 @@ def test_an_unknown_dialect_pragma_through_the_api_is_a_diagnostic_like_any_othe
     src = "{dialect 'bogus'}\n" + _program("y := 1;")
     assert _errors(src, "p.st") == [("E045", 1, 11, "unknown dialect 'bogus' in a {dialect} pragma")]
     with pytest.raises(Exception) as info:
-        compile_text(src, "p.st", use_cache=False)          # raise_on_error=True: the CompileError
+        compile_text(src, "p.st", use_cache=False)  # raise_on_error=True: the CompileError
     assert type(info.value).__name__ == "CompileError"
 
 
 def test_a_5000_deep_member_chain_with_a_syntax_error_is_a_syntax_error():
     src = _program("y := a" + ".a" * 5000 + " 1;")
-    assert _errors(src) == [("E001", 3, 10008, "syntax error: unexpected '1'; expected '&', '(', '*', '**', '+', "
-                                               "'-', '.', '/', …")]
+    assert _errors(src) == [
+        ("E001", 3, 10008, "syntax error: unexpected '1'; expected '&', '(', '*', '**', '+', '-', '.', '/', …")
+    ]
 
 
 def test_a_date_beyond_any_calendar_is_a_malformed_literal():
     assert _errors(_program("y := DT#99999999999999999999-01-01-00:00:00;", "y : DT;")) == [
-        ("E004", 3, 6, "invalid literal 'DT#99999999999999999999-01-01-00:00:00': year 99999999999999999999 "
-                       "is out of range")]
+        (
+            "E004",
+            3,
+            6,
+            "invalid literal 'DT#99999999999999999999-01-01-00:00:00': year 99999999999999999999 is out of range",
+        )
+    ]
 
 
 def test_an_integer_literal_of_5000_digits_is_a_malformed_literal():
     assert _errors(_program("y := 16#" + "F" * 5000 + ";", "y : LWORD;")) == [
-        ("E004", 3, 6, "invalid literal '16#FFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFF…': 5000 digits: too long for any "
-                       "integer type (ULINT holds 20 decimal digits)")]
+        (
+            "E004",
+            3,
+            6,
+            "invalid literal '16#FFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFFF…': 5000 digits: too long for any "
+            "integer type (ULINT holds 20 decimal digits)",
+        )
+    ]
     # a long literal within the limit still gets the ordinary range check, with a short message
     big = "*".join(["16#" + "F" * 120] * 40)
     assert _errors(_program(f"y := {big};", "y : LWORD;")) == [
-        ("E021", 3, 6, "a value of 19200 bits does not fit in LWORD (0..18446744073709551615)")]
+        ("E021", 3, 6, "a value of 19200 bits does not fit in LWORD (0..18446744073709551615)")
+    ]
 
 
 def test_negating_a_string_in_a_constant_expression_is_a_type_error():
     assert _errors(_program("y := 7 * -'a';")) == [
         ("E014", 3, 6, "operator * cannot combine integer literal and STRING[1]"),
-        ("E014", 3, 10, "operator - cannot be applied to STRING[1]")]
+        ("E014", 3, 10, "operator - cannot be applied to STRING[1]"),
+    ]
 
 
 def test_assigning_to_an_enumeration_value_is_an_error_not_an_internal_one():
@@ -88,13 +104,16 @@ def test_a_library_block_cannot_be_replaced_by_a_function():
     # found by the fuzzer (bench/fuzz_programs.py, seed 2, mutant 19991): FUNCTION R_TRIG made the
     # standard library's own code (F_TRIG's R_TRIG instance) fail inside the library file
     src = "FUNCTION R_TRIG : REAL\nVAR_INPUT x : REAL; END_VAR\nR_TRIG := x;\nEND_FUNCTION\n" + _program("y := 1;")
-    assert _errors(src) == [("E011", 1, 10, "'R_TRIG' is a function block of the standard library; "
-                                            "a FUNCTION cannot replace it")]
+    assert _errors(src) == [
+        ("E011", 1, 10, "'R_TRIG' is a function block of the standard library; a FUNCTION cannot replace it")
+    ]
 
 
 def test_a_library_block_replaced_by_a_block_is_a_warning_and_the_replacement_runs():
-    src = ("FUNCTION_BLOCK R_TRIG\nVAR_INPUT CLK : BOOL; END_VAR\nVAR_OUTPUT Q : BOOL; END_VAR\nQ := NOT CLK;\n"
-           "END_FUNCTION_BLOCK\n" + _program("t(CLK := FALSE); y := BOOL_TO_DINT(t.Q);", "y : DINT; t : R_TRIG;"))
+    src = (
+        "FUNCTION_BLOCK R_TRIG\nVAR_INPUT CLK : BOOL; END_VAR\nVAR_OUTPUT Q : BOOL; END_VAR\nQ := NOT CLK;\n"
+        "END_FUNCTION_BLOCK\n" + _program("t(CLK := FALSE); y := BOOL_TO_DINT(t.Q);", "y : DINT; t : R_TRIG;")
+    )
     r = compile_text(src, "t.st", raise_on_error=False, use_cache=False)
     assert [(d.code, d.span.line) for d in r.diagnostics if d.span.file == "t.st"] == [("W004", 1)]
     plc = PLC(r)
@@ -104,13 +123,16 @@ def test_a_library_block_replaced_by_a_block_is_a_warning_and_the_replacement_ru
 
 def test_a_parser_failure_is_an_internal_error_diagnostic_not_an_exception(monkeypatch):
     from st.compiler import driver
+
     parser, _ = driver._get_parser()
 
     def broken(src):
         raise KeyError("boom")
+
     monkeypatch.setattr(parser, "parse", broken)
     assert _errors(_program("y := 1;"), "broken.st") == [
-        ("E099", 1, 1, "internal compiler error while parsing: KeyError: 'boom'")]
+        ("E099", 1, 1, "internal compiler error while parsing: KeyError: 'boom'")
+    ]
 
 
 def test_a_one_megabyte_string_literal_is_lexed_in_linear_memory():
@@ -121,26 +143,34 @@ def test_a_one_megabyte_string_literal_is_lexed_in_linear_memory():
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert [d.code for d in r.diagnostics] == ["W003"]       # truncated to STRING[80]: a warning only
-    assert peak < 64 * 2**20, f"{peak / 2**20:.0f} MiB"       # it took 876 MB with a backtracking lexer rule
+    assert [d.code for d in r.diagnostics] == ["W003"]  # truncated to STRING[80]: a warning only
+    assert peak < 64 * 2**20, f"{peak / 2**20:.0f} MiB"  # it took 876 MB with a backtracking lexer rule
 
 
 # ---------------------------------------------------------------------- resource limits
 
+
 def _struct_chain(n: int) -> str:
-    return ("TYPE\n" + "".join(f"S{i} : STRUCT a : S{i + 1}; END_STRUCT;\n" for i in range(n))
-            + f"S{n} : STRUCT a : INT; END_STRUCT;\nEND_TYPE\n"
-            + _program(f"v{'.a' * (n + 1)} := v{'.a' * (n + 1)} + 1;", "v : S0;"))
+    return (
+        "TYPE\n"
+        + "".join(f"S{i} : STRUCT a : S{i + 1}; END_STRUCT;\n" for i in range(n))
+        + f"S{n} : STRUCT a : INT; END_STRUCT;\nEND_TYPE\n"
+        + _program(f"v{'.a' * (n + 1)} := v{'.a' * (n + 1)} + 1;", "v : S0;")
+    )
 
 
 def _block_chain(n: int) -> str:
-    return ("".join(f"FUNCTION_BLOCK F{i}\nVAR f : F{i + 1}; END_VAR\nf();\nEND_FUNCTION_BLOCK\n" for i in range(n))
-            + f"FUNCTION_BLOCK F{n}\nVAR x : INT; END_VAR\nx := x + 1;\nEND_FUNCTION_BLOCK\n"
-            + _program("f();", "f : F0;"))
+    return (
+        "".join(f"FUNCTION_BLOCK F{i}\nVAR f : F{i + 1}; END_VAR\nf();\nEND_FUNCTION_BLOCK\n" for i in range(n))
+        + f"FUNCTION_BLOCK F{n}\nVAR x : INT; END_VAR\nx := x + 1;\nEND_FUNCTION_BLOCK\n"
+        + _program("f();", "f : F0;")
+    )
 
 
-NESTED = "this declaration's type nests 101 levels deep (structures, arrays and function blocks inside each " \
-         "other; at most 100)"
+NESTED = (
+    "this declaration's type nests 101 levels deep (structures, arrays and function blocks inside each "
+    "other; at most 100)"
+)
 
 
 def test_600_nested_structures_are_refused_where_the_nesting_crosses_the_limit():
@@ -152,7 +182,9 @@ def test_a_1000_deep_chain_of_blocks_is_refused_where_the_nesting_crosses_the_li
     assert _errors(_block_chain(1000)) == [("E041", 3598, 5, NESTED)]
 
 
-@pytest.mark.parametrize("make, path", [(_struct_chain, "main.v" + ".a" * 100), (_block_chain, "main.f" + ".f" * 99 + ".x")])
+@pytest.mark.parametrize(
+    "make, path", [(_struct_chain, "main.v" + ".a" * 100), (_block_chain, "main.f" + ".f" * 99 + ".x")]
+)
 def test_the_deepest_nesting_allowed_checks_starts_and_runs(make, path):
     plc = PLC.from_source(make(99), name="deep.st", use_cache=False)
     plc.scan(3)
@@ -166,40 +198,51 @@ VAR v : ARRAY[1..3] OF S; w : ARRAY[1..20000] OF ARRAY[1..20000] OF INT; ok : AR
 ok[1] := 1;
 END_PROGRAM
 """
-    assert _errors(src) == [("E042", 1, 17, "this declaration holds 100,000,000 values (at most 50,000,000)"),
-                            ("E042", 3, 27, "this declaration holds 400,000,000 values (at most 50,000,000)")]
+    assert _errors(src) == [
+        ("E042", 1, 17, "this declaration holds 100,000,000 values (at most 50,000,000)"),
+        ("E042", 3, 27, "this declaration holds 400,000,000 values (at most 50,000,000)"),
+    ]
 
 
 # ---------------------------------------------------------------------- st check finds what st run refuses
 
+
 def test_addresses_the_process_image_cannot_hold_are_refused_by_the_checker():
-    src = _program("y := TRUE; %QW1024 := 5; %MX0.0 := TRUE;",
-                   "y AT %QX9000.0 : BOOL; z AT %IW5000 : INT; b AT %QX1.9 : BOOL; w AT %QX3 : BOOL;")
+    src = _program(
+        "y := TRUE; %QW1024 := 5; %MX0.0 := TRUE;",
+        "y AT %QX9000.0 : BOOL; z AT %IW5000 : INT; b AT %QX1.9 : BOOL; w AT %QX3 : BOOL;",
+    )
     assert _errors(src) == [
         ("E004", 2, 5, "%QX9000.0 is outside the process image (1024 entries per table)"),
         ("E004", 2, 28, "%IW5000 is outside the process image (1024 entries per table)"),
         ("E004", 2, 48, "%QX1.9: bit 9 is not 0..7"),
         ("E004", 2, 68, "%QX3: a bit address needs byte.bit, e.g. %QX0.0"),
-        ("E004", 3, 12, "%QW1024 is outside the process image (1024 entries per table)")]
+        ("E004", 3, 12, "%QW1024 is outside the process image (1024 entries per table)"),
+    ]
     # the last cell of each table is fine
     assert _errors(_program("%QW1023 := 1; %IX1023.7 := TRUE;", "m AT %MD1023 : DINT; q AT %QX1023.7 : BOOL;")) == []
 
 
-@pytest.mark.parametrize("t", ["STRING", "WSTRING[4]", "CHAR", "REFERENCE TO INT", "REF_TO INT", "POINTER TO INT",
-                               "ARRAY[0..1] OF INT", "TON"])
+@pytest.mark.parametrize(
+    "t",
+    ["STRING", "WSTRING[4]", "CHAR", "REFERENCE TO INT", "REF_TO INT", "POINTER TO INT", "ARRAY[0..1] OF INT", "TON"],
+)
 def test_a_located_variable_must_be_a_value_one_image_cell_holds(t):
     # found by the fuzzer (bench/fuzz_programs.py, seed 1, mutant 15407): `x AT %MW2 : REFERENCE TO INT`
     # checked clean, then crashed the start-up with a TypeError
     src = _program("", f"y : DINT;\n  x AT %MW2 : {t};")
-    assert _errors(src) == [("E013", 3, 3, f"'%MW2' is one cell of the process image; it cannot hold a value of type {t}")]
+    assert _errors(src) == [
+        ("E013", 3, 3, f"'%MW2' is one cell of the process image; it cannot hold a value of type {t}")
+    ]
 
 
 @pytest.mark.parametrize("t, value", [("INT", 0), ("WORD", 0), ("UINT(1..5)", 1), ("E", "A")])
 def test_numbers_bit_strings_subranges_and_enumerations_are_located(t, value):
-    plc = PLC.from_source("TYPE E : (A, B); END_TYPE\n" + _program("x := x;", f"y : DINT;\n  x AT %MW2 : {t};"),
-                          use_cache=False)
+    plc = PLC.from_source(
+        "TYPE E : (A, B); END_TYPE\n" + _program("x := x;", f"y : DINT;\n  x AT %MW2 : {t};"), use_cache=False
+    )
     plc.scan()
-    assert plc["%MW2"] == value            # the initial value (a subrange's starts at its low bound)
+    assert plc["%MW2"] == value  # the initial value (a subrange's starts at its low bound)
 
 
 def test_a_var_config_address_outside_the_image_is_refused_by_the_checker():
@@ -217,7 +260,8 @@ END_CONFIGURATION
 """
     errs = _errors(src)
     assert [(c, line, m) for c, line, _, m in errs] == [
-        ("E004", 10, "%QW4096 is outside the process image (1024 entries per table)")]
+        ("E004", 10, "%QW4096 is outside the process image (1024 entries per table)")
+    ]
 
 
 # ---------------------------------------------------------------------- generated names
@@ -264,9 +308,15 @@ def test_names_that_used_to_collide_are_separate_variables():
     # configuration's R_y and resource R's y: each its own variable (and no false "declared twice")
     plc = PLC.from_source(NAMES, name="names.st", use_cache=False)
     plc.scan(3)
-    assert [plc["p.x.out"], plc["p.z.out"], plc["p.r1"], plc["p.r2"], plc["p.y"], plc["p.R_y"]] == \
-        [3, 30, 3, 300, 8, 13]
-    assert [plc["p.d1"], plc["p.d2"], plc["%QX0.1"]] == [True, True, True]   # one cell, however it is spelled
+    assert [plc["p.x.out"], plc["p.z.out"], plc["p.r1"], plc["p.r2"], plc["p.y"], plc["p.R_y"]] == [
+        3,
+        30,
+        3,
+        300,
+        8,
+        13,
+    ]
+    assert [plc["p.d1"], plc["p.d2"], plc["%QX0.1"]] == [True, True, True]  # one cell, however it is spelled
 
 
 def test_a_global_declared_twice_in_the_same_scope_is_reported_whatever_its_case():
@@ -274,7 +324,7 @@ def test_a_global_declared_twice_in_the_same_scope_is_reported_whatever_its_case
     assert _errors(src) == [("E011", 2, 12, "global 'SPEED' is declared twice (first at t.st:1)")]
 
 
-_ident = st_.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,7}", fullmatch=True)     # ST identifiers
+_ident = st_.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,7}", fullmatch=True)  # ST identifiers
 
 
 def _unqualify(name: str) -> list:

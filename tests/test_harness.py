@@ -1,4 +1,5 @@
 """Python-side testing helpers: TestPLC (pulse, run_until, trace, set), FB and function handles."""
+
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as hs
@@ -32,9 +33,9 @@ END_FUNCTION
 def test_run_until_trace_pulse_and_set():
     p = TestPLC.from_source(BLINK, cycle="10ms")
     p.set({"main.start": True})
-    assert p.run_until("main.lamp") == 60_000_000          # TON at 0, Q at 50 ms: the 6th scan
+    assert p.run_until("main.lamp") == 60_000_000  # TON at 0, Q at 50 ms: the 6th scan
     rows = p.trace(["main.lamp", "main.n"], "120ms")
-    assert [r[1]["main.n"] for r in rows] == [1] * 6 + [2] * 6     # TON restarts at 70 ms, Q at 120 ms
+    assert [r[1]["main.n"] for r in rows] == [1] * 6 + [2] * 6  # TON restarts at 70 ms, Q at 120 ms
     assert rows[0][0] == 70_000_000 and rows[-1][0] == 180_000_000
     with pytest.raises(AssertionError, match=r"<lambda> did not become true within 0.05 s of PLC time"):
         p.run_until(lambda q: q["main.n"] > 100, timeout="50ms")
@@ -81,11 +82,12 @@ def test_batch_counter_never_passes_the_batch_size(parts, size):
 
 
 def test_api_writes_of_bad_values_are_value_errors():
-    p = TestPLC.from_source("TYPE Color : (Red, Green); END_TYPE\n"
-                            "PROGRAM main VAR t : TIME; r : REAL; c : Color; END_VAR END_PROGRAM")
+    p = TestPLC.from_source(
+        "TYPE Color : (Red, Green); END_TYPE\nPROGRAM main VAR t : TIME; r : REAL; c : Color; END_VAR END_PROGRAM"
+    )
     with pytest.raises(ValueError, match="main.t: empty duration"):
         p["main.t"] = ""
     with pytest.raises(ValueError, match="main.r: the value is too large for REAL"):
-        p["main.r"] = 10 ** 400
+        p["main.r"] = 10**400
     with pytest.raises(ValueError, match="main.c: True is not a value of Color"):
         p["main.c"] = True

@@ -1,4 +1,5 @@
 """Language corners: lexing, comments, case, literals, name safety, the generated code."""
+
 from __future__ import annotations
 
 import pytest
@@ -9,8 +10,7 @@ from st.grammar.comments import strip_comments
 
 
 def run(body: str, decls: str = "", scans: int = 1, extra: str = "", **kw) -> PLC:
-    plc = PLC.from_source(f"{extra}\nPROGRAM main\nVAR\n{decls}\nEND_VAR\n{body}\nEND_PROGRAM\n",
-                          use_cache=False, **kw)
+    plc = PLC.from_source(f"{extra}\nPROGRAM main\nVAR\n{decls}\nEND_VAR\n{body}\nEND_PROGRAM\n", use_cache=False, **kw)
     plc.scan(scans)
     return plc
 
@@ -38,15 +38,14 @@ def test_strings_protect_comment_markers():
 
 def test_openplc_debug_comment_megabytes_long_and_eof_inside_comment_line():
     dbg = "(*DBG:" + "x" * 2_000_000 + "*)"
-    src = ("PROGRAM main\nVAR a : INT; END_VAR\na := a + 1;\nEND_PROGRAM\n" + dbg + "\n// last line, no newline")
+    src = "PROGRAM main\nVAR a : INT; END_VAR\na := a + 1;\nEND_PROGRAM\n" + dbg + "\n// last line, no newline"
     plc = PLC.from_source(src, use_cache=False)
     plc.scan(2)
     assert plc["main.a"] == 2
 
 
 def test_keywords_and_identifiers_are_case_insensitive():
-    src = ("program Main\nvar Counter : int; END_var\nif TRUE then counter := COUNTER + 1; end_if;\n"
-           "End_Program\n")
+    src = "program Main\nvar Counter : int; END_var\nif TRUE then counter := COUNTER + 1; end_if;\nEnd_Program\n"
     plc = PLC.from_source(src, use_cache=False)
     plc.scan(3)
     assert plc["MAIN.counter"] == 3
@@ -54,17 +53,28 @@ def test_keywords_and_identifiers_are_case_insensitive():
 
 
 def test_soft_keywords_work_as_identifiers():
-    plc = run("step := step + 1; on := NOT on; action := step * 2; from := 1;",
-              "step : INT; on : BOOL; action : INT; from : INT;", scans=3)
+    plc = run(
+        "step := step + 1; on := NOT on; action := step * 2; from := 1;",
+        "step : INT; on : BOOL; action : INT; from : INT;",
+        scans=3,
+    )
     assert (plc["main.step"], plc["main.on"], plc["main.action"], plc["main.from"]) == (3, True, 6, 1)
 
 
 def test_python_keywords_and_builtins_as_st_names_are_harmless():
-    plc = run("def := 1; len := def + 1; self := len * 2; class := CONCAT('a', 'b'); print := LEN(class);"
-              "u_x_ := 5; _x := 6;",
-              "def : INT; len : INT; self : INT; class : STRING; print : INT; _x : INT; u_x_ : INT;")
-    assert [plc[f"main.{n}"] for n in ("def", "len", "self", "class", "print", "_x", "u_x_")] == \
-        [1, 2, 4, "ab", 2, 6, 5]
+    plc = run(
+        "def := 1; len := def + 1; self := len * 2; class := CONCAT('a', 'b'); print := LEN(class);u_x_ := 5; _x := 6;",
+        "def : INT; len : INT; self : INT; class : STRING; print : INT; _x : INT; u_x_ : INT;",
+    )
+    assert [plc[f"main.{n}"] for n in ("def", "len", "self", "class", "print", "_x", "u_x_")] == [
+        1,
+        2,
+        4,
+        "ab",
+        2,
+        6,
+        5,
+    ]
 
 
 def test_strings_cannot_inject_code():
@@ -74,34 +84,71 @@ def test_strings_cannot_inject_code():
 
 
 def test_every_literal_form():
-    decls = ("a : INT; b : DINT; c : BYTE; d : SINT; e : REAL; f : TIME; g : TIME; h : TIME; i : DATE;"
-             "j : TOD; k : DT; l : STRING; m : WSTRING; n : BOOL; o : LTIME; p : WORD;")
-    body = ("a := INT#5; b := 16#FF; c := 2#1010_0101; d := 8#17; e := 1.5E3; f := T#1h2m3s4ms5us6ns;"
-            "g := T#1.5s; h := TIME#-5s; i := D#2024-01-31; j := TOD#12:30:15.5; k := DT#2024-01-31-12:30:00;"
-            "l := 'text $N $'quote$' $41'; m := \"wide $\"q$\"\"; n := TRUE; o := LTIME#1d; p := WORD#16#ABCD;")
+    decls = (
+        "a : INT; b : DINT; c : BYTE; d : SINT; e : REAL; f : TIME; g : TIME; h : TIME; i : DATE;"
+        "j : TOD; k : DT; l : STRING; m : WSTRING; n : BOOL; o : LTIME; p : WORD;"
+    )
+    body = (
+        "a := INT#5; b := 16#FF; c := 2#1010_0101; d := 8#17; e := 1.5E3; f := T#1h2m3s4ms5us6ns;"
+        "g := T#1.5s; h := TIME#-5s; i := D#2024-01-31; j := TOD#12:30:15.5; k := DT#2024-01-31-12:30:00;"
+        "l := 'text $N $'quote$' $41'; m := \"wide $\"q$\"\"; n := TRUE; o := LTIME#1d; p := WORD#16#ABCD;"
+    )
     plc = run(body, decls)
     v = plc.variables()
-    assert v == {"main.a": 5, "main.b": 255, "main.c": 165, "main.d": 15, "main.e": 1500.0,
-                 "main.f": "T#1h2m3s4ms5us6ns", "main.g": "T#1s500ms", "main.h": "T#-5s",
-                 "main.i": "D#2024-01-31", "main.j": "TOD#12:30:15.5", "main.k": "DT#2024-01-31-12:30:00",
-                 "main.l": "text \n 'quote' A", "main.m": 'wide "q"', "main.n": True, "main.o": "LTIME#1d",
-                 "main.p": 43981}
+    assert v == {
+        "main.a": 5,
+        "main.b": 255,
+        "main.c": 165,
+        "main.d": 15,
+        "main.e": 1500.0,
+        "main.f": "T#1h2m3s4ms5us6ns",
+        "main.g": "T#1s500ms",
+        "main.h": "T#-5s",
+        "main.i": "D#2024-01-31",
+        "main.j": "TOD#12:30:15.5",
+        "main.k": "DT#2024-01-31-12:30:00",
+        "main.l": "text \n 'quote' A",
+        "main.m": 'wide "q"',
+        "main.n": True,
+        "main.o": "LTIME#1d",
+        "main.p": 43981,
+    }
 
 
 def test_operator_precedence_follows_the_iec_grammar():
-    plc = run("a := 2 + 3 * 4; b := 2 ** 3 ** 2; c := -2 ** 2; d := 10 - 4 - 3; x := 1 < 2 = 3 < 4;"
-              "y := TRUE OR FALSE AND FALSE; z := TRUE XOR TRUE OR TRUE; e := 7 MOD 4 * 2;",
-              "a : INT; b : LREAL; c : LREAL; d : INT; x : BOOL; y : BOOL; z : BOOL; e : INT;")
-    assert plc.variables() == {"main.a": 14, "main.b": 64.0, "main.c": 4.0, "main.d": 3, "main.x": True,
-                               "main.y": True, "main.z": True, "main.e": 6}
+    plc = run(
+        "a := 2 + 3 * 4; b := 2 ** 3 ** 2; c := -2 ** 2; d := 10 - 4 - 3; x := 1 < 2 = 3 < 4;"
+        "y := TRUE OR FALSE AND FALSE; z := TRUE XOR TRUE OR TRUE; e := 7 MOD 4 * 2;",
+        "a : INT; b : LREAL; c : LREAL; d : INT; x : BOOL; y : BOOL; z : BOOL; e : INT;",
+    )
+    assert plc.variables() == {
+        "main.a": 14,
+        "main.b": 64.0,
+        "main.c": 4.0,
+        "main.d": 3,
+        "main.x": True,
+        "main.y": True,
+        "main.z": True,
+        "main.e": 6,
+    }
 
 
 def test_integer_wraparound_division_and_mod():
-    plc = run("i := 32767; i := i + 1; u := 0; u := u - 1; b := 250; b := b + 10; q := -7 / 2; m := -7 MOD 2;"
-              "z := 5 MOD 0; d := DINT#2147483647; d := d * 2; l := 16#7FFFFFFFFFFFFFFF; l := l + 1;",
-              "i : INT; u : UINT; b : BYTE; q : INT; m : INT; z : INT; d : DINT; l : LINT;")
-    assert plc.variables() == {"main.i": -32768, "main.u": 65535, "main.b": 4, "main.q": -3, "main.m": -1,
-                               "main.z": 0, "main.d": -2, "main.l": -9223372036854775808}
+    plc = run(
+        "i := 32767; i := i + 1; u := 0; u := u - 1; b := 250; b := b + 10; q := -7 / 2; m := -7 MOD 2;"
+        "z := 5 MOD 0; d := DINT#2147483647; d := d * 2; l := 16#7FFFFFFFFFFFFFFF; l := l + 1;",
+        "i : INT; u : UINT; b : BYTE; q : INT; m : INT; z : INT; d : DINT; l : LINT;",
+    )
+    assert plc.variables() == {
+        "main.i": -32768,
+        "main.u": 65535,
+        "main.b": 4,
+        "main.q": -3,
+        "main.m": -1,
+        "main.z": 0,
+        "main.d": -2,
+        "main.l": -9223372036854775808,
+    }
 
 
 def test_real_is_single_precision_and_lreal_double():
@@ -113,9 +160,10 @@ def test_real_is_single_precision_and_lreal_double():
 
 
 def test_generated_code_carries_st_lines_and_file():
-    r = compile_text("PROGRAM main\nVAR a : INT; END_VAR\na := a + 1;\nEND_PROGRAM\n", "lines.st",
-                     use_cache=False, emit_python=True)
-    (path, code), = [(p, c) for p, c in r.modules if p == "lines.st"]
+    r = compile_text(
+        "PROGRAM main\nVAR a : INT; END_VAR\na := a + 1;\nEND_PROGRAM\n", "lines.st", use_cache=False, emit_python=True
+    )
+    ((path, code),) = [(p, c) for p, c in r.modules if p == "lines.st"]
     assert code.co_filename == "lines.st"
     cls = [c for c in code.co_consts if hasattr(c, "co_name") and c.co_name == "_prg_main"][0]
     body = [c for c in cls.co_consts if hasattr(c, "co_name") and c.co_name == "_body"][0]
@@ -135,23 +183,27 @@ def test_compile_cache_round_trip(tmp_path, monkeypatch):
     assert plc["main.a"] == 6
 
 
-@pytest.mark.parametrize("stmt,expected", [
-    ("FOR i := 1 TO 10 DO n := n + 1; END_FOR;", (11, 10)),
-    ("FOR i := 10 TO 1 BY -1 DO n := n + 1; END_FOR;", (0, 10)),
-    ("FOR i := 5 TO 1 DO n := n + 1; END_FOR;", (5, 0)),
-    ("FOR i := 1 TO 10 DO n := n + 1; IF i = 4 THEN EXIT; END_IF; END_FOR;", (4, 4)),
-    ("FOR i := 1 TO 10 BY 3 DO n := n + 1; END_FOR;", (13, 4)),
-    ("FOR i := 1 TO 6 DO IF i MOD 2 = 0 THEN CONTINUE; END_IF; n := n + 1; END_FOR;", (7, 3)),
-    ("FOR i := 1 TO 10 DO i := i + 1; n := n + 1; END_FOR;", (11, 5)),
-    ("s := 2; FOR i := 0 TO 6 BY s DO n := n + 1; END_FOR;", (8, 4)),
-    ("s := -2; FOR i := 6 TO 0 BY s DO n := n + 1; END_FOR;", (-2, 4)),
-])
+@pytest.mark.parametrize(
+    "stmt,expected",
+    [
+        ("FOR i := 1 TO 10 DO n := n + 1; END_FOR;", (11, 10)),
+        ("FOR i := 10 TO 1 BY -1 DO n := n + 1; END_FOR;", (0, 10)),
+        ("FOR i := 5 TO 1 DO n := n + 1; END_FOR;", (5, 0)),
+        ("FOR i := 1 TO 10 DO n := n + 1; IF i = 4 THEN EXIT; END_IF; END_FOR;", (4, 4)),
+        ("FOR i := 1 TO 10 BY 3 DO n := n + 1; END_FOR;", (13, 4)),
+        ("FOR i := 1 TO 6 DO IF i MOD 2 = 0 THEN CONTINUE; END_IF; n := n + 1; END_FOR;", (7, 3)),
+        ("FOR i := 1 TO 10 DO i := i + 1; n := n + 1; END_FOR;", (11, 5)),
+        ("s := 2; FOR i := 0 TO 6 BY s DO n := n + 1; END_FOR;", (8, 4)),
+        ("s := -2; FOR i := 6 TO 0 BY s DO n := n + 1; END_FOR;", (-2, 4)),
+    ],
+)
 def test_for_loop_final_values(stmt, expected):
     plc = run(stmt, "i : INT; n : INT; s : INT;")
     assert (plc["main.i"], plc["main.n"]) == expected
 
 
 def test_repeat_with_continue_still_tests_the_condition():
-    plc = run("REPEAT i := i + 1; IF i < 3 THEN CONTINUE; END_IF; n := n + 1; UNTIL i >= 5 END_REPEAT;",
-              "i : INT; n : INT;")
+    plc = run(
+        "REPEAT i := i + 1; IF i < 3 THEN CONTINUE; END_IF; n := n + 1; UNTIL i >= 5 END_REPEAT;", "i : INT; n : INT;"
+    )
     assert (plc["main.i"], plc["main.n"]) == (5, 3)

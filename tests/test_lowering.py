@@ -1,4 +1,5 @@
 """The lowering stage (compiler/lower): what code generation receives to print."""
+
 from __future__ import annotations
 
 from st.api import libraries
@@ -61,9 +62,11 @@ def test_lowering_twice_changes_nothing():
 
 
 def test_the_loops_of_unit_tests_are_guarded_too():
-    project = _project("PROGRAM main\nVAR x : INT; END_VAR\nx := x + 1;\nEND_PROGRAM\n"
-                       "TEST 'loops'\nVAR uut : main; i : INT; END_VAR\n"
-                       "FOR i := 1 TO 3 DO uut(); END_FOR;\nASSERT_EQ(uut.x, 3);\nEND_TEST\n")
+    project = _project(
+        "PROGRAM main\nVAR x : INT; END_VAR\nx := x + 1;\nEND_PROGRAM\n"
+        "TEST 'loops'\nVAR uut : main; i : INT; END_VAR\n"
+        "FOR i := 1 TO 3 DO uut(); END_FOR;\nASSERT_EQ(uut.x, 3);\nEND_TEST\n"
+    )
     loops = [s for t in project.tests for s in _loops(t.body)]
     assert len(loops) == 1 and isinstance(loops[0].body[0], A.LoopGuard)
 
@@ -100,7 +103,7 @@ def test_property_uses_become_accessor_calls():
     assert set_.target.accessor is project.pous["derived"].properties["p"].set
     assert isinstance(get.value, A.AccessorCall) and get.value.accessor is project.pous["derived"].properties["p"].get
     assert not get.value.nonvirtual
-    inner = project.pous["derived"].decl.body[0]          # P := 3 inside the block: this instance's SET
+    inner = project.pous["derived"].decl.body[0]  # P := 3 inside the block: this instance's SET
     assert isinstance(inner.target, A.AccessorCall) and inner.target.obj is None
 
 
@@ -178,8 +181,8 @@ END_PROGRAM
 def test_super_calls_run_the_base_and_other_calls_are_virtual():
     project = _project(SUPER)
     dog, animal = project.pous["dog"], project.pous["animal"]
-    assert dog.decl.body[0].call.target.nonvirtual is animal                     # SUPER^()
-    speak = dog.methods["speak"].decl.body[0].value.target.args[1].value         # SUPER^.Speak()
+    assert dog.decl.body[0].call.target.nonvirtual is animal  # SUPER^()
+    speak = dog.methods["speak"].decl.body[0].value.target.args[1].value  # SUPER^.Speak()
     assert speak.target.nonvirtual is animal
     main = project.pous["main"].decl.body
     assert main[0].call.target.nonvirtual is None and main[1].value.target.nonvirtual is None

@@ -1,6 +1,7 @@
 """The Modbus TCP slave, driven by clients that are not pymodbus: umodbus (PyPI), mbpoll (Debian)
 and raw sockets for exact bytes. The PLC runs on virtual time in the test's thread; the server is
 its own process."""
+
 import os
 import shutil
 import socket
@@ -111,13 +112,14 @@ def closed_by_peer(sock, timeout=5.0) -> bool:
 
 # ---------------------------------------------------------------------------- OpenPLC's map
 
+
 def test_every_table_of_openplc_map_through_umodbus(plc, slave):
-    plc["%IX0.2"] = True                      # discrete input 2; the program copies it to %QX1.0 (coil 8)
-    plc["%IW3"] = -7                          # input register 3
-    plc["main.setpoint"] = 1234               # holding 0
-    plc["main.speed"] = 500                   # %MW2 → holding 1026
-    plc["main.total"] = 0x12345678            # %MD1 → holding 2050-2051, high word first
-    plc["main.big"] = 0x0102030405060708      # %ML0 → holding 4096-4099
+    plc["%IX0.2"] = True  # discrete input 2; the program copies it to %QX1.0 (coil 8)
+    plc["%IW3"] = -7  # input register 3
+    plc["main.setpoint"] = 1234  # holding 0
+    plc["main.speed"] = 500  # %MW2 → holding 1026
+    plc["main.total"] = 0x12345678  # %MD1 → holding 2050-2051, high word first
+    plc["main.big"] = 0x0102030405060708  # %ML0 → holding 4096-4099
     plc.scan()
     s = connect(slave)
     assert tcp.send_message(tcp.read_coils(1, 8, 1), s) == [1]
@@ -140,14 +142,19 @@ def test_every_table_of_openplc_map_through_umodbus(plc, slave):
 def test_writes_are_applied_at_the_start_of_the_next_scan(plc, slave):
     plc.scan()
     s = connect(slave)
-    tcp.send_message(tcp.write_single_register(1, 0, 0xFFFD), s)      # %QW0 := -3
-    tcp.send_message(tcp.write_single_coil(1, 3, 1), s)               # %QX0.3
-    tcp.send_message(tcp.write_multiple_coils(1, 4, [1]), s)          # %QX0.4 only, not the byte
-    tcp.send_message(tcp.write_multiple_registers(1, 2050, [0xFFFF, 0xFFFE]), s)   # %MD1 := -2
-    assert (plc["main.setpoint"], plc["main.valve"]) == (0, False)    # nothing happens between scans
+    tcp.send_message(tcp.write_single_register(1, 0, 0xFFFD), s)  # %QW0 := -3
+    tcp.send_message(tcp.write_single_coil(1, 3, 1), s)  # %QX0.3
+    tcp.send_message(tcp.write_multiple_coils(1, 4, [1]), s)  # %QX0.4 only, not the byte
+    tcp.send_message(tcp.write_multiple_registers(1, 2050, [0xFFFF, 0xFFFE]), s)  # %MD1 := -2
+    assert (plc["main.setpoint"], plc["main.valve"]) == (0, False)  # nothing happens between scans
     plc.scan()
-    assert (plc["main.setpoint"], plc["main.echo"], plc["main.valve"], plc["main.flap"], plc["main.total"]) == \
-        (-3, -6, True, True, -2)
+    assert (plc["main.setpoint"], plc["main.echo"], plc["main.valve"], plc["main.flap"], plc["main.total"]) == (
+        -3,
+        -6,
+        True,
+        True,
+        -2,
+    )
     assert tcp.send_message(tcp.read_coils(1, 0, 8), s) == [0, 0, 0, 1, 1, 0, 0, 0]
     # one register of a %MD changes only its half; the last writer wins
     tcp.send_message(tcp.write_single_register(1, 2051, 5), s)
@@ -167,15 +174,15 @@ def test_map_file_real_string_and_word_order(plc, slave):
     plc["main.count"] = 0x00010002
     plc.scan()
     s = connect(slave)
-    assert tcp.send_message(tcp.read_holding_registers(1, 10000, 2), s) == [0x41AC, 0x0000]     # 21.5
+    assert tcp.send_message(tcp.read_holding_registers(1, 10000, 2), s) == [0x41AC, 0x0000]  # 21.5
     assert tcp.send_message(tcp.read_input_registers(1, 2000, 5), s) == [0x7075, 0x6D70, 0, 0, 0]  # 'pump'
-    assert tcp.send_message(tcp.read_input_registers(1, 2010, 2), s) == [0x0003, 0x0001]       # little (the scan added 1)
+    assert tcp.send_message(tcp.read_input_registers(1, 2010, 2), s) == [0x0003, 0x0001]  # little (the scan added 1)
     pi = struct.unpack(">HH", struct.pack(">f", 3.14159))
     tcp.send_message(tcp.write_multiple_registers(1, 10000, list(pi)), s)
     plc.scan()
     assert plc["main.temp"] == pytest.approx(3.14159, rel=1e-7)
     assert tcp.send_message(tcp.read_holding_registers(1, 10000, 2), s) == list(pi)
-    with pytest.raises(uexc.IllegalDataAddressError):                 # input registers are read-only
+    with pytest.raises(uexc.IllegalDataAddressError):  # input registers are read-only
         tcp.send_message(tcp.write_single_register(1, 10002, 1), s)  # and 10002 is outside the map
     s.close()
 
@@ -190,8 +197,7 @@ def test_map_file_errors_name_file_line_and_column(plc, tmp_path):
     with pytest.raises(MapError) as info:
         ModbusSlave(plc, port=0, map_file=str(bad))
     assert str(info.value) == f"{bad}:2:8: error: 'main.temp' is REAL: only BOOL variables go into the coils"
-    bad.write_text('[[register]]\npath = "main.temp"\naddress = 10\n[[register]]\npath = "main.count"\n'
-                   'address = 11\n')
+    bad.write_text('[[register]]\npath = "main.temp"\naddress = 10\n[[register]]\npath = "main.count"\naddress = 11\n')
     with pytest.raises(MapError) as info:
         ModbusSlave(plc, port=0, map_file=str(bad))
     assert "'main.count' at holding registers 11 overlaps 'main.temp' (10..11)" in str(info.value)
@@ -200,53 +206,60 @@ def test_map_file_errors_name_file_line_and_column(plc, tmp_path):
 def test_st_modbus_map_prints_the_effective_map(tmp_path):
     (tmp_path / "main.st").write_text(PROGRAM)
     (tmp_path / "map.toml").write_text(MAP)
-    out = subprocess.run(["st", "modbus", "map", str(tmp_path / "main.st"), "--map", str(tmp_path / "map.toml")],
-                         capture_output=True, text=True)
+    out = subprocess.run(
+        ["st", "modbus", "map", str(tmp_path / "main.st"), "--map", str(tmp_path / "map.toml")],
+        capture_output=True,
+        text=True,
+    )
     assert out.returncode == 0, out.stderr
     lines = [ln.split() for ln in out.stdout.splitlines()[1:-1]]
     assert [ln[:4] if ln[0] != "coils" else ln[:3] for ln in lines][:3] == [
-        ["coils", "3", "%QX0.3"], ["coils", "4", "%QX0.4"], ["coils", "8", "%QX1.0"]]
+        ["coils", "3", "%QX0.3"],
+        ["coils", "4", "%QX0.4"],
+        ["coils", "8", "%QX1.0"],
+    ]
     assert ["holding", "registers", "2050-2051", "%MD1", "DINT"] == lines[-3][:5]
     assert ["holding", "registers", "10000-10001", "main.temp", "REAL"] == lines[-1][:5]
 
 
 # ---------------------------------------------------------------------------- protocol
 
+
 def test_exception_codes_exact_bytes(plc, slave):
     plc.scan()
     s = connect(slave)
-    assert raw(s, bytes([0x11])) == bytes([0x91, 0x01])                          # unsupported function
+    assert raw(s, bytes([0x11])) == bytes([0x91, 0x01])  # unsupported function
     assert raw(s, bytes([0x08, 0, 0, 0x12, 0x34])) == bytes([0x88, 0x01])
-    assert raw(s, bytes([0x03, 0x23, 0x28, 0, 1])) == bytes([0x83, 0x02])        # holding 9000: outside
-    assert raw(s, bytes([0x04, 0x04, 0x00, 0, 1])) == bytes([0x84, 0x02])        # input register 1024
-    assert raw(s, bytes([0x03, 0x1F, 0xFF, 0, 2])) == bytes([0x83, 0x02])        # 8191..8192 crosses the end
-    assert raw(s, bytes([0x03, 0, 0, 0, 126])) == bytes([0x83, 0x03])            # > 125 registers
+    assert raw(s, bytes([0x03, 0x23, 0x28, 0, 1])) == bytes([0x83, 0x02])  # holding 9000: outside
+    assert raw(s, bytes([0x04, 0x04, 0x00, 0, 1])) == bytes([0x84, 0x02])  # input register 1024
+    assert raw(s, bytes([0x03, 0x1F, 0xFF, 0, 2])) == bytes([0x83, 0x02])  # 8191..8192 crosses the end
+    assert raw(s, bytes([0x03, 0, 0, 0, 126])) == bytes([0x83, 0x03])  # > 125 registers
     assert raw(s, bytes([0x03, 0, 0, 0, 0])) == bytes([0x83, 0x03])
-    assert raw(s, bytes([0x01, 0, 0, 0x07, 0xD1])) == bytes([0x81, 0x03])        # > 2000 bits
-    assert raw(s, bytes([0x02, 0, 0, 0x07, 0xD0]))[:2] == bytes([0x02, 250])     # 2000 bits is fine
-    assert raw(s, bytes([0x05, 0, 3, 0x12, 0x34])) == bytes([0x85, 0x03])        # FC5 value not 0/FF00
+    assert raw(s, bytes([0x01, 0, 0, 0x07, 0xD1])) == bytes([0x81, 0x03])  # > 2000 bits
+    assert raw(s, bytes([0x02, 0, 0, 0x07, 0xD0]))[:2] == bytes([0x02, 250])  # 2000 bits is fine
+    assert raw(s, bytes([0x05, 0, 3, 0x12, 0x34])) == bytes([0x85, 0x03])  # FC5 value not 0/FF00
     assert raw(s, bytes([0x10, 0, 0, 0, 2, 3, 0, 1, 0])) == bytes([0x90, 0x03])  # byte count 3 for 2 regs
-    assert raw(s, bytes([0x10, 0, 0, 0, 1, 2, 0])) == bytes([0x90, 0x03])        # frame shorter than count
-    assert raw(s, bytes([0x0F, 0, 0, 0, 9, 1, 0xFF])) == bytes([0x8F, 0x03])     # 9 coils need 2 bytes
-    assert raw(s, bytes([0x06, 0x23, 0x28, 0, 1])) == bytes([0x86, 0x02])        # write outside
-    assert raw(s, bytes([0x2B, 0x0D, 1, 0])) == bytes([0xAB, 0x01])              # MEI type 13: unsupported
-    assert raw(s, bytes([0x2B, 0x0E, 9, 0])) == bytes([0xAB, 0x03])              # read code 9
-    assert raw(s, bytes([0x05, 0, 3, 0xFF, 0x00])) == bytes([0x05, 0, 3, 0xFF, 0x00])   # and it still works
+    assert raw(s, bytes([0x10, 0, 0, 0, 1, 2, 0])) == bytes([0x90, 0x03])  # frame shorter than count
+    assert raw(s, bytes([0x0F, 0, 0, 0, 9, 1, 0xFF])) == bytes([0x8F, 0x03])  # 9 coils need 2 bytes
+    assert raw(s, bytes([0x06, 0x23, 0x28, 0, 1])) == bytes([0x86, 0x02])  # write outside
+    assert raw(s, bytes([0x2B, 0x0D, 1, 0])) == bytes([0xAB, 0x01])  # MEI type 13: unsupported
+    assert raw(s, bytes([0x2B, 0x0E, 9, 0])) == bytes([0xAB, 0x03])  # read code 9
+    assert raw(s, bytes([0x05, 0, 3, 0xFF, 0x00])) == bytes([0x05, 0, 3, 0xFF, 0x00])  # and it still works
     s.close()
 
 
 def test_device_identification(plc, slave):
     s = connect(slave)
-    reply = raw(s, bytes([0x2B, 0x0E, 1, 0]))                                    # basic: objects 0, 1, 2
+    reply = raw(s, bytes([0x2B, 0x0E, 1, 0]))  # basic: objects 0, 1, 2
     assert reply[:7] == bytes([0x2B, 0x0E, 1, 0x83, 0, 0, 3])
     objs, pos = {}, 7
     while pos < len(reply):
         oid, n = reply[pos], reply[pos + 1]
-        objs[oid] = reply[pos + 2:pos + 2 + n].decode()
+        objs[oid] = reply[pos + 2 : pos + 2 + n].decode()
         pos += 2 + n
     assert objs == {0: "st", 1: "st-plc", 2: "0.1"}
     assert raw(s, bytes([0x2B, 0x0E, 4, 4]))[6:] == bytes([1, 4, 11]) + b"st soft PLC"
-    assert raw(s, bytes([0x2B, 0x0E, 4, 0x55])) == bytes([0xAB, 0x02])           # no such object
+    assert raw(s, bytes([0x2B, 0x0E, 4, 0x55])) == bytes([0xAB, 0x02])  # no such object
     s.close()
 
 
@@ -280,7 +293,7 @@ def test_read_only_and_writable_ranges(plc):
     with ModbusSlave(plc, port=0, writable="holding:0-9,coil:3-3") as slave:
         s = connect(slave)
         assert raw(s, bytes([6, 0, 9, 0, 1])) == bytes([6, 0, 9, 0, 1])
-        assert raw(s, bytes([0x10, 0, 9, 0, 2, 4, 0, 1, 0, 2])) == bytes([0x90, 0x02])   # 9..10 leaves the range
+        assert raw(s, bytes([0x10, 0, 9, 0, 2, 4, 0, 1, 0, 2])) == bytes([0x90, 0x02])  # 9..10 leaves the range
         assert raw(s, bytes([5, 0, 3, 0xFF, 0])) == bytes([5, 0, 3, 0xFF, 0])
         assert raw(s, bytes([5, 0, 4, 0xFF, 0])) == bytes([0x85, 0x02])
         s.close()
@@ -297,16 +310,18 @@ def test_mbpoll_reads_and_writes(plc, slave):
     def poll(*args):
         out = subprocess.run(base + list(args) + ["127.0.0.1"], capture_output=True, text=True, timeout=20)
         return out.returncode, [ln.split(":", 1)[1].strip() for ln in out.stdout.splitlines() if ln.startswith("[")]
+
     assert poll("-t", "4", "-r", "0", "-c", "1") == (0, ["65534 (-2)"])
     assert poll("-t", "4:float", "-B", "-r", "10000", "-c", "1") == (0, ["21.5"])
     assert poll("-t", "0", "-r", "8", "-c", "1") == (0, ["0"])
     assert subprocess.run(base + ["-t", "4", "-r", "1026", "127.0.0.1", "321"], capture_output=True).returncode == 0
     plc.scan()
     assert plc["main.speed"] == 321
-    assert poll("-t", "4", "-r", "9000", "-c", "1")[0] == 1                     # exception 02 → exit 1
+    assert poll("-t", "4", "-r", "9000", "-c", "1")[0] == 1  # exception 02 → exit 1
 
 
 # ---------------------------------------------------------------------------- robustness and limits
+
 
 def test_malformed_headers_close_only_that_connection(plc, tmp_path):
     log = tmp_path / "modbus.log"
@@ -314,10 +329,12 @@ def test_malformed_headers_close_only_that_connection(plc, tmp_path):
     plc.scan()
     good = connect(slave)
     assert raw(good, bytes([3, 0, 0, 0, 1]), tid=0xBEEF) == bytes([3, 2, 0, 0])
-    for frame in (struct.pack(">HHHB", 1, 7, 6, 1) + bytes([3, 0, 0, 0, 1]),      # protocol id 7
-                  struct.pack(">HHHB", 1, 0, 1, 1),                               # length 1: no function code
-                  struct.pack(">HHHB", 1, 0, 300, 1) + bytes(299),                # longer than any ADU
-                  os.urandom(1) + b"\xA5" * 40):                                  # garbage
+    for frame in (
+        struct.pack(">HHHB", 1, 7, 6, 1) + bytes([3, 0, 0, 0, 1]),  # protocol id 7
+        struct.pack(">HHHB", 1, 0, 1, 1),  # length 1: no function code
+        struct.pack(">HHHB", 1, 0, 300, 1) + bytes(299),  # longer than any ADU
+        os.urandom(1) + b"\xa5" * 40,
+    ):  # garbage
         bad = connect(slave)
         bad.sendall(frame)
         assert closed_by_peer(bad)
@@ -327,7 +344,7 @@ def test_malformed_headers_close_only_that_connection(plc, tmp_path):
     slave.stop()
     err = log.read_text()
     assert "malformed MBAP header (protocol id 7, length 6)" in err
-    assert "be ef" not in err and "beef" not in err                                 # never another client's frame
+    assert "be ef" not in err and "beef" not in err  # never another client's frame
 
 
 @pytest.mark.slow
@@ -335,19 +352,20 @@ def test_truncated_frames_and_slow_senders_time_out_while_others_are_served(plc)
     with ModbusSlave(plc, port=0, idle_timeout=1.0) as slave:
         slow = [connect(slave) for _ in range(3)]
         for i, s in enumerate(slow):
-            s.sendall(struct.pack(">HHHB", 1, 0, 6, 1)[: 3 + i])                  # a frame that never ends
+            s.sendall(struct.pack(">HHHB", 1, 0, 6, 1)[: 3 + i])  # a frame that never ends
         good = connect(slave)
         t0 = time.monotonic()
         while time.monotonic() - t0 < 2.5:
             assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
             time.sleep(0.1)
-        assert all(closed_by_peer(s, 3.0) for s in slow)                         # idle timeout (1 s)
-        assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])           # active: kept
+        assert all(closed_by_peer(s, 3.0) for s in slow)  # idle timeout (1 s)
+        assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])  # active: kept
         good.close()
 
 
 def test_a_thousand_connections_do_not_lock_out_a_polling_client(plc):
     import resource
+
     soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
     if soft < 1200:
         resource.setrlimit(resource.RLIMIT_NOFILE, (min(hard, 4096), hard))
@@ -360,12 +378,12 @@ def test_a_thousand_connections_do_not_lock_out_a_polling_client(plc):
                 assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
         assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
         deadline = time.monotonic() + 10
-        while True:                                  # the server accepts the backlog and evicts as it goes
+        while True:  # the server accepts the backlog and evicts as it goes
             still_open = [c for c in crowd if not (_readable(c) and closed_by_peer(c, 0.01))]
             if len(still_open) <= 15 or time.monotonic() > deadline:
                 break
             time.sleep(0.2)
-        assert len(still_open) == 15                 # 16 with the polling client
+        assert len(still_open) == 15  # 16 with the polling client
         assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
         for c in crowd:
             c.close()
@@ -382,7 +400,7 @@ def test_a_burst_of_short_connections_never_evicts_a_polling_hmi(plc):
     plc["main.setpoint"] = 1234
     plc["%IW3"] = -7
     plc.scan()
-    hmi_reply = bytes([3, 4, 0x04, 0xD2, 0, 0])                     # holding 0-1: 1234, 0
+    hmi_reply = bytes([3, 4, 0x04, 0xD2, 0, 0])  # holding 0-1: 1234, 0
     with ModbusSlave(plc, port=0, max_connections=4, idle_timeout=2.0) as slave:
         hmi = connect(slave)
         polls, errors, stop = [], [], threading.Event()
@@ -404,31 +422,31 @@ def test_a_burst_of_short_connections_never_evicts_a_polling_hmi(plc):
 
         poller = threading.Thread(target=poll, daemon=True)
         poller.start()
-        wait_polls(2)                                   # the HMI is established, then the burst starts
+        wait_polls(2)  # the HMI is established, then the burst starts
         kept, burst_replies, sent = [], [], 0
         during = len(polls) + 2
         i = -1
-        while i < 199 or (len(polls) < during and poller.is_alive()):   # 200, and over two HMI polls
+        while i < 199 or (len(polls) < during and poller.is_alive()):  # 200, and over two HMI polls
             i += 1
             c = connect(slave)
-            if len(kept) > 100:                         # long evicted by the server: only file
-                kept.pop(0).close()                     # descriptors here
-            if i % 5 == 4:                              # connects, never sends anything, never closes
+            if len(kept) > 100:  # long evicted by the server: only file
+                kept.pop(0).close()  # descriptors here
+            if i % 5 == 4:  # connects, never sends anything, never closes
                 kept.append(c)
                 continue
             sent += 1
             burst_replies.append(raw(c, bytes([4, 0, 3, 0, 1]), tid=i & 0xFFFF))
             if i % 3 == 0:
-                kept.append(c)                          # one request, then left open
+                kept.append(c)  # one request, then left open
             else:
                 c.close()
-        wait_polls(len(polls) + 2)                      # and the HMI goes on polling after it
+        wait_polls(len(polls) + 2)  # and the HMI goes on polling after it
         stop.set()
         poller.join(5)
         assert errors == []
-        assert len(polls) >= 6 and polls == [hmi_reply] * len(polls)     # 2 before, 2 during, 2 after
-        assert raw(hmi, bytes([3, 0, 0, 0, 2]), tid=9999) == hmi_reply      # the same connection, still open
-        assert sent >= 160 and burst_replies == [bytes([4, 2, 0xFF, 0xF9])] * sent   # the burst was served too
+        assert len(polls) >= 6 and polls == [hmi_reply] * len(polls)  # 2 before, 2 during, 2 after
+        assert raw(hmi, bytes([3, 0, 0, 0, 2]), tid=9999) == hmi_reply  # the same connection, still open
+        assert sent >= 160 and burst_replies == [bytes([4, 2, 0xFF, 0xF9])] * sent  # the burst was served too
         for c in kept:
             c.close()
         hmi.close()
@@ -436,6 +454,7 @@ def test_a_burst_of_short_connections_never_evicts_a_polling_hmi(plc):
 
 def _readable(sock) -> bool:
     import select
+
     return bool(select.select([sock], [], [], 0)[0])
 
 
@@ -449,26 +468,26 @@ def test_connection_limit_evicts_never_active_then_the_busiest_peer_newest_first
         return all(raw(s, bytes([3, 0, 0, 0, 1])) == ok for s in socks)
 
     with ModbusSlave(plc, port=0, max_connections=4) as slave:
-        s1 = connect(slave, "127.0.0.1")                             # s1, s2, s3 never send a request
+        s1 = connect(slave, "127.0.0.1")  # s1, s2, s3 never send a request
         s2, s3 = connect(slave, "127.0.0.2"), connect(slave, "127.0.0.2")
         b1 = connect(slave, "127.0.0.2")
         assert served(b1)
-        a = connect(slave, "127.0.0.1")     # never-active first; .2 holds the most (3): its oldest, s2
-        assert closed_by_peer(s2, 2.0)      # (s1 is older, but .1 holds 2 with a)
+        a = connect(slave, "127.0.0.1")  # never-active first; .2 holds the most (3): its oldest, s2
+        assert closed_by_peer(s2, 2.0)  # (s1 is older, but .1 holds 2 with a)
         assert not _readable(s1) and not _readable(s3) and served(a, b1)
-        b2 = connect(slave, "127.0.0.2")    # never-active s1 (.1: 2) and s3 (.2: 3 with b1, b2): s3
+        b2 = connect(slave, "127.0.0.2")  # never-active s1 (.1: 2) and s3 (.2: 3 with b1, b2): s3
         assert closed_by_peer(s3, 2.0)
         assert not _readable(s1) and served(b2, a, b1)
-        c1 = connect(slave, "127.0.0.3")    # the last never-active one, whatever its peer
+        c1 = connect(slave, "127.0.0.3")  # the last never-active one, whatever its peer
         assert closed_by_peer(s1, 2.0)
         assert served(c1, a, b1, b2)
-        b3 = connect(slave, "127.0.0.2")    # all active: .2 would hold 3, its newest goes (b2),
-        assert closed_by_peer(b2, 2.0)      # not c1, the newest of all
+        b3 = connect(slave, "127.0.0.2")  # all active: .2 would hold 3, its newest goes (b2),
+        assert closed_by_peer(b2, 2.0)  # not c1, the newest of all
         assert served(b3, a, b1, c1)
-        c2 = connect(slave, "127.0.0.3")    # .2 and .3 would hold 2 each: the newest of
-        assert closed_by_peer(b3, 2.0)      # theirs goes (b3, newer than c1 and b1)
+        c2 = connect(slave, "127.0.0.3")  # .2 and .3 would hold 2 each: the newest of
+        assert closed_by_peer(b3, 2.0)  # theirs goes (b3, newer than c1 and b1)
         assert served(c2, a, b1, c1)
-        d1 = connect(slave, "127.0.0.1")    # .1 and .3 would hold 2 each: the newest (c2)
+        d1 = connect(slave, "127.0.0.1")  # .1 and .3 would hold 2 each: the newest (c2)
         assert closed_by_peer(c2, 2.0)
         assert served(d1, a, b1, c1)
         for s in (a, b1, c1, d1, s1, s2, s3, b2, b3, c2):
@@ -482,19 +501,19 @@ def test_regular_clients_are_never_evicted_and_new_connections_are_refused_inste
     slave = ModbusSlave(plc, port=0, max_connections=3, log_path=str(log)).start()
     try:
         once = connect(slave)
-        assert raw(once, bytes([3, 0, 0, 0, 1])) == ok       # one request, then nothing: not regular
+        assert raw(once, bytes([3, 0, 0, 0, 1])) == ok  # one request, then nothing: not regular
         h1, h2 = connect(slave), connect(slave)
         assert raw(h1, bytes([3, 0, 0, 0, 1])) == ok and raw(h2, bytes([3, 0, 0, 0, 1])) == ok
         time.sleep(1.1)
-        assert raw(h1, bytes([3, 0, 0, 0, 1])) == ok and raw(h2, bytes([3, 0, 0, 0, 1])) == ok   # regular now
-        n = connect(slave)                          # h2 is the newest, but regular: `once` goes
+        assert raw(h1, bytes([3, 0, 0, 0, 1])) == ok and raw(h2, bytes([3, 0, 0, 0, 1])) == ok  # regular now
+        n = connect(slave)  # h2 is the newest, but regular: `once` goes
         assert closed_by_peer(once, 2.0)
         assert raw(n, bytes([3, 0, 0, 0, 1])) == ok
-        m = connect(slave)                          # n is the only one that is not regular
+        m = connect(slave)  # n is the only one that is not regular
         assert closed_by_peer(n, 2.0)
         assert raw(m, bytes([3, 0, 0, 0, 1])) == ok
         time.sleep(1.1)
-        assert raw(m, bytes([3, 0, 0, 0, 1])) == ok             # m is regular too: every slot is
+        assert raw(m, bytes([3, 0, 0, 0, 1])) == ok  # m is regular too: every slot is
         refused = []
         for _ in range(5):
             r = connect(slave)
@@ -508,8 +527,10 @@ def test_regular_clients_are_never_evicted_and_new_connections_are_refused_inste
         slave.stop()
     lines = [ln for ln in log.read_text().splitlines() if "refused" in ln]
     head = "st modbus: WARNING connection limit 3: every connection is a regular client; refused"
-    assert lines == [f"{head} 1 new connection(s), the last from {refused[0]}",      # at once
-                     f"{head} 4 new connection(s), the last from {refused[4]}"]      # the rest: once, at the stop
+    assert lines == [
+        f"{head} 1 new connection(s), the last from {refused[0]}",  # at once
+        f"{head} 4 new connection(s), the last from {refused[4]}",
+    ]  # the rest: once, at the stop
 
 
 @pytest.mark.slow
@@ -522,7 +543,7 @@ def test_request_rate_is_bounded_per_connection(plc):
         replies = _recv(s, 100 * 11)
         elapsed = time.monotonic() - t0
         assert [struct.unpack_from(">H", replies, 11 * i)[0] for i in range(100)] == list(range(100))
-        assert elapsed >= 0.9                       # a burst of 50, then 50 per second
+        assert elapsed >= 0.9  # a burst of 50, then 50 per second
         s.close()
 
 
@@ -532,7 +553,7 @@ def test_a_client_that_never_reads_replies_is_throttled_and_memory_stays_bounded
         rss0 = _rss(slave.proc.pid)
         hog = connect(slave)
         hog.setblocking(False)
-        frame = struct.pack(">HHHB", 1, 0, 6, 1) + bytes([3, 0, 0, 0, 125])      # 259-byte replies
+        frame = struct.pack(">HHHB", 1, 0, 6, 1) + bytes([3, 0, 0, 0, 125])  # 259-byte replies
         sent = 0
         t0 = time.monotonic()
         while time.monotonic() - t0 < 3.0:
@@ -543,7 +564,7 @@ def test_a_client_that_never_reads_replies_is_throttled_and_memory_stays_bounded
         good = connect(slave)
         assert raw(good, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
         grew = _rss(slave.proc.pid) - rss0
-        assert sent < 50_000_000 and grew < 20_000_000, (sent, grew)             # the hog was stopped
+        assert sent < 50_000_000 and grew < 20_000_000, (sent, grew)  # the hog was stopped
         good.close()
         hog.close()
 
@@ -562,9 +583,22 @@ def test_st_run_with_modbus_serves_and_stops_cleanly(tmp_path):
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    child = subprocess.Popen(["st", "run", str(tmp_path / "main.st"), "--no-rt", "--duration", "20s",
-                              "--modbus", f"127.0.0.1:{port}", "--dump-json"],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    child = subprocess.Popen(
+        [
+            "st",
+            "run",
+            str(tmp_path / "main.st"),
+            "--no-rt",
+            "--duration",
+            "20s",
+            "--modbus",
+            f"127.0.0.1:{port}",
+            "--dump-json",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 15
     while True:
         try:
@@ -582,14 +616,15 @@ def test_st_run_with_modbus_serves_and_stops_cleanly(tmp_path):
     assert child.returncode == 0, err
     assert f"modbus: serving on 127.0.0.1:{port}" in err
     import json
+
     assert json.loads(out.splitlines()[-1])["main.echo"] == 42
-    with pytest.raises(OSError):                                # the server process is gone
+    with pytest.raises(OSError):  # the server process is gone
         socket.create_connection(("127.0.0.1", port), timeout=1)
 
 
 def test_forced_values_win_over_hmi_writes_and_the_program(plc, slave):
-    plc.force("main.setpoint", 5)                       # a %QW0 variable the HMI writes
-    plc.force("%QX1.0", True)                           # lamp, which the program sets from button
+    plc.force("main.setpoint", 5)  # a %QW0 variable the HMI writes
+    plc.force("%QX1.0", True)  # lamp, which the program sets from button
     s = connect(slave)
     tcp.send_message(tcp.write_single_register(1, 0, 77), s)
     plc.scan()
@@ -609,12 +644,15 @@ def test_forced_values_win_over_hmi_writes_and_the_program(plc, slave):
 
 def test_online_change_rebinds_the_served_cells(plc, slave, tmp_path):
     from st.api import compile_text
+
     plc["main.setpoint"] = 3
     plc.scan()
     src = PROGRAM.replace("echo : INT;", "echo : INT;\n    extra AT %QW5 : INT;").replace(
-        "echo := setpoint * 2;", "echo := setpoint * 2; extra := extra + 1;")
-    assert plc.online_change(compile_text(src, str(tmp_path / "main.st"))) == \
-        "online change: 1 instance(s) carried over"
+        "echo := setpoint * 2;", "echo := setpoint * 2; extra := extra + 1;"
+    )
+    assert (
+        plc.online_change(compile_text(src, str(tmp_path / "main.st"))) == "online change: 1 instance(s) carried over"
+    )
     s = connect(slave)
     tcp.send_message(tcp.write_single_register(1, 5, 100), s)
     plc.scan()

@@ -1,6 +1,7 @@
 """Object-oriented ST (IEC 61131-3 3rd edition) and its CODESYS/TwinCAT extensions: METHODs, THIS^,
 EXTENDS with virtual dispatch, SUPER^, interfaces, properties, access, ABSTRACT/FINAL/OVERRIDE,
 CLASS, references and pointers, VAR_INST, VAR_STAT, __NEW/__DELETE, dialect presets."""
+
 from functools import partial
 
 import pytest
@@ -44,7 +45,9 @@ END_FUNCTION_BLOCK
 
 
 def test_methods_with_inputs_outputs_in_outs_and_a_result():
-    plc = run(COUNTER + """
+    plc = run(
+        COUNTER
+        + """
 PROGRAM main
   VAR c : Counter; r1, r2, before : INT; x : INT := 1; y : INT := 2; END_VAR
   c(step := 2);                          (* count 2 *)
@@ -52,23 +55,29 @@ PROGRAM main
   r2 := r1 + c.Add(1);                   (* 12 + (12 + 2) *)
   c.Swap(x, y);
 END_PROGRAM
-""")
+"""
+    )
     assert (plc["main.r1"], plc["main.before"], plc["main.r2"], plc["main.c.count"]) == (12, 2, 26, 14)
     assert (plc["main.x"], plc["main.y"]) == (2, 1)
 
 
 def test_a_method_called_from_the_body_sees_the_values_the_body_just_wrote():
-    plc = run(COUNTER + """
+    plc = run(
+        COUNTER
+        + """
 PROGRAM main
   VAR c : Counter; END_VAR
   c(step := 60);
 END_PROGRAM
-""", 2)
-    assert plc["main.c.count"] == 0                  # 60, then 120 > 100: Reset() in the same call
+""",
+        2,
+    )
+    assert plc["main.c.count"] == 0  # 60, then 120 > 100: Reset() in the same call
 
 
 def test_this_reaches_the_instance_and_its_methods():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK Acc
   VAR_OUTPUT total : DINT; END_VAR
   VAR_INPUT x : DINT; END_VAR
@@ -82,8 +91,10 @@ PROGRAM main
   VAR a : Acc; END_VAR
   a(x := 3);
 END_PROGRAM
-""", 2)
-    assert plc["main.a.total"] == 18                 # (0 + 3) * 2 = 6, then (6 + 3) * 2
+""",
+        2,
+    )
+    assert plc["main.a.total"] == 18  # (0 + 3) * 2 = 6, then (6 + 3) * 2
 
 
 ANIMALS = """
@@ -117,7 +128,9 @@ END_FUNCTION_BLOCK
 
 
 def test_inheritance_overrides_virtual_dispatch_and_super():
-    plc = run(ANIMALS + """
+    plc = run(
+        ANIMALS
+        + """
 PROGRAM main
   VAR a : Animal; d : Dog; p : Puppy; s1, s2, s3, s4 : STRING; END_VAR
   a(); d(); p();
@@ -126,58 +139,94 @@ PROGRAM main
   s3 := p.Describe();
   s4 := d.Speak();
 END_PROGRAM
-""")
-    assert [plc[f"main.s{i}"] for i in (1, 2, 3, 4)] == ["generic!", "woof/generic!", "yip+woof/generic!",
-                                                         "woof/generic"]
-    assert (plc["main.d.calls"], plc["main.d.barks"], plc["main.p.calls"], plc["main.p.legs"],
-            plc["main.p.barks"]) == (11, 2, 11, 3, 1)
+"""
+    )
+    assert [plc[f"main.s{i}"] for i in (1, 2, 3, 4)] == [
+        "generic!",
+        "woof/generic!",
+        "yip+woof/generic!",
+        "woof/generic",
+    ]
+    assert (plc["main.d.calls"], plc["main.d.barks"], plc["main.p.calls"], plc["main.p.legs"], plc["main.p.barks"]) == (
+        11,
+        2,
+        11,
+        3,
+        1,
+    )
     assert plc["main.a.legs"] == 4 and plc["main.a.calls"] == 1
 
 
-@pytest.mark.parametrize("src, message", [
-    ("FUNCTION_BLOCK B EXTENDS Nope END_FUNCTION_BLOCK",
-     "B extends 'Nope', which is not declared"),
-    ("FUNCTION_BLOCK A EXTENDS B END_FUNCTION_BLOCK FUNCTION_BLOCK B EXTENDS A END_FUNCTION_BLOCK",
-     "extends itself through"),
-    ("FUNCTION_BLOCK FINAL A END_FUNCTION_BLOCK FUNCTION_BLOCK B EXTENDS A END_FUNCTION_BLOCK",
-     "'A' is FINAL and cannot be extended"),
-    ("FUNCTION F : INT F := 1; END_FUNCTION FUNCTION_BLOCK B EXTENDS F END_FUNCTION_BLOCK",
-     "B can only extend a FUNCTION_BLOCK; 'F' is a FUNCTION"),
-    ("""FUNCTION_BLOCK A METHOD FINAL M : INT M := 1; END_METHOD END_FUNCTION_BLOCK
+@pytest.mark.parametrize(
+    "src, message",
+    [
+        ("FUNCTION_BLOCK B EXTENDS Nope END_FUNCTION_BLOCK", "B extends 'Nope', which is not declared"),
+        (
+            "FUNCTION_BLOCK A EXTENDS B END_FUNCTION_BLOCK FUNCTION_BLOCK B EXTENDS A END_FUNCTION_BLOCK",
+            "extends itself through",
+        ),
+        (
+            "FUNCTION_BLOCK FINAL A END_FUNCTION_BLOCK FUNCTION_BLOCK B EXTENDS A END_FUNCTION_BLOCK",
+            "'A' is FINAL and cannot be extended",
+        ),
+        (
+            "FUNCTION F : INT F := 1; END_FUNCTION FUNCTION_BLOCK B EXTENDS F END_FUNCTION_BLOCK",
+            "B can only extend a FUNCTION_BLOCK; 'F' is a FUNCTION",
+        ),
+        (
+            """FUNCTION_BLOCK A METHOD FINAL M : INT M := 1; END_METHOD END_FUNCTION_BLOCK
         FUNCTION_BLOCK B EXTENDS A METHOD M : INT M := 2; END_METHOD END_FUNCTION_BLOCK""",
-     "method M of A is FINAL and cannot be overridden"),
-    ("""FUNCTION_BLOCK A METHOD M : INT VAR_INPUT x : INT; END_VAR M := x; END_METHOD END_FUNCTION_BLOCK
+            "method M of A is FINAL and cannot be overridden",
+        ),
+        (
+            """FUNCTION_BLOCK A METHOD M : INT VAR_INPUT x : INT; END_VAR M := x; END_METHOD END_FUNCTION_BLOCK
         FUNCTION_BLOCK B EXTENDS A METHOD M : DINT VAR_INPUT x : INT; END_VAR M := x; END_METHOD
         END_FUNCTION_BLOCK""",
-     "method M overrides A.M with a different signature"),
-    ("""FUNCTION_BLOCK A VAR x : INT; END_VAR METHOD x : INT x := 1; END_METHOD END_FUNCTION_BLOCK""",
-     "'x' is declared twice in A"),
-    ("""FUNCTION_BLOCK A VAR_OUTPUT q : INT; END_VAR METHOD M : INT M := 1; END_METHOD END_FUNCTION_BLOCK
+            "method M overrides A.M with a different signature",
+        ),
+        (
+            """FUNCTION_BLOCK A VAR x : INT; END_VAR METHOD x : INT x := 1; END_METHOD END_FUNCTION_BLOCK""",
+            "'x' is declared twice in A",
+        ),
+        (
+            """FUNCTION_BLOCK A VAR_OUTPUT q : INT; END_VAR METHOD M : INT M := 1; END_METHOD END_FUNCTION_BLOCK
         PROGRAM main VAR a : A; v : INT; END_VAR v := a.M; END_PROGRAM""",
-     "'M' is a method; call it: M()"),
-    ("""FUNCTION_BLOCK A METHOD M M := 1; END_METHOD END_FUNCTION_BLOCK""",
-     "METHOD M has no return type but assigns a result"),
-    ("""FUNCTION_BLOCK A VAR_OUTPUT q : INT; END_VAR END_FUNCTION_BLOCK
+            "'M' is a method; call it: M()",
+        ),
+        (
+            """FUNCTION_BLOCK A METHOD M M := 1; END_METHOD END_FUNCTION_BLOCK""",
+            "METHOD M has no return type but assigns a result",
+        ),
+        (
+            """FUNCTION_BLOCK A VAR_OUTPUT q : INT; END_VAR END_FUNCTION_BLOCK
         PROGRAM main VAR a : A; END_VAR a.Nope(); END_PROGRAM""",
-     "A has no method, action or instance 'Nope'"),
-    ("""PROGRAM main VAR x : INT; END_VAR x := SUPER^.x; END_PROGRAM""",
-     "SUPER exists only inside a function block that EXTENDS another"),
-])
+            "A has no method, action or instance 'Nope'",
+        ),
+        (
+            """PROGRAM main VAR x : INT; END_VAR x := SUPER^.x; END_PROGRAM""",
+            "SUPER exists only inside a function block that EXTENDS another",
+        ),
+    ],
+)
 def test_object_oriented_errors_are_located(src, message):
     text = errors(src)
     assert message in text and "oop.st:" in text
 
 
 def test_a_method_variable_hiding_an_instance_variable_is_a_warning():
-    cp = compile_text("""FUNCTION_BLOCK A VAR_OUTPUT x : INT; END_VAR
+    cp = compile_text(
+        """FUNCTION_BLOCK A VAR_OUTPUT x : INT; END_VAR
       METHOD M : INT VAR x : INT; END_VAR x := 5; M := x; END_METHOD
       x := M() + 1;
       END_FUNCTION_BLOCK
-      PROGRAM main VAR a : A; END_VAR a(); END_PROGRAM""", "oop.st", use_cache=False)
+      PROGRAM main VAR a : A; END_VAR a(); END_PROGRAM""",
+        "oop.st",
+        use_cache=False,
+    )
     assert [(d.code, d.span.line) for d in cp.diagnostics] == [("W006", 2)]
     plc = PLC(cp)
     plc.scan()
-    assert plc["main.a.x"] == 6                       # the method's own x, the instance's untouched by it
+    assert plc["main.a.x"] == 6  # the method's own x, the instance's untouched by it
 
 
 SHAPES = """
@@ -224,7 +273,9 @@ END_FUNCTION_BLOCK
 
 
 def test_polymorphic_dispatch_through_an_interface_array():
-    plc = run(SHAPES + """
+    plc = run(
+        SHAPES
+        + """
 PROGRAM main
   VAR
     sq : Square := (side := 2.0);
@@ -253,49 +304,67 @@ PROGRAM main
   unset := shapes[4] = NULL;
   same := shapes[1] = named;
 END_PROGRAM
-""")
+"""
+    )
     # square 2 → 4: 16; circle 1 → 2: 12; ring 2 → 4: 48 − 3 = 45
     assert plc["main.total"] == 73.0 and plc["main.nm"] == "square"
-    assert plc["main.sq.side"] == 4.0 and plc["main.rg.r"] == 4.0        # the instances themselves changed
+    assert plc["main.sq.side"] == 4.0 and plc["main.rg.r"] == 4.0  # the instances themselves changed
     assert plc["main.unset"] is True and plc["main.same"] is True
     assert plc.variables()["main.shapes"] == ["Square", "Circle", "Ring", None]
 
 
 def test_a_call_through_a_null_interface_is_a_null_fault_with_the_line():
     from st import PLCFaultError
-    plc = PLC(compile_text(SHAPES + """
+
+    plc = PLC(
+        compile_text(
+            SHAPES
+            + """
 PROGRAM main
   VAR s : I_Shape; a : REAL; END_VAR
   a := s.Area();
 END_PROGRAM
-""", "oop.st"))
+""",
+            "oop.st",
+        )
+    )
     with pytest.raises(PLCFaultError) as e:
         plc.scan()
     assert e.value.fault.kind == "NULL" and e.value.fault.line == SHAPES.count("\n") + 4
     assert plc.state == "FAULT"
 
 
-@pytest.mark.parametrize("src, message", [
-    (SHAPES + "PROGRAM main VAR s : I_Named; c : Circle; END_VAR s := c; END_PROGRAM",
-     "cannot assign Circle to I_Named: Circle does not implement I_Named"),
-    ("""INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
+@pytest.mark.parametrize(
+    "src, message",
+    [
+        (
+            SHAPES + "PROGRAM main VAR s : I_Named; c : Circle; END_VAR s := c; END_PROGRAM",
+            "cannot assign Circle to I_Named: Circle does not implement I_Named",
+        ),
+        (
+            """INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
         FUNCTION_BLOCK B IMPLEMENTS I VAR x : INT; END_VAR END_FUNCTION_BLOCK""",
-     "B does not implement method M of interface I"),
-    ("""INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
+            "B does not implement method M of interface I",
+        ),
+        (
+            """INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
         FUNCTION_BLOCK B IMPLEMENTS I METHOD M : DINT M := 1; END_METHOD END_FUNCTION_BLOCK""",
-     "method M of B does not match I.M"),
-    ("""FUNCTION_BLOCK A END_FUNCTION_BLOCK FUNCTION_BLOCK B IMPLEMENTS A END_FUNCTION_BLOCK""",
-     "B IMPLEMENTS: 'A' is a FUNCTION BLOCK, not an INTERFACE"),
-    ("""FUNCTION_BLOCK B IMPLEMENTS Nope END_FUNCTION_BLOCK""",
-     "B IMPLEMENTS: 'Nope' is not declared"),
-    ("""INTERFACE I METHOD M : INT M := 1; END_METHOD END_INTERFACE""",
-     "a method of INTERFACE I has no body"),
-    ("""INTERFACE I EXTENDS J END_INTERFACE INTERFACE J EXTENDS I END_INTERFACE""",
-     "extends itself"),
-    ("""INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
+            "method M of B does not match I.M",
+        ),
+        (
+            """FUNCTION_BLOCK A END_FUNCTION_BLOCK FUNCTION_BLOCK B IMPLEMENTS A END_FUNCTION_BLOCK""",
+            "B IMPLEMENTS: 'A' is a FUNCTION BLOCK, not an INTERFACE",
+        ),
+        ("""FUNCTION_BLOCK B IMPLEMENTS Nope END_FUNCTION_BLOCK""", "B IMPLEMENTS: 'Nope' is not declared"),
+        ("""INTERFACE I METHOD M : INT M := 1; END_METHOD END_INTERFACE""", "a method of INTERFACE I has no body"),
+        ("""INTERFACE I EXTENDS J END_INTERFACE INTERFACE J EXTENDS I END_INTERFACE""", "extends itself"),
+        (
+            """INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
         PROGRAM main VAR s : I; x : INT; END_VAR x := s.Nope(); END_PROGRAM""",
-     "I has no method 'Nope'"),
-])
+            "I has no method 'Nope'",
+        ),
+    ],
+)
 def test_interface_errors_are_located(src, message):
     text = errors(src)
     assert message in text and "oop.st:" in text
@@ -325,7 +394,9 @@ END_FUNCTION_BLOCK
 
 
 def test_properties_get_and_set():
-    plc = run(MOTOR + """
+    plc = run(
+        MOTOR
+        + """
 PROGRAM main
   VAR m : Motor; v, w : REAL; r0, r1 : BOOL; END_VAR
   r0 := m.Running;
@@ -336,7 +407,8 @@ PROGRAM main
   w := m.Speed;
   r1 := m.Running;
 END_PROGRAM
-""")
+"""
+    )
     assert (plc["main.r0"], plc["main.v"], plc["main.w"], plc["main.r1"]) == (False, 51.0, 100.0, True)
     assert plc["main.m.sets"] == 3
 
@@ -366,19 +438,30 @@ END_PROGRAM
     assert plc["main.a"] == 100 and plc["main.t.v"] == 100
 
 
-@pytest.mark.parametrize("src, message", [
-    (MOTOR + "PROGRAM main VAR m : Motor; END_VAR m.Running := TRUE; END_PROGRAM",
-     "property Running has no SET: it cannot be written"),
-    ("""FUNCTION_BLOCK A VAR x : INT; END_VAR PROPERTY P : INT SET x := P; END_SET END_PROPERTY
+@pytest.mark.parametrize(
+    "src, message",
+    [
+        (
+            MOTOR + "PROGRAM main VAR m : Motor; END_VAR m.Running := TRUE; END_PROGRAM",
+            "property Running has no SET: it cannot be written",
+        ),
+        (
+            """FUNCTION_BLOCK A VAR x : INT; END_VAR PROPERTY P : INT SET x := P; END_SET END_PROPERTY
         END_FUNCTION_BLOCK PROGRAM main VAR a : A; y : INT; END_VAR y := a.P; END_PROGRAM""",
-     "property P has no GET: it cannot be read"),
-    ("""INTERFACE I PROPERTY P : INT GET END_GET END_PROPERTY END_INTERFACE
+            "property P has no GET: it cannot be read",
+        ),
+        (
+            """INTERFACE I PROPERTY P : INT GET END_GET END_PROPERTY END_INTERFACE
         FUNCTION_BLOCK B IMPLEMENTS I PROPERTY P : DINT GET P := 1; END_GET END_PROPERTY END_FUNCTION_BLOCK""",
-     "B does not implement property P of interface I"),
-    ("""FUNCTION_BLOCK A VAR P : INT; END_VAR PROPERTY P : INT GET P := 1; END_GET END_PROPERTY
+            "B does not implement property P of interface I",
+        ),
+        (
+            """FUNCTION_BLOCK A VAR P : INT; END_VAR PROPERTY P : INT GET P := 1; END_GET END_PROPERTY
         END_FUNCTION_BLOCK""",
-     "'P' is declared twice in A"),
-])
+            "'P' is declared twice in A",
+        ),
+    ],
+)
 def test_property_errors_are_located(src, message):
     text = errors(src)
     assert message in text and "oop.st:" in text
@@ -410,38 +493,65 @@ END_FUNCTION_BLOCK
 
 
 def test_abstract_base_protected_and_private_methods():
-    plc = run(ABSTRACT_BASE + IMPL + """
+    plc = run(
+        ABSTRACT_BASE
+        + IMPL
+        + """
 PROGRAM main
   VAR i : Impl; r : INT; END_VAR
   r := i.Run();
 END_PROGRAM
-""")
-    assert plc["main.r"] == 129                        # (42 + 1) * 2 + (42 + 1)
+"""
+    )
+    assert plc["main.r"] == 129  # (42 + 1) * 2 + (42 + 1)
 
 
-@pytest.mark.parametrize("src, message", [
-    (ABSTRACT_BASE + "PROGRAM main VAR b : Base; END_VAR END_PROGRAM",
-     "'Base' is ABSTRACT and cannot be instantiated"),
-    (ABSTRACT_BASE + "FUNCTION_BLOCK Lazy EXTENDS Base END_FUNCTION_BLOCK",
-     "Lazy does not implement the ABSTRACT method Step of Base"),
-    (ABSTRACT_BASE + IMPL + "PROGRAM main VAR i : Impl; r : INT; END_VAR r := i.Secret(); END_PROGRAM",
-     "method Secret of Base is PRIVATE"),
-    (ABSTRACT_BASE + IMPL + "PROGRAM main VAR i : Impl; r : INT; END_VAR r := i.Helper(); END_PROGRAM",
-     "method Helper of Base is PROTECTED"),
-    (ABSTRACT_BASE + """FUNCTION_BLOCK Impl2 EXTENDS Base
+@pytest.mark.parametrize(
+    "src, message",
+    [
+        (
+            ABSTRACT_BASE + "PROGRAM main VAR b : Base; END_VAR END_PROGRAM",
+            "'Base' is ABSTRACT and cannot be instantiated",
+        ),
+        (
+            ABSTRACT_BASE + "FUNCTION_BLOCK Lazy EXTENDS Base END_FUNCTION_BLOCK",
+            "Lazy does not implement the ABSTRACT method Step of Base",
+        ),
+        (
+            ABSTRACT_BASE + IMPL + "PROGRAM main VAR i : Impl; r : INT; END_VAR r := i.Secret(); END_PROGRAM",
+            "method Secret of Base is PRIVATE",
+        ),
+        (
+            ABSTRACT_BASE + IMPL + "PROGRAM main VAR i : Impl; r : INT; END_VAR r := i.Helper(); END_PROGRAM",
+            "method Helper of Base is PROTECTED",
+        ),
+        (
+            ABSTRACT_BASE
+            + """FUNCTION_BLOCK Impl2 EXTENDS Base
         METHOD Step : INT Step := Secret(); END_METHOD END_FUNCTION_BLOCK""",
-     "method Secret of Base is PRIVATE"),
-    (ABSTRACT_BASE + """FUNCTION_BLOCK Impl3 EXTENDS Base
+            "method Secret of Base is PRIVATE",
+        ),
+        (
+            ABSTRACT_BASE
+            + """FUNCTION_BLOCK Impl3 EXTENDS Base
         METHOD Step : INT Step := SUPER^.Step(); END_METHOD END_FUNCTION_BLOCK""",
-     "method Step of Base is ABSTRACT: it has no implementation to call"),
-    ("""FUNCTION_BLOCK A METHOD OVERRIDE M : INT M := 1; END_METHOD END_FUNCTION_BLOCK""",
-     "method M is marked OVERRIDE but A inherits no method of that name"),
-    ("""FUNCTION_BLOCK A METHOD ABSTRACT M : INT END_METHOD END_FUNCTION_BLOCK""",
-     "ABSTRACT method M in A, which is not ABSTRACT"),
-    ("""FUNCTION_BLOCK A VAR x : INT; END_VAR PROPERTY PRIVATE P : INT GET P := x; END_GET END_PROPERTY
+            "method Step of Base is ABSTRACT: it has no implementation to call",
+        ),
+        (
+            """FUNCTION_BLOCK A METHOD OVERRIDE M : INT M := 1; END_METHOD END_FUNCTION_BLOCK""",
+            "method M is marked OVERRIDE but A inherits no method of that name",
+        ),
+        (
+            """FUNCTION_BLOCK A METHOD ABSTRACT M : INT END_METHOD END_FUNCTION_BLOCK""",
+            "ABSTRACT method M in A, which is not ABSTRACT",
+        ),
+        (
+            """FUNCTION_BLOCK A VAR x : INT; END_VAR PROPERTY PRIVATE P : INT GET P := x; END_GET END_PROPERTY
         END_FUNCTION_BLOCK PROGRAM main VAR a : A; y : INT; END_VAR y := a.P; END_PROGRAM""",
-     "property P of A is PRIVATE"),
-])
+            "property P of A is PRIVATE",
+        ),
+    ],
+)
 def test_access_and_abstract_errors(src, message):
     text = errors(src)
     assert message in text and "E043" in text and "oop.st:" in text
@@ -472,14 +582,21 @@ END_PROGRAM
     assert plc.variables()["main.b"] == "Both"
 
 
-@pytest.mark.parametrize("src, message", [
-    ("CLASS C VAR x : INT; END_VAR x := 1; END_CLASS", "a CLASS has no body; put the code in a METHOD of C"),
-    ("CLASS C METHOD M : INT M := 1; END_METHOD END_CLASS PROGRAM main VAR c : C; END_VAR c(); END_PROGRAM",
-     "an instance of the CLASS C has no body; call its methods"),
-    ("""INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
+@pytest.mark.parametrize(
+    "src, message",
+    [
+        ("CLASS C VAR x : INT; END_VAR x := 1; END_CLASS", "a CLASS has no body; put the code in a METHOD of C"),
+        (
+            "CLASS C METHOD M : INT M := 1; END_METHOD END_CLASS PROGRAM main VAR c : C; END_VAR c(); END_PROGRAM",
+            "an instance of the CLASS C has no body; call its methods",
+        ),
+        (
+            """INTERFACE I METHOD M : INT END_METHOD END_INTERFACE
         PROGRAM main VAR i : I; x : INT; ok : BOOL; END_VAR ok := __QUERYINTERFACE(i, x); END_PROGRAM""",
-     "__QUERYINTERFACE needs an interface variable to fill, not INT"),
-])
+            "__QUERYINTERFACE needs an interface variable to fill, not INT",
+        ),
+    ],
+)
 def test_class_errors(src, message):
     text = errors(src)
     assert message in text and "oop.st:" in text
@@ -526,29 +643,43 @@ END_PROGRAM
 
 def test_an_unbound_reference_is_a_null_fault_with_the_line():
     from st import PLCFaultError
-    plc = PLC(compile_text("""PROGRAM main
+
+    plc = PLC(
+        compile_text(
+            """PROGRAM main
   VAR r : REFERENCE TO INT; x : INT; END_VAR
   x := r + 1;
-END_PROGRAM""", "oop.st"))
+END_PROGRAM""",
+            "oop.st",
+        )
+    )
     with pytest.raises(PLCFaultError) as e:
         plc.scan()
     assert e.value.fault.kind == "NULL" and e.value.fault.line == 3
 
 
-@pytest.mark.parametrize("src, message", [
-    ("PROGRAM main VAR x : INT; y : INT; END_VAR x REF= y; END_PROGRAM", "REF= binds a REFERENCE TO variable"),
-    ("PROGRAM main VAR r : REFERENCE TO INT; y : REAL; END_VAR r REF= y; END_PROGRAM",
-     "REF= needs a INT variable, not REAL"),
-    ("PROGRAM main VAR r : REFERENCE TO INT; END_VAR r REF= 3; END_PROGRAM", "REF= needs a variable to refer to"),
-    ("PROGRAM main VAR x : INT; ok : BOOL; END_VAR ok := __ISVALIDREF(x); END_PROGRAM",
-     "__ISVALIDREF needs a reference, not INT"),
-])
+@pytest.mark.parametrize(
+    "src, message",
+    [
+        ("PROGRAM main VAR x : INT; y : INT; END_VAR x REF= y; END_PROGRAM", "REF= binds a REFERENCE TO variable"),
+        (
+            "PROGRAM main VAR r : REFERENCE TO INT; y : REAL; END_VAR r REF= y; END_PROGRAM",
+            "REF= needs a INT variable, not REAL",
+        ),
+        ("PROGRAM main VAR r : REFERENCE TO INT; END_VAR r REF= 3; END_PROGRAM", "REF= needs a variable to refer to"),
+        (
+            "PROGRAM main VAR x : INT; ok : BOOL; END_VAR ok := __ISVALIDREF(x); END_PROGRAM",
+            "__ISVALIDREF needs a reference, not INT",
+        ),
+    ],
+)
 def test_reference_errors(src, message):
     text = errors(src)
     assert message in text and "oop.st:" in text
 
 
 # ---------------------------------------------------------------------------- dialect presets
+
 
 def test_dialect_presets_accept_and_refuse_constructs():
     oop = """FUNCTION_BLOCK A METHOD M : INT M := 1; END_METHOD END_FUNCTION_BLOCK
@@ -577,11 +708,11 @@ def test_a_dialect_pragma_in_the_file_and_the_openplc_switches():
     src = """{dialect 'openplc'}
 PROGRAM main VAR t : DINT; END_VAR t := TIME_TO_DINT(T#2500ms); END_PROGRAM"""
     cp = compile_text(src, "oop.st", use_cache=False)
-    assert [d.code for d in cp.diagnostics] == []            # the dialect pragma is not an "ignored pragma"
+    assert [d.code for d in cp.diagnostics] == []  # the dialect pragma is not an "ignored pragma"
     plc = PLC(cp)
     plc.scan()
-    assert plc["main.t"] == 2                                  # MatIEC counts seconds
-    plc = PLC(compile_text(src, "oop.st", dialect="iec"))       # the explicit choice wins
+    assert plc["main.t"] == 2  # MatIEC counts seconds
+    plc = PLC(compile_text(src, "oop.st", dialect="iec"))  # the explicit choice wins
     plc.scan()
     assert plc["main.t"] == 2500
 
@@ -709,11 +840,12 @@ def test_a_codesys_style_source_with_methods_properties_and_interfaces(dialect):
     plc.scan(2)
     assert plc["MAIN.bOk"] is True
     assert plc["MAIN.fbX.nMoves"] == 2 and plc["MAIN.fbC.nMoves"] == 2
-    assert plc["MAIN.fSum"] == 50.0 + 5.0                        # 725 limited to 50; 725 mod 360 = 5
+    assert plc["MAIN.fSum"] == 50.0 + 5.0  # 725 limited to 50; 725 mod 360 = 5
 
 
 def test_var_stat_is_shared_by_every_instance_and_call():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK Widget
   VAR_STAT created : INT; END_VAR
   VAR_OUTPUT id : INT; END_VAR
@@ -729,14 +861,17 @@ PROGRAM main
   a(); b(); c(); a();
   t1 := NextTicket(); t2 := NextTicket();
 END_PROGRAM
-""", 2)
+""",
+        2,
+    )
     assert [plc[f"main.{k}"] for k in ("a.id", "b.id", "c.id", "t1", "t2")] == [1, 2, 3, 103, 104]
     assert "id" in plc.variables()["main.a"] and "created" not in plc.variables()["main.a"]
     assert plc.globals() == {"Widget.created": 3, "NextTicket.counter": 104}
 
 
 def test_var_stat_in_a_method_is_shared_by_instances():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK Widget
   METHOD Next : INT
     VAR_STAT n : INT; END_VAR
@@ -747,7 +882,9 @@ PROGRAM main
   VAR a, b : Widget; x, y : INT; END_VAR
   x := a.Next(); y := b.Next();
 END_PROGRAM
-""", 2)
+""",
+        2,
+    )
     assert (plc["main.x"], plc["main.y"]) == (3, 4)
     assert plc.globals() == {"Widget.Next.n": 4}
 
@@ -831,10 +968,17 @@ def test_var_sections_with_access_specifiers():
     assert (plc["main.a"], plc["main.b"], plc["main.c"]) == (10, 6, 1)
 
 
-@pytest.mark.parametrize("change, where, message", [
-    ("c := t.shown;", "13:41", "variable level of Tank is PROTECTED: only Tank and the blocks that extend it may use it"),
-    ("Twice := level * 2;", "9:31", "variable secret of Tank is PRIVATE: only Tank itself may use it"),
-])
+@pytest.mark.parametrize(
+    "change, where, message",
+    [
+        (
+            "c := t.shown;",
+            "13:41",
+            "variable level of Tank is PROTECTED: only Tank and the blocks that extend it may use it",
+        ),
+        ("Twice := level * 2;", "9:31", "variable secret of Tank is PRIVATE: only Tank itself may use it"),
+    ],
+)
 def test_var_access_violations_are_located(change, where, message):
     replacement = {"c := t.shown;": "c := t.level;", "Twice := level * 2;": "Twice := secret * 2;"}[change]
     msg = errors(VAR_ACCESS.replace(change, replacement))
@@ -910,12 +1054,17 @@ def test_online_change_points_interfaces_and_references_at_the_new_instances():
     plc = PLC(compile_text(RELINK, "v1.st"))
     plc.scan(2)
     before = (plc["main.c.n"], plc["main.arr[1].n"], plc["main.arr[0].n"], plc["gc.n"], plc["main.b.v"])
-    assert before == (204, 2, 2, 2, 4)       # c: it and gi bump it (2 per scan), gr adds 100
+    assert before == (204, 2, 2, 2, 4)  # c: it and gi bump it (2 per scan), gr adds 100
     plc.online_change(compile_text(RELINK.replace("n := n + 1;", "n := n + 10;"), "v2.st"))
     plc.scan()
     # every link now reaches the new objects: the new code (+10) changes the carried-over values
-    assert (plc["main.c.n"], plc["main.arr[1].n"], plc["main.arr[0].n"], plc["gc.n"], plc["main.b.v"]) == \
-        (204 + 20 + 100, 12, 12, 12, 6)
+    assert (plc["main.c.n"], plc["main.arr[1].n"], plc["main.arr[0].n"], plc["gc.n"], plc["main.b.v"]) == (
+        204 + 20 + 100,
+        12,
+        12,
+        12,
+        6,
+    )
     assert plc["main.last"] == 214 + 12 + 12 + 224
 
 
@@ -965,6 +1114,13 @@ PROGRAM main
 END_PROGRAM
 """)
     assert [plc[f"main.{n}"] for n in ("r1", "r2", "r3", "r4", "p", "rr", "none", "fresh")] == [
-        "REF(main.m[2, 1])", "REF(main.f.q)", "REF(main.pts[2])", "REF(g)", "REF(main.pts[1].y)",
-        "REF(main.r1)", None, "REF(__NEW)"]
+        "REF(main.m[2, 1])",
+        "REF(main.f.q)",
+        "REF(main.pts[2])",
+        "REF(g)",
+        "REF(main.pts[1].y)",
+        "REF(main.r1)",
+        None,
+        "REF(__NEW)",
+    ]
     assert plc.variables()["main.r1"] == "REF(main.m[2, 1])"

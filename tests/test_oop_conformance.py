@@ -3,6 +3,7 @@ CODESYS/TwinCAT example projects): methods, interfaces, properties, inheritance 
 abstract/final/override, access specifiers, CLASS, references and pointers, VAR_INST/VAR_STAT,
 __NEW/__DELETE, FB_init, dialect presets, and the located diagnostics for the usual mistakes.
 Every expected value was worked out by hand from the language semantics."""
+
 from functools import partial
 
 import pytest
@@ -17,6 +18,7 @@ fault = partial(helpers.fault, name="conf.st")
 
 
 # --------------------------------------------------------------------------- inheritance, SUPER^
+
 
 def test_super_method_chain_and_super_body_over_three_levels():
     plc = run("""
@@ -94,7 +96,8 @@ END_PROGRAM
 
 
 def test_abstract_template_body_and_super_body_of_a_bodyless_block():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK ABSTRACT Step
   VAR_OUTPUT trace : STRING; END_VAR
   METHOD ABSTRACT Work : STRING
@@ -113,7 +116,9 @@ END_FUNCTION_BLOCK
 PROGRAM main VAR a : S1; b : S2; END_VAR
   a(); b();
 END_PROGRAM
-""", 2)
+""",
+        2,
+    )
     assert (plc["main.a.trace"], plc["main.b.trace"]) == ("xx", "y.y.")
 
 
@@ -185,6 +190,7 @@ END_PROGRAM
 
 # --------------------------------------------------------------------------- methods
 
+
 def test_method_struct_and_array_results_outputs_and_in_outs():
     plc = run("""
 TYPE Pt : STRUCT x : INT; y : INT; END_STRUCT END_TYPE
@@ -227,7 +233,7 @@ END_PROGRAM
     assert plc["main.p"] == {"x": 3, "y": 7} and plc["main.p2"] == {"x": 2, "y": 1}
     assert plc["main.a"] == [100, 101, 102]
     assert (plc["main.ok"], plc["main.q"], plc["main.r"]) == (True, 3, 2)
-    assert (plc["main.ok2"], plc["main.q2"]) == (False, 0)     # outputs are copied out on RETURN too
+    assert (plc["main.ok2"], plc["main.q2"]) == (False, 0)  # outputs are copied out on RETURN too
     assert (plc["main.v"], plc["main.px"]) == (16, 9)
 
 
@@ -298,7 +304,8 @@ END_PROGRAM
 
 
 def test_methods_of_a_global_instance_from_two_programs():
-    plc = run("""
+    plc = run(
+        """
 VAR_GLOBAL g : Acc; END_VAR
 FUNCTION_BLOCK Acc
   VAR_OUTPUT total : INT; END_VAR
@@ -311,12 +318,15 @@ CONFIGURATION c RESOURCE r ON PLC
   PROGRAM i1 WITH t1 : p1;
   PROGRAM i2 WITH t1 : p2;
 END_RESOURCE END_CONFIGURATION
-""", 3)
+""",
+        3,
+    )
     assert plc["i2.t"] == 33
 
 
 def test_methods_and_properties_after_end_function_block_twincat_layout():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK FB_Valve
 VAR_INPUT
   bOpen : BOOL;
@@ -355,12 +365,16 @@ bRes := fbValve.M_Open(bForce := FALSE);
 fbValve();
 nCyc := fbValve.Cycles;
 END_PROGRAM
-""", 2, dialect="twincat")
+""",
+        2,
+        dialect="twincat",
+    )
     assert (plc["MAIN.bRes"], plc["MAIN.fbValve.nState"], plc["MAIN.nCyc"]) == (True, 1, 2)
 
 
 def test_a_method_of_a_program():
-    plc = run("""
+    plc = run(
+        """
 PROGRAM main
   VAR x : INT; y : INT; END_VAR
   METHOD Twice : INT
@@ -370,11 +384,15 @@ PROGRAM main
   x := x + 1;
   y := Twice(x);
 END_PROGRAM
-""", 3, dialect="codesys")
+""",
+        3,
+        dialect="codesys",
+    )
     assert (plc["main.x"], plc["main.y"]) == (3, 6)
 
 
 # --------------------------------------------------------------------------- properties
+
 
 def test_property_setter_clamps_and_methods_use_this_property():
     plc = run("""
@@ -481,6 +499,7 @@ END_PROGRAM
 
 # --------------------------------------------------------------------------- interfaces
 
+
 def test_interface_array_dispatch_with_extended_interface_and_property():
     plc = run("""
 INTERFACE IShape
@@ -573,7 +592,9 @@ END_FUNCTION_BLOCK
 
 
 def test_interfaces_as_inputs_outputs_and_assignment_attempts():
-    plc = run(ABSTRACT_SENSORS + """
+    plc = run(
+        ABSTRACT_SENSORS
+        + """
 FUNCTION ReadTwice : INT
   VAR_INPUT s : ISensor; END_VAR
   ReadTwice := s.Read() * 2;
@@ -603,7 +624,8 @@ PROGRAM main
   r3 := rt^.Read();
   ok2 := rp = NULL;
 END_PROGRAM
-""")
+"""
+    )
     assert (plc["main.r1"], plc["main.r2"], plc["main.r3"]) == (42, 3, 21)
     assert (plc["main.n"], plc["main.n2"], plc["main.q"]) == ("Temp", None, "Temp")
     assert (plc["main.ok1"], plc["main.ok2"], plc["main.nm"]) == (True, True, "temp")
@@ -740,7 +762,8 @@ END_PROGRAM
 
 
 def test_query_interface_and_assignment_attempt_from_null():
-    plc = run("""
+    plc = run(
+        """
 INTERFACE I
   METHOD M : INT
   END_METHOD
@@ -758,14 +781,18 @@ PROGRAM main VAR i : I; j : J; f : F; ok1, ok2 : BOOL := TRUE; END_VAR
   i := f;
   ok2 := __QUERYINTERFACE(i, j);
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert (plc["main.ok1"], plc["main.ok2"], plc["main.j"]) == (True, False, None)
 
 
 # --------------------------------------------------------------------------- references, vendor extensions
 
+
 def test_reference_to_pointer_and_sizeof():
-    plc = run("""
+    plc = run(
+        """
 TYPE S : STRUCT a : INT; b : ARRAY[1..3] OF INT; END_STRUCT END_TYPE
 TYPE STRUCT_T : STRUCT a : BYTE; b : LREAL; c : INT; d : STRING(10); END_STRUCT END_TYPE
 PROGRAM main VAR s : S; rr : REFERENCE TO INT; p : POINTER TO S; ok : BOOL; sz1, sz2, sz3 : DINT;
@@ -779,13 +806,16 @@ PROGRAM main VAR s : S; rr : REFERENCE TO INT; p : POINTER TO S; ok : BOOL; sz1,
   sz2 := SIZEOF(LREAL);
   sz3 := SIZEOF(t);
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert plc["main.s"] == {"a": 42, "b": [0, 7, 0]}
     assert (plc["main.ok"], plc["main.sz1"], plc["main.sz2"], plc["main.sz3"]) == (True, 8, 8, 32)
 
 
 def test_linked_list_of_classes_built_with_new_and_a_recursive_method():
-    plc = run("""
+    plc = run(
+        """
 CLASS Node
   VAR val : INT; next : POINTER TO Node; END_VAR
   METHOD Init
@@ -806,12 +836,15 @@ PROGRAM main
   __DELETE(n3);
   gone := n3 = NULL;
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert (plc["main.total"], plc["main.gone"]) == (321, True)
 
 
 def test_base_reference_and_pointer_to_a_derived_instance_dispatch_virtually():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK Shape
   METHOD Area : REAL
     Area := 0.0;
@@ -830,12 +863,15 @@ PROGRAM main VAR c : Circle; rs : REF_TO Shape; p : POINTER TO Shape; a1, a2 : R
   p := ADR(c);
   a2 := p^.Area();
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert (plc["main.a1"], plc["main.a2"]) == (12.0, 12.0)
 
 
 def test_var_inst_and_var_stat_in_methods():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK C
   METHOD Tick : INT
     VAR_INST n : INT; END_VAR
@@ -850,12 +886,15 @@ PROGRAM main VAR a, b : C; r1, r2, r3 : INT; END_VAR
   r2 := a.Tick();
   r3 := b.Tick();
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert (plc["main.r1"], plc["main.r2"], plc["main.r3"]) == (111, 221, 131)
 
 
 def test_var_stat_in_a_function_block_and_a_function():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK Id
   VAR_STAT next : INT := 100; END_VAR
   VAR_OUTPUT id : INT; END_VAR
@@ -869,12 +908,16 @@ PROGRAM main VAR a, b, c : Id; s : INT; END_VAR
   a(); b(); c(); a();
   s := Seq() + Seq();
 END_PROGRAM
-""", 2, dialect="codesys")
+""",
+        2,
+        dialect="codesys",
+    )
     assert (plc["main.a.id"], plc["main.b.id"], plc["main.c.id"], plc["main.s"]) == (101, 102, 103, 7)
 
 
 def test_fb_init_chain_with_declaration_arguments():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK Base
   VAR_OUTPUT log : STRING; id : INT; END_VAR
   METHOD FB_init : BOOL
@@ -891,12 +934,15 @@ FUNCTION_BLOCK Derived EXTENDS Base
 END_FUNCTION_BLOCK
 PROGRAM main VAR d : Derived(nId := 5, nScale := 3); b : Base(nId := 9); END_VAR
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert (plc["main.d.log"], plc["main.d.id"], plc["main.d.scale"], plc["main.b.id"]) == ("BD", 5, 3, 9)
 
 
 def test_attribute_pragmas_are_accepted_in_codesys():
-    plc = run("""
+    plc = run(
+        """
 {attribute 'qualified_only'}
 VAR_GLOBAL
   g : INT := 4;
@@ -919,11 +965,14 @@ PROGRAM main VAR f : F; {attribute 'hide'} x : INT; y : INT; END_VAR
   x := f.M() + f.P;
   y := g;
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert (plc["main.x"], plc["main.y"]) == (12, 4)
 
 
 # --------------------------------------------------------------------------- runtime faults
+
 
 def test_null_faults_carry_the_st_line():
     _, f = fault("""
@@ -948,7 +997,8 @@ PROGRAM main VAR r : REF_TO A; x : INT; END_VAR
 END_PROGRAM
 """)
     assert (f.kind, f.line) == ("NULL", 7)
-    plc, f = fault("""
+    plc, f = fault(
+        """
 PROGRAM main VAR p : POINTER TO INT; x : INT; END_VAR
   p := __NEW(INT);
   p^ := 5;
@@ -956,14 +1006,17 @@ PROGRAM main VAR p : POINTER TO INT; x : INT; END_VAR
   __DELETE(p);
   x := p^;
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert (f.kind, f.line, plc["main.x"]) == ("NULL", 7, 5)
 
 
 # --------------------------------------------------------------------------- diagnostics
 
 DIAGNOSTICS = [
-    ("""
+    (
+        """
 INTERFACE I
   METHOD M : INT
   END_METHOD
@@ -971,8 +1024,11 @@ END_INTERFACE
 FUNCTION_BLOCK F IMPLEMENTS I
 END_FUNCTION_BLOCK
 PROGRAM main VAR f : F; END_VAR END_PROGRAM
-""", "conf.st:6:16: error[E047]: F does not implement method M of interface I"),
-    ("""
+""",
+        "conf.st:6:16: error[E047]: F does not implement method M of interface I",
+    ),
+    (
+        """
 FUNCTION_BLOCK A
   METHOD M : INT
     VAR_INPUT x : INT; END_VAR
@@ -986,8 +1042,11 @@ FUNCTION_BLOCK B EXTENDS A
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; END_VAR END_PROGRAM
-""", "conf.st:9:10: error[E047]: method M overrides A.M with a different signature"),
-    ("""
+""",
+        "conf.st:9:10: error[E047]: method M overrides A.M with a different signature",
+    ),
+    (
+        """
 INTERFACE I
   METHOD M : INT
     VAR_INPUT x : INT; END_VAR
@@ -1000,8 +1059,11 @@ FUNCTION_BLOCK F IMPLEMENTS I
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main VAR f : F; END_VAR END_PROGRAM
-""", "conf.st:8:10: error[E047]: method M of F does not match I.M"),
-    ("""
+""",
+        "conf.st:8:10: error[E047]: method M of F does not match I.M",
+    ),
+    (
+        """
 FUNCTION_BLOCK ABSTRACT A
   METHOD ABSTRACT M : INT
   END_METHOD
@@ -1012,8 +1074,11 @@ FUNCTION_BLOCK B EXTENDS A
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; END_VAR END_PROGRAM
-""", "conf.st:8:10: error[E043]: method M of A is ABSTRACT: it has no implementation to call"),
-    ("""
+""",
+        "conf.st:8:10: error[E043]: method M of A is ABSTRACT: it has no implementation to call",
+    ),
+    (
+        """
 FUNCTION_BLOCK A
   METHOD PRIVATE M : INT
     M := 1;
@@ -1027,8 +1092,11 @@ END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; x : INT; END_VAR
   x := b.N();
 END_PROGRAM
-""", "conf.st:9:10: error[E043]: method M of A is PRIVATE: only A itself may use it"),
-    ("""
+""",
+        "conf.st:9:10: error[E043]: method M of A is PRIVATE: only A itself may use it",
+    ),
+    (
+        """
 FUNCTION_BLOCK A
   METHOD PROTECTED M : INT
     M := 1;
@@ -1043,8 +1111,11 @@ PROGRAM main VAR b : B; x : INT; END_VAR
   x := b.N();
   x := b.M();
 END_PROGRAM
-""", "conf.st:14:8: error[E043]: method M of A is PROTECTED: only A and the blocks that extend it may use it"),
-    ("""
+""",
+        "conf.st:14:8: error[E043]: method M of A is PROTECTED: only A and the blocks that extend it may use it",
+    ),
+    (
+        """
 FUNCTION_BLOCK F
   PROPERTY PROTECTED P : INT
   GET P := 1; END_GET
@@ -1053,36 +1124,51 @@ END_FUNCTION_BLOCK
 PROGRAM main VAR f : F; x : INT; END_VAR
   x := f.P;
 END_PROGRAM
-""", "conf.st:8:10: error[E043]: property P of F is PROTECTED"),
-    ("""
+""",
+        "conf.st:8:10: error[E043]: property P of F is PROTECTED",
+    ),
+    (
+        """
 FUNCTION_BLOCK A
   VAR PRIVATE secret : INT; END_VAR
 END_FUNCTION_BLOCK
 PROGRAM main VAR a : A; x : INT; END_VAR
   x := a.secret;
 END_PROGRAM
-""", "conf.st:6:10: error[E043]: variable secret of A is PRIVATE: only A itself may use it"),
-    ("""
+""",
+        "conf.st:6:10: error[E043]: variable secret of A is PRIVATE: only A itself may use it",
+    ),
+    (
+        """
 FUNCTION_BLOCK ABSTRACT A
   VAR x : INT; END_VAR
 END_FUNCTION_BLOCK
 PROGRAM main VAR a : A; END_VAR END_PROGRAM
-""", "conf.st:5:22: error[E043]: 'A' is ABSTRACT and cannot be instantiated"),
-    ("""
+""",
+        "conf.st:5:22: error[E043]: 'A' is ABSTRACT and cannot be instantiated",
+    ),
+    (
+        """
 FUNCTION_BLOCK ABSTRACT A
 END_FUNCTION_BLOCK
 PROGRAM main VAR p : POINTER TO A; END_VAR
   p := __NEW(A);
 END_PROGRAM
-""", "conf.st:5:14: error[E043]: 'A' is ABSTRACT and cannot be instantiated"),
-    ("""
+""",
+        "conf.st:5:14: error[E043]: 'A' is ABSTRACT and cannot be instantiated",
+    ),
+    (
+        """
 FUNCTION_BLOCK FINAL A
 END_FUNCTION_BLOCK
 FUNCTION_BLOCK B EXTENDS A
 END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; END_VAR END_PROGRAM
-""", "conf.st:4:16: error[E047]: 'A' is FINAL and cannot be extended"),
-    ("""
+""",
+        "conf.st:4:16: error[E047]: 'A' is FINAL and cannot be extended",
+    ),
+    (
+        """
 FUNCTION_BLOCK A
   METHOD FINAL M : INT
     M := 1;
@@ -1094,16 +1180,22 @@ FUNCTION_BLOCK B EXTENDS A
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; END_VAR END_PROGRAM
-""", "conf.st:8:10: error[E047]: method M of A is FINAL and cannot be overridden"),
-    ("""
+""",
+        "conf.st:8:10: error[E047]: method M of A is FINAL and cannot be overridden",
+    ),
+    (
+        """
 FUNCTION_BLOCK A
   METHOD OVERRIDE M : INT
     M := 1;
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main VAR a : A; END_VAR END_PROGRAM
-""", "conf.st:3:19: error[E043]: method M is marked OVERRIDE but A inherits no method of that name"),
-    ("""
+""",
+        "conf.st:3:19: error[E043]: method M is marked OVERRIDE but A inherits no method of that name",
+    ),
+    (
+        """
 FUNCTION_BLOCK ABSTRACT A
   METHOD ABSTRACT M : INT
   END_METHOD
@@ -1111,23 +1203,32 @@ END_FUNCTION_BLOCK
 FUNCTION_BLOCK B EXTENDS A
 END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; END_VAR END_PROGRAM
-""", "conf.st:6:16: error[E043]: B does not implement the ABSTRACT method M of A"),
-    ("""
+""",
+        "conf.st:6:16: error[E043]: B does not implement the ABSTRACT method M of A",
+    ),
+    (
+        """
 FUNCTION_BLOCK A
   METHOD ABSTRACT M : INT
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main VAR a : A; END_VAR END_PROGRAM
-""", "conf.st:3:19: error[E043]: ABSTRACT method M in A, which is not ABSTRACT"),
-    ("""
+""",
+        "conf.st:3:19: error[E043]: ABSTRACT method M in A, which is not ABSTRACT",
+    ),
+    (
+        """
 FUNCTION_BLOCK ABSTRACT A
   METHOD ABSTRACT M : INT
     M := 1;
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main END_PROGRAM
-""", "conf.st:3:19: error[E043]: ABSTRACT method M has a body"),
-    ("""
+""",
+        "conf.st:3:19: error[E043]: ABSTRACT method M has a body",
+    ),
+    (
+        """
 INTERFACE I
   METHOD M : INT
   END_METHOD
@@ -1137,8 +1238,11 @@ END_FUNCTION_BLOCK
 PROGRAM main VAR f : F; i : I; END_VAR
   i := f;
 END_PROGRAM
-""", "conf.st:9:8: error[E013]: cannot assign F to I: F does not implement I"),
-    ("""
+""",
+        "conf.st:9:8: error[E013]: cannot assign F to I: F does not implement I",
+    ),
+    (
+        """
 INTERFACE IA
   METHOD A : INT
   END_METHOD
@@ -1151,8 +1255,11 @@ PROGRAM main VAR a : IA; b : IB; END_VAR
   a := b;
   b := a;
 END_PROGRAM
-""", "conf.st:12:8: error[E013]: cannot assign IA to IB: IA does not implement IB"),
-    ("""
+""",
+        "conf.st:12:8: error[E013]: cannot assign IA to IB: IA does not implement IB",
+    ),
+    (
+        """
 FUNCTION_BLOCK A
   PROPERTY P : INT
   GET P := 1; END_GET
@@ -1161,8 +1268,11 @@ END_FUNCTION_BLOCK
 PROGRAM main VAR a : A; END_VAR
   a.P := 3;
 END_PROGRAM
-""", "conf.st:8:3: error[E018]: property P has no SET: it cannot be written"),
-    ("""
+""",
+        "conf.st:8:3: error[E018]: property P has no SET: it cannot be written",
+    ),
+    (
+        """
 FUNCTION_BLOCK F
   VAR v : INT; END_VAR
   PROPERTY P : INT
@@ -1172,8 +1282,11 @@ END_FUNCTION_BLOCK
 PROGRAM main VAR f : F; x : INT; END_VAR
   x := f.P;
 END_PROGRAM
-""", "conf.st:9:8: error[E023]: property P has no GET: it cannot be read"),
-    ("""
+""",
+        "conf.st:9:8: error[E023]: property P has no GET: it cannot be read",
+    ),
+    (
+        """
 INTERFACE I
   PROPERTY P : INT
   GET END_GET
@@ -1185,8 +1298,11 @@ FUNCTION_BLOCK F IMPLEMENTS I
   END_PROPERTY
 END_FUNCTION_BLOCK
 PROGRAM main END_PROGRAM
-""", "conf.st:7:16: error[E047]: F does not implement property P of interface I"),
-    ("""
+""",
+        "conf.st:7:16: error[E047]: F does not implement property P of interface I",
+    ),
+    (
+        """
 FUNCTION_BLOCK F
   METHOD M : INT
     VAR_INPUT a : INT; END_VAR
@@ -1196,16 +1312,22 @@ END_FUNCTION_BLOCK
 PROGRAM main VAR f : F; x : INT; END_VAR
   x := f.M(b := 1);
 END_PROGRAM
-""", "conf.st:9:12: error[E016]: M has no parameter 'b' (parameters: a)"),
-    ("""
+""",
+        "conf.st:9:12: error[E016]: M has no parameter 'b' (parameters: a)",
+    ),
+    (
+        """
 FUNCTION_BLOCK F
   METHOD M
     M := 1;
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main END_PROGRAM
-""", "conf.st:3:10: error[E013]: METHOD M has no return type but assigns a result"),
-    ("""
+""",
+        "conf.st:3:10: error[E013]: METHOD M has no return type but assigns a result",
+    ),
+    (
+        """
 FUNCTION_BLOCK A
   METHOD M : INT
     M := 1;
@@ -1215,12 +1337,17 @@ FUNCTION_BLOCK A
   END_METHOD
 END_FUNCTION_BLOCK
 PROGRAM main END_PROGRAM
-""", "conf.st:6:10: error[E011]: 'M' is declared twice in A"),
-    ("""
+""",
+        "conf.st:6:10: error[E011]: 'M' is declared twice in A",
+    ),
+    (
+        """
 FUNCTION_BLOCK F IMPLEMENTS INope
 END_FUNCTION_BLOCK
 PROGRAM main END_PROGRAM
-""", "conf.st:2:16: error[E010]: F IMPLEMENTS: 'INope' is not declared"),
+""",
+        "conf.st:2:16: error[E010]: F IMPLEMENTS: 'INope' is not declared",
+    ),
 ]
 
 
@@ -1248,7 +1375,9 @@ END_PROGRAM
     text = errors(oop, dialect="openplc")
     assert "conf.st:2:11: error[E044]: INTERFACE is not part of the openplc dialect" in text
     assert "conf.st:7:10: error[E044]: METHOD is not part of the openplc dialect" in text
-    assert "conf.st:3:11: error[E044]: INTERFACE is not part of the openplc dialect" in errors("{dialect 'openplc'}\n" + oop)
+    assert "conf.st:3:11: error[E044]: INTERFACE is not part of the openplc dialect" in errors(
+        "{dialect 'openplc'}\n" + oop
+    )
     assert run(oop, dialect="iec")["main.x"] == 1
     ptr = """
 PROGRAM main VAR x : INT; p : POINTER TO INT; END_VAR
@@ -1258,16 +1387,20 @@ END_PROGRAM
     text = errors(ptr, dialect="iec")
     assert "conf.st:2:31: error[E044]: POINTER TO is not part of the iec dialect" in text
     assert "conf.st:3:8: error[E044]: ADR is not part of the iec dialect" in text
-    plc = run("""
+    plc = run(
+        """
 PROGRAM main VAR x : INT; p : REF_TO INT; END_VAR
   p := REF(x);
   p^ := 3;
 END_PROGRAM
-""", dialect="iec")
+""",
+        dialect="iec",
+    )
     assert plc["main.x"] == 3
 
 
 # --------------------------------------------------------------------------- more runtime probes
+
 
 def test_methods_named_like_common_words():
     plc = run("""
@@ -1384,7 +1517,8 @@ END_PROGRAM
 
 
 def test_array_of_base_references_calls_methods_and_bodies_of_derived_instances():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK Base
   VAR_OUTPUT calls : INT; END_VAR
   METHOD Id : INT Id := 1; END_METHOD
@@ -1401,7 +1535,9 @@ PROGRAM main VAR b : Base; d : D1; refs : ARRAY[0..1] OF REF_TO Base; i : INT; s
   p := ADR(d);
   p^();
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert (plc["main.s"], plc["main.b.calls"], plc["main.d.calls"]) == (11, 1, 20)
 
 
@@ -1432,7 +1568,8 @@ END_PROGRAM
 
 
 def test_properties_through_array_elements_interfaces_pointers_and_references():
-    plc = run("""
+    plc = run(
+        """
 INTERFACE IP PROPERTY P : INT GET END_GET SET END_SET END_PROPERTY END_INTERFACE
 FUNCTION_BLOCK F IMPLEMENTS IP
   VAR v : INT; END_VAR
@@ -1454,7 +1591,9 @@ PROGRAM main VAR fs : ARRAY[1..3] OF F; is : ARRAY[1..3] OF IP; i : INT; p : POI
   rr^.P := rr^.P + 10;
   FOR i := 1 TO 3 DO s := s * 100 + fs[i].P; END_FOR;
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert plc["main.s"] == 240414
 
 
@@ -1521,7 +1660,8 @@ END_PROGRAM
 
 
 def test_fb_init_runs_inner_instances_first_in_arrays():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK Cell
   VAR_OUTPUT id : INT; END_VAR
   VAR_STAT n : INT; END_VAR
@@ -1540,7 +1680,9 @@ FUNCTION_BLOCK Holder
 END_FUNCTION_BLOCK
 PROGRAM main VAR h : Holder; END_VAR
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert (plc["main.h.cells[1].id"], plc["main.h.cells[3].id"], plc["main.h.first"]) == (1, 3, 3)
 
 
@@ -1569,6 +1711,7 @@ END_PROGRAM
 
 
 # --------------------------------------------------------------------------- found by these probes, fixed
+
 
 def test_super_property_in_an_overriding_property_reaches_the_base_accessors():
     plc = run("""
@@ -1610,7 +1753,8 @@ END_PROGRAM
 
 
 def test_var_external_in_a_method_and_a_property_accessor():
-    plc = run("""
+    plc = run(
+        """
 VAR_GLOBAL gCount : INT; END_VAR
 FUNCTION_BLOCK F
   METHOD Bump : INT
@@ -1625,7 +1769,9 @@ FUNCTION_BLOCK F
   END_PROPERTY
 END_FUNCTION_BLOCK
 PROGRAM main VAR f : F; x, y : INT; END_VAR  x := f.Bump(); y := f.P; END_PROGRAM
-""", 2)
+""",
+        2,
+    )
     assert (plc["main.x"], plc["main.y"], plc.globals()["gCount"]) == (2, 20, 2)
 
 
@@ -1654,7 +1800,15 @@ PROGRAM main VAR f : F; r1 : INT; r2 : INT := -1; e1, e2, e3, e4 : BOOL; END_VAR
   f.N(EN := FALSE, x := 9, ENO => e4);
 END_PROGRAM
 """)
-    assert [plc[f"main.{n}"] for n in ("r1", "r2", "e1", "e2", "e3", "e4", "f.k")] == [8, -1, True, False, True, False, 3]
+    assert [plc[f"main.{n}"] for n in ("r1", "r2", "e1", "e2", "e3", "e4", "f.k")] == [
+        8,
+        -1,
+        True,
+        False,
+        True,
+        False,
+        3,
+    ]
 
 
 def test_reference_to_inputs_are_bound_to_the_argument():
@@ -1730,20 +1884,33 @@ END_PROGRAM
     assert [plc[f"main.{n}"] for n in ("b1", "b2", "b3")] == [True, True, False]
 
 
-@pytest.mark.parametrize("src, diagnostic", [
-    ("FUNCTION Fn : INT Fn := THIS^.y; END_FUNCTION",
-     "conf.st:1:25: error[E010]: THIS exists only inside a function block or one of its methods"),
-    ("INTERFACE I METHOD M : INT END_METHOD END_INTERFACE\nFUNCTION_BLOCK F EXTENDS I END_FUNCTION_BLOCK",
-     "conf.st:2:16: error[E012]: F can only extend a FUNCTION_BLOCK; 'I' is an INTERFACE"),
-    ("FUNCTION_BLOCK F VAR_INST n : INT; END_VAR END_FUNCTION_BLOCK",
-     "conf.st:1:18: error[E003]: VAR_INST is not allowed in a FUNCTION_BLOCK"),
-    ("INTERFACE I METHOD M : INT END_METHOD END_INTERFACE\n"
-     "FUNCTION_BLOCK F IMPLEMENTS I METHOD PRIVATE M : INT M := 1; END_METHOD END_FUNCTION_BLOCK",
-     "conf.st:2:46: error[E043]: method M of F implements I.M: it must be PUBLIC"),
-    ("FUNCTION_BLOCK B METHOD PUBLIC M : INT M := 1; END_METHOD END_FUNCTION_BLOCK\n"
-     "FUNCTION_BLOCK D EXTENDS B METHOD PROTECTED M : INT M := 2; END_METHOD END_FUNCTION_BLOCK",
-     "conf.st:2:45: error[E043]: method M overrides B.M with a narrower access"),
-])
+@pytest.mark.parametrize(
+    "src, diagnostic",
+    [
+        (
+            "FUNCTION Fn : INT Fn := THIS^.y; END_FUNCTION",
+            "conf.st:1:25: error[E010]: THIS exists only inside a function block or one of its methods",
+        ),
+        (
+            "INTERFACE I METHOD M : INT END_METHOD END_INTERFACE\nFUNCTION_BLOCK F EXTENDS I END_FUNCTION_BLOCK",
+            "conf.st:2:16: error[E012]: F can only extend a FUNCTION_BLOCK; 'I' is an INTERFACE",
+        ),
+        (
+            "FUNCTION_BLOCK F VAR_INST n : INT; END_VAR END_FUNCTION_BLOCK",
+            "conf.st:1:18: error[E003]: VAR_INST is not allowed in a FUNCTION_BLOCK",
+        ),
+        (
+            "INTERFACE I METHOD M : INT END_METHOD END_INTERFACE\n"
+            "FUNCTION_BLOCK F IMPLEMENTS I METHOD PRIVATE M : INT M := 1; END_METHOD END_FUNCTION_BLOCK",
+            "conf.st:2:46: error[E043]: method M of F implements I.M: it must be PUBLIC",
+        ),
+        (
+            "FUNCTION_BLOCK B METHOD PUBLIC M : INT M := 1; END_METHOD END_FUNCTION_BLOCK\n"
+            "FUNCTION_BLOCK D EXTENDS B METHOD PROTECTED M : INT M := 2; END_METHOD END_FUNCTION_BLOCK",
+            "conf.st:2:45: error[E043]: method M overrides B.M with a narrower access",
+        ),
+    ],
+)
 def test_object_oriented_diagnostics_after_qa(src, diagnostic):
     msg = errors(src)
     assert diagnostic in msg and "None" not in msg
@@ -1761,7 +1928,8 @@ PROGRAM main VAR f : F; i : I; s : STRING; END_VAR i := f; s := i.Name; END_PROG
 
 
 def test_return_in_a_method_without_result_and_in_a_property_set():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK FB
   VAR_OUTPUT n : INT; END_VAR
   METHOD Bump
@@ -1775,12 +1943,15 @@ FUNCTION_BLOCK FB
 END_FUNCTION_BLOCK
 FUNCTION NoResult VAR_IN_OUT x : INT; END_VAR IF x > 5 THEN RETURN; END_IF x := x + 10; END_FUNCTION
 PROGRAM main VAR f, g : FB; a : INT := 3; END_VAR f.Bump(); g.P := -1; g.P := 4; NoResult(a); END_PROGRAM
-""", 4)
+""",
+        4,
+    )
     assert (plc["main.f.n"], plc["main.g.n"], plc["main.a"], plc.state) == (2, 4, 13, "RUN")
 
 
 def test_a_reference_to_an_in_out_outlives_the_call():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK FB
   VAR r : REFERENCE TO DINT; p : POINTER TO DINT; END_VAR
   VAR_OUTPUT seen : DINT; END_VAR
@@ -1797,13 +1968,22 @@ FUNCTION_BLOCK FB
 END_FUNCTION_BLOCK
 FUNCTION Inc2 VAR_IN_OUT v : DINT; END_VAR VAR q : REF_TO DINT; END_VAR q := REF(v); q^ := q^ + 2; v := v + 1; END_FUNCTION
 PROGRAM main VAR f : FB; x, y, z : DINT; END_VAR f.Bind(x); f.Touch(); y := f.Local(); Inc2(z); END_PROGRAM
-""", dialect="codesys")
-    assert [plc[f"main.{n}"] for n in ("x", "f.seen", "y", "z", "f.r", "f.p")] == \
-        [1101, 1101, 15, 3, "REF(main.x)", "REF(main.x)"]
+""",
+        dialect="codesys",
+    )
+    assert [plc[f"main.{n}"] for n in ("x", "f.seen", "y", "z", "f.r", "f.p")] == [
+        1101,
+        1101,
+        15,
+        3,
+        "REF(main.x)",
+        "REF(main.x)",
+    ]
 
 
 def test_interfaces_and_references_compared_with_and_assigned_zero():
-    plc = run("""
+    plc = run(
+        """
 INTERFACE I METHOD M END_METHOD END_INTERFACE
 FUNCTION_BLOCK F IMPLEMENTS I METHOD M END_METHOD END_FUNCTION_BLOCK
 PROGRAM main VAR i : I; f : F; r : REF_TO INT; b1, b2, b3, b4 : BOOL; END_VAR
@@ -1812,18 +1992,23 @@ PROGRAM main VAR i : I; f : F; r : REF_TO INT; b1, b2, b3, b4 : BOOL; END_VAR
   i := 0; b3 := i = 0;
   r := 0; b4 := r = 0;
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert [plc[f"main.b{k}"] for k in range(1, 5)] == [True, True, True, True]
 
 
 def test_an_instances_reference_member_is_used_as_its_target():
-    plc = run("""
+    plc = run(
+        """
 FUNCTION_BLOCK FB VAR_OUTPUT r : REFERENCE TO DINT; END_VAR END_FUNCTION_BLOCK
 FUNCTION Twice VAR_IN_OUT v : DINT; END_VAR v := v * 2; END_FUNCTION
 PROGRAM main VAR f : FB; x, y : DINT; END_VAR
   f.r REF= x; f.r := 5; y := f.r + 1; Twice(f.r);
 END_PROGRAM
-""", dialect="codesys")
+""",
+        dialect="codesys",
+    )
     assert (plc["main.x"], plc["main.y"], plc["main.f.r"]) == (10, 6, "REF(main.x)")
 
 
@@ -1840,13 +2025,16 @@ END_PROGRAM
 
 
 def test_w007_only_when_the_function_would_take_the_same_arguments():
-    d = compile_text("""
+    d = compile_text(
+        """
 FUNCTION_BLOCK Store
   VAR_INPUT s : STRING; END_VAR
   METHOD Find : INT VAR_INPUT what : STRING; END_VAR Find := 7; END_METHOD
   METHOD Use : INT Use := Find('x') + FIND(s, 'x'); END_METHOD
 END_FUNCTION_BLOCK
-""", "conf.st").diagnostics
+""",
+        "conf.st",
+    ).diagnostics
     assert [x.code for x in d if x.code == "W007"] == []
 
 

@@ -1,6 +1,7 @@
 """Realistic object-oriented ST programs as CODESYS and TwinCAT engineers write them (a state machine
 framework, a command queue, an event bus, an axis simulation, a recipe manager, ST unit tests of an
 OOP block), checked value by value against results worked out by hand."""
+
 from st import PLC
 from st.api import compile_text
 from st.testing import TestSuite
@@ -962,7 +963,7 @@ def test_state_machine_framework_twincat_layout_fb_init_and_interface_array():
     assert plc["main.fbM.eCurrent"] == "IDLE"
     assert plc["main.fbM.nTransitions"] == 4
     assert plc["main.fbM.nTrace"] == 1230
-    assert plc["main.ids"] == [0, 1, 2, 3]                     # FB_init(eMyId := ...) of every state
+    assert plc["main.ids"] == [0, 1, 2, 3]  # FB_init(eMyId := ...) of every state
     assert (plc["main.ctx.nProduced"], plc["main.ctx.nCycles"], plc["main.ctx.bStart"]) == (3, 1, False)
     assert [plc[f"main.fbM.{s}.nExec"] for s in ("fbIdle", "fbStarting", "fbRunning", "fbStopping")] == [4, 4, 3, 1]
     assert [plc[f"main.fbM.{s}.nEnter"] for s in ("fbIdle", "fbStarting", "fbRunning", "fbStopping")] == [1, 1, 1, 1]
@@ -971,7 +972,7 @@ def test_state_machine_framework_twincat_layout_fb_init_and_interface_array():
 
 def test_state_machine_mid_run_values():
     plc = run(STATE_MACHINE, 5, "twincat")
-    assert plc["main.fbM.eCurrent"] == "STARTING"                       # still STARTING: the TON has 20 ms of 30
+    assert plc["main.fbM.eCurrent"] == "STARTING"  # still STARTING: the TON has 20 ms of 30
     assert plc["main.fbM.fbStarting.nExec"] == 3
     plc.scan(1)
     assert plc["main.fbM.eCurrent"] == "RUNNING" and plc["main.fbM.nTrace"] == 12
@@ -981,7 +982,7 @@ def test_state_machine_mid_run_values():
 
 def test_command_queue_ring_buffer_of_interfaces_and_downcasts():
     plc = run(COMMAND_QUEUE, 8)
-    assert plc["main.acc"] == 21                               # ((1 + 5) * 3) - 4 + 7
+    assert plc["main.acc"] == 21  # ((1 + 5) * 3) - 4 + 7
     assert plc["main.q.sLog"] == "ADD5;MUL3;WAIT;ADD-4;ADD7;"
     assert (plc["main.q.nDone"], plc["main.q.nOverflows"], plc["main.q.nIdle"]) == (5, 1, 2)
     assert (plc["main.q.nHead"], plc["main.q.nTail"], plc["main.q.nCount"]) == (1, 1, 0)
@@ -1003,8 +1004,8 @@ def test_event_bus_with_this_registration_masks_consumption_and_var_stat_logger(
     assert (plc["main.r1"], plc["main.r2"], plc["main.r7"], plc["main.r5"]) == (2, 3, 1, 1)
     assert (plc["main.s1.nHits"], plc["main.s1.nSum"]) == (4, 220)
     assert (plc["main.s2.nHits"], plc["main.s2.nSum"]) == (4, 4400)
-    assert (plc["main.s3.nHits"], plc["main.s3.nSum"]) == (0, 0)       # code 7 consumed by s2 first
-    assert plc["main.total"] == 226                                     # tally through REFERENCE TO
+    assert (plc["main.s3.nHits"], plc["main.s3.nSum"]) == (0, 0)  # code 7 consumed by s2 first
+    assert plc["main.total"] == 226  # tally through REFERENCE TO
     assert (plc["main.bus.nDelivered"], plc["main.bus.nConsumed"], plc["main.bus.nSubs"]) == (14, 2, 4)
     assert (plc["main.bDup"], plc["main.bTally"], plc["main.s4.bRegistered"]) == (False, True, False)
     assert plc["main.s1.bRegistered"] and plc["main.s3.bRegistered"]
@@ -1018,7 +1019,13 @@ def test_axis_simulation_with_properties_timer_in_a_method_and_soft_limit_overri
     assert plc["main.nStep"] == 60
     assert (plc["main.fPos1"], plc["main.fPos2"], plc["main.fPos3"]) == (100.0, 0.0, 30.0)
     assert (plc["main.nErr1"], plc["main.nErr2"]) == (0x4001, 0x4002)
-    assert (plc["main.ok1"], plc["main.ok2"], plc["main.ok3"], plc["main.ok4"], plc["main.ok5"]) == (True, False, True, True, True)
+    assert (plc["main.ok1"], plc["main.ok2"], plc["main.ok3"], plc["main.ok4"], plc["main.ok5"]) == (
+        True,
+        False,
+        True,
+        True,
+        True,
+    )
     assert (plc["main.nDoneScan"], plc["main.nFinalScan"]) == (9, 12)
     assert (plc["main.fPosRead"], plc["main.fVelRead"]) == (30.0, 25.0)  # 80 was refused by the setter
     assert (plc["main.ax.nMoves"], plc["main.ax.nErrorId"], plc["main.ax.eState"]) == (2, 0, "Disabled")
@@ -1029,7 +1036,7 @@ def test_axis_simulation_with_properties_timer_in_a_method_and_soft_limit_overri
 def test_axis_positions_while_moving():
     plc = run(AXIS, 3)
     assert (plc["main.ax.fPos"], plc["main.ax.eState"], plc["main.ax2.fPos"]) == (50.0, "Moving", 100.0)
-    plc.scan(5)                                                 # scan 8: homing, 10 ms of 20
+    plc.scan(5)  # scan 8: homing, 10 ms of 20
     assert (plc["main.ax.eState"], plc["main.nStep"], plc["main.ax.fPos"]) == ("Homing", 30, 100.0)
 
 
@@ -1103,7 +1110,7 @@ END_PROGRAM
 
 def test_conformant_array_of_interfaces_with_assignment_attempt_and_query_interface():
     plc = run(SHAPES, 1)
-    assert (plc["main.t1"], plc["main.a.w"], plc["main.a.h"]) == (11.0, 2.0, 4.0)   # rect scaled x2 then 8 + circle 3
+    assert (plc["main.t1"], plc["main.a.w"], plc["main.a.h"]) == (11.0, 2.0, 4.0)  # rect scaled x2 then 8 + circle 3
     assert (plc["main.ok"], plc["main.ipS"]) == (False, None)
     plc.scan(1)
     assert (plc["main.t1"], plc["main.a.w"], plc["main.a.h"]) == (35.0, 4.0, 8.0)

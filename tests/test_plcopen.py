@@ -1,5 +1,6 @@
 """PLCopen motion: each FB, the axis state machine, output rules, buffer modes and the documented
 choices, cycle-exact on virtual time (1 ms task). Cycle n is the scan whose FB call first sees Execute."""
+
 import math
 
 import pytest
@@ -55,7 +56,7 @@ def make(**axis_cfg) -> PLC:
     plc = PLC(_COMPILED)
     if axis_cfg:
         configure_axes(plc, {1: axis_cfg})
-    plc.scan()                                    # power on
+    plc.scan()  # power on
     return plc
 
 
@@ -89,22 +90,23 @@ IDLE = (False, False, False, False, False)
 
 # ---------------------------------------------------------------------------- timing and output rules
 
+
 def test_move_absolute_is_busy_in_cycle_n_and_done_in_cycle_n_plus_2500():
     plc = make()
     assert (state(plc), plc["main.power.Status"], plc["main.status.Standstill"]) == ("Standstill", True, True)
     put(plc, "abs1", Position=100.0, Execute=True, **MOVE)
-    plc.scan()                                                   # cycle n
+    plc.scan()  # cycle n
     assert out(plc, "abs1") == BUSY
-    assert plc["main.seen_state_after_abs1"] is True              # the state changed inside the scan
+    assert plc["main.seen_state_after_abs1"] is True  # the state changed inside the scan
     for _ in range(2499):
         plc.scan()
     # the FB calls of cycle n + 2499 still see the move (the kernel then finishes it)
     assert out(plc, "abs1") == BUSY and plc["main.status.DiscreteMotion"]
-    plc.scan()                                                   # cycle n + 2500
+    plc.scan()  # cycle n + 2500
     assert out(plc, "abs1") == DONE and state(plc) == "Standstill"
     assert (plc["main.apos.Position"], plc["main.avel.Velocity"]) == (100.0, 0.0)
     plc.scan(5)
-    assert out(plc, "abs1") == DONE                              # stays while Execute is TRUE
+    assert out(plc, "abs1") == DONE  # stays while Execute is TRUE
     put(plc, "abs1", Execute=False)
     plc.scan()
     assert out(plc, "abs1") == IDLE
@@ -113,10 +115,10 @@ def test_move_absolute_is_busy_in_cycle_n_and_done_in_cycle_n_plus_2500():
 def test_profile_samples_are_the_exact_trapezoid():
     plc = make()
     put(plc, "abs1", Position=100.0, Execute=True, **MOVE)
-    plc.scan(500)                                                # end of the acceleration phase
+    plc.scan(500)  # end of the acceleration phase
     ax = axis_of(plc, "main.ax")
     assert (ax.set_pos, ax.set_vel) == pytest.approx((12.5, 50.0), abs=1e-9)
-    plc.scan(500)                                                # t = 1 s
+    plc.scan(500)  # t = 1 s
     assert ax.set_pos == pytest.approx(37.5, abs=1e-9)
     assert plc["main.avel.Velocity"] == pytest.approx(50.0)
 
@@ -127,7 +129,7 @@ def test_done_shows_for_exactly_one_call_when_execute_fell_before_the_end():
     plc.scan()
     put(plc, "rel", Execute=False)
     n = scans_until(plc, lambda: plc["main.rel.Done"])
-    assert n == 633                                              # 10 units, a triangle: 2·√(10/100) s
+    assert n == 633  # 10 units, a triangle: 2·√(10/100) s
     assert out(plc, "rel") == DONE
     plc.scan()
     assert out(plc, "rel") == IDLE
@@ -141,7 +143,7 @@ def test_retrigger_of_the_same_instance_starts_the_new_command_without_reporting
     plc.scan()
     put(plc, "abs1", Position=20.0, Execute=True)
     plc.scan()
-    assert out(plc, "abs1") == BUSY                              # no CommandAborted, no Done for the old one
+    assert out(plc, "abs1") == BUSY  # no CommandAborted, no Done for the old one
     n = scans_until(plc, lambda: plc["main.abs1.Done"])
     assert n == 1601 and axis_of(plc, "main.ax").set_pos == 20.0  # from 37.55: brake 0.5 s to 50.05, back 1.101 s
 
@@ -158,7 +160,7 @@ def test_move_velocity_stays_busy_and_active_after_in_velocity():
     plc.scan(10)
     assert out(plc, "vel", ("Busy", "Active", "InVelocity", "CommandAborted")) == (True, True, True, False)
     put(plc, "halt", Deceleration=100.0, Execute=True)
-    plc.scan()                                                   # halt is called after vel: vel sees it next scan
+    plc.scan()  # halt is called after vel: vel sees it next scan
     assert state(plc) == "DiscreteMotion" and out(plc, "halt") == BUSY
     plc.scan()
     assert out(plc, "vel", ("Busy", "Active", "InVelocity", "CommandAborted")) == (False, False, False, True)
@@ -175,7 +177,7 @@ def test_move_velocity_zero_ramps_to_rest_and_stays_in_continuous_motion():
     put(plc, "vel", Velocity=0.0, Execute=True)
     plc.scan()
     n = scans_until(plc, lambda: plc["main.vel.InVelocity"])
-    assert n == 400                                              # 20 / 50 = 0.4 s
+    assert n == 400  # 20 / 50 = 0.4 s
     assert (state(plc), axis_of(plc, "main.ax").set_vel) == ("ContinuousMotion", 0.0)
 
 
@@ -185,14 +187,15 @@ def test_move_velocity_negative_direction_and_reversal_uses_dec_then_acc():
     scans_until(plc, lambda: plc["main.vel.InVelocity"])
     put(plc, "vel", Execute=False)
     plc.scan()
-    put(plc, "vel", Direction=2, Execute=True)                   # mcNegativeDirection: -50
+    put(plc, "vel", Direction=2, Execute=True)  # mcNegativeDirection: -50
     plc.scan()
     n = scans_until(plc, lambda: plc["main.vel.InVelocity"])
-    assert n == 3000                                             # 50/20 + 50/100 = 3.0 s
+    assert n == 3000  # 50/20 + 50/100 = 3.0 s
     assert axis_of(plc, "main.ax").set_vel == -50.0
 
 
 # ---------------------------------------------------------------------------- state machine and rejections
+
 
 def test_motion_commands_are_rejected_in_disabled_and_the_axis_stays():
     plc = make()
@@ -225,16 +228,16 @@ def test_stop_holds_stopping_while_execute_and_releases_when_done_and_low():
     assert state(plc) == "Stopping" and out(plc, "stop") == BUSY
     plc.scan()
     assert out(plc, "vel", ("Busy", "Active", "InVelocity", "CommandAborted")) == (False, False, False, True)
-    put(plc, "abs1", Position=0.0, Execute=True, **MOVE)            # rejected while Stopping
+    put(plc, "abs1", Position=0.0, Execute=True, **MOVE)  # rejected while Stopping
     plc.scan()
     assert out(plc, "abs1") == ERROR and plc["main.abs1.ErrorID"] == E.AXIS_STOPPING
-    put(plc, "stop2", Deceleration=100.0, Execute=True)            # a second MC_Stop: error
+    put(plc, "stop2", Deceleration=100.0, Execute=True)  # a second MC_Stop: error
     plc.scan()
     assert out(plc, "stop2") == ERROR and plc["main.stop2.ErrorID"] == E.STOP_ALREADY_ACTIVE
     n = scans_until(plc, lambda: plc["main.stop.Done"])
-    assert n == 497                                               # 0.5 s from 50: Done at n + 500
+    assert n == 497  # 0.5 s from 50: Done at n + 500
     plc.scan(20)
-    assert state(plc) == "Stopping"                                # Execute still TRUE
+    assert state(plc) == "Stopping"  # Execute still TRUE
     put(plc, "stop", Execute=False)
     plc.scan()
     assert state(plc) == "Standstill" and plc["main.status.Standstill"]
@@ -248,7 +251,7 @@ def test_stop_whose_execute_fell_early_releases_to_standstill_when_done():
     plc.scan()
     put(plc, "stop", Execute=False)
     n = scans_until(plc, lambda: state(plc) == "Standstill")
-    assert n == 99                                                 # 0.1 s: the kernel of n + 99 releases it
+    assert n == 99  # 0.1 s: the kernel of n + 99 releases it
 
 
 def test_halt_can_be_aborted_by_move_velocity():
@@ -272,7 +275,7 @@ def test_error_stop_reports_error_on_active_and_buffered_fbs_and_reset_recovers(
     put(plc, "abs2", Position=28.0, BufferMode=1, Execute=True, **MOVE)
     plc.scan()
     assert out(plc, "abs2") == (True, False, False, False, False)  # buffered: Busy, not Active
-    put(plc, "abs1", Position=60.0)                                 # beyond the limit: rejected up front
+    put(plc, "abs1", Position=60.0)  # beyond the limit: rejected up front
     put(plc, "rel", Distance=100.0, Execute=True, **MOVE)
     plc.scan()
     assert out(plc, "rel") == ERROR and plc["main.rel.ErrorID"] == E.SW_LIMIT_TARGET
@@ -306,7 +309,7 @@ def test_reset_outside_error_stop_is_an_error_and_reset_with_power_off_goes_to_d
     scans_until(plc, lambda: state(plc) == "ErrorStop")
     plc["main.en"] = False
     plc.scan()
-    assert state(plc) == "ErrorStop"                                # Enable FALSE does not leave ErrorStop
+    assert state(plc) == "ErrorStop"  # Enable FALSE does not leave ErrorStop
     put(plc, "reset", Execute=False)
     plc.scan()
     put(plc, "reset", Execute=True)
@@ -318,8 +321,11 @@ def test_a_second_mc_power_is_an_error():
     plc = make()
     put(plc, "power2", Enable=True)
     plc.scan()
-    assert (plc["main.power2.Error"], plc["main.power2.ErrorID"], plc["main.power.Status"]) == \
-        (True, E.POWER_ALREADY_ACTIVE, True)
+    assert (plc["main.power2.Error"], plc["main.power2.ErrorID"], plc["main.power.Status"]) == (
+        True,
+        E.POWER_ALREADY_ACTIVE,
+        True,
+    )
 
 
 def test_enable_timeout_leaves_the_axis_disabled():
@@ -331,21 +337,28 @@ def test_enable_timeout_leaves_the_axis_disabled():
 
 # ---------------------------------------------------------------------------- parameters (documented choices)
 
-@pytest.mark.parametrize("inputs, code", [
-    (dict(Acceleration=0.0), E.INVALID_ACCELERATION), (dict(Acceleration=-1.0), E.INVALID_ACCELERATION),
-    (dict(Deceleration=float("nan")), E.INVALID_DECELERATION), (dict(Jerk=-1.0), E.INVALID_JERK),
-    (dict(Velocity=0.0), E.INVALID_VELOCITY), (dict(Velocity=-5.0), E.INVALID_VELOCITY),
-    (dict(Position=float("inf")), E.INVALID_POSITION),
-])
+
+@pytest.mark.parametrize(
+    "inputs, code",
+    [
+        (dict(Acceleration=0.0), E.INVALID_ACCELERATION),
+        (dict(Acceleration=-1.0), E.INVALID_ACCELERATION),
+        (dict(Deceleration=float("nan")), E.INVALID_DECELERATION),
+        (dict(Jerk=-1.0), E.INVALID_JERK),
+        (dict(Velocity=0.0), E.INVALID_VELOCITY),
+        (dict(Velocity=-5.0), E.INVALID_VELOCITY),
+        (dict(Position=float("inf")), E.INVALID_POSITION),
+    ],
+)
 def test_invalid_parameters_are_errors_and_leave_the_running_move_alone(inputs, code):
     plc = make()
     put(plc, "abs1", Position=100.0, Execute=True, **MOVE)
     plc.scan(1000)
     put(plc, "abs2", **{**MOVE, "Position": 0.0, **inputs})
-    put(plc, "abs2", Execute=True)                                # Aborting, but invalid
+    put(plc, "abs2", Execute=True)  # Aborting, but invalid
     plc.scan()
     assert out(plc, "abs2") == ERROR and plc["main.abs2.ErrorID"] == code
-    assert out(plc, "abs1") == BUSY                                 # the running move goes on
+    assert out(plc, "abs1") == BUSY  # the running move goes on
     n = scans_until(plc, lambda: plc["main.abs1.Done"])
     assert n == 1500
 
@@ -355,7 +368,7 @@ def test_jerk_zero_is_a_trapezoid_and_jerk_positive_an_s_curve():
     put(plc, "abs1", Position=100.0, Jerk=1000.0, Execute=True, **MOVE)
     plc.scan()
     n = scans_until(plc, lambda: plc["main.abs1.Done"])
-    assert n == 2600 and axis_of(plc, "main.ax").set_pos == 100.0   # ruckig: 2.6 s
+    assert n == 2600 and axis_of(plc, "main.ax").set_pos == 100.0  # ruckig: 2.6 s
 
 
 def test_buffer_full_is_an_error():
@@ -369,6 +382,7 @@ def test_buffer_full_is_an_error():
 
 # ---------------------------------------------------------------------------- buffer modes
 
+
 def test_buffered_successor_starts_when_the_predecessor_is_done():
     plc = make()
     put(plc, "abs1", Position=100.0, Execute=True, **MOVE)
@@ -376,9 +390,9 @@ def test_buffered_successor_starts_when_the_predecessor_is_done():
     plc.scan()
     assert out(plc, "abs2") == (True, False, False, False, False)
     n = scans_until(plc, lambda: plc["main.abs1.Done"])
-    assert n == 2500 and out(plc, "abs2") == BUSY                  # Active in the hand-over cycle
+    assert n == 2500 and out(plc, "abs2") == BUSY  # Active in the hand-over cycle
     n = scans_until(plc, lambda: plc["main.abs2.Done"])
-    assert n == 1100 and axis_of(plc, "main.ax").set_pos == 130.0   # 100 → 130 from rest: 1.1 s
+    assert n == 1100 and axis_of(plc, "main.ax").set_pos == 130.0  # 100 → 130 from rest: 1.1 s
 
 
 def test_a_command_buffered_after_move_velocity_starts_at_in_velocity_and_aborts_it():
@@ -388,7 +402,7 @@ def test_a_command_buffered_after_move_velocity_starts_at_in_velocity_and_aborts
     plc.scan()
     assert out(plc, "halt") == (True, False, False, False, False)  # queued: Busy, not Active
     n = scans_until(plc, lambda: plc["main.halt.Active"])
-    assert n == 500                                               # 0.5 s: Active in cycle n + 500
+    assert n == 500  # 0.5 s: Active in cycle n + 500
     assert out(plc, "vel", ("Busy", "Active", "InVelocity", "CommandAborted")) == (False, False, False, True)
     assert state(plc) == "DiscreteMotion"
     n = scans_until(plc, lambda: plc["main.halt.Done"])
@@ -412,8 +426,7 @@ def test_enable_false_while_stopping_aborts_the_stop_and_disables():
     assert out(plc, "stop") == (False, False, False, False, False)
 
 
-@pytest.mark.parametrize("mode, first, second", [(2, 2313, 4125), (3, 2250, 4000), (4, 2313, 4125),
-                                                 (5, 2250, 4000)])
+@pytest.mark.parametrize("mode, first, second", [(2, 2313, 4125), (3, 2250, 4000), (4, 2313, 4125), (5, 2250, 4000)])
 def test_blending_hands_over_at_the_standard_velocity(mode, first, second):
     # abs1: 0 → 100 at 50; abs2: 100 → 200 at 25. Low/Next hand over at 25, Previous/High at 50.
     plc = make()
@@ -434,17 +447,18 @@ def test_blending_between_opposite_directions_degrades_to_buffered():
     put(plc, "abs2", Position=70.0, BufferMode=5, Execute=True, **MOVE)
     plc.scan()
     n = scans_until(plc, lambda: plc["main.abs1.Done"])
-    ax = axis_of(plc, "main.ax")                                    # abs1 ended at rest; abs2 took one step back
+    ax = axis_of(plc, "main.ax")  # abs1 ended at rest; abs2 took one step back
     assert n == 2500 and ax.set_vel == pytest.approx(-0.1) and ax.set_pos == pytest.approx(100 - 0.00005)
 
 
 # ---------------------------------------------------------------------------- positions
 
+
 def test_move_relative_measures_from_the_set_position_at_its_start():
     plc = make()
     put(plc, "abs1", Position=100.0, Execute=True, **MOVE)
-    plc.scan(1000)                                                  # at 37.5, moving at 50
-    put(plc, "rel", Distance=40.0, Execute=True, **MOVE)            # aborting: ends at 77.5
+    plc.scan(1000)  # at 37.5, moving at 50
+    put(plc, "rel", Distance=40.0, Execute=True, **MOVE)  # aborting: ends at 77.5
     plc.scan()
     scans_until(plc, lambda: plc["main.rel.Done"])
     assert axis_of(plc, "main.ax").set_pos == 77.5
@@ -463,8 +477,9 @@ def test_set_position_and_home_shift_the_coordinates():
     assert plc["main.home.Done"] and state(plc) == "Standstill" and plc["main.apos.Position"] == 0.0
 
 
-HOMING = dict(homing="switch", home_switch_position=-20.005, home_direction=-1, home_velocity=10.0,
-              home_acceleration=100.0)
+HOMING = dict(
+    homing="switch", home_switch_position=-20.005, home_direction=-1, home_velocity=10.0, home_acceleration=100.0
+)
 
 
 def test_home_by_a_move_latches_the_switch_edge_and_shifts_the_coordinates():
@@ -474,7 +489,7 @@ def test_home_by_a_move_latches_the_switch_edge_and_shifts_the_coordinates():
     assert state(plc) == "Homing" and out(plc, "home") == BUSY
     ax = axis_of(plc, "main.ax")
     n = scans_until(plc, lambda: plc["main.home.Done"])
-    assert n == 2151                         # 0.1 s ramp, 19.505 units at 10/s seen in the next cycle, 0.1 s brake
+    assert n == 2151  # 0.1 s ramp, 19.505 units at 10/s seen in the next cycle, 0.1 s brake
     assert state(plc) == "Standstill"
     assert ax.act_pos == pytest.approx(99.495, abs=1e-9)  # the edge at -20.005 is now 100; 0.505 past it
     assert plc["main.apos.Position"] == ax.act_pos
@@ -497,11 +512,11 @@ def test_home_on_a_bool_variable_latches_the_actual_position_of_that_cycle():
     plc = make(**{**HOMING, "home_switch_position": math.nan, "home_switch": "main.ref_switch"})
     ax = axis_of(plc, "main.ax")
     put(plc, "home", Position=0.0, Execute=True)
-    plc.scan(300)                            # searching downwards at 10 units/s
+    plc.scan(300)  # searching downwards at 10 units/s
     assert state(plc) == "Homing" and ax.act_pos == pytest.approx(-2.5, abs=1e-9)
-    plc["main.ref_switch"] = True            # the switch closes
+    plc["main.ref_switch"] = True  # the switch closes
     n = scans_until(plc, lambda: plc["main.home.Done"])
-    assert n == 102                          # latched by the next kernel phase, 100 cycles braking, Done
+    assert n == 102  # latched by the next kernel phase, 100 cycles braking, Done
     assert ax.act_pos == pytest.approx(-0.5, abs=1e-9)  # the latched position is 0; braked 0.5 past it
 
 
@@ -516,7 +531,7 @@ def test_home_errors_not_configured_search_distance_and_stop():
     put(plc, "home", Position=0.0, Execute=True)
     plc.scan()
     n = scans_until(plc, lambda: state(plc) == "ErrorStop")
-    assert n == 550                          # 0.5 units of ramp + 4.505 at 10/s
+    assert n == 550  # 0.5 units of ramp + 4.505 at 10/s
     plc.scan()
     assert out(plc, "home") == ERROR and plc["main.home.ErrorID"] == E.AXIS_ERRORSTOP
     assert plc["main.aerr.AxisErrorID"] == E.HOMING_FAILED
@@ -524,8 +539,8 @@ def test_home_errors_not_configured_search_distance_and_stop():
     plc = make(**HOMING)
     put(plc, "home", Position=0.0, Execute=True)
     plc.scan(100)
-    put(plc, "abs1", Position=0.0, Execute=True, **MOVE)          # rejected while Homing
-    put(plc, "stop", Deceleration=100.0, Execute=True)            # MC_Stop is allowed
+    put(plc, "abs1", Position=0.0, Execute=True, **MOVE)  # rejected while Homing
+    put(plc, "stop", Deceleration=100.0, Execute=True)  # MC_Stop is allowed
     plc.scan()
     assert out(plc, "abs1") == ERROR and plc["main.abs1.ErrorID"] == E.AXIS_HOMING
     assert state(plc) == "Stopping"
@@ -533,13 +548,16 @@ def test_home_errors_not_configured_search_distance_and_stop():
     assert out(plc, "home") == ABORTED
 
 
-@pytest.mark.parametrize("start, target, direction, end_unwrapped", [
-    (350.0, 10.0, 0, 370.0),       # positive
-    (10.0, 350.0, 2, -10.0),       # negative
-    (10.0, 350.0, 1, -10.0),       # shortest: backwards
-    (0.0, 180.0, 1, 180.0),        # exactly half a period: positive
-    (90.0, 90.0, 0, 90.0),         # the same position with Positive: no move
-])
+@pytest.mark.parametrize(
+    "start, target, direction, end_unwrapped",
+    [
+        (350.0, 10.0, 0, 370.0),  # positive
+        (10.0, 350.0, 2, -10.0),  # negative
+        (10.0, 350.0, 1, -10.0),  # shortest: backwards
+        (0.0, 180.0, 1, 180.0),  # exactly half a period: positive
+        (90.0, 90.0, 0, 90.0),  # the same position with Positive: no move
+    ],
+)
 def test_modulo_axis_directions(start, target, direction, end_unwrapped):
     plc = make(modulo=360.0)
     put(plc, "setpos", Position=start, Execute=True)
@@ -582,4 +600,4 @@ def test_online_change_keeps_the_axes_and_the_running_move():
     assert plc.online_change(compile_text(changed, "motion.st")) == "online change: 1 instance(s) carried over"
     assert axis_of(plc, "main.ax").set_pos == pytest.approx(37.5)
     n = scans_until(plc, lambda: plc["main.abs1.Done"])
-    assert n == 1501 and axis_of(plc, "main.ax").set_pos == 100.0   # Done in cycle n + 2500
+    assert n == 1501 and axis_of(plc, "main.ax").set_pos == 100.0  # Done in cycle n + 2500

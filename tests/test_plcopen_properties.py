@@ -13,6 +13,7 @@ the axis state changes at once), then the kernel advances the axis one cycle, wh
 its state again (a move finishes → Standstill). MC_ReadStatus is called last in the program, so
 its flags are compared with the state the axis had right before the kernel phase of that scan.
 """
+
 import math
 
 import hypothesis.strategies as hs
@@ -58,9 +59,9 @@ EXECUTE_FBS = ("abs1", "abs2", "rel", "vel", "halt", "stop", "reset")
 STATES = ("ErrorStop", "Disabled", "Stopping", "Homing", "Standstill", "DiscreteMotion", "ContinuousMotion")
 
 NAN, INF = float("nan"), float("inf")
-VMAX = 1000.0          # the largest valid Velocity generated
-JMIN = 1e4             # the smallest positive Jerk generated
-AMAX = 1e4             # the largest valid Acceleration / Deceleration generated
+VMAX = 1000.0  # the largest valid Velocity generated
+JMIN = 1e4  # the smallest positive Jerk generated
+AMAX = 1e4  # the largest valid Acceleration / Deceleration generated
 
 # Valid starting inputs of each example (the blocks' own defaults are 0: invalid for a move).
 MOVE = dict(Velocity=100.0, Acceleration=1000.0, Deceleration=1000.0, Jerk=0.0)
@@ -86,6 +87,7 @@ def _compiled():
 
 # ---------------------------------------------------------------------------- actions
 
+
 def _values(valid, invalid):
     return hs.one_of(hs.sampled_from(valid + invalid), hs.sampled_from(valid))
 
@@ -93,31 +95,55 @@ def _values(valid, invalid):
 SPEED = _values([1.0, 10.0, 100.0, 500.0, VMAX], [0.0, -10.0, NAN, INF])
 RATE = _values([10.0, 100.0, 1000.0, AMAX], [0.0, -100.0, NAN, INF])
 JERK = _values([0.0, 0.0, JMIN, 1e5], [-1.0, NAN])
-POSITION = hs.one_of(hs.sampled_from([0.0, 100.0, -50.0, 480.0, -499.0, 650.0, NAN, INF]),
-                     hs.floats(-600.0, 600.0).map(lambda x: round(x, 3)))
-DISTANCE = hs.one_of(hs.sampled_from([0.0, 25.0, -40.0, 300.0, NAN]),
-                     hs.floats(-400.0, 400.0).map(lambda x: round(x, 3)))
+POSITION = hs.one_of(
+    hs.sampled_from([0.0, 100.0, -50.0, 480.0, -499.0, 650.0, NAN, INF]),
+    hs.floats(-600.0, 600.0).map(lambda x: round(x, 3)),
+)
+DISTANCE = hs.one_of(
+    hs.sampled_from([0.0, 25.0, -40.0, 300.0, NAN]), hs.floats(-400.0, 400.0).map(lambda x: round(x, 3))
+)
 BUFFER_MODE = hs.integers(0, 5)
 DIRECTION = hs.integers(0, 3)
 
 PARAMS = {
-    "abs1": {"Position": POSITION, "Velocity": SPEED, "Acceleration": RATE, "Deceleration": RATE, "Jerk": JERK,
-             "BufferMode": BUFFER_MODE, "Direction": DIRECTION},
-    "rel": {"Distance": DISTANCE, "Velocity": SPEED, "Acceleration": RATE, "Deceleration": RATE, "Jerk": JERK,
-            "BufferMode": BUFFER_MODE},
-    "vel": {"Velocity": SPEED, "Acceleration": RATE, "Deceleration": RATE, "Jerk": JERK,
-            "BufferMode": BUFFER_MODE, "Direction": DIRECTION},
+    "abs1": {
+        "Position": POSITION,
+        "Velocity": SPEED,
+        "Acceleration": RATE,
+        "Deceleration": RATE,
+        "Jerk": JERK,
+        "BufferMode": BUFFER_MODE,
+        "Direction": DIRECTION,
+    },
+    "rel": {
+        "Distance": DISTANCE,
+        "Velocity": SPEED,
+        "Acceleration": RATE,
+        "Deceleration": RATE,
+        "Jerk": JERK,
+        "BufferMode": BUFFER_MODE,
+    },
+    "vel": {
+        "Velocity": SPEED,
+        "Acceleration": RATE,
+        "Deceleration": RATE,
+        "Jerk": JERK,
+        "BufferMode": BUFFER_MODE,
+        "Direction": DIRECTION,
+    },
     "halt": {"Deceleration": RATE, "Jerk": JERK, "BufferMode": BUFFER_MODE},
     "stop": {"Deceleration": RATE, "Jerk": JERK},
 }
 PARAMS["abs2"] = PARAMS["abs1"]
 
 # the moves more often than MC_Stop (held, it keeps the axis in Stopping) and MC_Power (off: Disabled)
-toggle = hs.tuples(hs.just("toggle"), hs.sampled_from(("abs1", "abs2", "rel", "vel") * 3 + ("halt", "halt", "stop",
-                                                                                          "reset", "pw")))
+toggle = hs.tuples(
+    hs.just("toggle"), hs.sampled_from(("abs1", "abs2", "rel", "vel") * 3 + ("halt", "halt", "stop", "reset", "pw"))
+)
 continuous = hs.tuples(hs.just("continuous"), hs.sampled_from(("abs1", "abs2", "rel", "vel")))
 set_param = hs.sampled_from(sorted((fb, p) for fb, ps in PARAMS.items() for p in ps)).flatmap(
-    lambda fp: hs.tuples(hs.just("set"), hs.just(fp[0]), hs.just(fp[1]), PARAMS[fp[0]][fp[1]]))
+    lambda fp: hs.tuples(hs.just("set"), hs.just(fp[0]), hs.just(fp[1]), PARAMS[fp[0]][fp[1]])
+)
 run = hs.tuples(hs.just("scan"), hs.one_of(hs.integers(1, 5), hs.integers(1, 300)))
 action = hs.one_of(toggle, toggle, set_param, run, run, continuous)
 actions = hs.lists(action, min_size=20, max_size=60)
@@ -134,6 +160,7 @@ def format_actions(acts) -> str:
 
 
 # ---------------------------------------------------------------------------- the harness
+
 
 class Violation(AssertionError):
     pass
@@ -153,12 +180,13 @@ class Run:
         self.pre_kernel_state = None
         step = ax.step
 
-        def kernel_step():                       # the state the program phase left, for ReadStatus
+        def kernel_step():  # the state the program phase left, for ReadStatus
             self.pre_kernel_state = ax.state
             step()
+
         ax.step = kernel_step
         self.prev_exec = {name: False for name in EXECUTE_FBS}
-        self.started = {name: False for name in EXECUTE_FBS}   # a rising edge since the last terminal report
+        self.started = {name: False for name in EXECUTE_FBS}  # a rising edge since the last terminal report
         self.check_outputs, self.check_position = check_outputs, check_position
         self.scans = self.scan_in_action = 0
         self.last_pos = None
@@ -191,9 +219,11 @@ class Run:
         where = f"after scan {self.scans}"
         if last[0] == "scan":
             where += f" (scan {self.scan_in_action} of the last action {last!r})"
-        raise Violation(f"{what}\n  {where}; axis state {self.ax.state}, set_pos {self.ax.set_pos!r}, "
-                        f"set_vel {self.ax.set_vel!r}\n  actions (replay with play(ACTIONS)):\n"
-                        f"ACTIONS = {format_actions(self.done_actions)}")
+        raise Violation(
+            f"{what}\n  {where}; axis state {self.ax.state}, set_pos {self.ax.set_pos!r}, "
+            f"set_vel {self.ax.set_vel!r}\n  actions (replay with play(ACTIONS)):\n"
+            f"ACTIONS = {format_actions(self.done_actions)}"
+        )
 
     def check(self) -> None:
         if self.check_outputs:
@@ -206,7 +236,7 @@ class Run:
             fb = self.fb[name]
             ex = bool(fb.Execute)
             busy, error = fb.Busy, fb.Error
-            done = fb.Done if name != "vel" else False          # MC_MoveVelocity: InVelocity, no Done
+            done = fb.Done if name != "vel" else False  # MC_MoveVelocity: InVelocity, no Done
             aborted = fb.CommandAborted if name != "reset" else False
             active = fb.Active if name != "reset" else False
             flags = dict(Busy=busy, Done=done, Error=error, CommandAborted=aborted)
@@ -266,16 +296,18 @@ class Run:
             self.fail(f"set velocity {v!r} beyond ±{SPEED_BOUND}")
         # continuity: no jump larger than the fastest speed allows in one cycle
         if self.last_pos is not None and abs(p - self.last_pos) > SPEED_BOUND * ax.cycle + 1e-9:
-            self.fail(f"the set position jumped by {p - self.last_pos!r} in one cycle of {ax.cycle} s "
-                      f"({self.last_pos!r} → {p!r}; at most {SPEED_BOUND * ax.cycle!r})")
+            self.fail(
+                f"the set position jumped by {p - self.last_pos!r} in one cycle of {ax.cycle} s "
+                f"({self.last_pos!r} → {p!r}; at most {SPEED_BOUND * ax.cycle!r})"
+            )
         self.last_pos = p
 
 
 # Targets outside ±SW_LIMIT are rejected and a move running outward past a limit is an ErrorStop
 # braking at STOP_DEC, so the set position stays within the limits plus the braking distance from
 # the fastest speed (plus a jerk-limited velocity overshoot ≤ AMAX²/(2·JMIN)), and one cycle.
-SPEED_BOUND = VMAX + AMAX ** 2 / (2 * JMIN)
-POSITION_BOUND = SW_LIMIT + SPEED_BOUND ** 2 / (2 * STOP_DEC) + SPEED_BOUND * 0.01
+SPEED_BOUND = VMAX + AMAX**2 / (2 * JMIN)
+POSITION_BOUND = SW_LIMIT + SPEED_BOUND**2 / (2 * STOP_DEC) + SPEED_BOUND * 0.01
 
 
 def play(acts, check_outputs=True, check_position=True) -> Run:
@@ -287,8 +319,9 @@ def play(acts, check_outputs=True, check_position=True) -> Run:
 
 # ---------------------------------------------------------------------------- properties
 
-SETTINGS = dict(deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow,
-                                                                        HealthCheck.data_too_large])
+SETTINGS = dict(
+    deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large]
+)
 
 
 @pytest.mark.slow
@@ -307,8 +340,26 @@ def test_set_position_stays_finite_and_bounded(acts):
 
 def test_replay_of_a_hand_written_sequence():
     """The harness itself: a plain move, then a stop held and released, then an ErrorStop and reset."""
-    r = play([("toggle", "pw"), ("scan", 2), ("toggle", "abs1"), ("scan", 120), ("toggle", "abs1"),
-              ("toggle", "vel"), ("scan", 50), ("toggle", "stop"), ("scan", 30), ("toggle", "stop"),
-              ("scan", 2), ("set", "vel", "Velocity", 500.0), ("toggle", "vel"), ("scan", 1), ("toggle", "vel"),
-              ("scan", 200), ("toggle", "reset"), ("scan", 2)])
+    r = play(
+        [
+            ("toggle", "pw"),
+            ("scan", 2),
+            ("toggle", "abs1"),
+            ("scan", 120),
+            ("toggle", "abs1"),
+            ("toggle", "vel"),
+            ("scan", 50),
+            ("toggle", "stop"),
+            ("scan", 30),
+            ("toggle", "stop"),
+            ("scan", 2),
+            ("set", "vel", "Velocity", 500.0),
+            ("toggle", "vel"),
+            ("scan", 1),
+            ("toggle", "vel"),
+            ("scan", 200),
+            ("toggle", "reset"),
+            ("scan", 2),
+        ]
+    )
     assert r.ax.set_pos <= POSITION_BOUND and r.scans == 407

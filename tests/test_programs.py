@@ -10,6 +10,7 @@ when it starts. The helpers below express times in milliseconds:
                       run scans up to (not including) `ms`, recording
                       (t_ms, value, ...) after each scan
 """
+
 from pathlib import Path
 
 import pytest
@@ -66,6 +67,7 @@ def times_on(rows):
 
 
 # ============================================================================ blink
+
 
 @pytest.fixture
 def blink():
@@ -146,8 +148,7 @@ def test_blink_on_and_off_times_are_adjustable():
 
 # ============================================================================ traffic light
 
-CAR_RED, CAR_AMBER, CAR_GREEN, DONT_WALK, WALK, WAIT = (
-    "%QX0.0", "%QX0.1", "%QX0.2", "%QX0.3", "%QX0.4", "%QX0.5")
+CAR_RED, CAR_AMBER, CAR_GREEN, DONT_WALK, WALK, WAIT = ("%QX0.0", "%QX0.1", "%QX0.2", "%QX0.3", "%QX0.4", "%QX0.5")
 SIGNALS = (CAR_RED, CAR_AMBER, CAR_GREEN, DONT_WALK, WALK)
 
 # (car red, car amber, car green, don't walk, walk) for every phase
@@ -284,9 +285,9 @@ PUMP1, PUMP2, LEVEL_ALARM, DRY_RUN = "%QX0.0", "%QX0.1", "%QX0.2", "%QX0.3"
 @pytest.fixture
 def tank():
     plc = load("tank_level.st")
-    plc["%IX0.0"] = True   # auto
-    plc["%IX0.1"] = True   # water in the well
-    plc["%IW0"] = 5000     # 50.00 %
+    plc["%IX0.0"] = True  # auto
+    plc["%IX0.1"] = True  # water in the well
+    plc["%IW0"] = 5000  # 50.00 %
     plc.scan()
     return plc
 
@@ -298,8 +299,7 @@ def set_level(plc, raw):
 
 
 def test_tank_level_is_scaled_to_percent_and_clamped(tank):
-    for raw, percent in [(0, 0.0), (2500, 25.0), (5050, 50.5), (10000, 100.0),
-                         (-200, 0.0), (12000, 100.0)]:
+    for raw, percent in [(0, 0.0), (2500, 25.0), (5050, 50.5), (10000, 100.0), (-200, 0.0), (12000, 100.0)]:
         set_level(tank, raw)
         assert tank["instance0.level"] == percent, raw
 
@@ -308,8 +308,8 @@ def test_tank_lead_pump_starts_below_low_level_and_stops_above_high_level(tank):
     assert (tank[PUMP1], tank[PUMP2]) == (False, False)
     assert set_level(tank, 4000) == (False, False)  # 40.00 % is not below 40 %
     assert set_level(tank, 3999) == (True, False)
-    assert set_level(tank, 6000) == (True, False)   # hysteresis: keeps filling
-    assert set_level(tank, 8000) == (True, False)   # 80.00 % is not above 80 %
+    assert set_level(tank, 6000) == (True, False)  # hysteresis: keeps filling
+    assert set_level(tank, 8000) == (True, False)  # 80.00 % is not above 80 %
     assert set_level(tank, 8001) == (False, False)
     assert set_level(tank, 6000) == (False, False)  # hysteresis: stays off
     assert set_level(tank, 4000) == (False, False)
@@ -330,10 +330,12 @@ def test_tank_lead_pump_alternates_every_fill_cycle(tank):
         both = set_level(tank, 1500)
         cycles.append((lead, both))
         assert set_level(tank, 9000) == (False, False)
-    assert cycles == [((True, False), (True, True)),
-                      ((False, True), (True, True)),
-                      ((True, False), (True, True)),
-                      ((False, True), (True, True))]
+    assert cycles == [
+        ((True, False), (True, True)),
+        ((False, True), (True, True)),
+        ((True, False), (True, True)),
+        ((False, True), (True, True)),
+    ]
     assert tank["instance0.lead_pump"] == 1
 
 
@@ -361,14 +363,14 @@ def test_tank_dry_run_stops_pumps_and_latches_until_reset(tank):
     tank["%IX0.1"] = False  # the well runs dry
     tank.scan()
     assert (tank[PUMP1], tank[PUMP2], tank[DRY_RUN]) == (False, False, True)
-    tank["%IX0.4"] = True   # reset is refused while there is no water
+    tank["%IX0.4"] = True  # reset is refused while there is no water
     tank.scan()
     assert (tank[PUMP1], tank[PUMP2], tank[DRY_RUN]) == (False, False, True)
     tank["%IX0.4"] = False
-    tank["%IX0.1"] = True   # water is back: still latched
+    tank["%IX0.1"] = True  # water is back: still latched
     tank.scan(n=10)
     assert (tank[PUMP1], tank[PUMP2], tank[DRY_RUN]) == (False, False, True)
-    tank["%IX0.4"] = True   # reset
+    tank["%IX0.4"] = True  # reset
     tank.scan()
     assert (tank[PUMP1], tank[PUMP2], tank[DRY_RUN]) == (True, True, False)
 
@@ -468,9 +470,9 @@ def test_conveyor_large_part_runs_off_the_end(conveyor):
 
 
 def test_conveyor_tracks_several_parts_in_transit(conveyor):
-    feed(conveyor, 1000, 20)   # small
-    feed(conveyor, 1600, 80)   # medium
-    feed(conveyor, 2200, 40)   # small
+    feed(conveyor, 1000, 20)  # small
+    feed(conveyor, 1600, 80)  # medium
+    feed(conveyor, 2200, 40)  # small
     scan_at(conveyor, 2500)
     assert conveyor["instance0.small_diverter.in_transit"] == 2
     assert conveyor["instance0.medium_diverter.in_transit"] == 1
@@ -518,7 +520,7 @@ def test_conveyor_jam_stops_belt_until_acknowledged(conveyor):
     conveyor["%IX0.1"] = False  # operator frees the part
     conveyor.scan()
     assert (conveyor[MOTOR], conveyor[JAM]) == (False, True)
-    conveyor["%IX0.3"] = True   # acknowledge
+    conveyor["%IX0.3"] = True  # acknowledge
     conveyor.scan()
     assert (conveyor[MOTOR], conveyor[JAM]) == (True, False)
     assert conveyor["%MW0"] == 1  # the stuck part was counted once

@@ -1,4 +1,5 @@
 """The pytest plugin: ST test files collected next to Python tests, reports, options, fixture, xdist."""
+
 import textwrap
 
 import pytest
@@ -42,20 +43,22 @@ def test_st_items_pass_and_fail_with_st_lines(pytester):
     _project(pytester)
     result = pytester.runpytest("-p", "no:cacheprovider")
     result.assert_outcomes(passed=1, failed=1)
-    result.stdout.fnmatch_lines([
-        "*_ TEST 'twice is wrong' _*",
-        "test_counter.st:10:3: ASSERT_EQ(Twice(x), 5, 'on purpose') failed",
-        "   7 | TEST 'twice is wrong'",
-        "   8 |   VAR x : INT := 2; END_VAR",
-        "   9 |   x := x + 0;",
-        "> 10 |   ASSERT_EQ(Twice(x), 5, 'on purpose');",
-        "         ^",
-        "E   ASSERT_EQ(Twice(x), 5, 'on purpose') failed",
-        "E     actual:   4",
-        "E     expected: 5",
-        "E     message:  on purpose",
-        "FAILED test_counter.st::twice is wrong - test_counter.st:10:3: ASSERT_EQ*",
-    ])
+    result.stdout.fnmatch_lines(
+        [
+            "*_ TEST 'twice is wrong' _*",
+            "test_counter.st:10:3: ASSERT_EQ(Twice(x), 5, 'on purpose') failed",
+            "   7 | TEST 'twice is wrong'",
+            "   8 |   VAR x : INT := 2; END_VAR",
+            "   9 |   x := x + 0;",
+            "> 10 |   ASSERT_EQ(Twice(x), 5, 'on purpose');",
+            "         ^",
+            "E   ASSERT_EQ(Twice(x), 5, 'on purpose') failed",
+            "E     actual:   4",
+            "E     expected: 5",
+            "E     message:  on purpose",
+            "FAILED test_counter.st::twice is wrong - test_counter.st:10:3: ASSERT_EQ*",
+        ]
+    )
 
 
 def test_keyword_exitfirst_and_last_failed(pytester):
@@ -69,7 +72,8 @@ def test_keyword_exitfirst_and_last_failed(pytester):
 
 def test_python_and_st_tests_side_by_side_with_the_plc_fixture(pytester):
     _project(pytester)
-    pytester.makepyfile(test_side=textwrap.dedent("""
+    pytester.makepyfile(
+        test_side=textwrap.dedent("""
         def test_fb_from_python(plc):
             p = plc("counter.st")
             c = p.fb("Counter")
@@ -81,7 +85,8 @@ def test_python_and_st_tests_side_by_side_with_the_plc_fixture(pytester):
             p = plc(source="PROGRAM P VAR t : TON; q : BOOL; END_VAR t(IN := TRUE, PT := T#50ms); q := t.Q; END_PROGRAM",
                     cycle="10ms")
             assert p.run_until("p.q", timeout="1s") == 60_000_000
-    """))
+    """)
+    )
     pytester.runpytest().assert_outcomes(passed=3, failed=1)
 
 

@@ -1,4 +1,5 @@
 """The PLC API: virtual time, tasks, variable paths, located variables, faults, standard FBs, SFC."""
+
 from __future__ import annotations
 
 import pytest
@@ -28,13 +29,22 @@ def test_ton_tof_tp_exact_timing():
     plc["main.in_"] = True
     on = trace(plc, ["main.ton1.Q", "main.ton1.ET", "main.tof1.Q", "main.tp1.Q", "main.tp1.ET"], 5)
     ms = 1_000_000
-    assert on == [(False, 0, True, True, 0), (False, 10 * ms, True, True, 10 * ms),
-                  (False, 20 * ms, True, True, 20 * ms), (True, 30 * ms, True, False, 30 * ms),
-                  (True, 30 * ms, True, False, 30 * ms)]
+    assert on == [
+        (False, 0, True, True, 0),
+        (False, 10 * ms, True, True, 10 * ms),
+        (False, 20 * ms, True, True, 20 * ms),
+        (True, 30 * ms, True, False, 30 * ms),
+        (True, 30 * ms, True, False, 30 * ms),
+    ]
     plc["main.in_"] = False
     off = trace(plc, ["main.ton1.Q", "main.ton1.ET", "main.tof1.Q", "main.tof1.ET", "main.tp1.ET"], 5)
-    assert off == [(False, 0, True, 0, 0), (False, 0, True, 10 * ms, 0), (False, 0, True, 20 * ms, 0),
-                   (False, 0, False, 30 * ms, 0), (False, 0, False, 30 * ms, 0)]
+    assert off == [
+        (False, 0, True, 0, 0),
+        (False, 0, True, 10 * ms, 0),
+        (False, 0, True, 20 * ms, 0),
+        (False, 0, False, 30 * ms, 0),
+        (False, 0, False, 30 * ms, 0),
+    ]
 
 
 COUNTERS = """
@@ -92,8 +102,9 @@ def test_time_unit_dialect_switch():
 
 
 def test_advance_and_time():
-    plc = PLC.from_source("PROGRAM main\nVAR n : INT; END_VAR\nn := n + 1;\nEND_PROGRAM\n", cycle="20ms",
-                          use_cache=False)
+    plc = PLC.from_source(
+        "PROGRAM main\nVAR n : INT; END_VAR\nn := n + 1;\nEND_PROGRAM\n", cycle="20ms", use_cache=False
+    )
     assert plc.time == 0
     plc.advance("1s")
     assert (plc["main.n"], plc.time) == (50, 1_000_000_000)
@@ -267,6 +278,7 @@ END_PROGRAM
 def test_conversions_iec_does_not_define_are_unknown_functions():
     from st.api import compile_text
     from st.diagnostics import CompileError
+
     with pytest.raises(CompileError) as info:
         compile_text("PROGRAM p\nVAR r : REAL; t : TOD; END_VAR\nt := REAL_TO_TOD(r);\nEND_PROGRAM\n", use_cache=False)
     assert [(d.code, d.span.line) for d in info.value.errors] == [("E010", 3)]

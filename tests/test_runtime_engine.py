@@ -1,5 +1,6 @@
 """The runtime engine: policies, overload, process image, faults and safe outputs, retain, online change,
 statistics and `st run`."""
+
 import json
 import os
 import re
@@ -38,12 +39,15 @@ END_CONFIGURATION
 """.replace("VAR_GLOBAL log : ARRAY[0..39] OF INT; n : INT; go : BOOL; END_VAR\nPROGRAM", "PROGRAM", 1)
 
 
-@pytest.mark.parametrize("policy, first_tick", [
-    ("openplc", [40, 10, 20]),        # declaration order
-    ("priority", [40, 20, 10]),       # PRIORITY 1, 2, 3
-    ("edf", [10, 20, 40]),            # deadlines 10, 20, 40 ms
-    ("frame", [10, 20, 40]),          # same release: shorter period first
-])
+@pytest.mark.parametrize(
+    "policy, first_tick",
+    [
+        ("openplc", [40, 10, 20]),  # declaration order
+        ("priority", [40, 20, 10]),  # PRIORITY 1, 2, 3
+        ("edf", [10, 20, 40]),  # deadlines 10, 20, 40 ms
+        ("frame", [10, 20, 40]),  # same release: shorter period first
+    ],
+)
 def test_every_task_runs_at_its_interval_under_every_policy(policy, first_tick):
     plc = PLC.from_source(ORDER, policy=policy)
     plc.advance("1s")
@@ -54,10 +58,12 @@ def test_every_task_runs_at_its_interval_under_every_policy(policy, first_tick):
 
 
 def test_several_program_instances_share_a_task_and_run_in_declaration_order():
-    src = ORDER.replace("PROGRAM p_mid WITH mid : Rec (id := 20);",
-                        "PROGRAM p_mid WITH mid : Rec (id := 20);\n    PROGRAM p_fast2 WITH fast : Rec (id := 11);")
+    src = ORDER.replace(
+        "PROGRAM p_mid WITH mid : Rec (id := 20);",
+        "PROGRAM p_mid WITH mid : Rec (id := 20);\n    PROGRAM p_fast2 WITH fast : Rec (id := 11);",
+    )
     plc = PLC.from_source(src, policy="edf")
-    plc.scan(2)                      # ticks 0 and 10 ms: fast's job runs p_fast then p_fast2 each time
+    plc.scan(2)  # ticks 0 and 10 ms: fast's job runs p_fast then p_fast2 each time
     assert plc["log"][:6] == [10, 11, 20, 40, 10, 11]
     assert [t.runs for t in plc.tasks] == [1, 2, 1, 0]
     assert plc["p_fast2.id"] == 11 and plc.tasks[1].stats.jobs == 2
@@ -102,8 +108,11 @@ def test_an_overrunning_task_is_late_or_skips_but_never_runs_twice(policy, skipp
 
 def test_three_task_overload_counts_per_policy():
     # equal PRIORITY everywhere, so `priority` falls back to rate monotonic (shorter interval first)
-    src = re.sub(r"PRIORITY := \d", "PRIORITY := 1",
-                 ORDER.replace("(SINGLE := go, PRIORITY := 0)", "(INTERVAL := T#1000ms, PRIORITY := 9)"))
+    src = re.sub(
+        r"PRIORITY := \d",
+        "PRIORITY := 1",
+        ORDER.replace("(SINGLE := go, PRIORITY := 0)", "(INTERVAL := T#1000ms, PRIORITY := 9)"),
+    )
     counts = {}
     for policy in ("frame", "openplc", "priority"):
         plc = PLC(compile_text(src, "o.st"), policy=policy)
@@ -112,9 +121,9 @@ def test_three_task_overload_counts_per_policy():
         plc.advance("6s")
         counts[policy] = [t.runs for t in plc.tasks[:3]] + [sum(t.stats.skipped for t in plc.tasks)]
     # (slow, fast, mid runs; skipped releases): the thesis's Table 6.5 with exact costs
-    assert counts["frame"] == [150, 450, 300, 150]       # all slow runs kept, fast loses one in four
-    assert counts["openplc"] == [143, 571, 286, 0]       # FCFS never skips: everything runs late
-    assert counts["priority"] == [150, 525, 300, 80]     # non-preemptive RMS: slow blocks fast at times
+    assert counts["frame"] == [150, 450, 300, 150]  # all slow runs kept, fast loses one in four
+    assert counts["openplc"] == [143, 571, 286, 0]  # FCFS never skips: everything runs late
+    assert counts["priority"] == [150, 525, 300, 80]  # non-preemptive RMS: slow blocks fast at times
 
 
 def test_process_image_latches_inputs_and_publishes_outputs():
@@ -129,18 +138,18 @@ def test_process_image_latches_inputs_and_publishes_outputs():
     plc = PLC.from_source(src)
     plc["%IX0.3"] = True
     plc["%IW2"] = -7
-    assert plc["main.seen"] is False and plc["%QX1.0"] is False      # latched only at the next scan
+    assert plc["main.seen"] is False and plc["%QX1.0"] is False  # latched only at the next scan
     plc.scan()
     assert (plc["main.seen"], plc["main.copy"], plc["%QX1.0"], plc["%MD4"]) == (True, -7, True, 0.5)
-    assert plc.image.tables[("I", "W")][2] == 65529                   # raw 16-bit pattern of -7
-    assert plc.image.tables[("M", "D")][4] == 0x3F000000               # IEEE-754 of 0.5
-    plc["%MD4"] = 2.0                                                  # an HMI write to %M, seen next scan
+    assert plc.image.tables[("I", "W")][2] == 65529  # raw 16-bit pattern of -7
+    assert plc.image.tables[("M", "D")][4] == 0x3F000000  # IEEE-754 of 0.5
+    plc["%MD4"] = 2.0  # an HMI write to %M, seen next scan
     plc.scan()
     assert plc["main.m"] == 2.5
-    plc["main.b"] = False                                              # a write by path keeps the image in step
+    plc["main.b"] = False  # a write by path keeps the image in step
     plc.scan()
     assert plc["%QX1.0"] is False and plc["%IX0.3"] is False
-    plc["%QW100"] = 42                                                 # unbound cells are scratch memory
+    plc["%QW100"] = 42  # unbound cells are scratch memory
     assert plc["%QW100"] == 42
     with pytest.raises(KeyError, match="outside the process image"):
         plc["%IX1024.0"]
@@ -161,8 +170,13 @@ END_PROGRAM
 
 def test_fault_sets_safe_outputs_and_restart_restores_retained(tmp_path):
     db = str(tmp_path / "r.db")
-    plc = PLC.from_source(FAULTY.replace("100 / d", "100 / (d + 1)"), name="f.st", retain=db,
-                          retain_interval="20ms", safe_outputs={"%QX0.1": True})
+    plc = PLC.from_source(
+        FAULTY.replace("100 / d", "100 / (d + 1)"),
+        name="f.st",
+        retain=db,
+        retain_interval="20ms",
+        safe_outputs={"%QX0.1": True},
+    )
     plc.advance("100ms")
     assert (plc["%QX0.0"], plc["%QX0.1"], plc["main.total"]) == (True, True, 10)
     plc["main.d"] = -1
@@ -170,11 +184,11 @@ def test_fault_sets_safe_outputs_and_restart_restores_retained(tmp_path):
         plc.scan()
     f = info.value.fault
     assert (f.kind, f.file, f.line, f.pou, f.task, plc.state) == ("DIV0", "f.st", 7, "main", "main", "FAULT")
-    assert (plc["%QX0.0"], plc["%QX0.1"]) == (False, True)            # safe values: FALSE, or as configured
-    assert plc["main.lamp"] is True                                  # the variable keeps what the scan wrote
+    assert (plc["%QX0.0"], plc["%QX0.1"]) == (False, True)  # safe values: FALSE, or as configured
+    assert plc["main.lamp"] is True  # the variable keeps what the scan wrote
     with pytest.raises(PLCFaultError):
         plc.scan()
-    plc.restart()                                                    # warm: fresh instances, retained restored
+    plc.restart()  # warm: fresh instances, retained restored
     # total was 10 after ten scans; the faulting scan incremented it before dividing, and the fault
     # committed it as it stood (a PLC's retain memory keeps what the scan wrote)
     assert (plc.state, plc["main.total"], plc["main.d"]) == ("RUN", 11, 0)
@@ -211,8 +225,10 @@ END_RESOURCE END_CONFIGURATION
 """
 
 
-@pytest.mark.parametrize("kind, code, line, policy", [
-    (1, "DIV0", 6, "openplc"), (2, "INDEX", 7, "priority"), (3, "NULL", 8, "edf"), (4, "WATCHDOG", 9, "frame")])
+@pytest.mark.parametrize(
+    "kind, code, line, policy",
+    [(1, "DIV0", 6, "openplc"), (2, "INDEX", 7, "priority"), (3, "NULL", 8, "edf"), (4, "WATCHDOG", 9, "frame")],
+)
 def test_every_fault_kind_stops_the_task_with_a_located_diagnostic(kind, code, line, policy):
     plc = PLC.from_source(KINDS, name="k.st", policy=policy, watchdog="50ms")
     plc.scan(3)
@@ -222,8 +238,8 @@ def test_every_fault_kind_stops_the_task_with_a_located_diagnostic(kind, code, l
         plc.scan()
     f = info.value.fault
     assert (f.kind, f.file, f.line, f.pou, f.task, plc.state) == (code, "k.st", line, "Worker", "cyc", "FAULT")
-    assert (plc["%QX2.3"], plc["%QW4"]) == (False, 0)                 # outputs safe
-    assert plc.time == 40_000_000                                    # the faulting job consumed its tick
+    assert (plc["%QX2.3"], plc["%QW4"]) == (False, 0)  # outputs safe
+    assert plc.time == 40_000_000  # the faulting job consumed its tick
     plc["cell.kind"] = 0
     plc.reset_fault()
     plc.scan()
@@ -261,10 +277,12 @@ def test_retained_snapshot_survives_kill_9(tmp_path):
     time.sleep(0.6)
     os.kill(child.pid, signal.SIGKILL)
     child.wait()
-    plc = PLC.from_source("PROGRAM main VAR RETAIN a : DINT; b : DINT; s : ARRAY[1..3] OF DINT; END_VAR "
-                          "a := a + 1; END_PROGRAM", retain=db)
+    plc = PLC.from_source(
+        "PROGRAM main VAR RETAIN a : DINT; b : DINT; s : ARRAY[1..3] OF DINT; END_VAR a := a + 1; END_PROGRAM",
+        retain=db,
+    )
     a, b, s = plc["main.a"], plc["main.b"], plc["main.s"]
-    assert a > 50 and b == 2 * a and s == [a, 2 * a, 3 * a]          # one whole snapshot, not a torn one
+    assert a > 50 and b == 2 * a and s == [a, 2 * a, 3 * a]  # one whole snapshot, not a torn one
     assert plc.retain_restored == 3
 
 
@@ -281,30 +299,40 @@ def test_online_change_carries_values_over_and_refuses_type_changes():
     plc = PLC.from_source(V1)
     plc.advance("500ms")
     assert plc["main.n"] == 50
-    msg = plc.online_change(compile_text(V1.replace("n := n + 1", "n := n + 10") +
-                                         "FUNCTION Unused : INT Unused := 1; END_FUNCTION", "v2.st"))
+    msg = plc.online_change(
+        compile_text(
+            V1.replace("n := n + 1", "n := n + 10") + "FUNCTION Unused : INT Unused := 1; END_FUNCTION", "v2.st"
+        )
+    )
     assert msg == "online change: 1 instance(s) carried over"
     plc.scan()
     assert (plc["main.n"], plc["main.r.v"], plc["main.hist"]) == (60, 60, [60, 0])
-    assert plc["main.t.ET"] == 500_000_000                            # the timer kept running across the swap
+    assert plc["main.t.ET"] == 500_000_000  # the timer kept running across the swap
     bad = V1.replace("n : INT;", "n : REAL;").replace("v : INT;", "v : DINT;")
     with pytest.raises(ValueError) as info:
-        plc.online_change(compile_text(bad.replace("n := n + 1", "n := n + 1.0").replace("hist[1] := n", "hist[1] := 0")
-                                                .replace("r.v := n", "r.v := 0"), "v3.st"))
+        plc.online_change(
+            compile_text(
+                bad.replace("n := n + 1", "n := n + 1.0")
+                .replace("hist[1] := n", "hist[1] := 0")
+                .replace("r.v := n", "r.v := 0"),
+                "v3.st",
+            )
+        )
     assert str(info.value).splitlines() == [
         "online change refused, the old program keeps running:",
         "  main.n changed its type from INT to REAL",
-        "  main.r.v changed its type from INT to DINT"]
+        "  main.r.v changed its type from INT to DINT",
+    ]
     plc.scan()
-    assert plc["main.n"] == 70                                         # still the v2 code
+    assert plc["main.n"] == 70  # still the v2 code
 
 
 def test_mk_firm_utility_and_summary():
     s = TaskStats("t", 10_000_000, k=4, m=3)
-    for i, end in enumerate([5, 5, 12, 5, 15, 5]):      # R of 12 and 15 ms miss the 10 ms deadline
+    for i, end in enumerate([5, 5, 12, 5, 15, 5]):  # R of 12 and 15 ms miss the 10 ms deadline
         s.record(i * 10_000_000, i * 10_000_000, i * 10_000_000 + end * 1_000_000)
     assert (s.jobs, s.overruns, s.utility) == (6, 2, 0.5)
-    assert s.mk_violations == 2                          # windows [1,0,1,0] and [0,1,0,1] are below 3 of 4
+    assert s.mk_violations == 2  # windows [1,0,1,0] and [0,1,0,1] are below 3 of 4
     d = s.summary()
     assert d["exec_us"] == {"min": 5000.0, "avg": 7833.333, "max": 15000.0}
     assert d["latency_us"]["max"] == 0.0 and d["utility"] == {"k": 4, "m": 3, "U": 0.5, "windows_below_m_over_k": 2}
@@ -318,8 +346,19 @@ def _st(*args, cwd=None):
 def test_st_run_virtual_stats_json_and_fault_exit(tmp_path):
     prog = tmp_path / "one.st"
     prog.write_text(ONE)
-    out = _st("run", str(prog), "--virtual", "--duration", "1s", "--policy", "edf", "--sim-cost", "a=4ms",
-              "--stats-json", str(tmp_path / "s.json"))
+    out = _st(
+        "run",
+        str(prog),
+        "--virtual",
+        "--duration",
+        "1s",
+        "--policy",
+        "edf",
+        "--sim-cost",
+        "a=4ms",
+        "--stats-json",
+        str(tmp_path / "s.json"),
+    )
     assert out.returncode == 0, out.stderr
     d = json.loads((tmp_path / "s.json").read_text())
     assert (d["policy"], d["clock"], d["plc_time_s"], d["state"]) == ("edf", "virtual", 1.0, "STOP")
@@ -328,8 +367,18 @@ def test_st_run_virtual_stats_json_and_fault_exit(tmp_path):
     bad.write_text(FAULTY)
     out = _st("run", str(bad), "--virtual", "--scans", "3", "--no-retain")
     assert out.returncode == 3 and "PLC fault [DIV0]: division by zero (in main, task main)" in out.stderr
-    out = _st("run", str(bad), "--virtual", "--scans", "3", "--on-fault", "restart", "--retain",
-              str(tmp_path / "b.db"), "--dump-json")
+    out = _st(
+        "run",
+        str(bad),
+        "--virtual",
+        "--scans",
+        "3",
+        "--on-fault",
+        "restart",
+        "--retain",
+        str(tmp_path / "b.db"),
+        "--dump-json",
+    )
     assert out.returncode == 0 and out.stderr.count("restarted (warm)") == 3
     assert json.loads(out.stdout.splitlines()[-1])["main.total"] == 3
 
@@ -356,10 +405,26 @@ END_RESOURCE END_CONFIGURATION
 def test_st_run_watch_swaps_new_code_in_and_refuses_a_type_change(tmp_path):
     prog = tmp_path / "w.st"
     prog.write_text(WATCHED)
-    child = subprocess.Popen([sys.executable, "-m", "st.cli", "run", str(prog), "--duration", "6s", "--no-rt",
-                              "--watch", "--dump-json", "--stats-plot", str(tmp_path / "lat.png")],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(2.5)                      # start-up (imports, compile) may take a second on a loaded machine
+    child = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "st.cli",
+            "run",
+            str(prog),
+            "--duration",
+            "6s",
+            "--no-rt",
+            "--watch",
+            "--dump-json",
+            "--stats-plot",
+            str(tmp_path / "lat.png"),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    time.sleep(2.5)  # start-up (imports, compile) may take a second on a loaded machine
     prog.write_text(WATCHED.replace("x := x + 1;", "x := x + 1000;"))
     time.sleep(1.5)
     prog.write_text(WATCHED.replace("y : INT", "y : REAL").replace("x := x + 1;", "x := x + 7;"))
@@ -368,6 +433,6 @@ def test_st_run_watch_swaps_new_code_in_and_refuses_a_type_change(tmp_path):
     assert "online change: 1 instance(s) carried over" in err
     assert "online change refused, the old program keeps running:\n  p1.y changed its type from INT to REAL" in err
     x = json.loads(out.splitlines()[-1])["p1.x"]
-    before, after = x % 1000, x // 1000                  # jobs of the first build, then of the second
+    before, after = x % 1000, x // 1000  # jobs of the first build, then of the second
     assert before > 50 and after > 50 and before + after == 600
     assert (tmp_path / "lat.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -1,4 +1,5 @@
 """ST unit tests (TEST blocks): assertions, SETUP/TEARDOWN, time, mocks, faults, the runner and `st test`."""
+
 import subprocess
 import sys
 import textwrap
@@ -53,20 +54,23 @@ def only(tests: str, **kw):
     return next(iter(results.values()))
 
 
-@pytest.mark.parametrize("stmt, actual, expected", [
-    ("ASSERT_EQ(c.count, 2);", "1", "2"),
-    ("ASSERT_NEQ(c.count, 1);", "1", "not 1"),
-    ("ASSERT_GT(c.count, 1);", "1", "> 1"),
-    ("ASSERT_LT(c.count, 1);", "1", "< 1"),
-    ("ASSERT_GE(c.count, 2);", "1", ">= 2"),
-    ("ASSERT_LE(c.count, 0);", "1", "<= 0"),
-    ("ASSERT_TRUE(c.count = 2);", "FALSE", "TRUE"),
-    ("ASSERT_FALSE(c.enable);", "TRUE", "FALSE"),
-    ("ASSERT_NEAR(r, 1.0, 0.1);", "1.25", "1.0 ± 0.1 (difference 0.25)"),
-    ("ASSERT_EQ(s, 'abd');", "'abc'", "'abd'"),
-    ("ASSERT_EQ(tm, T#1s);", "T#1s500ms", "T#1s"),
-    ("ASSERT_EQ(r, 0.1);", "1.25", "0.1"),
-])
+@pytest.mark.parametrize(
+    "stmt, actual, expected",
+    [
+        ("ASSERT_EQ(c.count, 2);", "1", "2"),
+        ("ASSERT_NEQ(c.count, 1);", "1", "not 1"),
+        ("ASSERT_GT(c.count, 1);", "1", "> 1"),
+        ("ASSERT_LT(c.count, 1);", "1", "< 1"),
+        ("ASSERT_GE(c.count, 2);", "1", ">= 2"),
+        ("ASSERT_LE(c.count, 0);", "1", "<= 0"),
+        ("ASSERT_TRUE(c.count = 2);", "FALSE", "TRUE"),
+        ("ASSERT_FALSE(c.enable);", "TRUE", "FALSE"),
+        ("ASSERT_NEAR(r, 1.0, 0.1);", "1.25", "1.0 ± 0.1 (difference 0.25)"),
+        ("ASSERT_EQ(s, 'abd');", "'abc'", "'abd'"),
+        ("ASSERT_EQ(tm, T#1s);", "T#1s500ms", "T#1s"),
+        ("ASSERT_EQ(r, 0.1);", "1.25", "0.1"),
+    ],
+)
 def test_each_assertion_reports_actual_and_expected(stmt, actual, expected):
     r = only(f"""
     TEST 'one'
@@ -100,8 +104,10 @@ def test_passing_assertions_and_message():
     bad = res["fails with a message"]
     assert (bad.passed, bad.report.actual, bad.report.expected, bad.report.note) == (False, "2", "3", "math is broken")
     line = LIB.count("\n") + 10
-    assert str(bad.report) == (f"t.st:{line}:3: ASSERT_EQ(1 + 1, 3, CONCAT('math ', 'is broken')) failed\n"
-                               "  actual:   2\n  expected: 3\n  message:  math is broken")
+    assert str(bad.report) == (
+        f"t.st:{line}:3: ASSERT_EQ(1 + 1, 3, CONCAT('math ', 'is broken')) failed\n"
+        "  actual:   2\n  expected: 3\n  message:  math is broken"
+    )
 
 
 def test_setup_variables_are_fresh_for_every_test_and_teardown_runs():
@@ -180,8 +186,11 @@ def test_mock_skips_the_body_keeps_outputs_and_counts_calls():
     END_TEST
     """)
     assert not r.passed
-    assert (r.report.message, r.report.actual, r.report.expected) == \
-        ("MOCK_VERIFY_CALL_COUNT(p.c, 3) failed", "called 2 times", "called 3 times")
+    assert (r.report.message, r.report.actual, r.report.expected) == (
+        "MOCK_VERIFY_CALL_COUNT(p.c, 3) failed",
+        "called 2 times",
+        "called 3 times",
+    )
 
 
 def test_mocks_do_not_leak_into_the_next_test():
@@ -214,7 +223,8 @@ def test_mocks_do_not_leak_into_the_next_test():
 
 def test_runtime_faults_and_endless_loops_fail_the_test_at_their_line():
     base = LIB.count("\n")
-    res = run("""
+    res = run(
+        """
     TEST 'div'
       VAR a, b : INT; END_VAR
       a := 1 / b;
@@ -226,7 +236,9 @@ def test_runtime_faults_and_endless_loops_fail_the_test_at_their_line():
     TEST 'after'
       ASSERT_TRUE(TRUE);
     END_TEST
-    """, timeout="200ms")
+    """,
+        timeout="200ms",
+    )
     div, loop = res["div"].report, res["loop"].report
     assert (div.kind, div.line, div.message) == ("fault", base + 4, "PLC fault [DIV0]: division by zero")
     assert (loop.kind, loop.line) == ("fault", base + 8)
@@ -234,20 +246,23 @@ def test_runtime_faults_and_endless_loops_fail_the_test_at_their_line():
     assert res["after"].passed
 
 
-@pytest.mark.parametrize("src, code, fragment", [
-    ("PROGRAM P VAR x : INT; END_VAR ASSERT_EQ(x, 1); END_PROGRAM", "E033", "ASSERT_EQ is only allowed"),
-    ("PROGRAM P VAR c : Counter; END_VAR MOCK c; END_PROGRAM", "E033", "MOCK is only allowed"),
-    ("TEST 'x' MOCK_FUNCTION ABS RETURNS 1; END_TEST", "E020", "'ABS' is a standard function"),
-    ("TEST 'x' VAR i : INT; END_VAR MOCK i; END_TEST", "E013", "MOCK needs a function block or program instance"),
-    ("TEST 'x' ASSERT_EQ(1); END_TEST", "E017", "ASSERT_EQ takes 2 or 3 arguments, not 1"),
-    ("TEST 'x' ASSERT_TRUE(1); END_TEST", "E013", "ASSERT_TRUE needs a BOOL"),
-    ("TEST 'x' ASSERT_EQ(1, 'a'); END_TEST", "E014", ""),
-    ("TEST 'x' ASSERT_EQ(1, 1, 5); END_TEST", "E013", "the message of ASSERT_EQ must be a STRING"),
-    ("TEST 'x' ADVANCE_TIME('soon'); END_TEST", "E013", "ADVANCE_TIME needs a TIME"),
-    ("TEST 'x' ASSERT_TRUE(TRUE); END_TEST TEST 'x' ASSERT_TRUE(TRUE); END_TEST", "E011", "named 'x' already"),
-    ("SETUP END_SETUP SETUP END_SETUP", "E011", "one SETUP block"),
-    ("TEST 'x' VAR c : Counter; END_VAR MOCK_VERIFY_CALLED(nothing); END_TEST", "E010", "neither an instance"),
-])
+@pytest.mark.parametrize(
+    "src, code, fragment",
+    [
+        ("PROGRAM P VAR x : INT; END_VAR ASSERT_EQ(x, 1); END_PROGRAM", "E033", "ASSERT_EQ is only allowed"),
+        ("PROGRAM P VAR c : Counter; END_VAR MOCK c; END_PROGRAM", "E033", "MOCK is only allowed"),
+        ("TEST 'x' MOCK_FUNCTION ABS RETURNS 1; END_TEST", "E020", "'ABS' is a standard function"),
+        ("TEST 'x' VAR i : INT; END_VAR MOCK i; END_TEST", "E013", "MOCK needs a function block or program instance"),
+        ("TEST 'x' ASSERT_EQ(1); END_TEST", "E017", "ASSERT_EQ takes 2 or 3 arguments, not 1"),
+        ("TEST 'x' ASSERT_TRUE(1); END_TEST", "E013", "ASSERT_TRUE needs a BOOL"),
+        ("TEST 'x' ASSERT_EQ(1, 'a'); END_TEST", "E014", ""),
+        ("TEST 'x' ASSERT_EQ(1, 1, 5); END_TEST", "E013", "the message of ASSERT_EQ must be a STRING"),
+        ("TEST 'x' ADVANCE_TIME('soon'); END_TEST", "E013", "ADVANCE_TIME needs a TIME"),
+        ("TEST 'x' ASSERT_TRUE(TRUE); END_TEST TEST 'x' ASSERT_TRUE(TRUE); END_TEST", "E011", "named 'x' already"),
+        ("SETUP END_SETUP SETUP END_SETUP", "E011", "one SETUP block"),
+        ("TEST 'x' VAR c : Counter; END_VAR MOCK_VERIFY_CALLED(nothing); END_TEST", "E010", "neither an instance"),
+    ],
+)
 def test_misused_test_statements_are_diagnostics(src, code, fragment):
     with pytest.raises(CompileError) as e:
         compile_text(LIB + src, "t.st")
@@ -257,8 +272,9 @@ def test_misused_test_statements_are_diagnostics(src, code, fragment):
 
 def test_tests_split_over_files_and_source_by_convention(tmp_path):
     (tmp_path / "counter.st").write_text(LIB)
-    (tmp_path / "test_counter.st").write_text("TEST 'counts'\n  VAR c : Counter; END_VAR\n  c(enable := TRUE);\n"
-                                              "  ASSERT_EQ(c.count, 1);\nEND_TEST\n")
+    (tmp_path / "test_counter.st").write_text(
+        "TEST 'counts'\n  VAR c : Counter; END_VAR\n  c(enable := TRUE);\n  ASSERT_EQ(c.count, 1);\nEND_TEST\n"
+    )
     suite = TestSuite.from_paths([tmp_path / "test_counter.st"])
     assert [(c.name, c.line) for c in suite.cases] == [("counts", 1)]
     assert [r.passed for r in suite.run_all()] == [True]
@@ -271,14 +287,16 @@ def _st(*args, cwd):
 @pytest.mark.slow
 def test_st_test_command_output_and_exit_codes(tmp_path):
     (tmp_path / "counter.st").write_text(LIB)
-    (tmp_path / "test_counter.st").write_text(textwrap.dedent("""\
+    (tmp_path / "test_counter.st").write_text(
+        textwrap.dedent("""\
         TEST 'good'
           ASSERT_EQ(Twice(2), 4);
         END_TEST
         TEST 'bad'
           ASSERT_EQ(Twice(2), 5);
         END_TEST
-        """))
+        """)
+    )
     p = _st("test", "test_counter.st", cwd=tmp_path)
     assert p.returncode == 1
     assert p.stdout.splitlines() == [

@@ -1,6 +1,7 @@
 """Every runtime error of the standard functions is a located PLC fault of a named kind, or the
 documented IEC/IEEE result (docs/semantics.md, "Errors of the standard functions"): never
 Python's own exception text, never a silently wrong value."""
+
 import itertools
 import math
 import re
@@ -13,16 +14,26 @@ from st.model import types as T
 from st.stdlib.iec import default_library
 
 NAMED = {"DIV0", "INDEX", "RANGE", "CONVERSION", "OVERFLOW", "NULL"}
-PYTHON_TEXT = re.compile(r"Error\b|math domain|invalid literal|Exceeds the limit|too large to|unsupported operand|"
-                         r"NoneType|object|could not convert|int\(\)|float\(\)", re.I)
+PYTHON_TEXT = re.compile(
+    r"Error\b|math domain|invalid literal|Exceeds the limit|too large to|unsupported operand|"
+    r"NoneType|object|could not convert|int\(\)|float\(\)",
+    re.I,
+)
 
 INTS = ["SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT"]
 BITS = ["BYTE", "WORD", "DWORD", "LWORD"]
 REALS = ["REAL", "LREAL"]
-GROUPS = {"ANY_REAL": REALS, "ANY_INT": ["SINT", "DINT", "ULINT"], "ANY_BIT": ["BYTE", "LWORD", "BOOL"],
-          "ANY_NUM": ["DINT", "LREAL", "UDINT"], "ANY_MAGNITUDE": ["DINT", "LREAL", "TIME"],
-          "ANY_STRING": ["STRING"], "ANY_CHARS": ["STRING"], "ANY_ELEMENTARY": ["DINT", "LREAL", "STRING", "TIME"],
-          "ANY": ["DINT"]}
+GROUPS = {
+    "ANY_REAL": REALS,
+    "ANY_INT": ["SINT", "DINT", "ULINT"],
+    "ANY_BIT": ["BYTE", "LWORD", "BOOL"],
+    "ANY_NUM": ["DINT", "LREAL", "UDINT"],
+    "ANY_MAGNITUDE": ["DINT", "LREAL", "TIME"],
+    "ANY_STRING": ["STRING"],
+    "ANY_CHARS": ["STRING"],
+    "ANY_ELEMENTARY": ["DINT", "LREAL", "STRING", "TIME"],
+    "ANY": ["DINT"],
+}
 DAY = 86_400 * 10**9
 
 
@@ -38,13 +49,13 @@ def extremes(t: str) -> list:
     if t == "STRING":
         return ["", "abc", "-12", "1E400", "9" * 30, "7" * 6000, "  7", "16#FF", "T#5s"]
     if t == "TIME":
-        return [0, -10**9, 2**63 - 1, -2**63]
+        return [0, -(10**9), 2**63 - 1, -(2**63)]
     if t == "DATE":
         return [0, 2932896 * DAY, -DAY]
     if t == "TOD":
         return [0, DAY - 1]
     if t == "DT":
-        return [0, 253402300799 * 10**9, -10**9]
+        return [0, 253402300799 * 10**9, -(10**9)]
     return [0]
 
 
@@ -56,8 +67,9 @@ def _program(cases: list) -> str:
     """One program for many calls: case j is on line 4 + j, over its own variables c<j>_a<i>,
     chosen by `sel` so that each runs alone."""
     decls = " ".join(f"c{j}_a{i} : {_decl(t)};" for j, (_, types) in enumerate(cases) for i, t in enumerate(types))
-    branches = "".join(f"{j}: {call.format(*[f'c{j}_a{i}' for i in range(len(types))])};\n"
-                       for j, (call, types) in enumerate(cases))
+    branches = "".join(
+        f"{j}: {call.format(*[f'c{j}_a{i}' for i in range(len(types))])};\n" for j, (call, types) in enumerate(cases)
+    )
     return f"PROGRAM main\nVAR sel : INT; {decls} END_VAR\nCASE sel OF\n{branches}END_CASE;\nEND_PROGRAM\n"
 
 
@@ -107,12 +119,25 @@ def _functions():
 def _conversions():
     """Per source type, every X_TO_Y conversion from it; then TRUNC, BCD and TO_* forms."""
     for s in INTS + BITS + REALS + ["BOOL", "STRING", "TIME", "DATE", "TOD", "DT"]:
-        yield [(f"{s}_TO_{d}({{0}})", (s,)) for d in INTS + BITS + REALS + [
-            "BOOL", "STRING", "TIME", "LTIME", "DATE", "TOD", "DT", "WSTRING", "CHAR"] if d != s]
-    yield [(call + "({0})", (t,)) for call, t in (
-        ("TRUNC", "LREAL"), ("LREAL_TRUNC_INT", "LREAL"), ("TRUNC_DINT", "REAL"), ("BCD_TO_INT", "WORD"),
-        ("INT_TO_BCD", "INT"), ("WORD_BCD_TO_INT", "WORD"), ("INT_TO_BCD_WORD", "INT"), ("TO_DINT", "LREAL"),
-        ("TO_STRING", "LREAL"))]
+        yield [
+            (f"{s}_TO_{d}({{0}})", (s,))
+            for d in INTS + BITS + REALS + ["BOOL", "STRING", "TIME", "LTIME", "DATE", "TOD", "DT", "WSTRING", "CHAR"]
+            if d != s
+        ]
+    yield [
+        (call + "({0})", (t,))
+        for call, t in (
+            ("TRUNC", "LREAL"),
+            ("LREAL_TRUNC_INT", "LREAL"),
+            ("TRUNC_DINT", "REAL"),
+            ("BCD_TO_INT", "WORD"),
+            ("INT_TO_BCD", "INT"),
+            ("WORD_BCD_TO_INT", "WORD"),
+            ("INT_TO_BCD_WORD", "INT"),
+            ("TO_DINT", "LREAL"),
+            ("TO_STRING", "LREAL"),
+        )
+    ]
 
 
 GROUPS_OF_CASES = list(_functions()) + list(_conversions())
@@ -125,25 +150,25 @@ def test_every_standard_function_and_conversion_faults_cleanly_on_extreme_argume
     for cases in GROUPS_OF_CASES[chunk::2]:
         for call, types, vals, outcome in _sweep(cases):
             ran += 1
-            if outcome != "ok" and (outcome.kind not in NAMED or PYTHON_TEXT.search(outcome.message)
-                                    or outcome.file != "sweep.st"):
+            if outcome != "ok" and (
+                outcome.kind not in NAMED or PYTHON_TEXT.search(outcome.message) or outcome.file != "sweep.st"
+            ):
                 bad.append(f"{call} {types} {vals!r:.80}: {outcome}")
     assert not bad, "\n".join(bad[:40])
-    assert ran > 2000                     # the sweep really ran (each half: thousands of calls)
+    assert ran > 2000  # the sweep really ran (each half: thousands of calls)
 
 
 # ---------------------------------------------------------------------- the cases, exactly
 
+
 def _run(body: str, decls: str):
-    plc = PLC.from_source(f"PROGRAM main\nVAR {decls} END_VAR\n{body}\nEND_PROGRAM\n", name="f.st",
-                          use_cache=False)
+    plc = PLC.from_source(f"PROGRAM main\nVAR {decls} END_VAR\n{body}\nEND_PROGRAM\n", name="f.st", use_cache=False)
     plc.scan()
     return plc
 
 
 def _fault(body: str, decls: str):
-    plc = PLC.from_source(f"PROGRAM main\nVAR {decls} END_VAR\n{body}\nEND_PROGRAM\n", name="f.st",
-                          use_cache=False)
+    plc = PLC.from_source(f"PROGRAM main\nVAR {decls} END_VAR\n{body}\nEND_PROGRAM\n", name="f.st", use_cache=False)
     with pytest.raises(PLCFaultError) as info:
         plc.scan()
     f = info.value.fault
@@ -151,41 +176,58 @@ def _fault(body: str, decls: str):
 
 
 def test_mod_and_division_by_a_literal_on_unsigned_and_bit_string_types():
-    plc = _run("r1 := x MOD 7; r2 := y MOD 3; r3 := b / 7; r4 := x MOD 0; r5 := d MOD 16#10;",
-               "x : UDINT := 20; y : WORD := 20; b : BYTE := 250; d : DWORD := 16#FF; "
-               "r1 : UDINT; r2 : WORD; r3 : BYTE; r4 : UDINT; r5 : DWORD;")
+    plc = _run(
+        "r1 := x MOD 7; r2 := y MOD 3; r3 := b / 7; r4 := x MOD 0; r5 := d MOD 16#10;",
+        "x : UDINT := 20; y : WORD := 20; b : BYTE := 250; d : DWORD := 16#FF; "
+        "r1 : UDINT; r2 : WORD; r3 : BYTE; r4 : UDINT; r5 : DWORD;",
+    )
     assert [plc[f"main.r{i}"] for i in range(1, 6)] == [6, 2, 35, 0, 15]
 
 
 def test_a_negative_shift_count_is_a_range_fault():
-    assert _fault("x := SHL(x, n);", "x : DWORD := 5; n : INT := -1;") == \
-        ("RANGE", 3, "SHL: the shift count -1 is negative")
-    assert _fault("x := SHR(x, n);", "x : BYTE := 5; n : DINT := -3;") == \
-        ("RANGE", 3, "SHR: the shift count -3 is negative")
+    assert _fault("x := SHL(x, n);", "x : DWORD := 5; n : INT := -1;") == (
+        "RANGE",
+        3,
+        "SHL: the shift count -1 is negative",
+    )
+    assert _fault("x := SHR(x, n);", "x : BYTE := 5; n : DINT := -3;") == (
+        "RANGE",
+        3,
+        "SHR: the shift count -3 is negative",
+    )
 
 
 def test_shifts_past_the_width_give_zero_and_rotations_wrap():
-    plc = _run("a := SHL(x, 8); b := SHR(x, 200); c := ROL(x, -1); d := ROR(x, 9);",
-               "x : BYTE := 16#81; a, b, c, d : BYTE;")
+    plc = _run(
+        "a := SHL(x, 8); b := SHR(x, 200); c := ROL(x, -1); d := ROR(x, 9);", "x : BYTE := 16#81; a, b, c, d : BYTE;"
+    )
     assert [plc["main.a"], plc["main.b"], plc["main.c"], plc["main.d"]] == [0, 0, 0xC0, 0xC0]
 
 
 def test_trigonometry_of_infinity_is_nan():
-    plc = _run("inf := big * 10.0; s := SIN(inf); c := COS(-inf); t := TAN(inf); a := ASIN(2.0); q := SQRT(-1.0);",
-               "big : LREAL := 1.0E308; inf, s, c, t, a, q : LREAL;")
+    plc = _run(
+        "inf := big * 10.0; s := SIN(inf); c := COS(-inf); t := TAN(inf); a := ASIN(2.0); q := SQRT(-1.0);",
+        "big : LREAL := 1.0E308; inf, s, c, t, a, q : LREAL;",
+    )
     assert plc["main.inf"] == math.inf
     assert all(math.isnan(plc[f"main.{v}"]) for v in "sctaq")
 
 
-@pytest.mark.parametrize("body, message", [
-    ("y := LREAL_TO_DINT(r);", "1e+30 is outside the range of DINT (-2147483648..2147483647)"),
-    ("y := LREAL_TO_DINT(1.0E30);", "1e+30 is outside the range of DINT (-2147483648..2147483647)"),
-    ("w := LREAL_TO_WORD(-r);", "-1e+30 is outside the range of WORD (0..65535)"),
-    ("y := TRUNC(r);", "1e+30 is outside the range of DINT (-2147483648..2147483647)"),
-    ("y := LREAL_TO_DINT(r - r * 2.0 + r);", "0.0"),                            # fine: 0
-    ("y := LREAL_TO_DINT(r * 1.0E300 - r * 1.0E300);", "NaN is outside the range of DINT (-2147483648..2147483647)"),
-    ("u := LREAL_TO_USINT(255.6);", "255.6 is outside the range of USINT (0..255)"),
-])
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        ("y := LREAL_TO_DINT(r);", "1e+30 is outside the range of DINT (-2147483648..2147483647)"),
+        ("y := LREAL_TO_DINT(1.0E30);", "1e+30 is outside the range of DINT (-2147483648..2147483647)"),
+        ("w := LREAL_TO_WORD(-r);", "-1e+30 is outside the range of WORD (0..65535)"),
+        ("y := TRUNC(r);", "1e+30 is outside the range of DINT (-2147483648..2147483647)"),
+        ("y := LREAL_TO_DINT(r - r * 2.0 + r);", "0.0"),  # fine: 0
+        (
+            "y := LREAL_TO_DINT(r * 1.0E300 - r * 1.0E300);",
+            "NaN is outside the range of DINT (-2147483648..2147483647)",
+        ),
+        ("u := LREAL_TO_USINT(255.6);", "255.6 is outside the range of USINT (0..255)"),
+    ],
+)
 def test_a_real_outside_the_integer_range_is_a_conversion_fault(body, message):
     decls = "y : DINT; w : WORD; u : USINT; r : LREAL := 1.0E30;"
     if message == "0.0":
@@ -195,9 +237,11 @@ def test_a_real_outside_the_integer_range_is_a_conversion_fault(body, message):
 
 
 def test_conversions_at_the_edge_of_the_range_round_as_iec_says():
-    plc = _run("a := LREAL_TO_DINT(2147483647.4); b := LREAL_TO_DINT(-2147483648.4); c := REAL_TO_INT(2.5); "
-               "d := REAL_TO_INT(-2.5); e := LREAL_TO_USINT(255.4); f := TRUNC(-2.9);",
-               "a, b : DINT; c, d : INT; e : USINT; f : DINT;")
+    plc = _run(
+        "a := LREAL_TO_DINT(2147483647.4); b := LREAL_TO_DINT(-2147483648.4); c := REAL_TO_INT(2.5); "
+        "d := REAL_TO_INT(-2.5); e := LREAL_TO_USINT(255.4); f := TRUNC(-2.9);",
+        "a, b : DINT; c, d : INT; e : USINT; f : DINT;",
+    )
     assert [plc[f"main.{v}"] for v in "abcdef"] == [2147483647, -2147483648, 3, -3, 255, -2]
 
 
@@ -209,8 +253,11 @@ def test_expt_overflow_keeps_the_sign_ieee_gives():
 def test_real_to_char_converts_the_code_and_faults_outside_it():
     plc = _run("c := LREAL_TO_CHAR(65.0);", "c : CHAR;")
     assert plc["main.c"] == "A"
-    assert _fault("c := LREAL_TO_CHAR(300.0);", "c : CHAR;") == \
-        ("CONVERSION", 3, "300.0 is outside the range of CHAR (0..255)")
+    assert _fault("c := LREAL_TO_CHAR(300.0);", "c : CHAR;") == (
+        "CONVERSION",
+        3,
+        "300.0 is outside the range of CHAR (0..255)",
+    )
 
 
 def test_a_function_called_as_a_statement_compiles():
@@ -221,8 +268,15 @@ def test_a_function_called_as_a_statement_compiles():
 
 
 def test_text_to_number_of_thousands_of_digits_does_not_reach_python_limits():
-    plc = _run("s := '1'; FOR k := 1 TO 13 DO s := CONCAT(s, s); END_FOR; r := STRING_TO_LREAL(s); "
-               "ok := LEN(s) = 8192;", "s : STRING(9000); k : INT; r : LREAL; ok : BOOL;")
+    plc = _run(
+        "s := '1'; FOR k := 1 TO 13 DO s := CONCAT(s, s); END_FOR; r := STRING_TO_LREAL(s); ok := LEN(s) = 8192;",
+        "s : STRING(9000); k : INT; r : LREAL; ok : BOOL;",
+    )
     assert plc["main.ok"] is True and plc["main.r"] == math.inf
-    assert _fault("s := '1'; FOR k := 1 TO 13 DO s := CONCAT(s, s); END_FOR; y := STRING_TO_DINT(s);",
-                  "s : STRING(9000); k : INT; y : DINT;")[0] == "CONVERSION"
+    assert (
+        _fault(
+            "s := '1'; FOR k := 1 TO 13 DO s := CONCAT(s, s); END_FOR; y := STRING_TO_DINT(s);",
+            "s : STRING(9000); k : INT; y : DINT;",
+        )[0]
+        == "CONVERSION"
+    )

@@ -1,4 +1,5 @@
 """The options of one `st run` (the CLI's flags as one value)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -26,8 +27,8 @@ class RunOptions:
     rt_priority: int = 30
     cpu: int | None = None
     sim_cost: list = field(default_factory=list)
-    safe_outputs: list = field(default_factory=list)      # ["%QX0.1=TRUE", "%QW3=100"]
-    modbus: str | None = None                          # "[HOST:]PORT"
+    safe_outputs: list = field(default_factory=list)  # ["%QX0.1=TRUE", "%QW3=100"]
+    modbus: str | None = None  # "[HOST:]PORT"
     modbus_map: str | None = None
     modbus_read_only: bool = False
     modbus_writable: str | None = None
@@ -35,18 +36,18 @@ class RunOptions:
     modbus_idle_timeout: float = 60.0
     modbus_rate: float = 1000.0
     modbus_unit_ids: str | None = None
-    axes: str | None = None                            # axis configuration (TOML)
-    trace: list = field(default_factory=list)             # AXIS_REF paths
+    axes: str | None = None  # axis configuration (TOML)
+    trace: list = field(default_factory=list)  # AXIS_REF paths
     trace_plot: str | None = None
     trace_csv: str | None = None
-    ethercat: str | None = None                        # segment configuration (TOML)
+    ethercat: str | None = None  # segment configuration (TOML)
     ethercat_backend: str = "sim"
     ethercat_iface: str | None = None
     ethercat_capture: str | None = None
     quiet: bool = False
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
-    compiled_mtimes: dict | None = None                # the sources as compiled (see --watch)
+    compiled_mtimes: dict | None = None  # the sources as compiled (see --watch)
 
 
 def safe_values(specs: list) -> dict:

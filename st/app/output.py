@@ -1,4 +1,5 @@
 """Messages of `st run` go to stderr, flushed (stdout carries --dump-json)."""
+
 from __future__ import annotations
 
 import sys

@@ -1,4 +1,5 @@
 """What `st run` leaves behind when it ends: statistics (JSON, plot, summary), variables, axis traces."""
+
 from __future__ import annotations
 
 import json
@@ -15,11 +16,19 @@ def report(plc: PLC, o: RunOptions) -> None:
     stats = plc.stats()
     if o.stats_json:
         with open(o.stats_json, "w") as f:
-            json.dump({"policy": plc.policy_name, "clock": "virtual" if o.virtual else "real",
-                       "plc_time_s": plc.time / 1e9, "state": plc.state,
-                       "faults": [str(x) for x in plc.faults], "tasks": stats,
-                       "io": io_stats(plc)},
-                      f, indent=1)
+            json.dump(
+                {
+                    "policy": plc.policy_name,
+                    "clock": "virtual" if o.virtual else "real",
+                    "plc_time_s": plc.time / 1e9,
+                    "state": plc.state,
+                    "faults": [str(x) for x in plc.faults],
+                    "tasks": stats,
+                    "io": io_stats(plc),
+                },
+                f,
+                indent=1,
+            )
     if o.stats_plot:
         try:
             plot_latency([t.stats for t in plc.tasks], o.stats_plot)
@@ -32,14 +41,18 @@ def report(plc: PLC, o: RunOptions) -> None:
         for d in plc.io:
             if d.name == "ethercat":
                 c = d.stats()
-                err(f"  ethercat: {c['frames']} frames, {c['lost_frames']} lost, {c['wkc_errors']} working-counter "
-                     f"errors, {c['outages']} outage(s)")
+                err(
+                    f"  ethercat: {c['frames']} frames, {c['lost_frames']} lost, {c['wkc_errors']} working-counter "
+                    f"errors, {c['outages']} outage(s)"
+                )
         if not o.virtual:
             for s in stats:
                 lat, ex = s["latency_us"], s["exec_us"]
-                err(f"  task {s['task']}: {s['jobs']} jobs, {s['overruns']} overruns, {s['skipped']} skipped; "
-                     f"latency µs min {lat['min']:g} avg {lat['avg']:g} p99 {lat['p99']:g} p99.9 {lat['p99.9']:g} "
-                     f"max {lat['max']:g}; exec µs avg {ex['avg']:g} max {ex['max']:g}")
+                err(
+                    f"  task {s['task']}: {s['jobs']} jobs, {s['overruns']} overruns, {s['skipped']} skipped; "
+                    f"latency µs min {lat['min']:g} avg {lat['avg']:g} p99 {lat['p99']:g} p99.9 {lat['p99.9']:g} "
+                    f"max {lat['max']:g}; exec µs avg {ex['avg']:g} max {ex['max']:g}"
+                )
 
 
 def io_stats(plc: PLC) -> dict:

@@ -5,6 +5,7 @@ Ctrl-C and SIGTERM stop cleanly: the engine stops at a scan boundary, outputs go
 safe values, retained data is committed. A fault leaves the PLC in FAULT (safe outputs, the
 process alive until the run ends) or, with --on-fault restart, restarts it warm.
 """
+
 from __future__ import annotations
 
 import signal
@@ -28,8 +29,9 @@ from .watch import Watcher
 
 def _has_retained(compiled) -> bool:
     p = compiled.project
-    return any(v.retain or v.persistent for pou in p.pous.values() if not pou.library for v in pou.vars.values()) \
-        or any(g.retain or g.persistent for g in p.globals.values())
+    return any(
+        v.retain or v.persistent for pou in p.pous.values() if not pou.library for v in pou.vars.values()
+    ) or any(g.retain or g.persistent for g in p.globals.values())
 
 
 def run_plc(compiled, o: RunOptions) -> int:
@@ -38,12 +40,20 @@ def run_plc(compiled, o: RunOptions) -> int:
     if not o.no_retain and (o.retain_file or _has_retained(compiled)):
         retain = o.retain_file or str(Path(o.files[0]).with_suffix(".retain.db"))
     try:
-        plc = PLC(compiled, o.cycle, watchdog=o.watchdog, policy=o.policy, retain=retain,
-                  retain_interval=o.retain_interval, cold=o.cold, safe_outputs=safe_values(o.safe_outputs))
+        plc = PLC(
+            compiled,
+            o.cycle,
+            watchdog=o.watchdog,
+            policy=o.policy,
+            retain=retain,
+            retain_interval=o.retain_interval,
+            cold=o.cold,
+            safe_outputs=safe_values(o.safe_outputs),
+        )
         for spec in o.sim_cost:
             name, _, cost = spec.partition("=")
             plc.set_cost(name.strip(), cost.strip())
-    except (ValueError, KeyError, MemoryError) as e:     # PLCStartError: the reason, located
+    except (ValueError, KeyError, MemoryError) as e:  # PLCStartError: the reason, located
         err(f"error: cannot start the PLC: {e or type(e).__name__}")
         return 2
     if not plc.instances:
@@ -60,27 +70,45 @@ def run_plc(compiled, o: RunOptions) -> int:
             plc.close()
             return 2
     ecat = None
-    if o.ethercat:                  # the I/O packages are imported when used: each costs 0.1-0.2 s of start-up
+    if o.ethercat:  # the I/O packages are imported when used: each costs 0.1-0.2 s of start-up
         from ..io.ethercat import ConfigError, EtherCATDriver, MasterError, load_segment
+
         try:
-            ecat = EtherCATDriver(plc, load_segment(o.ethercat), backend=o.ethercat_backend,
-                                  iface=o.ethercat_iface or "", capture=o.ethercat_capture or "")
+            ecat = EtherCATDriver(
+                plc,
+                load_segment(o.ethercat),
+                backend=o.ethercat_backend,
+                iface=o.ethercat_iface or "",
+                capture=o.ethercat_capture or "",
+            )
         except (ConfigError, MasterError) as e:
             err(f"error: {e}")
             plc.close()
             return 2
         if not o.quiet:
-            err(f"ethercat: {len(ecat.master.slaves)} slave(s) in OP ({o.ethercat_backend} backend), "
-                 f"{len(ecat.links)} drive(s) bound")
+            err(
+                f"ethercat: {len(ecat.master.slaves)} slave(s) in OP ({o.ethercat_backend} backend), "
+                f"{len(ecat.links)} drive(s) bound"
+            )
     slave = None
     if o.modbus:
         from ..io.modbus import MapError, ModbusSlave, parse_endpoint
+
         try:
             host, port = parse_endpoint(o.modbus)
             units = None if not o.modbus_unit_ids else [int(u) for u in o.modbus_unit_ids.split(",")]
-            slave = ModbusSlave(plc, host, port, map_file=o.modbus_map, read_only=o.modbus_read_only,
-                                writable=o.modbus_writable, max_connections=o.modbus_max_connections,
-                                idle_timeout=o.modbus_idle_timeout, max_rate=o.modbus_rate, unit_ids=units).start()
+            slave = ModbusSlave(
+                plc,
+                host,
+                port,
+                map_file=o.modbus_map,
+                read_only=o.modbus_read_only,
+                writable=o.modbus_writable,
+                max_connections=o.modbus_max_connections,
+                idle_timeout=o.modbus_idle_timeout,
+                max_rate=o.modbus_rate,
+                unit_ids=units,
+            ).start()
         except MapError as e:
             err(str(e))
             plc.close()
@@ -90,8 +118,12 @@ def run_plc(compiled, o: RunOptions) -> int:
             plc.close()
             return 2
         if not o.quiet:
-            err(f"modbus: serving on {host}:{slave.port} (OpenPLC map" +
-                 (f" + {o.modbus_map}" if o.modbus_map else "") + (", read-only" if o.modbus_read_only else "") + ")")
+            err(
+                f"modbus: serving on {host}:{slave.port} (OpenPLC map"
+                + (f" + {o.modbus_map}" if o.modbus_map else "")
+                + (", read-only" if o.modbus_read_only else "")
+                + ")"
+            )
     if retain and not o.quiet:
         err(f"retained data: {retain} ({'cold start' if o.cold else f'{plc.retain_restored} value(s) restored'})")
     stop = threading.Event()
@@ -165,7 +197,7 @@ def _run_real(plc: PLC, o: RunOptions, stop, status, watcher) -> int:
         if remaining is not None and remaining <= 0:
             break
         try:
-            if plc.state == FAULT:      # stay alive with safe outputs until the run ends
+            if plc.state == FAULT:  # stay alive with safe outputs until the run ends
                 _sleep_while_faulted(plc, stop, remaining, on_idle)
                 break
             plc.run_realtime(duration=remaining, on_idle=on_idle, stop=stop)
@@ -202,14 +234,16 @@ def _sleep_while_faulted(plc, stop, remaining, on_idle) -> None:
 def _install_signals(stop: threading.Event, plc: PLC):
     """Ctrl-C and SIGTERM stop the PLC at the next scan boundary; a job still running is ended by its
     watchdog (so within one watchdog period), or at once when the signal comes a second time."""
+
     def handler(signum, frame):
         stop.set()
         plc.request_stop(signal.Signals(signum).name)
+
     old = {}
     for sig in (signal.SIGINT, signal.SIGTERM):
         try:
             old[sig] = signal.signal(sig, handler)
-        except ValueError:         # not the main thread
+        except ValueError:  # not the main thread
             pass
     return old
 

@@ -1,4 +1,5 @@
 """The live status line of `st run` on a terminal."""
+
 from __future__ import annotations
 
 import io
@@ -18,11 +19,12 @@ class StatusLine:
         self.plc = plc
         self.tty = sys.stderr.isatty()
         self.last = 0.0
-        if self.tty:                  # import and warm up before the first scan, not inside one's slack
+        if self.tty:  # import and warm up before the first scan, not inside one's slack
             self.text()
 
     def text(self):
         from rich.text import Text
+
         p = self.plc
         colour = {"RUN": "bold green", "STOP": "bold yellow"}.get(p.state, "bold red")
         out = Text.assemble((p.state, colour), f" t={p.time / 1e9:.1f}s")
@@ -40,6 +42,7 @@ class StatusLine:
             return
         self.last = now
         from rich.console import Console
+
         width = shutil.get_terminal_size((120, 24)).columns or 120
         buf = io.StringIO()
         console = Console(file=buf, force_terminal=True, width=width)

@@ -1,4 +1,5 @@
 """--watch: online change when a source file is edited."""
+
 from __future__ import annotations
 
 import os
@@ -54,8 +55,9 @@ class Watcher:
 
     def _prepare(self) -> None:
         try:
-            compiled = compile_paths(self.o.files, time_unit=self.o.time_unit,
-                                     f_trig_first_scan=self.o.f_trig_first_scan)
+            compiled = compile_paths(
+                self.o.files, time_unit=self.o.time_unit, f_trig_first_scan=self.o.f_trig_first_scan
+            )
             self.result = self.plc.prepare_change(compiled)
         except CompileError as e:
             err("\nonline change refused, the old program keeps running:\n" + e.render())

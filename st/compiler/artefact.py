@@ -7,6 +7,7 @@ same model through `CompiledProgram.to_bytes`, with that syntax replaced (`ast_f
 the small values of st.model.summaries. The compiler's own objects are never changed, and a
 cached and an uncached compile give the same value.
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -103,7 +104,14 @@ def _test(s: dict) -> None:
 
 
 _RULES: dict[type, Callable[[dict], None]] = {
-    T.POUType: _pou, T.VarSym: _init, T.Member: _init, T.AliasType: _init,
-    Project: _project, ConfigModel: _config, InstanceModel: _instance, StepModel: _step,
-    TransitionModel: _transition, TestModel: _test,
+    T.POUType: _pou,
+    T.VarSym: _init,
+    T.Member: _init,
+    T.AliasType: _init,
+    Project: _project,
+    ConfigModel: _config,
+    InstanceModel: _instance,
+    StepModel: _step,
+    TransitionModel: _transition,
+    TestModel: _test,
 }

@@ -4,6 +4,7 @@ Expression nodes carry a `ty` slot that the checker fills in (the resolved
 IEC type) and a `const` slot for folded constant values; everything else is
 what the source said.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -23,10 +24,10 @@ class Expr:
 
 @dataclass(slots=True, eq=False)
 class Literal(Expr):
-    kind: str = ""          # int real bool string wstring time date tod dt
+    kind: str = ""  # int real bool string wstring time date tod dt
     value: Any = None
-    type_name: str = ""     # the typed prefix (INT#5 → "INT"), or "" when untyped
-    text: str = ""          # the source text, for messages
+    type_name: str = ""  # the typed prefix (INT#5 → "INT"), or "" when untyped
+    text: str = ""  # the source text, for messages
 
 
 @dataclass(slots=True, eq=False)
@@ -38,12 +39,12 @@ class EnumLit(Expr):
 @dataclass(slots=True, eq=False)
 class Name(Expr):
     name: str = ""
-    sym: Any = field(default=None, repr=False)   # resolved by the checker
+    sym: Any = field(default=None, repr=False)  # resolved by the checker
 
 
 @dataclass(slots=True, eq=False)
 class Direct(Expr):
-    address: str = ""       # "%IX0.0"
+    address: str = ""  # "%IX0.0"
 
 
 @dataclass(slots=True, eq=False)
@@ -58,7 +59,7 @@ class Field(Expr):
 class Bit(Expr):
     base: Expr = None
     index: int = 0
-    size: str = "X"         # X (bit), B, W, D, L for partial access x.%B1
+    size: str = "X"  # X (bit), B, W, D, L for partial access x.%B1
 
 
 @dataclass(slots=True, eq=False)
@@ -75,10 +76,10 @@ class Deref(Expr):
 @dataclass(slots=True, eq=False)
 class Arg:
     span: Span
-    name: str = ""          # "" for a positional argument
+    name: str = ""  # "" for a positional argument
     value: Expr = None
-    output: bool = False    # name => variable
-    negated: bool = False   # NOT name => variable
+    output: bool = False  # name => variable
+    negated: bool = False  # NOT name => variable
 
 
 @dataclass(slots=True, eq=False)
@@ -91,13 +92,13 @@ class Call(Expr):
 
 @dataclass(slots=True, eq=False)
 class Unary(Expr):
-    op: str = ""            # "-", "+", "NOT"
+    op: str = ""  # "-", "+", "NOT"
     operand: Expr = None
 
 
 @dataclass(slots=True, eq=False)
 class Binary(Expr):
-    op: str = ""            # + - * / MOD ** = <> < > <= >= AND OR XOR AND_THEN OR_ELSE
+    op: str = ""  # + - * / MOD ** = <> < > <= >= AND OR XOR AND_THEN OR_ELSE
     left: Expr = None
     right: Expr = None
 
@@ -110,6 +111,7 @@ class AccessorCall(Expr):
     """A property read or written, after lowering (compiler/lower/properties.py): a call of
     `accessor` (its GET; its SET as an assignment's target) on `obj`, None for this instance.
     `nonvirtual`: SUPER^.Prop, the base block's accessor on this instance (obj is the SUPER^)."""
+
     obj: Expr | None = None
     accessor: Any = field(default=None, repr=False)
     nonvirtual: bool = False
@@ -118,7 +120,7 @@ class AccessorCall(Expr):
 @dataclass(slots=True, eq=False)
 class ArrayInit:
     span: Span
-    items: list             # of initializers or RepeatInit
+    items: list  # of initializers or RepeatInit
 
 
 @dataclass(slots=True, eq=False)
@@ -131,15 +133,16 @@ class RepeatInit:
 @dataclass(slots=True, eq=False)
 class StructInit:
     span: Span
-    fields: list            # of (name, span, initializer)
+    fields: list  # of (name, span, initializer)
 
 
 @dataclass(slots=True, eq=False)
 class CtorInit:
     """`inst : FB(a := 1)` (CODESYS): arguments for the block's FB_init, plus an ordinary
     initializer (`:= (x := 2)`) if one is given too."""
+
     span: Span
-    args: list              # of (name, span, expression)
+    args: list  # of (name, span, expression)
     inner: Any = None
 
 
@@ -155,8 +158,8 @@ class Stmt:
 class Assign(Stmt):
     target: Expr = None
     value: Expr = None
-    kind: str = ":="        # ":=", "S=", "R=", "?=", "REF="
-    attempt: tuple = None   # for "?=": (kind name, source is a reference, destination is a reference)
+    kind: str = ":="  # ":=", "S=", "R=", "?=", "REF="
+    attempt: tuple = None  # for "?=": (kind name, source is a reference, destination is a reference)
 
 
 @dataclass(slots=True, eq=False)
@@ -167,27 +170,29 @@ class CallStmt(Stmt):
 @dataclass(slots=True, eq=False)
 class Mock(Stmt):
     """MOCK inst; (unit tests): the instance's body is skipped from now on, calls are counted."""
+
     target: Expr = None
 
 
 @dataclass(slots=True, eq=False)
 class MockFunction(Stmt):
     """MOCK_FUNCTION f RETURNS v; (unit tests)."""
+
     name: str = ""
     value: Expr = None
-    pou: Any = field(default=None, repr=False)      # filled by the checker
+    pou: Any = field(default=None, repr=False)  # filled by the checker
 
 
 @dataclass(slots=True, eq=False)
 class If(Stmt):
-    branches: list = None   # [(cond, [stmt])]
-    orelse: list = None     # [stmt] or None
+    branches: list = None  # [(cond, [stmt])]
+    orelse: list = None  # [stmt] or None
 
 
 @dataclass(slots=True, eq=False)
 class CaseBranch:
     span: Span
-    labels: list            # [(lo Expr, hi Expr | None)]
+    labels: list  # [(lo Expr, hi Expr | None)]
     body: list
 
 
@@ -228,6 +233,7 @@ class CountedFor(Stmt):
     to its type) before every round but the first. `step_value` is the step as a constant
     (1 without BY), or None when only known at run time.
     """
+
     var: Expr = None
     start: Expr = None
     end: Expr = None
@@ -285,14 +291,14 @@ class StringType(TypeSpec):
 
 @dataclass(slots=True, eq=False)
 class ArrayType(TypeSpec):
-    ranges: list = None     # [(lo Expr, hi Expr)] or [None] for [*]
+    ranges: list = None  # [(lo Expr, hi Expr)] or [None] for [*]
     element: TypeSpec = None
 
 
 @dataclass(slots=True, eq=False)
 class RefType(TypeSpec):
     target: TypeSpec = None
-    kind: str = "REF_TO"    # REF_TO, POINTER, REFERENCE
+    kind: str = "REF_TO"  # REF_TO, POINTER, REFERENCE
 
 
 @dataclass(slots=True, eq=False)
@@ -311,15 +317,15 @@ class EnumValue:
 
 @dataclass(slots=True, eq=False)
 class EnumType(TypeSpec):
-    values: list = None     # [EnumValue]
-    base: str = ""          # "" → INT
+    values: list = None  # [EnumValue]
+    base: str = ""  # "" → INT
     default: str = ""
 
 
 @dataclass(slots=True, eq=False)
 class StructType(TypeSpec):
-    members: list = None    # [VarDecl]
-    extends: Any = None     # NamedType of the base structure (CODESYS `TYPE B EXTENDS A : STRUCT`)
+    members: list = None  # [VarDecl]
+    extends: Any = None  # NamedType of the base structure (CODESYS `TYPE B EXTENDS A : STRUCT`)
 
 
 # --------------------------------------------------------------------------- declarations
@@ -328,19 +334,19 @@ class StructType(TypeSpec):
 @dataclass(slots=True, eq=False)
 class VarDecl:
     span: Span
-    names: list             # [(name, span)]
+    names: list  # [(name, span)]
     type: TypeSpec
-    init: Any = None        # Expr, ArrayInit, StructInit or None
-    location: str = ""      # "%IX0.0"
-    edge: str = ""          # R_EDGE / F_EDGE
-    path: list = None       # VAR_CONFIG: instance path [names]
+    init: Any = None  # Expr, ArrayInit, StructInit or None
+    location: str = ""  # "%IX0.0"
+    edge: str = ""  # R_EDGE / F_EDGE
+    path: list = None  # VAR_CONFIG: instance path [names]
 
 
 @dataclass(slots=True, eq=False)
 class VarBlock:
     span: Span
-    kind: str               # VAR, VAR_INPUT, ... (upper case)
-    qualifiers: list        # CONSTANT, RETAIN, NON_RETAIN, PERSISTENT, PUBLIC, PRIVATE, PROTECTED, INTERNAL
+    kind: str  # VAR, VAR_INPUT, ... (upper case)
+    qualifiers: list  # CONSTANT, RETAIN, NON_RETAIN, PERSISTENT, PUBLIC, PRIVATE, PROTECTED, INTERNAL
     decls: list
 
 
@@ -379,10 +385,10 @@ class Transition:
     span: Span
     name: str
     priority: Expr | None
-    sources: list           # [(name, span)]
+    sources: list  # [(name, span)]
     targets: list
     cond: Expr | None = None
-    body: list | None = None     # transition given as statements assigning the transition name
+    body: list | None = None  # transition given as statements assigning the transition name
 
 
 @dataclass(slots=True, eq=False)
@@ -401,7 +407,7 @@ class Method:
     var_blocks: list = field(default_factory=list)
     body: list = field(default_factory=list)
     end_span: Span | None = None
-    kind: str = "FUNCTION"          # checked and generated as a function with the instance as `self`
+    kind: str = "FUNCTION"  # checked and generated as a function with the instance as `self`
     steps: list = field(default_factory=list)
     transitions: list = field(default_factory=list)
     actions: list = field(default_factory=list)
@@ -413,8 +419,8 @@ class Property:
     name: str
     modifiers: list = field(default_factory=list)
     type: TypeSpec | None = None
-    get: Method | None = None       # the accessors, as methods (GET: result = the property's name;
-    set: Method | None = None       # SET: an input with the property's name)
+    get: Method | None = None  # the accessors, as methods (GET: result = the property's name;
+    set: Method | None = None  # SET: an input with the property's name)
     end_span: Span | None = None
 
 
@@ -423,7 +429,7 @@ class Interface:
     span: Span
     name: str
     extends: list = field(default_factory=list)
-    methods: list = field(default_factory=list)      # Method prototypes (no body)
+    methods: list = field(default_factory=list)  # Method prototypes (no body)
     end_span: Span | None = None
     kind: str = "INTERFACE"
     properties: list = field(default_factory=list)
@@ -440,7 +446,7 @@ class Interface:
 @dataclass(slots=True, eq=False)
 class POU:
     span: Span
-    kind: str               # FUNCTION, FUNCTION_BLOCK, PROGRAM
+    kind: str  # FUNCTION, FUNCTION_BLOCK, PROGRAM
     name: str
     return_type: TypeSpec | None = None
     var_blocks: list = field(default_factory=list)
@@ -460,7 +466,7 @@ class POU:
 class TaskDecl:
     span: Span
     name: str
-    params: dict            # upper-case name → Expr
+    params: dict  # upper-case name → Expr
 
 
 @dataclass(slots=True, eq=False)
@@ -469,7 +475,7 @@ class ProgramConfig:
     instance: str
     task: str
     type_name: str
-    args: list              # [Arg]
+    args: list  # [Arg]
     retain: str = ""
 
 
@@ -494,7 +500,7 @@ class Configuration:
 @dataclass(slots=True, eq=False)
 class TestBlock:
     span: Span
-    kind: str               # TEST, SETUP, TEARDOWN
+    kind: str  # TEST, SETUP, TEARDOWN
     name: str
     var_blocks: list
     body: list
@@ -505,5 +511,5 @@ class Unit:
     """Everything declared in one source file."""
 
     path: str
-    items: list             # TypeBlock, POU, Configuration, VarBlock, TestBlock
+    items: list  # TypeBlock, POU, Configuration, VarBlock, TestBlock
     pragmas: list = field(default_factory=list)

@@ -3,6 +3,7 @@
 The builder runs inside the LALR parser (no intermediate parse tree), which is
 what makes parsing large libraries fast.
 """
+
 from __future__ import annotations
 
 from lark import Token, Transformer
@@ -20,13 +21,32 @@ from ..model.literals import (
 from ..source import Span
 from . import ast as A
 
-_PREC = {"OR": 1, "OR_ELSE": 1, "XOR": 2, "AND": 3, "&": 3, "AND_THEN": 3, "=": 4, "<>": 4,
-         "<": 5, ">": 5, "<=": 5, ">=": 5, "+": 6, "-": 6, "*": 7, "/": 7, "MOD": 7, "**": 8}
+_PREC = {
+    "OR": 1,
+    "OR_ELSE": 1,
+    "XOR": 2,
+    "AND": 3,
+    "&": 3,
+    "AND_THEN": 3,
+    "=": 4,
+    "<>": 4,
+    "<": 5,
+    ">": 5,
+    "<=": 5,
+    ">=": 5,
+    "+": 6,
+    "-": 6,
+    "*": 7,
+    "/": 7,
+    "MOD": 7,
+    "**": 8,
+}
 _OPNAME = {"&": "AND"}
 # Words that may never be declared as a name (contextual lexing would otherwise let 'THEN' be an
 # identifier where no keyword is expected). Soft keywords (ON, STEP, BY, ...) and type names (DT is
 # a common name for a time step) are not here: the grammar tells them apart by context.
-RESERVED = frozenset("""
+RESERVED = frozenset(
+    """
 TYPE END_TYPE STRUCT END_STRUCT ARRAY OF STRING WSTRING REF_TO POINTER REFERENCE TO END_VAR CONSTANT RETAIN
 NON_RETAIN PERSISTENT R_EDGE F_EDGE AT FUNCTION END_FUNCTION FUNCTION_BLOCK END_FUNCTION_BLOCK PROGRAM
 END_PROGRAM EXTENDS IMPLEMENTS INITIAL_STEP END_STEP END_TRANSITION END_ACTION CONFIGURATION
@@ -34,8 +54,11 @@ END_CONFIGURATION RESOURCE END_RESOURCE IF THEN ELSIF ELSE END_IF CASE END_CASE 
 END_WHILE REPEAT UNTIL END_REPEAT EXIT CONTINUE RETURN OR XOR AND NOT MOD TRUE FALSE VAR VAR_INPUT
 VAR_OUTPUT VAR_IN_OUT VAR_TEMP VAR_GLOBAL VAR_EXTERNAL VAR_CONFIG VAR_ACCESS END_TEST END_SETUP
 END_TEARDOWN PUBLIC PRIVATE PROTECTED INTERNAL ABSTRACT FINAL END_METHOD END_INTERFACE END_PROPERTY END_GET END_SET END_CLASS
-""".split())
-_QUALIFIERS = frozenset(("CONSTANT", "RETAIN", "NON_RETAIN", "PERSISTENT", "PUBLIC", "PRIVATE", "PROTECTED", "INTERNAL"))
+""".split()
+)
+_QUALIFIERS = frozenset(
+    ("CONSTANT", "RETAIN", "NON_RETAIN", "PERSISTENT", "PUBLIC", "PRIVATE", "PROTECTED", "INTERNAL")
+)
 
 
 class BuildError(Exception):
@@ -87,12 +110,20 @@ class AstBuilder(Transformer):
     def _attach(self, part, items) -> None:
         """A METHOD, PROPERTY or ACTION after END_FUNCTION_BLOCK / END_PROGRAM (the layout of TwinCAT
         and CODESYS text exports) belongs to the block just before it in the file."""
-        owner = items[-1] if items and isinstance(items[-1], A.POU) and \
-            items[-1].kind in ("FUNCTION_BLOCK", "PROGRAM") else None
+        owner = (
+            items[-1]
+            if items and isinstance(items[-1], A.POU) and items[-1].kind in ("FUNCTION_BLOCK", "PROGRAM")
+            else None
+        )
         what = {A.Method: "METHOD", A.Property: "PROPERTY", A.ActionDecl: "ACTION"}[type(part)]
         if owner is None:
-            self.errors.append(BuildError(part.span, f"this {what} is outside any FUNCTION_BLOCK or PROGRAM: "
-                                          f"declare it inside the block, or right after its END_FUNCTION_BLOCK"))
+            self.errors.append(
+                BuildError(
+                    part.span,
+                    f"this {what} is outside any FUNCTION_BLOCK or PROGRAM: "
+                    f"declare it inside the block, or right after its END_FUNCTION_BLOCK",
+                )
+            )
             return
         {A.Method: owner.methods, A.Property: owner.properties, A.ActionDecl: owner.actions}[type(part)].append(part)
 
@@ -101,8 +132,7 @@ class AstBuilder(Transformer):
 
     def _not_reserved(self, tok):
         if isinstance(tok, Token) and tok.type == "IDENT" and tok.upper() in RESERVED:
-            self.errors.append(BuildError(self.sp(tok), f"'{tok}' is a reserved keyword and cannot be a name",
-                                          "E001"))
+            self.errors.append(BuildError(self.sp(tok), f"'{tok}' is a reserved keyword and cannot be a name", "E001"))
         return tok
 
     # ---------------------------------------------------------------- types
@@ -210,8 +240,7 @@ class AstBuilder(Transformer):
         if isinstance(spec, A.NamedType) and spec.ctor_args:
             init = A.CtorInit(spec.span, spec.ctor_args, init)
             spec.ctor_args = None
-        return A.VarDecl(self.sp(names[0]), [(str(n), self.sp(n)) for n in names], spec, init,
-                         location, edge)
+        return A.VarDecl(self.sp(names[0]), [(str(n), self.sp(n)) for n in names], spec, init, location, edge)
 
     def var_decl(self, c):
         return self._var_decl(c)
@@ -313,7 +342,7 @@ class AstBuilder(Transformer):
             i += 1
         name = c[i]
         self._not_reserved(name)
-        rest = c[i + 1:-1]
+        rest = c[i + 1 : -1]
         m = A.Method(self.sp(name), str(name), mods)
         if rest and isinstance(rest[0], A.TypeSpec):
             m.return_type, rest = rest[0], rest[1:]
@@ -354,7 +383,7 @@ class AstBuilder(Transformer):
         name = c[i]
         self._not_reserved(name)
         prop = A.Property(self.sp(name), str(name), mods, c[i + 1])
-        for acc in c[i + 2:-1]:
+        for acc in c[i + 2 : -1]:
             kind, span, parts = acc
             m = A.Method(span, str(name), mods)
             for p in parts:
@@ -452,10 +481,14 @@ class AstBuilder(Transformer):
 
     def resource_decl(self, c):
         name, target = c[1], c[3]
-        return A.Resource(self.sp(name), str(name), str(target),
-                          [x for x in c if isinstance(x, A.VarBlock)],
-                          [x for x in c if isinstance(x, A.TaskDecl)],
-                          [x for x in c if isinstance(x, A.ProgramConfig)])
+        return A.Resource(
+            self.sp(name),
+            str(name),
+            str(target),
+            [x for x in c if isinstance(x, A.VarBlock)],
+            [x for x in c if isinstance(x, A.TaskDecl)],
+            [x for x in c if isinstance(x, A.ProgramConfig)],
+        )
 
     def task_decl(self, c):
         params = {}
@@ -470,7 +503,11 @@ class AstBuilder(Transformer):
     def program_config(self, c):
         items = list(c[1:])
         retain = ""
-        if items and isinstance(items[0], Token) and items[0].type in ("RETAIN", "NON_RETAIN", "CONSTANT", "PERSISTENT"):
+        if (
+            items
+            and isinstance(items[0], Token)
+            and items[0].type in ("RETAIN", "NON_RETAIN", "CONSTANT", "PERSISTENT")
+        ):
             retain = str(items.pop(0)).upper()
         inst = items.pop(0)
         task = ""
@@ -494,8 +531,13 @@ class AstBuilder(Transformer):
         return self._test("TEARDOWN", c[0], "", c[1:-1])
 
     def _test(self, kind, kw, name, parts):
-        return A.TestBlock(self.sp(kw), kind, name, [p for p in parts if isinstance(p, A.VarBlock)],
-                           [p for p in parts if isinstance(p, A.Stmt)])
+        return A.TestBlock(
+            self.sp(kw),
+            kind,
+            name,
+            [p for p in parts if isinstance(p, A.VarBlock)],
+            [p for p in parts if isinstance(p, A.Stmt)],
+        )
 
     # ---------------------------------------------------------------- statements
     def assignment(self, c):
@@ -554,7 +596,7 @@ class AstBuilder(Transformer):
             elif isinstance(x, tuple) and x[0] == "else":
                 orelse = x[1]
             elif isinstance(x, A.Stmt):
-                if not branches:        # reported, the statement dropped: parsing goes on
+                if not branches:  # reported, the statement dropped: parsing goes on
                     self.errors.append(BuildError(x.span, "a statement in a CASE needs a label before it", "E001"))
                     continue
                 branches[-1].body.append(x)
@@ -599,7 +641,7 @@ class AstBuilder(Transformer):
         if isinstance(c[i], Token) and c[i].type == "BY":
             step = c[i + 1]
             i += 2
-        return A.For(self.sp(c[0]), var, start, end, step, self._stmts(c[i + 1:]))
+        return A.For(self.sp(c[0]), var, start, end, step, self._stmts(c[i + 1 :]))
 
     def while_stmt(self, c):
         return A.While(self.sp(c[0]), c[1], self._stmts(c[3:]))
@@ -646,8 +688,7 @@ class AstBuilder(Transformer):
     def unary_expr(self, c):
         op = str(c[0]).upper()
         operand = c[1]
-        if op == "-" and isinstance(operand, A.Literal) and operand.kind in ("int", "real") \
-                and not operand.type_name:
+        if op == "-" and isinstance(operand, A.Literal) and operand.kind in ("int", "real") and not operand.type_name:
             # fold negative literals so that e.g. -32768 fits an INT
             return A.Literal(self.sp(c[0]), operand.kind, -operand.value, "", "-" + operand.text)
         return A.Unary(self.sp(c[0]), op, operand)
@@ -736,19 +777,24 @@ class AstBuilder(Transformer):
             kind, v = "real", self._lit(parse_real, tok)
         else:
             kind, v = "int", self._lit(parse_int, tok)
-        return A.Literal(self.sp(c[0]), kind, -v if neg else v, prefix.upper(),
-                         str(c[0]) + ("-" if neg else "") + str(tok))
+        return A.Literal(
+            self.sp(c[0]), kind, -v if neg else v, prefix.upper(), str(c[0]) + ("-" if neg else "") + str(tok)
+        )
 
     def lit_typed_bool(self, c):
         prefix = str(c[0])[:-1]
-        return A.Literal(self.sp(c[0]), "bool", str(c[1]).upper() == "TRUE", prefix.upper(),
-                         str(c[0]) + str(c[1]))
+        return A.Literal(self.sp(c[0]), "bool", str(c[1]).upper() == "TRUE", prefix.upper(), str(c[0]) + str(c[1]))
 
     def lit_typed_string(self, c):
         prefix = str(c[0])[:-1]
         wide = c[1].type == "WSTRING_LIT"
-        return A.Literal(self.sp(c[0]), "wstring" if wide else "string",
-                         self._lit(parse_string, c[1], wide), prefix.upper(), str(c[0]) + str(c[1]))
+        return A.Literal(
+            self.sp(c[0]),
+            "wstring" if wide else "string",
+            self._lit(parse_string, c[1], wide),
+            prefix.upper(),
+            str(c[0]) + str(c[1]),
+        )
 
     def lit_enum(self, c):
         prefix = str(c[0])[:-1]

@@ -6,6 +6,7 @@ It stores bytes and returns fresh objects: it never changes the program it is gi
 returned. An entry it cannot read (another format, another Python, a damaged file) is a miss,
 and the program is compiled again.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -30,7 +31,8 @@ def cache_dir() -> Path | None:
     if os.environ.get("ST_NO_CACHE"):
         return None
     base = os.environ.get("ST_CACHE_DIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "st")
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "st"
+    )
     p = Path(base) / "compiled"
     try:
         p.mkdir(parents=True, exist_ok=True)
@@ -67,8 +69,9 @@ def cache_key(sources: list[SourceFile], libraries: list[Library], options: Comp
     return h.hexdigest()
 
 
-def load(directory: Path, key: str, *, sources: dict[str, SourceFile],
-         helpers: dict[str, Any]) -> CompiledProgram | None:
+def load(
+    directory: Path, key: str, *, sources: dict[str, SourceFile], helpers: dict[str, Any]
+) -> CompiledProgram | None:
     """The program stored under `key`, with the caller's sources and helpers, or None."""
     try:
         data = (directory / key).read_bytes()

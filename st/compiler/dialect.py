@@ -14,6 +14,7 @@ Without a preset everything is accepted and only --time-unit / --f-trig-first-sc
 behaviour before presets existed). A preset is chosen with `--dialect NAME` (API: dialect=…)
 or with a pragma `{dialect 'NAME'}` in a source file; an explicit flag wins.
 """
+
 from __future__ import annotations
 
 import re
@@ -28,13 +29,13 @@ class Dialect:
     name: str
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
-    oop: bool = True                   # METHOD, PROPERTY, INTERFACE, CLASS, EXTENDS, IMPLEMENTS, THIS, SUPER
-    vendor_extensions: bool = True     # POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
+    oop: bool = True  # METHOD, PROPERTY, INTERFACE, CLASS, EXTENDS, IMPLEMENTS, THIS, SUPER
+    vendor_extensions: bool = True  # POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
     #                                    __NEW, __DELETE, VAR_INST in methods, VAR_STAT, STRUCT EXTENDS,
     #                                    METHODs of a PROGRAM
-    attribute_pragmas: bool = False    # {attribute '…'} without a warning
-    writable_inputs: bool = False      # a POU may assign its own VAR_INPUT (a local copy); else E018
-    enum_as_int: bool = False          # an enumeration value is usable as its integer (not {attribute 'strict'})
+    attribute_pragmas: bool = False  # {attribute '…'} without a warning
+    writable_inputs: bool = False  # a POU may assign its own VAR_INPUT (a local copy); else E018
+    enum_as_int: bool = False  # an enumeration value is usable as its integer (not {attribute 'strict'})
 
 
 PRESETS = {
@@ -64,8 +65,13 @@ def pragma_preset(sources) -> Dialect | None:
         return None
     name, span = found
     if name not in PRESETS:
-        diag = Diagnostic("E045", Severity.ERROR, span, f"unknown dialect '{name}' in a {{dialect}} pragma",
-                          hint=f"the presets are {', '.join(PRESETS)}")
+        diag = Diagnostic(
+            "E045",
+            Severity.ERROR,
+            span,
+            f"unknown dialect '{name}' in a {{dialect}} pragma",
+            hint=f"the presets are {', '.join(PRESETS)}",
+        )
         raise CompileError([diag], {s.path: s for s in sources})
     return PRESETS[name]
 

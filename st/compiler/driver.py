@@ -4,6 +4,7 @@ artefact (artefact.py), cached (cache.py).
 `compile_sources` is the one entry point; the CLI, the PLC API and the tests
 all go through it (st.api builds its libraries and CompileOptions).
 """
+
 from __future__ import annotations
 
 import gc
@@ -36,6 +37,7 @@ def _get_parser():
     global _parser, _builder
     if _parser is None:
         from ..grammar.parser import StParser
+
         _builder = AstBuilder("")
         _parser = StParser(_builder)
     return _parser, _builder
@@ -50,14 +52,22 @@ def parse_source(src: SourceFile, sink: DiagnosticSink) -> A.Unit | None:
         try:
             unit, diags = parser.parse(src)
         except RecursionError:
-            sink.error("E041", Span(src.path, 1, 1), "this file is nested too deeply to parse",
-                       "split deeply nested expressions or statements")
+            sink.error(
+                "E041",
+                Span(src.path, 1, 1),
+                "this file is nested too deeply to parse",
+                "split deeply nested expressions or statements",
+            )
             return None
         except Exception as exc:  # a parser bug must still not show the user a traceback
             if os.environ.get("ST_DEBUG"):
                 raise
-            sink.error("E099", Span(src.path, 1, 1), f"internal compiler error while parsing: {type(exc).__name__}: {exc}",
-                       "please report this with the source file; set ST_DEBUG=1 to see the traceback")
+            sink.error(
+                "E099",
+                Span(src.path, 1, 1),
+                f"internal compiler error while parsing: {type(exc).__name__}: {exc}",
+                "please report this with the source file; set ST_DEBUG=1 to see the traceback",
+            )
             return None
         errors = list(builder.errors)
     for d in diags:
@@ -69,8 +79,13 @@ def parse_source(src: SourceFile, sink: DiagnosticSink) -> A.Unit | None:
     return unit
 
 
-def compile_sources(sources: list[SourceFile], libraries: list[Library], options: CompileOptions | None = None, *,
-                    raise_on_error: bool = True) -> CompiledProgram:
+def compile_sources(
+    sources: list[SourceFile],
+    libraries: list[Library],
+    options: CompileOptions | None = None,
+    *,
+    raise_on_error: bool = True,
+) -> CompiledProgram:
     """Compile ST sources with the given libraries and options (st.api builds both)."""
     options = options or CompileOptions()
     # The compiler allocates millions of small objects that all live until the end:
@@ -88,8 +103,9 @@ def compile_sources(sources: list[SourceFile], libraries: list[Library], options
             gc.enable()
 
 
-def _compile_sources(sources: list[SourceFile], libraries: list[Library], options: CompileOptions, *,
-                     raise_on_error: bool) -> CompiledProgram:
+def _compile_sources(
+    sources: list[SourceFile], libraries: list[Library], options: CompileOptions, *, raise_on_error: bool
+) -> CompiledProgram:
     all_sources = {s.path: s for s in sources}
     lib_sources = [SourceFile(path, text) for lib in libraries for path, text in lib.sources]
     all_sources.update((src.path, src) for src in lib_sources)
@@ -124,15 +140,27 @@ def _compile_sources(sources: list[SourceFile], libraries: list[Library], option
                         out.append((path, compile(mod, path, "exec")))
     except RecursionError as exc:
         first = sources[0].path if sources else "<input>"
-        sink.error("E041", getattr(exc, "st_span", None) or Span(first, 1, 1),
-                   "this statement is nested too deeply to compile", "split the expression into several assignments")
-    except SyntaxError as exc:       # Python's own limits, e.g. more than 20 nested loops
-        sink.error("E041", Span(exc.filename or (sources[0].path if sources else "<input>"), exc.lineno or 1, 1),
-                   f"this code is nested too deeply to compile ({exc.msg})", "move inner loops into a FUNCTION")
+        sink.error(
+            "E041",
+            getattr(exc, "st_span", None) or Span(first, 1, 1),
+            "this statement is nested too deeply to compile",
+            "split the expression into several assignments",
+        )
+    except SyntaxError as exc:  # Python's own limits, e.g. more than 20 nested loops
+        sink.error(
+            "E041",
+            Span(exc.filename or (sources[0].path if sources else "<input>"), exc.lineno or 1, 1),
+            f"this code is nested too deeply to compile ({exc.msg})",
+            "move inner loops into a FUNCTION",
+        )
     except Exception as exc:  # a compiler bug must still not show the user a traceback
         first = sources[0].path if sources else "<input>"
-        sink.error("E099", getattr(exc, "st_span", None) or Span(first, 1, 1), f"internal compiler error: {type(exc).__name__}: {exc}",
-                   "please report this with the source file; set ST_DEBUG=1 to see the traceback")
+        sink.error(
+            "E099",
+            getattr(exc, "st_span", None) or Span(first, 1, 1),
+            f"internal compiler error: {type(exc).__name__}: {exc}",
+            "please report this with the source file; set ST_DEBUG=1 to see the traceback",
+        )
         if os.environ.get("ST_DEBUG"):
             raise
     diags = sink.sorted()
@@ -147,9 +175,12 @@ def _compile_sources(sources: list[SourceFile], libraries: list[Library], option
         except Exception as exc:  # a compiler object left in the model: a compiler bug, reported as one
             if os.environ.get("ST_DEBUG"):
                 raise
-            sink.error("E099", Span(sources[0].path if sources else "<input>", 1, 1),
-                       f"internal compiler error: {type(exc).__name__}: {exc}",
-                       "please report this with the source file; set ST_DEBUG=1 to see the traceback")
+            sink.error(
+                "E099",
+                Span(sources[0].path if sources else "<input>", 1, 1),
+                f"internal compiler error: {type(exc).__name__}: {exc}",
+                "please report this with the source file; set ST_DEBUG=1 to see the traceback",
+            )
             draft.diagnostics = diags = sink.sorted()
     if result is None:
         if raise_on_error:
@@ -161,9 +192,9 @@ def _compile_sources(sources: list[SourceFile], libraries: list[Library], option
     return result
 
 
-
-def _parse_all(sources: list[SourceFile], lib_sources: list[SourceFile], options: CompileOptions,
-               sink: DiagnosticSink) -> tuple[list[A.Unit], set[str]]:
+def _parse_all(
+    sources: list[SourceFile], lib_sources: list[SourceFile], options: CompileOptions, sink: DiagnosticSink
+) -> tuple[list[A.Unit], set[str]]:
     """Parse the libraries' sources and the user's; (units, the library paths)."""
     units = []
     lib_paths = {src.path for src in lib_sources}
@@ -183,8 +214,9 @@ def _parse_all(sources: list[SourceFile], lib_sources: list[SourceFile], options
     return units, lib_paths
 
 
-def check_sources(sources: list[SourceFile], libraries: list[Library],
-                  options: CompileOptions | None = None) -> tuple[Project, list[Diagnostic]]:
+def check_sources(
+    sources: list[SourceFile], libraries: list[Library], options: CompileOptions | None = None
+) -> tuple[Project, list[Diagnostic]]:
     """The front end alone: parse and check, (the checked model with its AST, the diagnostics).
     For tools and tests that look at what the compiler works on; `compile_sources` returns the
     AST-free artefact instead."""
@@ -210,8 +242,9 @@ def load_files(paths: list[str]) -> list[SourceFile]:
         try:
             raw = Path(p).read_bytes()
         except OSError as e:
-            raise CompileError([Diagnostic("E000", Severity.ERROR, Span(str(p), 0, 0),
-                                           f"cannot read file: {e.strerror}")], {}) from None
+            raise CompileError(
+                [Diagnostic("E000", Severity.ERROR, Span(str(p), 0, 0), f"cannot read file: {e.strerror}")], {}
+            ) from None
         try:
             text = raw.decode("utf-8")
         except UnicodeDecodeError:

@@ -4,6 +4,7 @@ The compiler knows no standard function by itself; `st.stdlib` (and later
 `st.stdlib.plcopen`) describe theirs with `FuncSig`, so every library plugs in
 the same way.
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -14,8 +15,8 @@ from typing import Any
 @dataclass
 class Param:
     name: str
-    constraint: str         # a type name (INT, TIME, ...) or a generic (ANY_NUM, ANY_INT, ...)
-    group: str = ""         # params of the same group unify to one type ("T")
+    constraint: str  # a type name (INT, TIME, ...) or a generic (ANY_NUM, ANY_INT, ...)
+    group: str = ""  # params of the same group unify to one type ("T")
 
 
 @dataclass
@@ -42,10 +43,10 @@ class FuncSig:
 @dataclass
 class Library:
     name: str
-    sources: list = field(default_factory=list)       # [(path, text)]
-    functions: dict = field(default_factory=dict)     # upper name → FuncSig
-    helpers: dict = field(default_factory=dict)       # python name → object (module namespace)
-    conversion: Callable | None = None             # name → FuncSig | None (X_TO_Y family)
+    sources: list = field(default_factory=list)  # [(path, text)]
+    functions: dict = field(default_factory=dict)  # upper name → FuncSig
+    helpers: dict = field(default_factory=dict)  # python name → object (module namespace)
+    conversion: Callable | None = None  # name → FuncSig | None (X_TO_Y family)
     version: str = "1"
 
     def add(self, sig: FuncSig) -> None:

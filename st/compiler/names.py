@@ -11,6 +11,7 @@ variable, a resource's global) joins them with `qualified`, which is injective t
 inside a part every '_' is written '_1' and parts are separated by '_0', so
 `A_B` + `c` ('A_1B_0c') and `A` + `B_c` ('A_0B_1c') never meet.
 """
+
 from __future__ import annotations
 
 import keyword

@@ -6,6 +6,7 @@
     scheduling    thesis 6.3: executions per task under frame / FCFS / RMS, (m,k)-firm utility
     latency       thesis 6.1-6.2: wake-up latency and CPU use in real time beside cyclictest
 """
+
 from __future__ import annotations
 
 import importlib

@@ -10,6 +10,7 @@ and machine to machine; only the comparison with cyclictest next to it is meanin
 
 The helpers (`run_cyclictest`, `run_st`, `start_load`) are shared with bench/bench_latency.py.
 """
+
 from __future__ import annotations
 
 import json
@@ -28,26 +29,35 @@ from statistics import mean, pstdev
 
 from .report import Report
 
-PKG_PARENT = Path(__file__).resolve().parents[2]     # the directory holding the `st` package
-PRIORITY = 80                                        # SCHED_FIFO priority of both tools (as bench_latency.py)
+PKG_PARENT = Path(__file__).resolve().parents[2]  # the directory holding the `st` package
+PRIORITY = 80  # SCHED_FIFO priority of both tools (as bench_latency.py)
 
 # (average, std) over the thesis's runs; Xenomai, 1 µs timer resolution. 6.2/6.3: real drives, 6.4: simulation.
-THESIS_HW = {1: {"table": "6.2", "min": (1.2802, 0.0079), "max": (533.034, 596.82), "cpu": (23.47, 0.12)},
-             2: {"table": "6.3", "min": (1.6401, 0.0120), "max": (713.859, 137.50), "cpu": (29.6, 0.4)}}
-THESIS_SIM = {1: {"min": (1.2583, 0.0095), "max": (567.92, 130.55)},
-              2: {"min": (1.8374, 0.0098), "max": (611.21, 95.34)},
-              3: {"min": (1.742, 0.0147), "max": (674.12, 154.28)},
-              10: {"min": (1.877, 0.0230), "max": (709.78, 120.51)}}
+THESIS_HW = {
+    1: {"table": "6.2", "min": (1.2802, 0.0079), "max": (533.034, 596.82), "cpu": (23.47, 0.12)},
+    2: {"table": "6.3", "min": (1.6401, 0.0120), "max": (713.859, 137.50), "cpu": (29.6, 0.4)},
+}
+THESIS_SIM = {
+    1: {"min": (1.2583, 0.0095), "max": (567.92, 130.55)},
+    2: {"min": (1.8374, 0.0098), "max": (611.21, 95.34)},
+    3: {"min": (1.742, 0.0147), "max": (674.12, 154.28)},
+    10: {"min": (1.877, 0.0230), "max": (709.78, 120.51)},
+}
 
 
 # ---------------------------------------------------------------- the program and segment for N axes
 def axes_program(n: int, cycle: str = "1ms") -> str:
     """An ST program that powers N axes and turns each at 360 units/s (1 rev/s of a drive)."""
-    decl = "\n".join(f"    ax{i} : AXIS_REF := (AxisNo := {i});\n    power{i} : MC_Power;\n    move{i} : MC_MoveVelocity;"
-                     for i in range(1, n + 1))
-    body = "\n".join(f"  power{i}(Axis := ax{i}, Enable := TRUE);\n"
-                     f"  move{i}(Axis := ax{i}, Execute := power{i}.Status, Velocity := 360.0, Acceleration := 360.0,"
-                     f" Deceleration := 360.0);" for i in range(1, n + 1))
+    decl = "\n".join(
+        f"    ax{i} : AXIS_REF := (AxisNo := {i});\n    power{i} : MC_Power;\n    move{i} : MC_MoveVelocity;"
+        for i in range(1, n + 1)
+    )
+    body = "\n".join(
+        f"  power{i}(Axis := ax{i}, Enable := TRUE);\n"
+        f"  move{i}(Axis := ax{i}, Execute := power{i}.Status, Velocity := 360.0, Acceleration := 360.0,"
+        f" Deceleration := 360.0);"
+        for i in range(1, n + 1)
+    )
     return f"""(* {n} PLCopen axes on a {cycle} task: the scan of thesis Tables 6.2-6.4 *)
 PROGRAM Axes
   VAR
@@ -89,8 +99,20 @@ def run_cyclictest(interval_us: int, seconds: int, prio: int) -> dict:
     """cyclictest (mlockall, one thread) for `seconds`: min/avg/p99/p99.9/max µs, samples, overruns.
     Raises FileNotFoundError or subprocess.CalledProcessError when it cannot run."""
     limit = 20000
-    cmd = ["cyclictest", "-m", "-p", str(prio), "-i", str(interval_us), "-D", str(int(seconds)), "-q",
-           "-h", str(limit), "--policy=fifo" if prio else "--policy=other"]
+    cmd = [
+        "cyclictest",
+        "-m",
+        "-p",
+        str(prio),
+        "-i",
+        str(interval_us),
+        "-D",
+        str(int(seconds)),
+        "-q",
+        "-h",
+        str(limit),
+        "--policy=fifo" if prio else "--policy=other",
+    ]
     out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
     hist, total = {}, 0
     fields = {}
@@ -109,11 +131,16 @@ def run_cyclictest(interval_us: int, seconds: int, prio: int) -> dict:
         if m:
             total += int(m.group(1))
     mx = fields.get("max", 0.0)
-    return {"min": fields.get("min", 0.0), "avg": fields.get("avg", 0.0),
-            "p99": percentile_from_histogram(hist, total, 0.99, mx),
-            "p99.9": percentile_from_histogram(hist, total, 0.999, mx), "max": mx, "samples": total,
-            # a wake-up later than the next period skips the missed periods: one sample per stall
-            "overruns": max(0, int(seconds) * 1_000_000 // interval_us - total)}
+    return {
+        "min": fields.get("min", 0.0),
+        "avg": fields.get("avg", 0.0),
+        "p99": percentile_from_histogram(hist, total, 0.99, mx),
+        "p99.9": percentile_from_histogram(hist, total, 0.999, mx),
+        "max": mx,
+        "samples": total,
+        # a wake-up later than the next period skips the missed periods: one sample per stall
+        "overruns": max(0, int(seconds) * 1_000_000 // interval_us - total),
+    }
 
 
 # ---------------------------------------------------------------- st run
@@ -143,14 +170,26 @@ def run_st(program: Path, seconds: float, prio: int, cycle: str | None = None, e
         prog = Path(d) / program.name
         prog.write_text(src)
         stats = Path(d) / "stats.json"
-        cmd = [sys.executable, "-m", "st.cli", "run", str(prog), "--duration", f"{seconds:g}s", "--no-retain",
-               "--rt-priority", str(prio or 30), "--stats-json", str(stats)]
+        cmd = [
+            sys.executable,
+            "-m",
+            "st.cli",
+            "run",
+            str(prog),
+            "--duration",
+            f"{seconds:g}s",
+            "--no-retain",
+            "--rt-priority",
+            str(prio or 30),
+            "--stats-json",
+            str(stats),
+        ]
         if ethercat:
             cmd += ["--ethercat", str(Path(ethercat).resolve())]
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=d, env=env)
         err, rt, cpu0, t0 = [], "", None, None
-        for line in proc.stderr:             # the line printed just before the first scan
+        for line in proc.stderr:  # the line printed just before the first scan
             err.append(line)
             if line.startswith("real time:"):
                 t0, cpu0, rt = time.monotonic(), _proc_cpu(proc.pid), line.split(":", 1)[1].strip()
@@ -167,18 +206,47 @@ def run_st(program: Path, seconds: float, prio: int, cycle: str | None = None, e
     t = data["tasks"][0]
     lat = t["latency_us"]
     ecat = data.get("io", {}).get("ethercat", {})
-    return {"min": lat["min"], "avg": lat["avg"], "p99": lat["p99"], "p99.9": lat["p99.9"], "max": lat["max"],
-            "samples": t["jobs"], "overruns": t["overruns"] + t["skipped"], "exec_avg": t["exec_us"]["avg"],
-            "exec_max": t["exec_us"]["max"], "cpu": cpu, "cpu_total": total / seconds, "rt": rt,
-            "fifo": rt.startswith("SCHED_FIFO priority"), "lost_frames": ecat.get("lost_frames", 0),
-            "frames": ecat.get("frames", 0)}
+    return {
+        "min": lat["min"],
+        "avg": lat["avg"],
+        "p99": lat["p99"],
+        "p99.9": lat["p99.9"],
+        "max": lat["max"],
+        "samples": t["jobs"],
+        "overruns": t["overruns"] + t["skipped"],
+        "exec_avg": t["exec_us"]["avg"],
+        "exec_max": t["exec_us"]["max"],
+        "cpu": cpu,
+        "cpu_total": total / seconds,
+        "rt": rt,
+        "fifo": rt.startswith("SCHED_FIFO priority"),
+        "lost_frames": ecat.get("lost_frames", 0),
+        "frames": ecat.get("frames", 0),
+    }
 
 
 def start_load() -> subprocess.Popen:
     """stress-ng on every CPU (arithmetic, memory, file system) at normal priority."""
-    return subprocess.Popen(["stress-ng", "--cpu", str(os.cpu_count() or 2), "--vm", "1", "--vm-bytes", "256M",
-                             "--hdd", "1", "--hdd-bytes", "64M", "--timeout", "3600s", "-q"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return subprocess.Popen(
+        [
+            "stress-ng",
+            "--cpu",
+            str(os.cpu_count() or 2),
+            "--vm",
+            "1",
+            "--vm-bytes",
+            "256M",
+            "--hdd",
+            "1",
+            "--hdd-bytes",
+            "64M",
+            "--timeout",
+            "3600s",
+            "-q",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
 
 
 # ---------------------------------------------------------------- the experiment
@@ -200,8 +268,16 @@ def _thesis(pair) -> str:
     return f"{pair[0]:g} ± {pair[1]:g}" if pair else "–"
 
 
-def run(out_dir, quick: bool = False, seed: int = 1, axes=None, seconds: float | None = None,
-        repeats: int | None = None, cyclictest: bool | None = None, ethercat: bool = True) -> Report:
+def run(
+    out_dir,
+    quick: bool = False,
+    seed: int = 1,
+    axes=None,
+    seconds: float | None = None,
+    repeats: int | None = None,
+    cyclictest: bool | None = None,
+    ethercat: bool = True,
+) -> Report:
     """Tables 6.2–6.4 on this machine. Full: N = 1, 2, 3, 10 axes, 3 runs of 10 s each (about 4 min
     with cyclictest); quick: N = 1, 2, one run of 2 s. cyclictest runs when it is installed unless
     `cyclictest=False`. `seed` is unused (real time cannot be seeded); it is accepted so that every
@@ -216,7 +292,7 @@ def run(out_dir, quick: bool = False, seed: int = 1, axes=None, seconds: float |
     rep = Report("latency", out_dir, "Wake-up latency and CPU usage with 1–10 axes (thesis 6.1/6.2, Tables 6.2–6.4)")
     d = Path(out_dir)
 
-    results = {}            # n → {"st": [dict], "ct": [dict], "ct_error": str}
+    results = {}  # n → {"st": [dict], "ct": [dict], "ct_error": str}
     for n in axes:
         prog = d / f"axes_{n}.st"
         prog.write_text(axes_program(n))
@@ -237,18 +313,26 @@ def run(out_dir, quick: bool = False, seed: int = 1, axes=None, seconds: float |
     st_runs = [x for r in results.values() for x in r["st"]]
     granted = st_runs[0]["rt"] if st_runs else ""
     fifo = all(x["fifo"] for x in st_runs)
-    ct_note = ("cyclictest (rt-tests) for the same duration just before each `st run`, at the same interval and "
-               f"{'SCHED_FIFO ' + str(prio) if prio else 'SCHED_OTHER'}" if use_ct else
-               ("cyclictest was not run (not installed: `apt-get install rt-tests`)" if not have_ct
-                else "cyclictest was not run (switched off)"))
+    ct_note = (
+        "cyclictest (rt-tests) for the same duration just before each `st run`, at the same interval and "
+        f"{'SCHED_FIFO ' + str(prio) if prio else 'SCHED_OTHER'}"
+        if use_ct
+        else (
+            "cyclictest was not run (not installed: `apt-get install rt-tests`)"
+            if not have_ct
+            else "cyclictest was not run (switched off)"
+        )
+    )
     errors = {n: r["ct_error"] for n, r in results.items() if r["ct_error"]}
     if fifo:
         sched = f"`st run` got SCHED_FIFO {prio or 30}{'' if root else ' (without being root)'}."
     elif root:
         sched = "**SCHED_FIFO was refused** to `st run` although we are root, so it ran as a SCHED_OTHER process."
     else:
-        sched = ("**Not root**: SCHED_FIFO (and mlockall, cpu_dma_latency) are refused, so both tools ran as "
-                 "ordinary SCHED_OTHER processes and the latencies include normal time-sharing.")
+        sched = (
+            "**Not root**: SCHED_FIFO (and mlockall, cpu_dma_latency) are refused, so both tools ran as "
+            "ordinary SCHED_OTHER processes and the latencies include normal time-sharing."
+        )
     rep.text(f"""
 **Real time, not reproducible:** every number below is a measurement of this machine at the time of
 the run; a rerun gives different values (the maximum most of all). Compare `st run` with cyclictest
@@ -256,49 +340,94 @@ measured just before it on the same machine, not with another run.
 
 Setup: for N axes an ST program with N × (`AXIS_REF (AxisNo := i)`, `MC_Power`, `MC_MoveVelocity` at
 1 rev/s) on a **1 ms** task ([axes_N.st](axes_1.st)), run by `st run --duration {seconds:g}s --stats-json`
-{'with an emulated EtherCAT segment of N CiA 402 drives (`--ethercat axes_N.segment.toml`, sim backend: the drives and their motor models are simulated in the same process)' if ethercat else 'with virtual axes (no EtherCAT segment)'};
+{"with an emulated EtherCAT segment of N CiA 402 drives (`--ethercat axes_N.segment.toml`, sim backend: the drives and their motor models are simulated in the same process)" if ethercat else "with virtual axes (no EtherCAT segment)"};
 {repeats} run(s) per N. Machine: {platform.system()} {platform.release()} ({platform.machine()}, {os.cpu_count()} CPUs),
 Python {platform.python_version()}. {sched}
-(`st run` reported: real time: {granted or 'nothing'}). {ct_note}.
-{'cyclictest failed: ' + '; '.join(f'N={n}: {e}' for n, e in errors.items()) + '.' if errors else ''}
+(`st run` reported: real time: {granted or "nothing"}). {ct_note}.
+{"cyclictest failed: " + "; ".join(f"N={n}: {e}" for n, e in errors.items()) + "." if errors else ""}
 
 Wake-up latency = actual start − release of each job of the 1 ms task (the thesis's J_i; cyclictest's
 latency). CPU = share of one core the `st run` process used while scanning (start-up and compilation
 excluded).
 """)
-    headers = ["axes", "runs × s", "min µs", "avg µs", "p99 µs", "p99.9 µs", "max µs", "overruns", "exec avg µs",
-               "CPU % of a core", "cyclictest min / avg / max µs"]
+    headers = [
+        "axes",
+        "runs × s",
+        "min µs",
+        "avg µs",
+        "p99 µs",
+        "p99.9 µs",
+        "max µs",
+        "overruns",
+        "exec avg µs",
+        "CPU % of a core",
+        "cyclictest min / avg / max µs",
+    ]
     rows = []
     for n, r in results.items():
         s, c = r["st"], r["ct"]
-        rows.append([n, f"{len(s)} × {seconds:g}", _ms([x["min"] for x in s], 2), _ms([x["avg"] for x in s], 2),
-                     _ms([x["p99"] for x in s]), _ms([x["p99.9"] for x in s]), _ms([x["max"] for x in s]),
-                     sum(x["overruns"] for x in s), _ms([x["exec_avg"] for x in s], 0), _ms([100 * x["cpu"] for x in s]),
-                     " / ".join(_ms([x[k] for x in c], 0) for k in ("min", "avg", "max")) if c else "not run"])
+        rows.append(
+            [
+                n,
+                f"{len(s)} × {seconds:g}",
+                _ms([x["min"] for x in s], 2),
+                _ms([x["avg"] for x in s], 2),
+                _ms([x["p99"] for x in s]),
+                _ms([x["p99.9"] for x in s]),
+                _ms([x["max"] for x in s]),
+                sum(x["overruns"] for x in s),
+                _ms([x["exec_avg"] for x in s], 0),
+                _ms([100 * x["cpu"] for x in s]),
+                " / ".join(_ms([x[k] for x in c], 0) for k in ("min", "avg", "max")) if c else "not run",
+            ]
+        )
     rep.table("st run at 1 ms with N axes (mean ± std over the runs)", headers, rows)
     rows = []
     for n, r in results.items():
         s = r["st"]
         hw, sim = THESIS_HW.get(n), THESIS_SIM.get(n)
-        rows.append([n, _ms([x["min"] for x in s], 3), _thesis(hw and hw["min"]), _thesis(sim and sim["min"]),
-                     _ms([x["max"] for x in s]), _thesis(hw and hw["max"]), _thesis(sim and sim["max"]),
-                     _ms([100 * x["cpu"] for x in s]), _thesis(hw and hw["cpu"]),
-                     _ms([x["max"] for x in r["ct"]], 0) if r["ct"] else "–"])
-    rep.table("Beside the thesis (Tables 6.2 and 6.3: real drives; Table 6.4: simulated axes)",
-              ["axes", "min µs (st)", "min µs (6.2/6.3)", "min µs (6.4)", "max µs (st)", "max µs (6.2/6.3)",
-               "max µs (6.4)", "CPU % (st)", "CPU % (6.2/6.3)", "max µs (cyclictest)"], rows,
-              note="The thesis reports average ± std over its runs (their number and length are not given).")
+        rows.append(
+            [
+                n,
+                _ms([x["min"] for x in s], 3),
+                _thesis(hw and hw["min"]),
+                _thesis(sim and sim["min"]),
+                _ms([x["max"] for x in s]),
+                _thesis(hw and hw["max"]),
+                _thesis(sim and sim["max"]),
+                _ms([100 * x["cpu"] for x in s]),
+                _thesis(hw and hw["cpu"]),
+                _ms([x["max"] for x in r["ct"]], 0) if r["ct"] else "–",
+            ]
+        )
+    rep.table(
+        "Beside the thesis (Tables 6.2 and 6.3: real drives; Table 6.4: simulated axes)",
+        [
+            "axes",
+            "min µs (st)",
+            "min µs (6.2/6.3)",
+            "min µs (6.4)",
+            "max µs (st)",
+            "max µs (6.2/6.3)",
+            "max µs (6.4)",
+            "CPU % (st)",
+            "CPU % (6.2/6.3)",
+            "max µs (cyclictest)",
+        ],
+        rows,
+        note="The thesis reports average ± std over its runs (their number and length are not given).",
+    )
     st_min = min((x["min"] for x in st_runs), default=0)
     rep.text(f"""
 ### Why the numbers differ from the thesis's
 
 - Platform: the thesis ran OpenPLC (C) on Xenomai with a 1 µs timer on an industrial PC with real
   drives (6.1/6.2) or load tasks standing for axes (6.4). Here a Python soft PLC runs on
-  {platform.release()} (a general-purpose kernel{', in a container or VM' if _virtualised() else ''}), so
+  {platform.release()} (a general-purpose kernel{", in a container or VM" if _virtualised() else ""}), so
   the maximum is set by what the kernel and the host do, not by the program.
 - Minimum: `st run` sleeps until 200 µs before a release and spins for the rest, so its wake-up is a
   spin loop's exit (lowest here {st_min:.2f} µs), the same order as the thesis's 1.3–1.9 µs, while
-  cyclictest, which only sleeps, shows the kernel's timer wake-up ({'min ' + _ms([x['min'] for r in results.values() for x in r['ct']], 0) + ' µs' if any(r['ct'] for r in results.values()) else 'not measured'}).
+  cyclictest, which only sleeps, shows the kernel's timer wake-up ({"min " + _ms([x["min"] for r in results.values() for x in r["ct"]], 0) + " µs" if any(r["ct"] for r in results.values()) else "not measured"}).
 - CPU: the spin costs a share of a core whatever the program does (up to 200 µs of every 1 ms, about
   20 %); on top, the
   emulated segment simulates every drive's slave controller and motor physics in the same process, so
@@ -312,20 +441,43 @@ excluded).
     late = {n: sum(x["overruns"] for x in r["st"]) for n, r in results.items()}
     if any(late.values()):
         rep.text(f"""
-- Overruns ({', '.join(f'N={n}: {v}' for n, v in late.items() if v)}): the emulated segment makes the job
+- Overruns ({", ".join(f"N={n}: {v}" for n, v in late.items() if v)}): the emulated segment makes the job
   take a large part of the 1 ms period (exec avg in the first table), so after a stall some jobs end
   after their next release; the thesis's Table 6.4 has no such cost.
 """)
     rows = []
     for n, r in results.items():
         for i, x in enumerate(r["st"]):
-            rows.append([n, i, "st run"] + [_num(x[k]) for k in ("min", "avg", "p99", "p99.9", "max")] +
-                        [x["samples"], x["overruns"], _num(x["exec_avg"], 2), _num(100 * x["cpu"], 2), x["rt"]])
+            rows.append(
+                [n, i, "st run"]
+                + [_num(x[k]) for k in ("min", "avg", "p99", "p99.9", "max")]
+                + [x["samples"], x["overruns"], _num(x["exec_avg"], 2), _num(100 * x["cpu"], 2), x["rt"]]
+            )
         for i, x in enumerate(r["ct"]):
-            rows.append([n, i, "cyclictest"] + [_num(x[k]) for k in ("min", "avg", "p99", "p99.9", "max")] +
-                        [x["samples"], x["overruns"], "", "", f"{'SCHED_FIFO ' + str(prio) if prio else 'SCHED_OTHER'}"])
-    rep.csv("latency.csv", ["axes", "run", "tool", "min_us", "avg_us", "p99_us", "p99.9_us", "max_us", "samples",
-                            "overruns", "exec_avg_us", "cpu_percent", "scheduling"], rows)
+            rows.append(
+                [n, i, "cyclictest"]
+                + [_num(x[k]) for k in ("min", "avg", "p99", "p99.9", "max")]
+                + [x["samples"], x["overruns"], "", "", f"{'SCHED_FIFO ' + str(prio) if prio else 'SCHED_OTHER'}"]
+            )
+    rep.csv(
+        "latency.csv",
+        [
+            "axes",
+            "run",
+            "tool",
+            "min_us",
+            "avg_us",
+            "p99_us",
+            "p99.9_us",
+            "max_us",
+            "samples",
+            "overruns",
+            "exec_avg_us",
+            "cpu_percent",
+            "scheduling",
+        ],
+        rows,
+    )
     _plot(rep, results)
     rep.write()
     return rep
@@ -350,15 +502,36 @@ def _plot(rep: Report, results: dict) -> None:
     for k, colour in styles.items():
         ax.plot(ns, [mean(x[k] for x in results[n]["st"]) for n in ns], "o-", color=colour, label=f"st {k}")
         if all(results[n]["ct"] for n in ns) and k != "p99":
-            ax.plot(ns, [mean(x[k] for x in results[n]["ct"]) for n in ns], "s--", color=colour, alpha=0.6,
-                    mfc="none", label=f"cyclictest {k}")
+            ax.plot(
+                ns,
+                [mean(x[k] for x in results[n]["ct"]) for n in ns],
+                "s--",
+                color=colour,
+                alpha=0.6,
+                mfc="none",
+                label=f"cyclictest {k}",
+            )
     sim = [n for n in ns if n in THESIS_SIM]
     for k in ("min", "max"):
-        ax.errorbar(sim, [THESIS_SIM[n][k][0] for n in sim], [THESIS_SIM[n][k][1] for n in sim], fmt="k^",
-                    ms=6, capsize=3, label="thesis 6.4" if k == "min" else None)
+        ax.errorbar(
+            sim,
+            [THESIS_SIM[n][k][0] for n in sim],
+            [THESIS_SIM[n][k][1] for n in sim],
+            fmt="k^",
+            ms=6,
+            capsize=3,
+            label="thesis 6.4" if k == "min" else None,
+        )
         hw = [n for n in ns if n in THESIS_HW]
-        ax.scatter(hw, [THESIS_HW[n][k][0] for n in hw], marker="D", facecolors="none", edgecolors="black",
-                   label="thesis 6.2/6.3" if k == "min" else None, zorder=3)
+        ax.scatter(
+            hw,
+            [THESIS_HW[n][k][0] for n in hw],
+            marker="D",
+            facecolors="none",
+            edgecolors="black",
+            label="thesis 6.2/6.3" if k == "min" else None,
+            zorder=3,
+        )
     ax.set_yscale("log")
     ax.set_xticks(ns)
     ax.set_xlabel("axes")
@@ -368,11 +541,24 @@ def _plot(rep: Report, results: dict) -> None:
     ax = axs[0][1]
     x = range(len(ns))
     cpu = [[100 * v["cpu"] for v in results[n]["st"]] for n in ns]
-    ax.bar(x, [mean(c) for c in cpu], 0.5, yerr=[pstdev(c) if len(c) > 1 else 0 for c in cpu], color="tab:blue",
-           label="st run (one core)")
+    ax.bar(
+        x,
+        [mean(c) for c in cpu],
+        0.5,
+        yerr=[pstdev(c) if len(c) > 1 else 0 for c in cpu],
+        color="tab:blue",
+        label="st run (one core)",
+    )
     hw = [(i, n) for i, n in enumerate(ns) if n in THESIS_HW]
-    ax.errorbar([i for i, n in hw], [THESIS_HW[n]["cpu"][0] for i, n in hw], [THESIS_HW[n]["cpu"][1] for i, n in hw],
-                fmt="kD", mfc="none", capsize=3, label="thesis 6.2/6.3")
+    ax.errorbar(
+        [i for i, n in hw],
+        [THESIS_HW[n]["cpu"][0] for i, n in hw],
+        [THESIS_HW[n]["cpu"][1] for i, n in hw],
+        fmt="kD",
+        mfc="none",
+        capsize=3,
+        label="thesis 6.2/6.3",
+    )
     ax.set_xticks(list(x), [str(n) for n in ns])
     ax.set_xlabel("axes")
     ax.set_ylabel("CPU %")

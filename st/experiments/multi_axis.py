@@ -11,6 +11,7 @@ C. A and B again with the segment's delay compensation, which sends each drive t
    shifted by set velocity × its delay (Fig. 6.9).
 At constant speed the offset should be speed × delay (1 rev/s × 1 ms = 0.36°).
 """
+
 from __future__ import annotations
 
 from .report import Report
@@ -18,7 +19,7 @@ from .rig import Rig, load_segment_dict
 
 DELAYS_MS = (0.25, 0.5, 1.0, 2.0)
 ACCELS = (1.0, 2.0, 10.0)
-SPEED = 1.0                                      # rev/s
+SPEED = 1.0  # rev/s
 
 
 def offset_run(delay_ms: float, accel: float, compensate: bool, seconds: float, speed: float = SPEED):
@@ -41,15 +42,18 @@ def offset_run(delay_ms: float, accel: float, compensate: bool, seconds: float, 
             return
         (p1, p2), _tc = rig.drive_positions_at_one_instant()
         rows.append((round(rig.t - t0, 6), (p1 - p2) / cpr * 360.0, rig["offset_deg"]))
+
     rig.scan(int(seconds * 1000), each=sample)
     return rows
 
 
 def run(out_dir, quick: bool = False, seed: int = 1) -> Report:
     rep = Report("multi-axis", out_dir, "Two axes (thesis 6.2): offset versus network delay and acceleration")
-    rep.text("Two emulated MINAS A6 drives on the `sim` EtherCAT backend without DC, driven by "
-             "`programs/thesis/two_axes.st` (two MC_MoveVelocity started in the same scan), 1 ms task, "
-             "virtual time. The second drive's frames arrive `delay` later (its forwarding delay).")
+    rep.text(
+        "Two emulated MINAS A6 drives on the `sim` EtherCAT backend without DC, driven by "
+        "`programs/thesis/two_axes.st` (two MC_MoveVelocity started in the same scan), 1 ms task, "
+        "virtual time. The second drive's frames arrive `delay` later (its forwarding delay)."
+    )
     seconds = 1.5 if quick else 3.0
     delays = (0.5, 2.0) if quick else DELAYS_MS
     accels = (1.0, 10.0) if quick else ACCELS
@@ -58,31 +62,48 @@ def run(out_dir, quick: bool = False, seed: int = 1) -> Report:
         for d in delays:
             runs[("delay", d, comp)] = offset_run(d, 1.0, comp, seconds)
         for a in accels:
-            runs[("accel", a, comp)] = offset_run(1.0, a, comp, seconds) if a != 1.0 or ("delay", 1.0, comp) \
-                not in runs else runs[("delay", 1.0, comp)]
+            runs[("accel", a, comp)] = (
+                offset_run(1.0, a, comp, seconds)
+                if a != 1.0 or ("delay", 1.0, comp) not in runs
+                else runs[("delay", 1.0, comp)]
+            )
     for (kind, x, comp), rows in runs.items():
-        rep.csv(f"offset_{kind}_{x:g}{'_compensated' if comp else ''}.csv",
-                ["t_s", "offset_deg_at_drives", "offset_deg_plc_view"], rows)
+        rep.csv(
+            f"offset_{kind}_{x:g}{'_compensated' if comp else ''}.csv",
+            ["t_s", "offset_deg_at_drives", "offset_deg_plc_view"],
+            rows,
+        )
     table = []
     for d in delays:
         plain, comp = runs[("delay", d, False)][-1][1], runs[("delay", d, True)][-1][1]
         table.append((f"{d:g}", SPEED * 360.0 * d / 1000.0, plain, comp))
-    rep.table("Offset at constant speed (1 rev/s, after the ramp)",
-              ["delay (ms)", "expected speed × delay (°)", "offset (°)", "offset with compensation (°)"], table,
-              note="The thesis's Fig. 6.8a shows the same linear growth of the offset with the delay (it gives "
-                   "no table); Fig. 6.9 shows the compensated offset near zero.")
+    rep.table(
+        "Offset at constant speed (1 rev/s, after the ramp)",
+        ["delay (ms)", "expected speed × delay (°)", "offset (°)", "offset with compensation (°)"],
+        table,
+        note="The thesis's Fig. 6.8a shows the same linear growth of the offset with the delay (it gives "
+        "no table); Fig. 6.9 shows the compensated offset near zero.",
+    )
     table = []
     for a in accels:
         rows = runs[("accel", a, False)]
         rows_c = runs[("accel", a, True)]
         early = next(o for t, o, _ in rows if t >= 0.1 - 1e-9)
         table.append((f"{a:g}", a * 0.1 * 360.0 * 0.001, early, rows[-1][1], max(abs(o) for _, o, _ in rows_c)))
-    rep.table("Offset by acceleration (1 ms delay)",
-              ["acceleration (rev/s²)", "expected at 0.1 s: a × 0.1 s × delay (°)", "offset at 0.1 s (°)",
-               "offset at speed (°)", "compensated, max over the run (°)"], table,
-              note="During the ramp the second drive is behind by the distance the first covered in the delay, "
-                   "which grows with the speed reached: at any moment of the ramp a steeper ramp gives a larger "
-                   "offset (Fig. 6.8b); at the common final speed all end at speed × delay.")
+    rep.table(
+        "Offset by acceleration (1 ms delay)",
+        [
+            "acceleration (rev/s²)",
+            "expected at 0.1 s: a × 0.1 s × delay (°)",
+            "offset at 0.1 s (°)",
+            "offset at speed (°)",
+            "compensated, max over the run (°)",
+        ],
+        table,
+        note="During the ramp the second drive is behind by the distance the first covered in the delay, "
+        "which grows with the speed reached: at any moment of the ramp a steeper ramp gives a larger "
+        "offset (Fig. 6.8b); at the common final speed all end at speed × delay.",
+    )
     fig, axes = rep.figure(1, 3, (15, 4.2))
     if fig is not None:
         for d in delays:

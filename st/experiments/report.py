@@ -1,11 +1,12 @@
 """What an experiment leaves behind: CSV files, PNG plots and a Markdown summary in one directory.
 
-    rep = Report("single-axis", out_dir, "Single axis (thesis 6.1)")
-    rep.table("Speed error", ["command", "error %"], rows, note="…")
-    rep.csv("speed.csv", ["t", "v"], samples)
-    fig, ax = rep.figure()            # a matplotlib figure, saved by rep.save_figure(fig, "speed.png")
-    rep.write()                       # summary.md: the tables, the notes, links to the files
+rep = Report("single-axis", out_dir, "Single axis (thesis 6.1)")
+rep.table("Speed error", ["command", "error %"], rows, note="…")
+rep.csv("speed.csv", ["t", "v"], samples)
+fig, ax = rep.figure()            # a matplotlib figure, saved by rep.save_figure(fig, "speed.png")
+rep.write()                       # summary.md: the tables, the notes, links to the files
 """
+
 from __future__ import annotations
 
 import csv
@@ -25,8 +26,7 @@ class Report:
         self.parts.append(markdown.strip() + "\n")
 
     def table(self, title: str, headers: list, rows: list, note: str = "") -> None:
-        lines = [f"### {title}", "", "| " + " | ".join(str(h) for h in headers) + " |",
-                 "|" + "---|" * len(headers)]
+        lines = [f"### {title}", "", "| " + " | ".join(str(h) for h in headers) + " |", "|" + "---|" * len(headers)]
         lines += ["| " + " | ".join(_fmt(v) for v in r) + " |" for r in rows]
         if note:
             lines += ["", note.strip()]
@@ -45,6 +45,7 @@ class Report:
     def figure(self, rows: int = 1, cols: int = 1, size=(9, 5)):
         try:
             import matplotlib
+
             matplotlib.use("Agg")
             import matplotlib.pyplot as plt
         except ImportError:
@@ -56,6 +57,7 @@ class Report:
         if fig is None:
             return None
         import matplotlib.pyplot as plt
+
         path = self.dir / filename
         fig.tight_layout()
         fig.savefig(path, dpi=110)

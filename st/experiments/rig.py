@@ -1,6 +1,7 @@
 """A PLC with its EtherCAT segment on virtual time, as the motion experiments use it: the thesis's
 programs from programs/thesis/, their axis file, and a segment configuration that an experiment
 may adjust (delays, compensation) before the segment is built."""
+
 from __future__ import annotations
 
 import tomllib

@@ -11,6 +11,7 @@ B. Rotate-and-stop cycles (Table 6.1, tests 1-9): each cycle moves N revolutions
 Virtual time, 1 ms task, the drive model's defaults (Table 5.1: MINAS A6, 23-bit encoder); no
 randomness, so every run gives the same numbers.
 """
+
 from __future__ import annotations
 
 import math
@@ -18,13 +19,21 @@ import math
 from .report import Report
 from .rig import Rig, load_segment_dict
 
-SPEEDS = (1.0, 10.0, 20.0, 30.0)                  # rev/s
-ACCEL = 10.0                                      # rev/s²
+SPEEDS = (1.0, 10.0, 20.0, 30.0)  # rev/s
+ACCEL = 10.0  # rev/s²
 THESIS_SPEED_ERROR = {1.0: 31.74, 10.0: 18.56, 20.0: 3.03, 30.0: 1.47}
 # Table 6.1: (test, rotations per cycle, cycles, calibration, thesis error in revolutions, in degrees)
-TESTS = [(1, 1, 4000, False, -0.1052, -37.8), (2, 10, 400, False, -0.009, -3.24), (3, 100, 40, False, 0.00024, 0.086),
-         (4, 1, 1000, False, -0.0231, 8.316), (5, 10, 1000, False, -0.0244, 8.78), (6, 100, 1000, False, -0.0313, 11.27),
-         (7, 1, 1000, True, -0.0022, 0.79), (8, 10, 1000, True, -0.0020, 0.72), (9, 100, 1000, True, 0.0039, 1.40)]
+TESTS = [
+    (1, 1, 4000, False, -0.1052, -37.8),
+    (2, 10, 400, False, -0.009, -3.24),
+    (3, 100, 40, False, 0.00024, 0.086),
+    (4, 1, 1000, False, -0.0231, 8.316),
+    (5, 10, 1000, False, -0.0244, 8.78),
+    (6, 100, 1000, False, -0.0313, 11.27),
+    (7, 1, 1000, True, -0.0022, 0.79),
+    (8, 10, 1000, True, -0.0020, 0.72),
+    (9, 100, 1000, True, 0.0039, 1.40),
+]
 
 
 def velocity_command(speed: float, hold_s: float, accel: float = ACCEL):
@@ -40,6 +49,7 @@ def velocity_command(speed: float, hold_s: float, accel: float = ACCEL):
 
     def sample():
         rows.append((rig.t - t0, ax.set_vel / 360.0, drive.velocity / cpr))
+
     rig["speed"], rig["accel"], rig["mode"] = speed, accel, 1
     ramp = speed / accel
     rig.scan(int(round((ramp + hold_s) * 1000)), each=sample)
@@ -62,6 +72,7 @@ def rotate_and_stop(rotations: float, cycles: int, compensate: bool, each_cycle=
         if n != last[0]:
             last[0] = n
             errors.append((n, rig["error_deg"]))
+
     move_s = 2 * math.sqrt(rotations / 500.0) if rotations <= 5.0 else rotations / 50.0 + 0.1
     rig.run_until(lambda: rig["finished"], cycles * (move_s + 0.05) + 2.0, each=watch)
     return errors
@@ -74,9 +85,11 @@ def _rotate_job(args):
 def _map(fn, jobs: list, parallel: bool) -> list:
     """Run independent simulations in one process per core (each is deterministic on its own)."""
     import os
+
     if not parallel or (os.cpu_count() or 1) < 2:
         return [fn(j) for j in jobs]
     import multiprocessing as mp
+
     # the longest first (rotations × cycles), so the two cores finish together
     order = sorted(range(len(jobs)), key=lambda i: -jobs[i][0] * jobs[i][1])
     with mp.get_context("fork").Pool(min(len(jobs), os.cpu_count() or 1)) as pool:
@@ -89,9 +102,11 @@ def _map(fn, jobs: list, parallel: bool) -> list:
 
 def run(out_dir, quick: bool = False, seed: int = 1) -> Report:
     rep = Report("single-axis", out_dir, "Single axis (thesis 6.1): velocity commands and rotate-and-stop cycles")
-    rep.text("One emulated CiA 402 drive (the MINAS A6 model of Table 5.1: 100 W, 0.32 N·m, 6000 rev/min, "
-             "23-bit encoder) on the `sim` EtherCAT backend with DC, driven by `programs/thesis/single_axis.st` "
-             "(MC_Power, MC_MoveVelocity, MC_MoveAbsolute) on a 1 ms task, on virtual time.")
+    rep.text(
+        "One emulated CiA 402 drive (the MINAS A6 model of Table 5.1: 100 W, 0.32 N·m, 6000 rev/min, "
+        "23-bit encoder) on the `sim` EtherCAT backend with DC, driven by `programs/thesis/single_axis.st` "
+        "(MC_Power, MC_MoveVelocity, MC_MoveAbsolute) on a 1 ms task, on virtual time."
+    )
     # ---------------------------------------------------------------- A. velocity commands
     hold = 0.5 if quick else 2.0
     results = []
@@ -101,13 +116,15 @@ def run(out_dir, quick: bool = False, seed: int = 1) -> Report:
         curves[v] = rows
         results.append((v, steady, tracking, THESIS_SPEED_ERROR[v]))
         rep.csv(f"speed_{int(v)}revs.csv", ["t_s", "set_rev_s", "measured_rev_s"], rows)
-    rep.table("A. Relative speed error per velocity command",
-              ["command (rev/s)", "constant-speed error (%)", "tracking error, whole command (%)", "thesis (%)"],
-              [(f"{v:g}", s, t, th) for v, s, t, th in results],
-              note=f"Acceleration {ACCEL:g} rev/s², then {hold:g} s at speed. Constant-speed error: the mean "
-                   "measured speed over the constant-speed phase (from 0.1 s after the ramp) against the "
-                   "command. Tracking error: the RMS difference between measured speed and the set profile "
-                   "over the whole command, relative to the command.")
+    rep.table(
+        "A. Relative speed error per velocity command",
+        ["command (rev/s)", "constant-speed error (%)", "tracking error, whole command (%)", "thesis (%)"],
+        [(f"{v:g}", s, t, th) for v, s, t, th in results],
+        note=f"Acceleration {ACCEL:g} rev/s², then {hold:g} s at speed. Constant-speed error: the mean "
+        "measured speed over the constant-speed phase (from 0.1 s after the ramp) against the "
+        "command. Tracking error: the RMS difference between measured speed and the set profile "
+        "over the whole command, relative to the command.",
+    )
     fig, axes = rep.figure(2, 2, (10, 6))
     if fig is not None:
         for a, v in zip(axes.flat, SPEEDS):
@@ -140,20 +157,45 @@ def run(out_dir, quick: bool = False, seed: int = 1) -> Report:
         errs = series[test]
         final = errs[-1][1] if errs else float("nan")
         rep.csv(f"table6_1_test{test}.csv", ["cycle", "error_deg"], errs)
-        table.append((test, f"{rot} rotation{'s' if rot > 1 else ''} and 1 stop", n, n * rot,
-                      "PI" if comp else "none", final / 360.0, final, th_rev, th_deg))
-    rep.table("B. Accumulated position error over rotate-and-stop cycles (Table 6.1)",
-              ["test", "behaviour", "cycles", "total rotations", "calibration", "error (rev)", "error (°)",
-               "thesis (rev)", "thesis (°)"], table,
-              note=("Quick run: the cycle counts are divided by 200 (at least 4). " if quick else "") +
-                   "Each move: 50 rev/s, 500 rev/s². The next target is the actual position at Done plus N "
-                   "revolutions (plus the PI correction in tests 7-9: kp 0.6, ki 0.2 on the error actual − "
-                   "ideal).")
+        table.append(
+            (
+                test,
+                f"{rot} rotation{'s' if rot > 1 else ''} and 1 stop",
+                n,
+                n * rot,
+                "PI" if comp else "none",
+                final / 360.0,
+                final,
+                th_rev,
+                th_deg,
+            )
+        )
+    rep.table(
+        "B. Accumulated position error over rotate-and-stop cycles (Table 6.1)",
+        [
+            "test",
+            "behaviour",
+            "cycles",
+            "total rotations",
+            "calibration",
+            "error (rev)",
+            "error (°)",
+            "thesis (rev)",
+            "thesis (°)",
+        ],
+        table,
+        note=("Quick run: the cycle counts are divided by 200 (at least 4). " if quick else "")
+        + "Each move: 50 rev/s, 500 rev/s². The next target is the actual position at Done plus N "
+        "revolutions (plus the PI correction in tests 7-9: kp 0.6, ki 0.2 on the error actual − "
+        "ideal).",
+    )
     fig, axes = rep.figure(1, 3, (14, 4))
     if fig is not None:
-        for a, tests, title in ((axes[0][0], (1, 2, 3), "same rotations (tests 1-3)"),
-                                (axes[0][1], (4, 5, 6), "same cycles, no calibration (4-6)"),
-                                (axes[0][2], (7, 8, 9), "same cycles, PI calibration (7-9)")):
+        for a, tests, title in (
+            (axes[0][0], (1, 2, 3), "same rotations (tests 1-3)"),
+            (axes[0][1], (4, 5, 6), "same cycles, no calibration (4-6)"),
+            (axes[0][2], (7, 8, 9), "same cycles, PI calibration (7-9)"),
+        ):
             for test in tests:
                 errs = series[test]
                 a.plot([c for c, _ in errs], [e for _, e in errs], label=f"test {test}")

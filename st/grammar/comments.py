@@ -5,6 +5,7 @@ OpenPLC's ``(*DBG:...*)`` lines can be megabytes long. This pass blanks every
 comment and pragma with spaces (keeping newlines), so line and column numbers
 of everything that remains are unchanged, and records the pragmas it removed.
 """
+
 from __future__ import annotations
 
 import re
@@ -95,8 +96,11 @@ def strip_comments(text: str) -> tuple[str, list[Pragma], list[CommentError]]:
                     depth -= 1
                     i = c + 2
             if depth:
-                errors.append(CommentError(start, "unterminated comment '(*' (comments nest: every '(*' "
-                                                  "inside it needs its own '*)')"))
+                errors.append(
+                    CommentError(
+                        start, "unterminated comment '(*' (comments nest: every '(*' inside it needs its own '*)')"
+                    )
+                )
                 end = n
             else:
                 end = i

@@ -5,6 +5,7 @@ Transformer running inside the parser (no intermediate tree). Syntax errors
 become `Diagnostic`s with a location and, for the usual slips, a hint; a
 missing ';' is repaired so that the rest of the file is still checked.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -23,17 +24,26 @@ from .comments import strip_comments
 GRAMMAR_PATH = Path(__file__).with_name("st.lark")
 
 _PRETTY = {
-    "IDENT": "an identifier", "INTEGER": "an integer", "REAL_LIT": "a real number",
-    "STRING_LIT": "a string", "WSTRING_LIT": "a wide string", "TIME_LIT": "a time literal",
-    "DIRECT_VAR": "a located address", "TYPED_PREFIX": "a typed literal", "VAR_KIND": "VAR",
-    "BASED_INT": "an integer", "$END": "end of file", "STRING_KW": "STRING",
+    "IDENT": "an identifier",
+    "INTEGER": "an integer",
+    "REAL_LIT": "a real number",
+    "STRING_LIT": "a string",
+    "WSTRING_LIT": "a wide string",
+    "TIME_LIT": "a time literal",
+    "DIRECT_VAR": "a located address",
+    "TYPED_PREFIX": "a typed literal",
+    "VAR_KIND": "VAR",
+    "BASED_INT": "an integer",
+    "$END": "end of file",
+    "STRING_KW": "STRING",
 }
 _EXPR_START = {"IDENT", "INTEGER", "REAL_LIT", "LPAR", "MINUS", "NOT", "TRUE", "FALSE", "STRING_LIT"}
 
 
 def _cache_dir() -> Path:
     base = os.environ.get("ST_CACHE_DIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "st")
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "st"
+    )
     try:
         Path(base).mkdir(parents=True, exist_ok=True)
         return Path(base)
@@ -47,8 +57,15 @@ class StParser:
         digest = hashlib.sha256(text.encode()).hexdigest()[:16]
         cache = _cache_dir() / f"grammar-{digest}.lark.pickle"
         self.callbacks = callbacks
-        self.lark = Lark(text, parser="lalr", lexer="contextual", start="start",
-                         transformer=callbacks, cache=str(cache), maybe_placeholders=False)
+        self.lark = Lark(
+            text,
+            parser="lalr",
+            lexer="contextual",
+            start="start",
+            transformer=callbacks,
+            cache=str(cache),
+            maybe_placeholders=False,
+        )
         self._pretty = {}
         for t in self.lark.terminals:
             if t.name in _PRETTY:
@@ -62,9 +79,23 @@ class StParser:
     def _expected(self, names) -> str:
         names = sorted(set(names))
         if _EXPR_START <= set(names):
-            names = [n for n in names if n not in _EXPR_START and n not in (
-                "BASED_INT", "WSTRING_LIT", "TIME_LIT", "DATE_LIT", "TOD_LIT", "DT_LIT", "TYPED_PREFIX",
-                "DIRECT_VAR", "PLUS")] + ["EXPR"]
+            names = [
+                n
+                for n in names
+                if n not in _EXPR_START
+                and n
+                not in (
+                    "BASED_INT",
+                    "WSTRING_LIT",
+                    "TIME_LIT",
+                    "DATE_LIT",
+                    "TOD_LIT",
+                    "DT_LIT",
+                    "TYPED_PREFIX",
+                    "DIRECT_VAR",
+                    "PLUS",
+                )
+            ] + ["EXPR"]
         shown = []
         for n in names:
             if n == "EXPR":
@@ -103,18 +134,18 @@ class StParser:
         """Would inserting ';' before this token let the parse go on?"""
         if ip is None or tok.type == "$END":
             return False
-        errors = getattr(self.callbacks, "errors", None)     # the builder's, if it keeps any
+        errors = getattr(self.callbacks, "errors", None)  # the builder's, if it keeps any
         mark = len(errors) if isinstance(errors, list) else None
         try:
             trial = ip.copy()
             trial.feed_token(Token("SEMICOLON", ";"))
             trial.feed_token(tok)
             return True
-        except (UnexpectedInput, RecursionError):   # RecursionError: copying a very deep partial tree
+        except (UnexpectedInput, RecursionError):  # RecursionError: copying a very deep partial tree
             return False
         finally:
             if mark is not None:
-                del errors[mark:]                      # what the trial reduced is not the program
+                del errors[mark:]  # what the trial reduced is not the program
 
     # ------------------------------------------------------------------ parse
     def parse(self, src: SourceFile):
@@ -127,13 +158,22 @@ class StParser:
         for p in pragmas:
             if p.text not in seen_pragmas:
                 seen_pragmas.add(p.text)
-                diags.append(Diagnostic("W001", Severity.WARNING, src.span_at(p.offset),
-                                        f"pragma {p.text[:60]!r} is ignored", data=(("pragma", p.name),)))
+                diags.append(
+                    Diagnostic(
+                        "W001",
+                        Severity.WARNING,
+                        src.span_at(p.offset),
+                        f"pragma {p.text[:60]!r} is ignored",
+                        data=(("pragma", p.name),),
+                    )
+                )
+
         def on_error(e: UnexpectedInput) -> bool:
             if isinstance(e, UnexpectedCharacters):
                 ch = text[e.pos_in_stream] if e.pos_in_stream < len(text) else "?"
-                diags.append(Diagnostic("E001", Severity.ERROR, Span(src.path, e.line, e.column),
-                                        f"unexpected character {ch!r}"))
+                diags.append(
+                    Diagnostic("E001", Severity.ERROR, Span(src.path, e.line, e.column), f"unexpected character {ch!r}")
+                )
                 return False
             if isinstance(e, UnexpectedToken):
                 tok = e.token
@@ -153,14 +193,28 @@ class StParser:
                     if line < tok.line:
                         hint = f"a ';' is missing at the end of line {line}"
                 else:
-                    span = Span(src.path, tok.line, tok.column, getattr(tok, "end_line", 0) or 0,
-                                getattr(tok, "end_column", 0) or 0)
+                    span = Span(
+                        src.path,
+                        tok.line,
+                        tok.column,
+                        getattr(tok, "end_line", 0) or 0,
+                        getattr(tok, "end_column", 0) or 0,
+                    )
                 msg = f"syntax error: unexpected {self._describe(tok)}; expected {self._expected(expected)}"
                 diags.append(Diagnostic("E001", Severity.ERROR, span, msg, hint))
                 # repair a missing ';' and go on, so that later errors are reported too
                 if fixes and len(diags) < 50:
-                    ip.feed_token(Token("SEMICOLON", ";", start_pos=tok.start_pos, line=tok.line,
-                                        column=tok.column, end_line=tok.line, end_column=tok.column))
+                    ip.feed_token(
+                        Token(
+                            "SEMICOLON",
+                            ";",
+                            start_pos=tok.start_pos,
+                            line=tok.line,
+                            column=tok.column,
+                            end_line=tok.line,
+                            end_column=tok.column,
+                        )
+                    )
                     ip.feed_token(tok)
                     return True
                 return False
@@ -170,8 +224,14 @@ class StParser:
             result = self.lark.parse(text, on_error=on_error)
         except UnexpectedEOF as e:
             if not any(d.code == "E001" for d in diags):
-                diags.append(Diagnostic("E001", Severity.ERROR, Span(src.path, src.text.count("\n") + 1, 1),
-                                        f"syntax error: unexpected end of file; expected {self._expected(e.expected)}"))
+                diags.append(
+                    Diagnostic(
+                        "E001",
+                        Severity.ERROR,
+                        Span(src.path, src.text.count("\n") + 1, 1),
+                        f"syntax error: unexpected end of file; expected {self._expected(e.expected)}",
+                    )
+                )
             return None, diags
         except UnexpectedInput:
             if not any(d.code == "E001" for d in diags):  # pragma: no cover - defensive
@@ -180,8 +240,9 @@ class StParser:
         except VisitError as e:  # an exception inside a builder callback
             orig = e.orig_exc
             span = getattr(orig, "span", None) or Span(src.path, 1, 1)
-            diags.append(Diagnostic(getattr(orig, "code", "E003"), Severity.ERROR, span,
-                                    getattr(orig, "message", str(orig))))
+            diags.append(
+                Diagnostic(getattr(orig, "code", "E003"), Severity.ERROR, span, getattr(orig, "message", str(orig)))
+            )
             return None, diags
         if any(d.is_error for d in diags):
             return result, diags

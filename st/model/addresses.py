@@ -4,6 +4,7 @@ layout, one table per area (I, Q, M) and size with TABLE_LEN entries (8 × TABLE
 The checker and the runtime both ask `parse_address`, so `st check` refuses exactly the
 addresses `st run` could not bind.
 """
+
 from __future__ import annotations
 
 import re
@@ -14,7 +15,7 @@ _ADDR = re.compile(r"%([IQM])([XBWDL]?)([0-9]+)(?:\.([0-9]+))?$", re.I)
 
 
 class AddressError(KeyError):
-    def __str__(self) -> str:           # KeyError would quote the message
+    def __str__(self) -> str:  # KeyError would quote the message
         return str(self.args[0]) if self.args else ""
 
 

@@ -7,6 +7,7 @@ Python (marshalled code is version-specific) is refused with FormatError, never 
 The serialiser also refuses any object of st outside this package, st.source and
 st.diagnostics: a compiled program loads without importing the compiler.
 """
+
 from __future__ import annotations
 
 import copyreg
@@ -45,15 +46,15 @@ class FormatError(ValueError):
 class CompiledProgram:
     """Everything the runtime needs: code objects and the checked model."""
 
-    modules: list[tuple[str, types.CodeType]]           # [(filename, code object)]
+    modules: list[tuple[str, types.CodeType]]  # [(filename, code object)]
     project: Project
     diagnostics: list[Diagnostic]
-    sources: dict[str, SourceFile]                      # path → SourceFile (for rendering diagnostics)
+    sources: dict[str, SourceFile]  # path → SourceFile (for rendering diagnostics)
     helpers: dict[str, Any] = field(default_factory=dict)
-    python_source: dict[str, str] = field(default_factory=dict)     # path → Python text (emit python)
+    python_source: dict[str, str] = field(default_factory=dict)  # path → Python text (emit python)
     from_cache: bool = False
     coverage_points: list[tuple[Any, ...]] = field(default_factory=list)  # [(file, line, kind, label, target)]
-    coverage_hits: bytearray | None = None            # one byte per point, shared by every PLC of this build
+    coverage_hits: bytearray | None = None  # one byte per point, shared by every PLC of this build
     test_modules: list[tuple[str, types.CodeType]] = field(default_factory=list)  # `_test_<n>` functions (TESTs)
 
     def to_bytes(self, substitute: Substitute | None = None) -> bytes:
@@ -72,13 +73,14 @@ class CompiledProgram:
         return buf.getvalue()
 
     @classmethod
-    def from_bytes(cls, data: bytes, *, sources: dict[str, SourceFile] | None = None,
-                   helpers: dict[str, Any] | None = None) -> CompiledProgram:
+    def from_bytes(
+        cls, data: bytes, *, sources: dict[str, SourceFile] | None = None, helpers: dict[str, Any] | None = None
+    ) -> CompiledProgram:
         """A program from `to_bytes()` output, with the caller's sources and helpers."""
         if not data.startswith(_HEADER):
             raise FormatError(_why_refused(data))
         try:
-            d = pickle.loads(memoryview(data)[len(_HEADER):])
+            d = pickle.loads(memoryview(data)[len(_HEADER) :])
             modules = [(p, marshal.loads(c)) for p, c in d["modules"]]
             test_modules = [(p, marshal.loads(c)) for p, c in d["test_modules"]]
             project, diagnostics, python = d["project"], d["diagnostics"], d["python"]
@@ -86,14 +88,15 @@ class CompiledProgram:
             raise FormatError(f"damaged compiled program: {type(exc).__name__}: {exc}") from None
         if not isinstance(project, Project) or not all(isinstance(x, Diagnostic) for x in diagnostics):
             raise FormatError("damaged compiled program: unexpected contents")
-        return cls(modules, project, diagnostics, dict(sources or {}), dict(helpers or {}), python,
-                   test_modules=test_modules)
+        return cls(
+            modules, project, diagnostics, dict(sources or {}), dict(helpers or {}), python, test_modules=test_modules
+        )
 
 
 def _why_refused(data: bytes) -> str:
     if not data.startswith(_MAGIC):
         return "not a compiled st program"
-    version = int.from_bytes(data[len(_MAGIC):len(_MAGIC) + 2], "big")
+    version = int.from_bytes(data[len(_MAGIC) : len(_MAGIC) + 2], "big")
     if version != FORMAT:
         return f"compiled program format {version}, this st reads format {FORMAT}"
     return "compiled by another Python version"

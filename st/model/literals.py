@@ -3,6 +3,7 @@
 TIME/LTIME: a duration in ns.  DATE/DT: ns since 1970-01-01 (UTC, no zone).
 TOD: ns since midnight.  These are also the runtime representations.
 """
+
 from __future__ import annotations
 
 import re
@@ -25,7 +26,7 @@ class LiteralError(ValueError):
     pass
 
 
-MAX_INT_DIGITS = 128     # far beyond ULINT (20 decimal digits); longer is a slip, not a number
+MAX_INT_DIGITS = 128  # far beyond ULINT (20 decimal digits); longer is a slip, not a number
 
 
 def parse_int(text: str) -> int:
@@ -141,7 +142,7 @@ def parse_string(text: str, wide: bool) -> str:
             out.append(_ESC[e.upper()])
             i += 2
             continue
-        h = body[i + 1:i + 1 + hexlen]
+        h = body[i + 1 : i + 1 + hexlen]
         if len(h) == hexlen and all(ch in "0123456789abcdefABCDEF" for ch in h):
             out.append(chr(int(h, 16)))
             i += 1 + hexlen

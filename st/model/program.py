@@ -3,6 +3,7 @@
 Fields marked "syntax" hold the compiler's AST while it compiles; in the compiled artefact
 (st.compiler.artefact) they hold the AST-free values of st.model.summaries, or None.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -15,9 +16,9 @@ from .types import EnumType, POUType, Type, VarSym
 @dataclass(eq=False)
 class TaskModel:
     name: str
-    interval: int = 0           # ns; 0 for an event task
+    interval: int = 0  # ns; 0 for an event task
     priority: int = 0
-    single: str = ""            # the name of the BOOL global that triggers an event task
+    single: str = ""  # the name of the BOOL global that triggers an event task
     span: Any = None
 
 
@@ -25,7 +26,7 @@ class TaskModel:
 class InstanceModel:
     name: str
     type: POUType
-    task: str                   # task name ("" = runs every base tick)
+    task: str  # task name ("" = runs every base tick)
     resource: str = ""
     # connections [(param, syntax: Expr (None in the artefact), is_output)]
     args: list[tuple[str, Any, bool]] = field(default_factory=list)
@@ -39,7 +40,7 @@ class ConfigModel:
     instances: list[InstanceModel] = field(default_factory=list)
     # [(path, location, syntax: init (artefact: InitialValue | None), syntax: declared type (None), span)]
     var_config: list[tuple[list[str], str, Any, Any, Span]] = field(default_factory=list)
-    implicit: bool = False      # made up for a file with only a PROGRAM
+    implicit: bool = False  # made up for a file with only a PROGRAM
 
 
 @dataclass(eq=False)
@@ -47,16 +48,16 @@ class StepModel:
     name: str
     index: int
     initial: bool
-    actions: list[tuple[str, str, Any]]    # [(action name, qualifier, syntax: time Expr | None)]
+    actions: list[tuple[str, str, Any]]  # [(action name, qualifier, syntax: time Expr | None)]
     span: Any = None
 
 
 @dataclass(eq=False)
 class TransitionModel:
     index: int
-    sources: list[int]          # step indices
+    sources: list[int]  # step indices
     targets: list[int]
-    cond: Any                   # syntax: Expr (BOOL) | None
+    cond: Any  # syntax: Expr (BOOL) | None
     priority: int = 0
     span: Any = None
 
@@ -65,24 +66,24 @@ class TransitionModel:
 class SfcModel:
     steps: list[StepModel]
     transitions: list[TransitionModel]
-    actions: list[str]          # action names in use (lower)
+    actions: list[str]  # action names in use (lower)
     action_index: dict[str, int]  # lower name → index
 
 
 @dataclass(eq=False)
 class Project:
-    types: dict[str, Type] = field(default_factory=dict)            # lower name → Type
-    pous: dict[str, POUType] = field(default_factory=dict)          # lower name → POUType
-    globals: dict[str, VarSym] = field(default_factory=dict)        # unique key → VarSym
-    global_names: dict[str, list[VarSym]] = field(default_factory=dict)   # lower name → [VarSym]
+    types: dict[str, Type] = field(default_factory=dict)  # lower name → Type
+    pous: dict[str, POUType] = field(default_factory=dict)  # lower name → POUType
+    globals: dict[str, VarSym] = field(default_factory=dict)  # unique key → VarSym
+    global_names: dict[str, list[VarSym]] = field(default_factory=dict)  # lower name → [VarSym]
     configs: list[ConfigModel] = field(default_factory=list)
     enum_members: dict[str, list[tuple[EnumType, str, int]]] = field(default_factory=dict)  # lower member → …
-    direct_vars: dict[str, tuple[str, Type]] = field(default_factory=dict)    # "%QX0.0" → (pyname, Type)
-    sfc: dict[str, SfcModel] = field(default_factory=dict)          # pou lower → SfcModel
-    test_blocks: list[Any] = field(default_factory=list)    # syntax: ast.TestBlock as parsed ([] in the artefact)
-    tests: list[TestModel] = field(default_factory=list)            # checked
-    test_asserts: list[AssertInfo] = field(default_factory=list)    # index = id in generated code
-    libraries: list[Any] = field(default_factory=list)      # compiler: Library; artefact: LibraryInfo
+    direct_vars: dict[str, tuple[str, Type]] = field(default_factory=dict)  # "%QX0.0" → (pyname, Type)
+    sfc: dict[str, SfcModel] = field(default_factory=dict)  # pou lower → SfcModel
+    test_blocks: list[Any] = field(default_factory=list)  # syntax: ast.TestBlock as parsed ([] in the artefact)
+    tests: list[TestModel] = field(default_factory=list)  # checked
+    test_asserts: list[AssertInfo] = field(default_factory=list)  # index = id in generated code
+    libraries: list[Any] = field(default_factory=list)  # compiler: Library; artefact: LibraryInfo
 
     def user_pous(self) -> list[POUType]:
         return [p for p in self.pous.values() if not p.library]
@@ -95,8 +96,8 @@ class TestModel:
     name: str
     span: Span
     pyname: str
-    pou: Any = None             # the pseudo-POU holding SETUP + TEST variables (None in the artefact)
-    setup: list[Any] = field(default_factory=list)      # syntax: statements ([] in the artefact)
+    pou: Any = None  # the pseudo-POU holding SETUP + TEST variables (None in the artefact)
+    setup: list[Any] = field(default_factory=list)  # syntax: statements ([] in the artefact)
     body: list[Any] = field(default_factory=list)
     teardown: list[Any] = field(default_factory=list)
 
@@ -105,8 +106,8 @@ class TestModel:
 class AssertInfo:
     """What a failure report of one test statement needs: its kind, place, source text and types."""
 
-    kind: str                   # ASSERT_EQ, ADVANCE_TIME, MOCK_VERIFY_CALLED, ...
+    kind: str  # ASSERT_EQ, ADVANCE_TIME, MOCK_VERIFY_CALLED, ...
     span: Span
-    text: str = ""              # the statement's source text, filled by the driver
+    text: str = ""  # the statement's source text, filled by the driver
     types: list[Type] = field(default_factory=list)
     index: int = -1

@@ -4,6 +4,7 @@ The checker fills the model with its AST (a POU's declaration, initial-value exp
 ACTION's body); code generation needs them, the compiled artefact does not. The artefact holds
 these small values in their place, so it carries no AST node and loads without the compiler.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -6,6 +6,7 @@ TIME/DATE/TOD/DT (and L-variants) → int nanoseconds; STRING/WSTRING/CHAR → s
 enums → int; arrays → list (multi-dimensional: flat, row-major); structs and
 FB/program instances → instances of generated slotted classes.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -73,7 +74,7 @@ class ElemType(Type):
     lo: Any = None
     hi: Any = None
     default: Any = 0
-    long: bool = False      # LTIME, LDATE, ... (64-bit variants)
+    long: bool = False  # LTIME, LDATE, ... (64-bit variants)
 
     def __repr__(self) -> str:
         return self.name
@@ -106,8 +107,12 @@ def _bit(name: str, bits: int) -> ElemType:
 
 BOOL = ElemType("BOOL", "bool", 1, False, 0, 1, False)
 SINT, INT, DINT, LINT = _int("SINT", 8, True), _int("INT", 16, True), _int("DINT", 32, True), _int("LINT", 64, True)
-USINT, UINT, UDINT, ULINT = (_int("USINT", 8, False), _int("UINT", 16, False), _int("UDINT", 32, False),
-                             _int("ULINT", 64, False))
+USINT, UINT, UDINT, ULINT = (
+    _int("USINT", 8, False),
+    _int("UINT", 16, False),
+    _int("UDINT", 32, False),
+    _int("ULINT", 64, False),
+)
 BYTE, WORD, DWORD, LWORD = _bit("BYTE", 8), _bit("WORD", 16), _bit("DWORD", 32), _bit("LWORD", 64)
 REAL = ElemType("REAL", "real", 32, True, -3.4028234663852886e38, 3.4028234663852886e38, 0.0)
 LREAL = ElemType("LREAL", "real", 64, True, -1.7976931348623157e308, 1.7976931348623157e308, 0.0)
@@ -141,13 +146,37 @@ STRING = StringType(80, False)
 WSTRING = StringType(80, True)
 
 ELEMENTARY: dict[str, Type] = {
-    "BOOL": BOOL, "SINT": SINT, "INT": INT, "DINT": DINT, "LINT": LINT,
-    "USINT": USINT, "UINT": UINT, "UDINT": UDINT, "ULINT": ULINT,
-    "BYTE": BYTE, "WORD": WORD, "DWORD": DWORD, "LWORD": LWORD,
-    "REAL": REAL, "LREAL": LREAL, "TIME": TIME, "LTIME": LTIME,
-    "DATE": DATE, "LDATE": LDATE, "TIME_OF_DAY": TOD, "TOD": TOD, "LTIME_OF_DAY": LTOD, "LTOD": LTOD,
-    "DATE_AND_TIME": DT, "DT": DT, "LDATE_AND_TIME": LDT, "LDT": LDT,
-    "STRING": STRING, "WSTRING": WSTRING, "CHAR": CHAR, "WCHAR": WCHAR,
+    "BOOL": BOOL,
+    "SINT": SINT,
+    "INT": INT,
+    "DINT": DINT,
+    "LINT": LINT,
+    "USINT": USINT,
+    "UINT": UINT,
+    "UDINT": UDINT,
+    "ULINT": ULINT,
+    "BYTE": BYTE,
+    "WORD": WORD,
+    "DWORD": DWORD,
+    "LWORD": LWORD,
+    "REAL": REAL,
+    "LREAL": LREAL,
+    "TIME": TIME,
+    "LTIME": LTIME,
+    "DATE": DATE,
+    "LDATE": LDATE,
+    "TIME_OF_DAY": TOD,
+    "TOD": TOD,
+    "LTIME_OF_DAY": LTOD,
+    "LTOD": LTOD,
+    "DATE_AND_TIME": DT,
+    "DT": DT,
+    "LDATE_AND_TIME": LDT,
+    "LDT": LDT,
+    "STRING": STRING,
+    "WSTRING": WSTRING,
+    "CHAR": CHAR,
+    "WCHAR": WCHAR,
 }
 
 
@@ -165,8 +194,8 @@ LIT_REAL = LiteralType("real literal", "lit_real")
 
 @dataclass(eq=False)
 class ArrayType(Type):
-    dims: list[tuple[int, int]] = field(default_factory=list)   # [(lo, hi)]; hi < lo: ARRAY[*]
-    element: Type = None    # type: ignore[assignment]  # always given
+    dims: list[tuple[int, int]] = field(default_factory=list)  # [(lo, hi)]; hi < lo: ARRAY[*]
+    element: Type = None  # type: ignore[assignment]  # always given
     kind: str = "array"
 
     @property
@@ -185,7 +214,7 @@ class ArrayType(Type):
 class Member:
     name: str
     type: Type
-    init: Any = None        # syntax: the initializer (compiler: AST; artefact: InitialValue | None)
+    init: Any = None  # syntax: the initializer (compiler: AST; artefact: InitialValue | None)
     span: Any = None
     pyname: str = ""
 
@@ -193,7 +222,7 @@ class Member:
 @dataclass(eq=False)
 class StructType(Type):
     name: str
-    members: dict[str, Member] = field(default_factory=dict)   # lower name → Member
+    members: dict[str, Member] = field(default_factory=dict)  # lower name → Member
     kind: str = "struct"
     pyname: str = ""
     resolved: bool = False
@@ -202,7 +231,7 @@ class StructType(Type):
 @dataclass(eq=False)
 class EnumType(Type):
     name: str
-    members: dict[str, tuple[str, int]] = field(default_factory=dict)   # lower name → (name, value)
+    members: dict[str, tuple[str, int]] = field(default_factory=dict)  # lower name → (name, value)
     base: ElemType = INT
     default_value: int = 0
     kind: str = "enum"
@@ -212,7 +241,7 @@ class EnumType(Type):
 @dataclass(eq=False)
 class SubrangeType(Type):
     name: str = "?"
-    base: ElemType = None   # type: ignore[assignment]  # always given
+    base: ElemType = None  # type: ignore[assignment]  # always given
     lo: int = 0
     hi: int = 0
 
@@ -231,7 +260,7 @@ class SubrangeType(Type):
 
 @dataclass(eq=False)
 class RefType(Type):
-    target: Type = None     # type: ignore[assignment]  # always given
+    target: Type = None  # type: ignore[assignment]  # always given
     ref_kind: str = "REF_TO"
     kind: str = "ref"
 
@@ -251,56 +280,61 @@ class AliasType(Type):
     """A named alias whose only difference from its target is a default value."""
 
     name: str = "?"
-    target: Type = None     # type: ignore[assignment]  # always given
-    init: Any = None        # syntax: the default value (compiler: AST; artefact: InitialValue | None)
+    target: Type = None  # type: ignore[assignment]  # always given
+    init: Any = None  # syntax: the default value (compiler: AST; artefact: InitialValue | None)
 
 
 @dataclass(eq=False)
 class VarSym:
     name: str
     type: Type
-    section: str            # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL
+    section: str  # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL
     span: Any = None
-    init: Any = None        # syntax: the initial value (compiler: AST; artefact: InitialValue | None)
+    init: Any = None  # syntax: the initial value (compiler: AST; artefact: InitialValue | None)
     location: str = ""
     constant: bool = False
     retain: bool = False
     persistent: bool = False
     edge: str = ""
     pyname: str = ""
-    owner: Any = None       # the POUType or None for globals
+    owner: Any = None  # the POUType or None for globals
     used: bool = False
     written: bool = False
     address_taken: bool = False
     const_value: Any = None
     is_global: bool = False
     global_ref: Any = None  # VAR_EXTERNAL → the VAR_GLOBAL symbol
-    access: str = ""        # PUBLIC, PRIVATE, PROTECTED or INTERNAL from `VAR PRIVATE`; "" = unrestricted
+    access: str = ""  # PUBLIC, PRIVATE, PROTECTED or INTERNAL from `VAR PRIVATE`; "" = unrestricted
 
 
 @dataclass(eq=False)
 class POUType(Type):
     name: str = "?"
-    pou_kind: str = "FUNCTION_BLOCK"   # FUNCTION, FUNCTION_BLOCK, PROGRAM (TEST: a unit test's variables)
-    decl: Any = None        # syntax: ast.POU / ast.Method (artefact: PouInfo); None for native
-    vars: dict[str, VarSym] = field(default_factory=dict)      # lower → VarSym, declaration order
+    pou_kind: str = "FUNCTION_BLOCK"  # FUNCTION, FUNCTION_BLOCK, PROGRAM (TEST: a unit test's variables)
+    decl: Any = None  # syntax: ast.POU / ast.Method (artefact: PouInfo); None for native
+    vars: dict[str, VarSym] = field(default_factory=dict)  # lower → VarSym, declaration order
     return_type: Type | None = None
     pyname: str = ""
-    library: str = ""       # "" for user code, else the library name
-    native: Any = None      # a native implementation (Python) for library POUs
-    actions: dict[str, Any] = field(default_factory=dict)   # lower → syntax: ast.ActionDecl (artefact: PouInfo)
+    library: str = ""  # "" for user code, else the library name
+    native: Any = None  # a native implementation (Python) for library POUs
+    actions: dict[str, Any] = field(default_factory=dict)  # lower → syntax: ast.ActionDecl (artefact: PouInfo)
     resolved: bool = False
-    methods: dict[str, POUType] = field(default_factory=dict)   # lower → POUType (pou_kind FUNCTION, owner_fb set)
-    owner_fb: Any = None    # a METHOD: the function block it belongs to
-    base: Any = None        # FUNCTION_BLOCK … EXTENDS base
-    interfaces: list[POUType] = field(default_factory=list)   # INTERFACEs implemented (FB) or extended (INTERFACE)
-    properties: dict[str, PropSym] = field(default_factory=dict)   # lower → PropSym
-    modifiers: tuple[str, ...] = ()   # ABSTRACT, FINAL, OVERRIDE, PUBLIC, …
+    methods: dict[str, POUType] = field(default_factory=dict)  # lower → POUType (pou_kind FUNCTION, owner_fb set)
+    owner_fb: Any = None  # a METHOD: the function block it belongs to
+    base: Any = None  # FUNCTION_BLOCK … EXTENDS base
+    interfaces: list[POUType] = field(default_factory=list)  # INTERFACEs implemented (FB) or extended (INTERFACE)
+    properties: dict[str, PropSym] = field(default_factory=dict)  # lower → PropSym
+    modifiers: tuple[str, ...] = ()  # ABSTRACT, FINAL, OVERRIDE, PUBLIC, …
 
     @property
     def kind(self) -> str:  # type: ignore[override]
-        return {"FUNCTION": "function", "FUNCTION_BLOCK": "fb", "PROGRAM": "fb", "TEST": "test",
-                "INTERFACE": "interface"}[self.pou_kind]
+        return {
+            "FUNCTION": "function",
+            "FUNCTION_BLOCK": "fb",
+            "PROGRAM": "fb",
+            "TEST": "test",
+            "INTERFACE": "interface",
+        }[self.pou_kind]
 
     def inputs(self) -> list[VarSym]:
         return [v for v in self.vars.values() if v.section == "VAR_INPUT"]
@@ -318,13 +352,14 @@ class POUType(Type):
 @dataclass(eq=False)
 class PropSym:
     """A PROPERTY of a function block or interface: its type and accessor methods (None if absent)."""
+
     name: str
     type: Type
-    get: Any = None         # POUType (FUNCTION returning `type`), pyname _pg_<name>
-    set: Any = None         # POUType with one VAR_INPUT named like the property, pyname _ps_<name>
+    get: Any = None  # POUType (FUNCTION returning `type`), pyname _pg_<name>
+    set: Any = None  # POUType with one VAR_INPUT named like the property, pyname _ps_<name>
     owner: Any = None
     span: Any = None
-    bare: bool = False      # an interface prototype without accessors: GET, SET or both satisfy it
+    bare: bool = False  # an interface prototype without accessors: GET, SET or both satisfy it
 
 
 def is_conformant(t: Type | None) -> bool:
@@ -411,11 +446,16 @@ _WIDEN: dict[str, set[str]] = {
     "WORD": {"DWORD", "LWORD"},
     "DWORD": {"LWORD"},
     "LWORD": set(),
-    "TIME": {"LTIME"}, "LTIME": set(),
-    "DATE": {"LDATE"}, "LDATE": set(),
-    "TIME_OF_DAY": {"LTIME_OF_DAY"}, "LTIME_OF_DAY": set(),
-    "DATE_AND_TIME": {"LDATE_AND_TIME"}, "LDATE_AND_TIME": set(),
-    "CHAR": {"STRING"}, "WCHAR": {"WSTRING"},
+    "TIME": {"LTIME"},
+    "LTIME": set(),
+    "DATE": {"LDATE"},
+    "LDATE": set(),
+    "TIME_OF_DAY": {"LTIME_OF_DAY"},
+    "LTIME_OF_DAY": set(),
+    "DATE_AND_TIME": {"LDATE_AND_TIME"},
+    "LDATE_AND_TIME": set(),
+    "CHAR": {"STRING"},
+    "WCHAR": {"WSTRING"},
 }
 
 

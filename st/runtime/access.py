@@ -5,6 +5,7 @@ process-image cell in step (or the next latch would undo it). A %address reads o
 image itself, typed by the variable bound there. A forced variable holds its value whenever a
 job starts and ends; forces are asked for by path and applied again after a reload.
 """
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
@@ -35,7 +36,7 @@ def set_(plc: PLC, path: str, value: Any) -> None:
     v = from_python(value, t, path)
     write(container, key, v)
     b = plc._binding_of.get((id(container), key))
-    if b is not None:                   # keep the image in step, or the next latch would undo the write
+    if b is not None:  # keep the image in step, or the next latch would undo the write
         b.table[b.index] = to_raw(v, t, b.size)
 
 
@@ -56,8 +57,12 @@ def force(plc: PLC, path: str, value: Any) -> None:
     for container, key, t in targets:
         v = from_python(value, t, path)
         write(container, key, v)
-        plc._forced[(path.strip().lower(), id(container), key)] = (container, key, v,
-                                                                  plc._binding_of.get((id(container), key)))
+        plc._forced[(path.strip().lower(), id(container), key)] = (
+            container,
+            key,
+            v,
+            plc._binding_of.get((id(container), key)),
+        )
     apply_forced(plc)
 
 
@@ -139,7 +144,7 @@ def store_python(container: Any, key: Any, t: T.Type, value: Any) -> None:
         for i, v in enumerate(flat):
             store_python(arr, i, ut.element, v)
     elif isinstance(ut, T.RefType) or (isinstance(ut, T.POUType) and ut.pou_kind == "INTERFACE"):
-        return                                   # references: re-aimed by relink()
+        return  # references: re-aimed by relink()
     elif isinstance(ut, (T.StructType, T.POUType)):
         obj = read(container, key)
         members = ut.members if isinstance(ut, T.StructType) else ut.vars
@@ -174,10 +179,12 @@ def variables(plc: PLC) -> dict[str, Any]:
 
 def globals_(plc: PLC) -> dict[str, Any]:
     """Global variables, and static ones (VAR_STAT) as 'POU.name' or 'FB.Method.name'."""
+
     def name(g: Any) -> str:
         if g.section != "VAR_STAT" or g.owner is None:
             return str(g.name)
         fb = getattr(g.owner, "owner_fb", None)
         return f"{fb.name + '.' if fb is not None else ''}{g.owner.name}.{g.name}"
+
     ref = refnames.namer(plc)
     return {name(g): to_json(plc.ns[g.pyname], g.type, ref) for g in plc.project.globals.values()}

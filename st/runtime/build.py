@@ -7,6 +7,7 @@ the watchdog and without touching the running PLC; any failure raises PLCStartEr
 program. Start-up, warm restart and online change all go this way, so a change is all or
 nothing.
 """
+
 from __future__ import annotations
 
 import math
@@ -44,16 +45,23 @@ class Build:
         self.ns: dict[str, Any] = {}
         self.wd: Watchdog | None = None
         self.config: Any = None
-        self.instances: dict[str, tuple[str, Any, Any]] = {}    # lower name → (display name, object, POUType)
+        self.instances: dict[str, tuple[str, Any, Any]] = {}  # lower name → (display name, object, POUType)
         self.tasks: list[Task] = []
         self.tick = DEFAULT_CYCLE
-        self.policy: Policy = None           # type: ignore[assignment]      # set by build()
-        self.bindings: dict[str, list[Binding]] = {}        # normalised address → [Binding]
-        self.binding_of: dict[tuple[int, Any], Binding] = {}    # (id(container), key) → Binding
+        self.policy: Policy = None  # type: ignore[assignment]      # set by build()
+        self.bindings: dict[str, list[Binding]] = {}  # normalised address → [Binding]
+        self.binding_of: dict[tuple[int, Any], Binding] = {}  # (id(container), key) → Binding
 
 
-def build(compiled: CompiledProgram, image: ProcessImage, *, cycle: int | None, watchdog: int | None,
-          policy: str, what: str = "start-up") -> Build:
+def build(
+    compiled: CompiledProgram,
+    image: ProcessImage,
+    *,
+    cycle: int | None,
+    watchdog: int | None,
+    policy: str,
+    what: str = "start-up",
+) -> Build:
     """The program ready to run, bound to `image`; PLCStartError says why it cannot start."""
     b = Build(compiled)
     budget = max(watchdog or 0, STARTUP_BUDGET)
@@ -61,6 +69,7 @@ def build(compiled: CompiledProgram, image: ProcessImage, *, cycle: int | None, 
     def install_watchdog(ns: dict[str, Any]) -> None:
         b.wd = Watchdog(ns)
         b.wd.start(budget, f"the {what} (initial values, FB_init)")
+
     try:
         b.ns = build_namespace(compiled, install_watchdog)
         cfg = b.config = b.project.configs[0] if b.project.configs else None
@@ -83,8 +92,10 @@ def build(compiled: CompiledProgram, image: ProcessImage, *, cycle: int | None, 
                 task.instances.append((im.name, obj, im))
             _apply_var_config(cfg, b)
         for t in b.tasks:
-            t.calls = [(name, obj, b.ns.get("_cfg_in_" + name.lower()), b.ns.get("_cfg_out_" + name.lower()))
-                       for name, obj, im in t.instances]
+            t.calls = [
+                (name, obj, b.ns.get("_cfg_in_" + name.lower()), b.ns.get("_cfg_out_" + name.lower()))
+                for name, obj, im in t.instances
+            ]
         intervals = [t.interval for t in b.tasks if t.interval > 0]
         b.tick = math.gcd(*intervals) if intervals else (cyc or DEFAULT_CYCLE)
         b.policy = make_policy(policy, b.tasks, b.tick)
@@ -104,7 +115,7 @@ def build(compiled: CompiledProgram, image: ProcessImage, *, cycle: int | None, 
 
 def install(plc: PLC, b: Build, first: bool = False) -> None:
     """Make a built program the PLC's running one (at a scan boundary); `first` at start-up."""
-    assert b.wd is not None                     # a finished build has its watchdog
+    assert b.wd is not None  # a finished build has its watchdog
     plc.compiled, plc.project, plc.ns, plc._wd = b.compiled, b.project, b.ns, b.wd
     plc.config, plc.instances, plc.tasks = b.config, b.instances, b.tasks
     plc.tick, plc.policy = b.tick, b.policy

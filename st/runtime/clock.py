@@ -5,12 +5,13 @@ little before a deadline, then spins on `time.monotonic_ns()` for the last stret
 alone wakes up to a scheduler tick late); the grid of deadlines is offset by a phase so it
 does not coincide with the kernel's tick (measured here: aligned deadlines lose ~44 µs).
 """
+
 from __future__ import annotations
 
 import time
 
-SPIN_NS = 200_000            # sleep until deadline − 200 µs, then spin
-SLICE_NS = 50_000_000        # the longest single sleep
+SPIN_NS = 200_000  # sleep until deadline − 200 µs, then spin
+SLICE_NS = 50_000_000  # the longest single sleep
 
 
 class VirtualClock:
@@ -37,7 +38,7 @@ class RealClock:
     def __init__(self, start: int = 0, phase_ns: int = 0, spin_ns: int = SPIN_NS):
         self.base = time.monotonic_ns() - start + phase_ns
         self.spin = spin_ns
-        self.wake = False           # set by a stop request: a long sleep ends early
+        self.wake = False  # set by a stop request: a long sleep ends early
 
     def now(self) -> int:
         return time.monotonic_ns() - self.base

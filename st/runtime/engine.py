@@ -7,6 +7,7 @@ process image's inputs, runs its task's program instances and publishes the outp
 clock that timers read is the job's release time, so a run is deterministic whether it is
 paced or not. This is the hot path: it reads the PLC's state directly, one function per job.
 """
+
 from __future__ import annotations
 
 import gc
@@ -38,9 +39,15 @@ def run_virtual(plc: PLC, t_end: int) -> None:
     run(plc, t_end)
 
 
-def run_realtime(plc: PLC, scans: int | None = None, duration: Any = None,
-                 on_idle: Callable[[PLC], None] | None = None, phase: Any = "500us", gc_control: bool = True,
-                 stop: threading.Event | None = None) -> None:
+def run_realtime(
+    plc: PLC,
+    scans: int | None = None,
+    duration: Any = None,
+    on_idle: Callable[[PLC], None] | None = None,
+    phase: Any = "500us",
+    gc_control: bool = True,
+    stop: threading.Event | None = None,
+) -> None:
     """See PLC.run_realtime."""
     if plc.state == FAULT:
         raise fault_error(plc)
@@ -91,7 +98,7 @@ def run(plc: PLC, t_end: Any) -> None:
             plc._time = max(plc._time, min(plc._next_tick, t_end))
             return
         now = clock.now()
-        if now >= t_end:            # overloaded on virtual time: the clock passed the end; stop here
+        if now >= t_end:  # overloaded on virtual time: the clock passed the end; stop here
             plc._time = max(plc._time, t_end)
             plc.scans = plc._time // plc.tick
             return
@@ -100,15 +107,18 @@ def run(plc: PLC, t_end: Any) -> None:
             ready = [t for t in tasks if t.pending is not None]
             if ready and plc.state == RUN:
                 task = min(ready, key=lambda t: key(t, t.pending))  # type: ignore[arg-type]
-                release: int = task.pending     # type: ignore[assignment]      # ready: it is set
+                release: int = task.pending  # type: ignore[assignment]      # ready: it is set
                 task.pending = None
                 _job(plc, task, release)
                 idle_jobs += 1
                 continue
-            for t in ready:         # STOP or FAULT: releases lapse
+            for t in ready:  # STOP or FAULT: releases lapse
                 t.pending = None
-            nxt = min([t.next_release for t in tasks if t.interval > 0] +
-                      ([plc._next_tick] if plc._event_tasks else []) + [math.inf])
+            nxt = min(
+                [t.next_release for t in tasks if t.interval > 0]
+                + ([plc._next_tick] if plc._event_tasks else [])
+                + [math.inf]
+            )
         else:
             nxt = plc._next_tick
             if nxt < t_end and nxt <= now:
@@ -201,8 +211,12 @@ def _job(plc: PLC, task: Task, release: int) -> None:
         if plc._forced:
             apply_forced(plc)
         ns["_now"] = release
-        plc._wd.start(plc.watchdog or (10 * (task.interval or plc.tick) if clock.real else
-                                       max(10 * (task.interval or plc.tick), 1_000_000_000)))
+        plc._wd.start(
+            plc.watchdog
+            or (
+                10 * (task.interval or plc.tick) if clock.real else max(10 * (task.interval or plc.tick), 1_000_000_000)
+            )
+        )
         try:
             for _name, obj, cin, cout in task.calls:
                 if cin is not None:

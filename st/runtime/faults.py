@@ -1,4 +1,5 @@
 """PLC runtime faults, how a Python exception maps to an ST location, and the errors the PLC raises."""
+
 from __future__ import annotations
 
 import types
@@ -16,7 +17,7 @@ class PLCFault(Exception):
 
 @dataclass
 class FaultInfo:
-    kind: str           # DIV0, INDEX, RANGE, NULL, LOOP, WATCHDOG, CONVERSION, ...
+    kind: str  # DIV0, INDEX, RANGE, NULL, LOOP, WATCHDOG, CONVERSION, ...
     message: str
     file: str = ""
     line: int = 0
@@ -84,7 +85,7 @@ def _pou_name(frame: types.FrameType) -> str:
         cls = type(self).__name__
         for p in ("_fb_", "_prg_"):
             if cls.startswith(p):
-                return str(cls[len(p):])
+                return str(cls[len(p) :])
     if name.startswith("_fn_"):
         return name[4:]
     return name

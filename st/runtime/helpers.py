@@ -3,6 +3,7 @@
 Everything here is small and hot. Generated code reaches Python only through
 these names (all begin with '_'), never through builtins directly.
 """
+
 from __future__ import annotations
 
 import math
@@ -35,8 +36,9 @@ def make_f32() -> Callable[[float], float]:
     buf = array("f", [0.0])
 
     def _f32(v: float) -> float:
-        buf[0] = v          # C float conversion: overflow gives ±inf, NaN stays NaN
+        buf[0] = v  # C float conversion: overflow gives ±inf, NaN stays NaN
         return buf[0]
+
     return _f32
 
 
@@ -207,7 +209,7 @@ def _wrap_to(v: Any, spec: Any) -> Any:
     if spec == "f32":
         return round_f32(v)
     if spec[0] == "str":
-        return v[:spec[1]]
+        return v[: spec[1]]
     bits, signed = spec
     if isinstance(v, bool):
         return v
@@ -354,11 +356,40 @@ def _deref_null() -> NoReturn:
 
 
 BASE_NAMESPACE: dict[str, Any] = {
-    "_f32": round_f32, "_idiv": _idiv, "_imod": _imod, "_umod": _umod, "_fdiv": _fdiv, "_pow": _pow,
-    "_round": _round, "_trunc": _trunc, "_ix": _ix, "_subrange": _subrange, "_setbit": _setbit,
+    "_f32": round_f32,
+    "_idiv": _idiv,
+    "_imod": _imod,
+    "_umod": _umod,
+    "_fdiv": _fdiv,
+    "_pow": _pow,
+    "_round": _round,
+    "_trunc": _trunc,
+    "_ix": _ix,
+    "_subrange": _subrange,
+    "_setbit": _setbit,
     "_setbits": _setbits,
-    "_for_dir": _for_dir, "_Struct": _Struct, "_FB": _FB, "_copy": _copy, "_assign": _assign,
-    "_init_fields": _init_fields, "_AttrRef": _AttrRef, "_ObjRef": _ObjRef, "_query_itf": _query_itf, "_conf": _conf, "_cix": _cix, "_attempt": _attempt, "_ItemRef": _ItemRef, "_NegRef": _NegRef,
-    "_float": float, "_int": int, "_range": range, "_abs": abs, "_min": min, "_max": max, "_len": len,
-    "_str": str, "_bool": bool, "_PLCFault": PLCFault,
+    "_for_dir": _for_dir,
+    "_Struct": _Struct,
+    "_FB": _FB,
+    "_copy": _copy,
+    "_assign": _assign,
+    "_init_fields": _init_fields,
+    "_AttrRef": _AttrRef,
+    "_ObjRef": _ObjRef,
+    "_query_itf": _query_itf,
+    "_conf": _conf,
+    "_cix": _cix,
+    "_attempt": _attempt,
+    "_ItemRef": _ItemRef,
+    "_NegRef": _NegRef,
+    "_float": float,
+    "_int": int,
+    "_range": range,
+    "_abs": abs,
+    "_min": min,
+    "_max": max,
+    "_len": len,
+    "_str": str,
+    "_bool": bool,
+    "_PLCFault": PLCFault,
 }

@@ -11,6 +11,7 @@ The optional parts have defaults in `IODriverBase`, which drivers extend: a `nam
 (`per_namespace`, listed in its `_io_drivers`, made again with every reload) `adopt(old)` to
 take over the state of the one it replaces.
 """
+
 from __future__ import annotations
 
 from typing import Any, Protocol
@@ -36,8 +37,8 @@ class IODriver(Protocol):
 class IODriverBase:
     """Defaults for the optional parts of IODriver: nothing to do, nothing to report."""
 
-    name = ""                   # shown in reports ("" and stats() None: not reported)
-    per_namespace = False       # True: made by the program's namespace, replaced on every reload
+    name = ""  # shown in reports ("" and stats() None: not reported)
+    per_namespace = False  # True: made by the program's namespace, replaced on every reload
 
     def before_job(self, task: Task | None = None) -> None:
         pass

@@ -4,6 +4,7 @@ A fault or a stop puts the outputs to their safe values (FALSE/0, or `safe_outpu
 the I/O drivers (`after_job()` without a task) and commits retained data. A warm restart
 builds the program afresh and restores the retained values.
 """
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
@@ -22,7 +23,7 @@ STOP, RUN, FAULT = "STOP", "RUN", "FAULT"
 
 def fault_error(plc: PLC) -> PLCFaultError:
     """The error for an attempt to run a PLC in FAULT."""
-    assert plc.fault is not None                # FAULT is only entered with its FaultInfo
+    assert plc.fault is not None  # FAULT is only entered with its FaultInfo
     return PLCFaultError(plc.fault)
 
 
@@ -76,9 +77,10 @@ def restart(plc: PLC) -> None:
     snapshot = retained_values(plc) if plc.retain_store is None else None
     committed = plc.retain_store.load() if plc.retain_store is not None else snapshot
     try:
-        b = build(plc.compiled, plc.image, cycle=plc.cycle, watchdog=plc.watchdog, policy=plc.policy_name,
-                  what="restart")
-    except PLCStartError as e:             # FB_init faults again: stay in FAULT, say why
+        b = build(
+            plc.compiled, plc.image, cycle=plc.cycle, watchdog=plc.watchdog, policy=plc.policy_name, what="restart"
+        )
+    except PLCStartError as e:  # FB_init faults again: stay in FAULT, say why
         info = e.fault or FaultInfo("START", str(e))
         enter_fault(plc, info)
         raise PLCFaultError(info) from None

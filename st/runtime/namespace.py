@@ -3,6 +3,7 @@
 One namespace per PLC (and per unit test, which is what isolates tests from one
 another: globals, FB classes and mocks are all fresh).
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -13,13 +14,13 @@ from .helpers import BASE_NAMESPACE, make_f32
 from .sfc import SfcDesc, SfcState
 
 
-def build_namespace(compiled: CompiledProgram,
-                    install: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+def build_namespace(
+    compiled: CompiledProgram, install: Callable[[dict[str, Any]], None] | None = None
+) -> dict[str, Any]:
     """`install(ns)` adds what must exist before module code runs (watchdog, test helpers)."""
     ns: dict[str, Any] = dict(BASE_NAMESPACE)
     ns.update(compiled.helpers)
-    ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True,
-               "_f32": make_f32()})
+    ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True, "_f32": make_f32()})
     ns["_ns"] = ns
     if compiled.coverage_hits is not None:
         ns["_cov"] = compiled.coverage_hits
@@ -28,5 +29,5 @@ def build_namespace(compiled: CompiledProgram,
     for _path, code in compiled.modules:
         exec(code, ns)
     for name in sorted(k for k in ns if k.startswith("_post_exec_")):
-        ns[name](ns)            # libraries with native parts finish their classes here
+        ns[name](ns)  # libraries with native parts finish their classes here
     return ns

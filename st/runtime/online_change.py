@@ -4,6 +4,7 @@ All or nothing: `prepare_change` refuses configuration or type changes, then bui
 program (it may run in another thread while the old one scans); `apply_change` carries every
 variable over by path and type, reading the old program only, then installs the new one.
 """
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
@@ -34,8 +35,9 @@ def prepare_change(plc: PLC, compiled: CompiledProgram) -> Build:
     if problems:
         raise OnlineChangeRefused(problems)
     try:
-        return build(compiled, plc.image, cycle=plc.cycle, watchdog=plc.watchdog, policy=plc.policy_name,
-                     what="online change")
+        return build(
+            compiled, plc.image, cycle=plc.cycle, watchdog=plc.watchdog, policy=plc.policy_name, what="online change"
+        )
     except PLCStartError as e:
         raise OnlineChangeRefused([f"the new program cannot start: {e}"]) from None
 
@@ -44,8 +46,7 @@ def apply_change(plc: PLC, b: Build) -> str:
     try:
         _carry_over(plc, b)
     except Exception as exc:  # noqa: BLE001 - whatever fails, the old program keeps running
-        reason = exc.args[0] if isinstance(exc, (ValueError, KeyError)) and exc.args else \
-            str(fault_from_exception(exc))
+        reason = exc.args[0] if isinstance(exc, (ValueError, KeyError)) and exc.args else str(fault_from_exception(exc))
         raise OnlineChangeRefused([f"the state cannot be carried over: {reason}"]) from None
     old_now = plc.ns.get("_now", 0)
     install(plc, b)
@@ -69,11 +70,20 @@ def _carry_over(plc: PLC, b: Build) -> None:
         if og is not None and str(og.type) == str(g.type):
             store_python(b.ns, g.pyname, g.type, to_python(plc.ns[og.pyname], og.type))
     # interface variables and references still point into the old objects: re-aim them
-    relink([(plc.instances[k][1], obj, plc.instances[k][2], pou)
-            for k, (name, obj, pou) in b.instances.items() if k in plc.instances],
-           [(g.pyname, g.pyname, old_globals[g.pyname].type, g.type)
-            for g in b.project.globals.values() if g.pyname in old_globals],
-           plc.ns, b.ns)
+    relink(
+        [
+            (plc.instances[k][1], obj, plc.instances[k][2], pou)
+            for k, (name, obj, pou) in b.instances.items()
+            if k in plc.instances
+        ],
+        [
+            (g.pyname, g.pyname, old_globals[g.pyname].type, g.type)
+            for g in b.project.globals.values()
+            if g.pyname in old_globals
+        ],
+        plc.ns,
+        b.ns,
+    )
 
 
 def _change_problems(plc: PLC, compiled: CompiledProgram) -> list[str]:
@@ -83,8 +93,11 @@ def _change_problems(plc: PLC, compiled: CompiledProgram) -> list[str]:
     def shape(cfg: Any) -> tuple[set[tuple[Any, ...]], set[tuple[Any, ...]]]:
         if cfg is None:
             return set(), set()
-        return ({(t.name.lower(), t.interval, t.priority, t.single) for t in cfg.tasks},
-                {(i.name.lower(), i.type.name.lower(), i.task.lower()) for i in cfg.instances})
+        return (
+            {(t.name.lower(), t.interval, t.priority, t.single) for t in cfg.tasks},
+            {(i.name.lower(), i.type.name.lower(), i.task.lower()) for i in cfg.instances},
+        )
+
     if shape(plc.config) != shape(new_cfg):
         out.append("the configuration's tasks or program instances changed (restart the PLC to apply it)")
     new_pous = {i.name.lower(): i.type for i in (new_cfg.instances if new_cfg else [])}
@@ -102,8 +115,12 @@ def _change_problems(plc: PLC, compiled: CompiledProgram) -> list[str]:
 def _type_changes(old: T.Type, new: T.Type, path: str, out: list[str]) -> None:
     """Variables that keep their name but change their type (their values cannot be carried over)."""
     uo, un = T.unalias(old), T.unalias(new)
-    if isinstance(uo, (T.POUType, T.StructType)) and isinstance(un, (T.POUType, T.StructType)) \
-            and type(uo) is type(un) and uo.name.lower() == un.name.lower():
+    if (
+        isinstance(uo, (T.POUType, T.StructType))
+        and isinstance(un, (T.POUType, T.StructType))
+        and type(uo) is type(un)
+        and uo.name.lower() == un.name.lower()
+    ):
         om = uo.members if isinstance(uo, T.StructType) else uo.vars
         nm = un.members if isinstance(un, T.StructType) else un.vars
         for k, m in om.items():

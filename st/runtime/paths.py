@@ -5,6 +5,7 @@ A resolved variable is a (container, key, type) triple: the key is an attribute 
 integer have no such slot, so they are reached through a small holder object with one attribute
 `v`. `read` and `write` are raw: no conversion, no process-image update.
 """
+
 from __future__ import annotations
 
 import re
@@ -20,6 +21,7 @@ _ADDR = re.compile(r"%([IQM])([XBWDL]?)([0-9]+(?:\.[0-9]+)*)$", re.I)
 
 class Program(Protocol):
     """What resolution needs of a program: the running PLC or a build being prepared."""
+
     instances: dict[str, tuple[str, Any, Any]]
     project: Any
     ns: dict[str, Any]
@@ -62,8 +64,11 @@ class BitHolder:
 
     @v.setter
     def v(self, value: Any) -> None:
-        write(self.container, self.key, _setbit(read(self.container, self.key), self.bit, value, self.t.bits,
-                                                self.t.signed))
+        write(
+            self.container,
+            self.key,
+            _setbit(read(self.container, self.key), self.bit, value, self.t.bits, self.t.signed),
+        )
 
 
 def resolve(src: Program, path: str) -> tuple[Any, Any, Any]:

@@ -6,6 +6,7 @@ lifecycle.py (STOP/RUN/FAULT, safe outputs, warm restart), retained.py (RETAIN/P
 values), online_change.py, access.py (variables by path or %address, forcing, dumps) over
 paths.py (path resolution) and varref.py (`ref`).
 """
+
 from __future__ import annotations
 
 import threading
@@ -47,7 +48,7 @@ class PLC:
     project: Any
     ns: dict[str, Any]
     config: Any
-    instances: dict[str, tuple[str, Any, Any]]      # lower name → (display name, object, POUType)
+    instances: dict[str, tuple[str, Any, Any]]  # lower name → (display name, object, POUType)
     tasks: list[Task]
     tick: int
     policy: Policy
@@ -59,11 +60,20 @@ class PLC:
 
     _on_idle: Callable[[PLC], None] | None = None
     _stop_event: threading.Event | None = None
-    idle_slack: float = 0       # ns until the next release, as seen by an `on_idle` hook
+    idle_slack: float = 0  # ns until the next release, as seen by an `on_idle` hook
 
-    def __init__(self, compiled: CompiledProgram, cycle: Any = None, *, watchdog: Any = None,
-                 policy: str = "openplc", retain: str | None = None, retain_interval: Any = "1s",
-                 cold: bool = False, safe_outputs: dict[str, Any] | None = None):
+    def __init__(
+        self,
+        compiled: CompiledProgram,
+        cycle: Any = None,
+        *,
+        watchdog: Any = None,
+        policy: str = "openplc",
+        retain: str | None = None,
+        retain_interval: Any = "1s",
+        cold: bool = False,
+        safe_outputs: dict[str, Any] | None = None,
+    ):
         self.cycle = parse_duration_arg(cycle) if cycle is not None else None
         self.watchdog = parse_duration_arg(watchdog) if watchdog is not None else None
         self.policy_name = policy
@@ -72,7 +82,7 @@ class PLC:
             if parse_address(addr)[0] != "Q":
                 raise ValueError(f"safe output {addr}: only outputs (%Q…) have safe values")
         self.image = ProcessImage()
-        self.image_lock = threading.Lock()      # held by a job under the frame policy (the thesis's semaphore)
+        self.image_lock = threading.Lock()  # held by a job under the frame policy (the thesis's semaphore)
         self.state = RUN
         self.fault: FaultInfo | None = None
         self.faults: list[FaultInfo] = []
@@ -80,14 +90,13 @@ class PLC:
         self.scans = 0
         self.clock: Any = VirtualClock()
         self._stats: dict[str, TaskStats] = {}
-        self.io: list[IODriver] = []            # see iodriver.py
+        self.io: list[IODriver] = []  # see iodriver.py
         # (path, id(container), key) → (container, key, value, binding)
         self._forced: dict[tuple[str, int, Any], tuple[Any, Any, Any, Binding | None]] = {}
-        self._force_spec: dict[str, Any] = {}             # path → the value asked for (re-applied after a reload)
+        self._force_spec: dict[str, Any] = {}  # path → the value asked for (re-applied after a reload)
         self._stop_requested = False
         self.retain_store: RetainStore | None = None
-        install(self, build(compiled, self.image, cycle=self.cycle, watchdog=self.watchdog, policy=policy),
-                first=True)
+        install(self, build(compiled, self.image, cycle=self.cycle, watchdog=self.watchdog, policy=policy), first=True)
         self.retain_store = RetainStore(retain) if retain else None
         self.retain_interval = parse_duration_arg(retain_interval)
         self._next_retain = self.retain_interval
@@ -122,9 +131,15 @@ class PLC:
         d = parse_duration_arg(duration)
         engine.run_virtual(self, self._time + -(-d // self.tick) * self.tick)
 
-    def run_realtime(self, scans: int | None = None, duration: Any = None,
-                     on_idle: Callable[[PLC], None] | None = None, phase: Any = "500us", gc_control: bool = True,
-                     stop: threading.Event | None = None) -> None:
+    def run_realtime(
+        self,
+        scans: int | None = None,
+        duration: Any = None,
+        on_idle: Callable[[PLC], None] | None = None,
+        phase: Any = "500us",
+        gc_control: bool = True,
+        stop: threading.Event | None = None,
+    ) -> None:
         """Pace the engine by CLOCK_MONOTONIC with absolute deadlines (no drift) until `scans` base ticks
         or `duration` have passed, `stop` is set, or Ctrl-C. `on_idle(plc)` runs between jobs when there
         is slack (status line, file watching). A fault ends the run with PLCFaultError."""

@@ -10,6 +10,7 @@ A scan of a task: `latch_in` copies `%I` (and `%M`, which an HMI may have writte
 located variables of the task's program instances and the located globals; `publish`
 copies `%Q` and `%M` variables back into the image at the end.
 """
+
 from __future__ import annotations
 
 import struct
@@ -25,7 +26,8 @@ __all__ = ["ProcessImage", "Binding", "to_raw", "from_raw", "AddressError", "par
 class ProcessImage:
     def __init__(self) -> None:
         self.tables: dict[tuple[str, str], list[Any]] = {
-            (a, s): ([False] if s == "X" else [0]) * (TABLE_LEN * (8 if s == "X" else 1)) for a in "IQM" for s in SIZES}
+            (a, s): ([False] if s == "X" else [0]) * (TABLE_LEN * (8 if s == "X" else 1)) for a in "IQM" for s in SIZES
+        }
 
     def get(self, addr: str) -> Any:
         area, size, i = parse_address(addr)
@@ -100,8 +102,7 @@ def _converters(t: T.Type, size: str) -> tuple[Callable[[Any], Any], Callable[[A
 class Binding:
     """One located variable: where it lives (container + attribute/key) and its image cell."""
 
-    __slots__ = ("addr", "area", "size", "index", "container", "key", "type", "table", "conv_in", "conv_out",
-                 "is_dict")
+    __slots__ = ("addr", "area", "size", "index", "container", "key", "type", "table", "conv_in", "conv_out", "is_dict")
 
     def __init__(self, addr: str, container: Any, key: Any, t: T.Type, image: ProcessImage):
         self.addr = addr

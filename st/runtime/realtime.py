@@ -4,6 +4,7 @@ SCHED_FIFO (priority 30 like OpenPLC v3 by default), mlockall, CPU affinity, hol
 /dev/cpu_dma_latency at 0 (no deep C-states) and a 1 ns timer slack. Measured on these
 machines (../shared/notes/realtime.md): SCHED_FIFO and cpu_dma_latency matter most.
 """
+
 from __future__ import annotations
 
 import ctypes

@@ -2,6 +2,7 @@
 `REF(path)` of the variable it designates (`REF(main.arr[1])`, `REF(main.fb.x)`, `REF(g_count)`),
 `REF(__NEW)` for a value made by __NEW. The index from objects to paths is built once per
 dump, only when a reference is met."""
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -81,7 +82,7 @@ def namer(plc: Program) -> Callable[[Any], str]:
                 path, t = index[id(ref.obj)]
                 return f"REF({path}{_subscript(t, ref.key)})"
             elif isinstance(ref.obj, list) and len(ref.obj) == 1:
-                return "REF(__NEW)"                      # a value of its own, made by __NEW
+                return "REF(__NEW)"  # a value of its own, made by __NEW
         if isinstance(ref, _ObjRef) and id(ref.obj) in index:
             return f"REF({index[id(ref.obj)][0]})"
         return "REF(?)"

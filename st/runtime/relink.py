@@ -4,6 +4,7 @@ interface variables, REF_TO / POINTER TO / REFERENCE TO values still point into 
 pairs every old instance, structure and array with its new counterpart, and then points each
 reference at the new object in the same place. What has no counterpart any more becomes NULL;
 values made by __NEW (outside every variable) are kept as they are."""
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -21,8 +22,15 @@ def _members(t: Any) -> dict[str, Any]:
     return {k: s for k, s in t.vars.items() if s.section not in _SKIP}
 
 
-def _walk(old: Any, new: Any, ot: Any, nt: Any, visit_leaf: Callable[[Any, Any, Any, Any], None], seen: set[int],
-          pairs: dict[int, Any]) -> None:
+def _walk(
+    old: Any,
+    new: Any,
+    ot: Any,
+    nt: Any,
+    visit_leaf: Callable[[Any, Any, Any, Any], None],
+    seen: set[int],
+    pairs: dict[int, Any],
+) -> None:
     """Visit (old, new) values of types (ot, nt); aggregates are paired in `pairs` and recursed."""
     ou: Any = T.unalias(ot)
     nu: Any = T.unalias(nt)
@@ -101,8 +109,12 @@ def _write(container: Any, key: Any, v: Any) -> None:
         container[key] = v
 
 
-def relink(instances: list[tuple[Any, Any, Any, Any]], globals_: list[tuple[str, str, Any, Any]],
-           old_ns: dict[str, Any], new_ns: dict[str, Any]) -> int:
+def relink(
+    instances: list[tuple[Any, Any, Any, Any]],
+    globals_: list[tuple[str, str, Any, Any]],
+    old_ns: dict[str, Any],
+    new_ns: dict[str, Any],
+) -> int:
     """instances: (old object, new object, old type, new type) of every program instance;
     globals_: (old pyname, new pyname, old type, new type). Returns how many references now
     point at new objects."""
@@ -142,10 +154,10 @@ def _moved(v: Any, pairs: dict[int, Any]) -> Any:
         o = pairs.get(id(v.obj))
         if o is not None:
             return _ItemRef(o, v.key, v.spec)
-        return v                      # a value of its own (__NEW): nothing to point it at
+        return v  # a value of its own (__NEW): nothing to point it at
     if isinstance(v, _ObjRef):
         o = pairs.get(id(v.obj))
         return _ObjRef(o) if o is not None else None
     if isinstance(v, _NegRef):
         return v
-    return pairs.get(id(v))           # an interface variable: the instance itself
+    return pairs.get(id(v))  # an interface variable: the instance itself

@@ -6,6 +6,7 @@ either applied the transaction or rolls it back on the next open. Values are sto
 (to_python form: TIME as ns, enums by name, arrays as lists, structs as objects) together
 with the variable's type, and restored only into a variable of the same path and type.
 """
+
 from __future__ import annotations
 
 import json
@@ -20,8 +21,9 @@ class RetainStore:
         self.db = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
         self.db.execute("PRAGMA journal_mode=WAL")
         self.db.execute("PRAGMA synchronous=NORMAL")
-        self.db.execute("CREATE TABLE IF NOT EXISTS retain (path TEXT PRIMARY KEY, type TEXT NOT NULL, "
-                        "value TEXT NOT NULL)")
+        self.db.execute(
+            "CREATE TABLE IF NOT EXISTS retain (path TEXT PRIMARY KEY, type TEXT NOT NULL, value TEXT NOT NULL)"
+        )
         self.db.execute("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT)")
         self.commits = 0
 
@@ -37,8 +39,10 @@ class RetainStore:
         try:
             db.execute("DELETE FROM retain")
             db.executemany("INSERT INTO retain VALUES (?, ?, ?)", rows)
-            db.execute("INSERT OR REPLACE INTO meta VALUES ('committed', ?)",
-                       (json.dumps({"plc_time_ns": plc_time, "wall": time.time(), "count": len(rows)}),))
+            db.execute(
+                "INSERT OR REPLACE INTO meta VALUES ('committed', ?)",
+                (json.dumps({"plc_time_ns": plc_time, "wall": time.time(), "count": len(rows)}),),
+            )
             db.execute("COMMIT")
         except BaseException:
             db.execute("ROLLBACK")

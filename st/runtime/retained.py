@@ -4,6 +4,7 @@ The snapshot maps a variable's path to (its type as text, its value in to_python
 is restored only where the path still names a variable of the same type. retain.py keeps the
 snapshots in SQLite.
 """
+
 from __future__ import annotations
 
 from collections.abc import Iterator

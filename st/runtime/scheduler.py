@@ -21,6 +21,7 @@ start, and what happens to a release that finds the previous job still waiting.
 An overrun (a job that ends after its next release) never starts a second copy of a task: see
 `TaskStats` for how overruns and skipped releases are counted.
 """
+
 from __future__ import annotations
 
 import math
@@ -36,26 +37,27 @@ POLICIES = ("openplc", "priority", "edf", "frame")
 @dataclass(eq=False)
 class Task:
     name: str
-    interval: int               # ns (0: event task)
+    interval: int  # ns (0: event task)
     priority: int
-    instances: list[tuple[str, Any, Any]]     # [(name, object, InstanceModel)]
-    single: str = ""            # event task: the BOOL global whose rising edge releases it
-    index: int = 0              # declaration order
+    instances: list[tuple[str, Any, Any]]  # [(name, object, InstanceModel)]
+    single: str = ""  # event task: the BOOL global whose rising edge releases it
+    index: int = 0  # declaration order
     prev_single: bool = False
     runs: int = 0
-    calls: list[tuple[str, Any, Callable[[Any], None] | None, Callable[[Any], None] | None]] = \
-        field(default_factory=list)             # [(name, object, copy-in fn, copy-out fn)]
-    cost: Any = 0               # simulated execution time on virtual time (ns), or a callable giving it
-    stats: TaskStats = None     # type: ignore[assignment]     # set when the program is installed
+    calls: list[tuple[str, Any, Callable[[Any], None] | None, Callable[[Any], None] | None]] = field(
+        default_factory=list
+    )  # [(name, object, copy-in fn, copy-out fn)]
+    cost: Any = 0  # simulated execution time on virtual time (ns), or a callable giving it
+    stats: TaskStats = None  # type: ignore[assignment]     # set when the program is installed
     next_release: int = 0
-    pending: int | None = None       # release time of a released job not yet started
-    ins: list[Any] = field(default_factory=list)     # process image bindings latched before the job
-    outs: list[Any] = field(default_factory=list)    # … published after it
+    pending: int | None = None  # release time of a released job not yet started
+    ins: list[Any] = field(default_factory=list)  # process image bindings latched before the job
+    outs: list[Any] = field(default_factory=list)  # … published after it
 
 
 class Policy:
     name = ""
-    eager = True                # releases happen at their time (False: OpenPLC's tick catch-up)
+    eager = True  # releases happen at their time (False: OpenPLC's tick catch-up)
 
     def __init__(self, tasks: list[Task], tick: int):
         self.tasks = tasks
@@ -96,16 +98,22 @@ class FramePolicy(Policy):
         self.frame = min(periodic) if periodic else tick
         for t in tasks:
             if t.interval and t.interval % self.frame:
-                raise ValueError(f"policy frame: task {t.name}'s interval {t.interval / 1e6:g} ms is not a multiple "
-                                 f"of the minor frame {self.frame / 1e6:g} ms (the shortest interval)")
+                raise ValueError(
+                    f"policy frame: task {t.name}'s interval {t.interval / 1e6:g} ms is not a multiple "
+                    f"of the minor frame {self.frame / 1e6:g} ms (the shortest interval)"
+                )
 
     def key(self, task: Task, release: int) -> tuple[Any, ...]:
         return (release, task.interval or self.frame, task.index)
 
 
 def make_policy(name: str, tasks: list[Task], tick: int) -> Policy:
-    policies: dict[str, type[Policy]] = {"openplc": OpenPLCPolicy, "priority": PriorityPolicy, "edf": EDFPolicy,
-                                         "frame": FramePolicy}
+    policies: dict[str, type[Policy]] = {
+        "openplc": OpenPLCPolicy,
+        "priority": PriorityPolicy,
+        "edf": EDFPolicy,
+        "frame": FramePolicy,
+    }
     cls = policies.get(name)
     if cls is None:
         raise ValueError(f"unknown scheduling policy {name!r} (one of {', '.join(POLICIES)})")

@@ -7,6 +7,7 @@ targets activate, (3) action qualifiers are evaluated for every step and the
 active actions run (ACTION bodies in declaration order; a BOOL variable used as
 an action gets the action's state).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -20,8 +21,8 @@ class SfcDesc:
     n_steps: int
     initial: int
     transitions: list[tuple[tuple[int, ...], tuple[int, ...], str]]  # [(sources, targets, method name)]
-    steps: list[list[tuple[int, str, str]]]     # per step: [(action index, qualifier, time method name or "")]
-    actions: list[tuple[str, str]]              # per action: ("act", method name) or ("var", attribute name)
+    steps: list[list[tuple[int, str, str]]]  # per step: [(action index, qualifier, time method name or "")]
+    actions: list[tuple[str, str]]  # per action: ("act", method name) or ("var", attribute name)
 
 
 class SfcState:
@@ -35,7 +36,7 @@ class SfcState:
         self.last = [0] * desc.n_steps
         self.prev_x = [False] * desc.n_steps
         self.stored = [False] * len(desc.actions)
-        self.timers: dict[tuple[int, str], int] = {}     # (action, kind) → start time for SD/DS/SL
+        self.timers: dict[tuple[int, str], int] = {}  # (action, kind) → start time for SD/DS/SL
         self.started = False
         self.act_prev = [False] * len(desc.actions)
 

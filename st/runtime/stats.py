@@ -10,6 +10,7 @@ from overruns). The (m,k)-firm time utility U(T_i) = (1/k) Σ u over the last k 
 Samples are kept in bounded deques (the latest `keep`), so percentiles describe the recent
 window while min/avg/max and counts cover the whole run. Recording is a few list operations.
 """
+
 from __future__ import annotations
 
 import math
@@ -25,8 +26,8 @@ class TaskStats:
         self.m = m or k
         self.keep = keep
         self.jobs = 0
-        self.overruns = 0          # jobs that ended after their next release
-        self.skipped = 0           # releases dropped because the previous job had not started
+        self.overruns = 0  # jobs that ended after their next release
+        self.skipped = 0  # releases dropped because the previous job had not started
         self.lat_min = math.inf
         self.lat_max = 0
         self.lat_sum = 0
@@ -34,10 +35,10 @@ class TaskStats:
         self.exec_max = 0
         self.exec_sum = 0
         self.latencies: deque[int] = deque(maxlen=keep)  # the latest `keep` samples (ns)
-        self.periods: deque[int] = deque(maxlen=keep)    # start-to-start intervals (ns)
+        self.periods: deque[int] = deque(maxlen=keep)  # start-to-start intervals (ns)
         self._last_start: int | None = None
         self.utility_window: deque[int] = deque(maxlen=k)
-        self.mk_violations = 0     # windows (after the first k jobs) with U < m/k
+        self.mk_violations = 0  # windows (after the first k jobs) with U < m/k
 
     def record(self, release: int, start: int, end: int) -> None:
         lat = start - release
@@ -89,16 +90,26 @@ class TaskStats:
             "overruns": self.overruns,
             "skipped": self.skipped,
             "latency_us": {
-                "min": _us(self.lat_min if self.jobs else 0), "avg": _us(self.lat_sum / self.jobs if self.jobs else 0),
-                "max": _us(self.lat_max), "p50": _us(_pct(lats, 50)), "p99": _us(_pct(lats, 99)),
-                "p99.9": _us(_pct(lats, 99.9))},
-            "exec_us": {"min": _us(self.exec_min if self.jobs else 0),
-                        "avg": _us(self.exec_sum / self.jobs if self.jobs else 0), "max": _us(self.exec_max)},
-            "jitter_us": {"max_abs": _us(max((abs(j) for j in jitter), default=0)),
-                          "stdev": _us(_stdev(jitter))},
+                "min": _us(self.lat_min if self.jobs else 0),
+                "avg": _us(self.lat_sum / self.jobs if self.jobs else 0),
+                "max": _us(self.lat_max),
+                "p50": _us(_pct(lats, 50)),
+                "p99": _us(_pct(lats, 99)),
+                "p99.9": _us(_pct(lats, 99.9)),
+            },
+            "exec_us": {
+                "min": _us(self.exec_min if self.jobs else 0),
+                "avg": _us(self.exec_sum / self.jobs if self.jobs else 0),
+                "max": _us(self.exec_max),
+            },
+            "jitter_us": {"max_abs": _us(max((abs(j) for j in jitter), default=0)), "stdev": _us(_stdev(jitter))},
             "period_histogram": self.period_histogram(),
-            "utility": {"k": self.k, "m": self.m, "U": round(self.utility, 4),
-                        "windows_below_m_over_k": self.mk_violations},
+            "utility": {
+                "k": self.k,
+                "m": self.m,
+                "U": round(self.utility, 4),
+                "windows_below_m_over_k": self.mk_violations,
+            },
         }
 
     def period_histogram(self, bins: int = 20) -> dict[str, Any]:
@@ -160,6 +171,7 @@ def plot_latency(stats: list[TaskStats], path: str) -> None:
     """A PNG of each task's wake-up latency histogram (log scale), as cyclictest users draw it."""
     try:
         import matplotlib
+
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:

@@ -1,4 +1,5 @@
 """Runtime values ↔ Python API values and JSON, driven by IEC types."""
+
 from __future__ import annotations
 
 import math
@@ -38,8 +39,11 @@ def _convert(v: Any, t: T.Type, leaf: Callable[[Any, Any], Any], ref: Callable[[
         # an interface variable: which block type it refers to (the instance is shown where it is declared)
         return None if v is None else type(v).__name__.removeprefix("_fb_")
     if isinstance(t, T.POUType):
-        return {s.name: _convert(getattr(v, s.pyname), s.type, leaf, ref) for s in t.vars.values()
-                if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT")}
+        return {
+            s.name: _convert(getattr(v, s.pyname), s.type, leaf, ref)
+            for s in t.vars.values()
+            if s.section not in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT")
+        }
     if isinstance(t, T.RefType):
         return None if v is None or ref is None else ref(v)
     return leaf(v, t)
@@ -81,14 +85,14 @@ def to_st_literal(v: Any, t: T.Type | None) -> str:
         return f"{ut.name}#{name}" if name is not None else str(v)
     if ut.is_aggregate or isinstance(ut, T.RefType):
         import json
+
         return json.dumps(to_json(v, t))
     bt = T.base_of(t)
     if isinstance(v, bool) or bt.is_bool:
         return "TRUE" if v else "FALSE"
     if isinstance(bt, T.StringType) or bt.kind == "char":
         q = '"' if getattr(bt, "wide", False) or getattr(bt, "name", "") == "WCHAR" else "'"
-        body = str(v).replace("$", "$$").replace(q, "$" + q).replace("\n", "$N").replace("\r", "$R") \
-            .replace("\t", "$T")
+        body = str(v).replace("$", "$$").replace(q, "$" + q).replace("\n", "$N").replace("\r", "$R").replace("\t", "$T")
         return q + body + q
     if isinstance(v, float):
         if v != v or v in (math.inf, -math.inf):
@@ -114,7 +118,7 @@ def _nest(flat: list[Any], dims: list[tuple[int, int]]) -> list[Any]:
     inner = 1
     for lo, hi in dims[1:]:
         inner *= hi - lo + 1
-    return [_nest(flat[i:i + inner], dims[1:]) for i in range(0, len(flat), inner)]
+    return [_nest(flat[i : i + inner], dims[1:]) for i in range(0, len(flat), inner)]
 
 
 def from_python(v: Any, t: T.Type, where: str = "") -> Any:
@@ -137,7 +141,7 @@ def from_python(v: Any, t: T.Type, where: str = "") -> Any:
     if isinstance(bt, T.StringType):
         if not isinstance(v, str):
             raise ValueError_(f"{where}: expected a string, got {v!r}")
-        return v[:bt.length]
+        return v[: bt.length]
     k = bt.kind
     if k == "bool":
         if isinstance(v, bool) or v in (0, 1):
@@ -165,8 +169,12 @@ def from_python(v: Any, t: T.Type, where: str = "") -> Any:
             try:
                 if "#" not in v:
                     return parse_duration(v) if k == "time" else _raise(where, v)
-                return {"time": parse_time_literal, "date": parse_date_literal, "tod": parse_tod_literal,
-                        "dt": parse_dt_literal}[k](v)
+                return {
+                    "time": parse_time_literal,
+                    "date": parse_date_literal,
+                    "tod": parse_tod_literal,
+                    "dt": parse_dt_literal,
+                }[k](v)
             except ValueError as e:
                 raise ValueError_(f"{where}: {e}") from None
         if hasattr(v, "total_seconds") and k == "time":

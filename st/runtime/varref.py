@@ -5,6 +5,7 @@ internals. A reference is resolved once: it stays valid while the program runs, 
 made again after the program is reloaded (online change, warm restart), whose variables are
 new objects.
 """
+
 from __future__ import annotations
 
 from typing import Any

@@ -8,6 +8,7 @@ loop's ST line. `abort()` raises the flag at once (a forced stop: a second Ctrl-
 watchdog guards start-up and online change: module code, declared initial values and FB_init
 run under a budget too.
 """
+
 from __future__ import annotations
 
 import threading
@@ -24,7 +25,7 @@ POLL_NS = int(_POLL_S * 1e9)
 class Watchdog:
     def __init__(self, ns: dict[str, Any]):
         self.ns = ns
-        self.deadline = 0           # monotonic ns; 0 = not running
+        self.deadline = 0  # monotonic ns; 0 = not running
         self.budget = 0
         self.what = "the job"
         self.abort_reason = ""
@@ -63,8 +64,7 @@ class Watchdog:
         if self.deadline and time.monotonic_ns() >= self.deadline:
             self.ns["_wd_armed"] = False
             self.deadline = 0
-            raise PLCFault(f"{self.what} did not finish within {_ms(self.budget)} (endless loop?)",
-                           "WATCHDOG")
+            raise PLCFault(f"{self.what} did not finish within {_ms(self.budget)} (endless loop?)", "WATCHDOG")
         self.ns["_wd_armed"] = False
 
     def poll(self, now: int) -> None:

@@ -3,6 +3,7 @@
 Values follow the representation in st.model.types: times are ns integers.
 String positions are 1-based as in IEC 61131-3.
 """
+
 from __future__ import annotations
 
 import math
@@ -54,13 +55,14 @@ def _safe(fn):
             return fn(x)
         except ValueError:
             return math.nan
+
     f.__name__ = fn.__name__
     return f
 
 
 _std_asin = _safe(math.asin)
 _std_acos = _safe(math.acos)
-_std_sin = _safe(math.sin)          # SIN/COS/TAN of ±INF: NaN, as IEEE 754 says
+_std_sin = _safe(math.sin)  # SIN/COS/TAN of ±INF: NaN, as IEEE 754 says
 _std_cos = _safe(math.cos)
 _std_tan = _safe(math.tan)
 
@@ -124,6 +126,7 @@ def _std_sel(g, a, b):
 def _cmp_chain(op):
     def f(*args):
         return all(op(args[i], args[i + 1]) for i in range(len(args) - 1))
+
     return f
 
 
@@ -152,7 +155,7 @@ def _std_right(s, n):
 def _std_mid(s, n, p):
     if p < 1:
         raise PLCFault(f"MID: position {p} must be at least 1", "RANGE")
-    return s[p - 1:p - 1 + n] if n > 0 else ""
+    return s[p - 1 : p - 1 + n] if n > 0 else ""
 
 
 def _std_concat(*parts):
@@ -168,13 +171,13 @@ def _std_insert(s1, s2, p):
 def _std_delete(s, n, p):
     if p < 1 or p > len(s) + 1:
         raise PLCFault(f"DELETE: position {p} is outside 1..{len(s)}", "RANGE")
-    return s[:p - 1] + s[p - 1 + max(n, 0):]
+    return s[: p - 1] + s[p - 1 + max(n, 0) :]
 
 
 def _std_replace(s1, s2, n, p):
     if p < 1 or p > len(s1) + 1:
         raise PLCFault(f"REPLACE: position {p} is outside 1..{len(s1)}", "RANGE")
-    return s1[:p - 1] + s2 + s1[p - 1 + max(n, 0):]
+    return s1[: p - 1] + s2 + s1[p - 1 + max(n, 0) :]
 
 
 def _std_find(s1, s2):
@@ -336,9 +339,27 @@ def _day_of_week(d):
     return (d // DAY + 4) % 7
 
 
-NAMESPACE = {name: obj for name, obj in list(globals().items())
-             if name.startswith("_std_") or name in (
-                 "_to_string", "_str_to_int", "_str_to_real", "_str_to_bool", "_str_to_time", "_to_bcd",
-                 "_from_bcd", "_concat_date", "_concat_tod", "_day_of_week", "_signed", "_round_half_away",
-                 "_real_to_string", "_real_to_int", "_real_trunc_to")}
+NAMESPACE = {
+    name: obj
+    for name, obj in list(globals().items())
+    if name.startswith("_std_")
+    or name
+    in (
+        "_to_string",
+        "_str_to_int",
+        "_str_to_real",
+        "_str_to_bool",
+        "_str_to_time",
+        "_to_bcd",
+        "_from_bcd",
+        "_concat_date",
+        "_concat_tod",
+        "_day_of_week",
+        "_signed",
+        "_round_half_away",
+        "_real_to_string",
+        "_real_to_int",
+        "_real_trunc_to",
+    )
+}
 NAMESPACE.update({"_atan": math.atan, "_atan2": math.atan2})

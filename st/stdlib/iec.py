@@ -3,6 +3,7 @@
 Standard function blocks are written in ST (`standard_fbs.st`), compiled with
 the user's program like any other POU; functions are native (Python).
 """
+
 from __future__ import annotations
 
 import ast as py
@@ -27,6 +28,7 @@ def _p(name, constraint, group=""):
 def _emit_helper(helper):
     def emit(ctx, args, types, rt):
         return call(helper, *args)
+
     return emit
 
 
@@ -53,6 +55,7 @@ def _math(name, helper):
     def emit(ctx, args, types, rt):
         node = call(helper, args[0])
         return call("_f32", node) if T.base_of(rt) is T.REAL else node
+
     return FuncSig(name, [_p("IN", "ANY_REAL")], _real_result, emit=emit)
 
 
@@ -68,6 +71,7 @@ def _shift(name, helper):
         if b.is_int and b.signed:
             node = call("_signed", node, const(b.bits))
         return node
+
     sig = FuncSig(name, [_p("IN", "ANY_BIT", "T"), _p("N", "ANY_INT")], "T", emit=emit)
     sig.exact = True
     return sig
@@ -88,6 +92,7 @@ def _arith(name, op, extensible):
             else:
                 node = py.BinOp(node, {"+": py.Add(), "-": py.Sub(), "*": py.Mult()}[op], a)
         return node
+
     params = [_p("IN1", "ANY_MAGNITUDE", "T"), _p("IN2", "ANY_MAGNITUDE", "T")]
     result = "T"
     if op in ("*", "/"):
@@ -113,12 +118,19 @@ def _mul_div_result(name):
                 return f"{name}: incompatible argument types {out} and {t}"
             out = c
         return out
+
     return result
 
 
 def _cmp(name, helper):
-    return FuncSig(name, [_p("IN1", "ANY_ELEMENTARY", "T"), _p("IN2", "ANY_ELEMENTARY", "T")], "BOOL",
-                   extensible=name != "NE", helper=helper, min_args=2)
+    return FuncSig(
+        name,
+        [_p("IN1", "ANY_ELEMENTARY", "T"), _p("IN2", "ANY_ELEMENTARY", "T")],
+        "BOOL",
+        extensible=name != "NE",
+        helper=helper,
+        min_args=2,
+    )
 
 
 def _time_fn(name, a, b, result, op):
@@ -141,6 +153,7 @@ def _time_fn(name, a, b, result, op):
         if result in ("TOD", "LTOD"):
             node = py.BinOp(node, py.Mod(), const(functions.DAY))
         return node
+
     return FuncSig(name, [_p("IN1", a), _p("IN2", b)], result, emit=emit)
 
 
@@ -161,8 +174,14 @@ def _abs_emit(ctx, args, types, rt):
 
 
 def _minmax(name, helper):
-    return FuncSig(name, [_p("IN1", "ANY_ELEMENTARY", "T"), _p("IN2", "ANY_ELEMENTARY", "T")], "T",
-                   extensible=True, helper=helper, min_args=2)
+    return FuncSig(
+        name,
+        [_p("IN1", "ANY_ELEMENTARY", "T"), _p("IN2", "ANY_ELEMENTARY", "T")],
+        "T",
+        extensible=True,
+        helper=helper,
+        min_args=2,
+    )
 
 
 def _now_emit(ctx, args, types, rt):
@@ -192,6 +211,7 @@ def _trunc_sig(name, dst):
         if b.is_intlike:
             return call("_real_trunc_to", args[0], const(b.lo), const(b.hi), const(b.name))
         return _emit_wrap(call("_trunc", args[0]), rt)
+
     res = (lambda ts: T.DINT) if dst is None else dst
     sig = FuncSig(name, [_p("IN", "ANY_REAL")], res, emit=emit)
     sig.result_from_context = dst is None
@@ -211,20 +231,37 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
     add = lib.add
     # numeric
     add(FuncSig("ABS", [_p("IN", "ANY_NUM", "T")], "T", emit=_abs_emit))
-    for name, helper in (("SQRT", "_std_sqrt"), ("LN", "_std_ln"), ("LOG", "_std_log"), ("EXP", "_std_exp"),
-                         ("SIN", "_std_sin"), ("COS", "_std_cos"), ("TAN", "_std_tan"), ("ASIN", "_std_asin"),
-                         ("ACOS", "_std_acos"), ("ATAN", "_atan")):
+    for name, helper in (
+        ("SQRT", "_std_sqrt"),
+        ("LN", "_std_ln"),
+        ("LOG", "_std_log"),
+        ("EXP", "_std_exp"),
+        ("SIN", "_std_sin"),
+        ("COS", "_std_cos"),
+        ("TAN", "_std_tan"),
+        ("ASIN", "_std_asin"),
+        ("ACOS", "_std_acos"),
+        ("ATAN", "_atan"),
+    ):
         add(_math(name, helper))
 
     def atan2_emit(ctx, args, types, rt):
         node = call("_atan2", args[0], args[1])
         return call("_f32", node) if T.base_of(rt) is T.REAL else node
-    add(FuncSig("ATAN2", [_p("Y", "ANY_REAL", "T"), _p("X", "ANY_REAL", "T")],
-                lambda ts: _real_result([T.common_type(ts[0], ts[1]) or ts[0]]), emit=atan2_emit))
+
+    add(
+        FuncSig(
+            "ATAN2",
+            [_p("Y", "ANY_REAL", "T"), _p("X", "ANY_REAL", "T")],
+            lambda ts: _real_result([T.common_type(ts[0], ts[1]) or ts[0]]),
+            emit=atan2_emit,
+        )
+    )
 
     def expt_emit(ctx, args, types, rt):
         node = call("_pow", args[0], args[1])
         return call("_f32", node) if T.base_of(rt) is T.REAL else node
+
     add(FuncSig("EXPT", [_p("IN1", "ANY_REAL"), _p("IN2", "ANY_NUM")], _real_result, emit=expt_emit))
     add(_arith("ADD", "+", True))
     add(_arith("MUL", "*", True))
@@ -237,6 +274,7 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
     add(_shift("SHR", "_std_shr"))
     add(_shift("ROL", "_std_rol"))
     add(_shift("ROR", "_std_ror"))
+
     # AND/OR/XOR/NOT in function form, as the OpenPLC Editor writes them for FBD/LD blocks
     def _bitwise(name, pyop):
         def emit(ctx, args, types, rt):
@@ -244,10 +282,13 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
             for a in args[1:]:
                 node = py.BinOp(node, pyop(), a)
             return node
-        sig = FuncSig(name, [_p("IN1", "ANY_BIT", "T"), _p("IN2", "ANY_BIT", "T")], "T", extensible=True,
-                      emit=emit, min_args=2)
+
+        sig = FuncSig(
+            name, [_p("IN1", "ANY_BIT", "T"), _p("IN2", "ANY_BIT", "T")], "T", extensible=True, emit=emit, min_args=2
+        )
         sig.exact = True
         return sig
+
     add(_bitwise("AND", py.BitAnd))
     add(_bitwise("OR", py.BitOr))
     add(_bitwise("XOR", py.BitXor))
@@ -259,15 +300,30 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
         if b.is_intlike and not b.signed:
             return py.BinOp(py.UnaryOp(py.Invert(), args[0]), py.BitAnd(), const(b.hi))
         return py.UnaryOp(py.Invert(), args[0])
+
     add(FuncSig("NOT", [_p("IN", "ANY_BIT", "T")], "T", emit=not_emit))
     # selection
     add(FuncSig("SEL", [_p("G", "BOOL"), _p("IN0", "ANY", "T"), _p("IN1", "ANY", "T")], "T", helper="_std_sel"))
     add(_minmax("MAX", "_max"))
     add(_minmax("MIN", "_min"))
-    add(FuncSig("LIMIT", [_p("MN", "ANY_ELEMENTARY", "T"), _p("IN", "ANY_ELEMENTARY", "T"),
-                          _p("MX", "ANY_ELEMENTARY", "T")], "T", emit=_limit_emit))
-    add(FuncSig("MUX", [_p("K", "ANY_INT"), _p("IN0", "ANY", "T"), _p("IN1", "ANY", "T")], "T",
-                extensible=True, helper="_std_mux", min_args=2))
+    add(
+        FuncSig(
+            "LIMIT",
+            [_p("MN", "ANY_ELEMENTARY", "T"), _p("IN", "ANY_ELEMENTARY", "T"), _p("MX", "ANY_ELEMENTARY", "T")],
+            "T",
+            emit=_limit_emit,
+        )
+    )
+    add(
+        FuncSig(
+            "MUX",
+            [_p("K", "ANY_INT"), _p("IN0", "ANY", "T"), _p("IN1", "ANY", "T")],
+            "T",
+            extensible=True,
+            helper="_std_mux",
+            min_args=2,
+        )
+    )
     # comparison
     for name in ("GT", "GE", "EQ", "LE", "LT", "NE"):
         add(_cmp(name, "_std_" + name.lower()))
@@ -275,34 +331,84 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
     add(FuncSig("LEN", [_p("IN", "ANY_STRING")], "INT", emit=_len_emit))
     add(FuncSig("LEFT", [_p("IN", "ANY_STRING"), _p("L", "ANY_INT")], _string_result, helper="_std_left"))
     add(FuncSig("RIGHT", [_p("IN", "ANY_STRING"), _p("L", "ANY_INT")], _string_result, helper="_std_right"))
-    add(FuncSig("MID", [_p("IN", "ANY_STRING"), _p("L", "ANY_INT"), _p("P", "ANY_INT")], _string_result,
-                helper="_std_mid"))
-    add(FuncSig("CONCAT", [_p("IN1", "ANY_CHARS"), _p("IN2", "ANY_CHARS")], _concat_result, extensible=True,
-                helper="_std_concat", min_args=2))
-    add(FuncSig("INSERT", [_p("IN1", "ANY_STRING"), _p("IN2", "ANY_STRING"), _p("P", "ANY_INT")],
-                _concat_result, helper="_std_insert"))
-    add(FuncSig("DELETE", [_p("IN", "ANY_STRING"), _p("L", "ANY_INT"), _p("P", "ANY_INT")], _string_result,
-                helper="_std_delete"))
-    add(FuncSig("REPLACE", [_p("IN1", "ANY_STRING"), _p("IN2", "ANY_STRING"), _p("L", "ANY_INT"),
-                            _p("P", "ANY_INT")], _concat_result, helper="_std_replace"))
+    add(
+        FuncSig(
+            "MID", [_p("IN", "ANY_STRING"), _p("L", "ANY_INT"), _p("P", "ANY_INT")], _string_result, helper="_std_mid"
+        )
+    )
+    add(
+        FuncSig(
+            "CONCAT",
+            [_p("IN1", "ANY_CHARS"), _p("IN2", "ANY_CHARS")],
+            _concat_result,
+            extensible=True,
+            helper="_std_concat",
+            min_args=2,
+        )
+    )
+    add(
+        FuncSig(
+            "INSERT",
+            [_p("IN1", "ANY_STRING"), _p("IN2", "ANY_STRING"), _p("P", "ANY_INT")],
+            _concat_result,
+            helper="_std_insert",
+        )
+    )
+    add(
+        FuncSig(
+            "DELETE",
+            [_p("IN", "ANY_STRING"), _p("L", "ANY_INT"), _p("P", "ANY_INT")],
+            _string_result,
+            helper="_std_delete",
+        )
+    )
+    add(
+        FuncSig(
+            "REPLACE",
+            [_p("IN1", "ANY_STRING"), _p("IN2", "ANY_STRING"), _p("L", "ANY_INT"), _p("P", "ANY_INT")],
+            _concat_result,
+            helper="_std_replace",
+        )
+    )
     add(FuncSig("FIND", [_p("IN1", "ANY_STRING"), _p("IN2", "ANY_STRING")], "INT", helper="_std_find"))
     # time and date
     for name, a, b, r, op in (
-            ("ADD_TIME", "TIME", "TIME", "TIME", "+"), ("ADD_LTIME", "LTIME", "LTIME", "LTIME", "+"),
-            ("SUB_TIME", "TIME", "TIME", "TIME", "-"), ("SUB_LTIME", "LTIME", "LTIME", "LTIME", "-"),
-            ("ADD_TOD_TIME", "TOD", "TIME", "TOD", "+"), ("ADD_DT_TIME", "DT", "TIME", "DT", "+"),
-            ("SUB_TOD_TIME", "TOD", "TIME", "TOD", "-"), ("SUB_DT_TIME", "DT", "TIME", "DT", "-"),
-            ("SUB_DATE_DATE", "DATE", "DATE", "TIME", "-"), ("SUB_TOD_TOD", "TOD", "TOD", "TIME", "-"),
-            ("SUB_DT_DT", "DT", "DT", "TIME", "-"), ("MUL_TIME", "TIME", "ANY_NUM", "TIME", "*"),
-            ("MULTIME", "TIME", "ANY_NUM", "TIME", "*"), ("DIV_TIME", "TIME", "ANY_NUM", "TIME", "/"),
-            ("DIVTIME", "TIME", "ANY_NUM", "TIME", "/"), ("MUL_LTIME", "LTIME", "ANY_NUM", "LTIME", "*"),
-            ("DIV_LTIME", "LTIME", "ANY_NUM", "LTIME", "/"),
-            ("CONCAT_DATE_TOD", "DATE", "TOD", "DT", "concat")):
+        ("ADD_TIME", "TIME", "TIME", "TIME", "+"),
+        ("ADD_LTIME", "LTIME", "LTIME", "LTIME", "+"),
+        ("SUB_TIME", "TIME", "TIME", "TIME", "-"),
+        ("SUB_LTIME", "LTIME", "LTIME", "LTIME", "-"),
+        ("ADD_TOD_TIME", "TOD", "TIME", "TOD", "+"),
+        ("ADD_DT_TIME", "DT", "TIME", "DT", "+"),
+        ("SUB_TOD_TIME", "TOD", "TIME", "TOD", "-"),
+        ("SUB_DT_TIME", "DT", "TIME", "DT", "-"),
+        ("SUB_DATE_DATE", "DATE", "DATE", "TIME", "-"),
+        ("SUB_TOD_TOD", "TOD", "TOD", "TIME", "-"),
+        ("SUB_DT_DT", "DT", "DT", "TIME", "-"),
+        ("MUL_TIME", "TIME", "ANY_NUM", "TIME", "*"),
+        ("MULTIME", "TIME", "ANY_NUM", "TIME", "*"),
+        ("DIV_TIME", "TIME", "ANY_NUM", "TIME", "/"),
+        ("DIVTIME", "TIME", "ANY_NUM", "TIME", "/"),
+        ("MUL_LTIME", "LTIME", "ANY_NUM", "LTIME", "*"),
+        ("DIV_LTIME", "LTIME", "ANY_NUM", "LTIME", "/"),
+        ("CONCAT_DATE_TOD", "DATE", "TOD", "DT", "concat"),
+    ):
         add(_time_fn(name, a, b, r, op))
-    add(FuncSig("CONCAT_DATE", [_p("YEAR", "ANY_INT"), _p("MONTH", "ANY_INT"), _p("DAY", "ANY_INT")], "DATE",
-                helper="_concat_date"))
-    add(FuncSig("CONCAT_TOD", [_p("HOUR", "ANY_INT"), _p("MINUTE", "ANY_INT"), _p("SECOND", "ANY_INT"),
-                               _p("MILLISECOND", "ANY_INT")], "TOD", helper="_concat_tod"))
+    add(
+        FuncSig(
+            "CONCAT_DATE",
+            [_p("YEAR", "ANY_INT"), _p("MONTH", "ANY_INT"), _p("DAY", "ANY_INT")],
+            "DATE",
+            helper="_concat_date",
+        )
+    )
+    add(
+        FuncSig(
+            "CONCAT_TOD",
+            [_p("HOUR", "ANY_INT"), _p("MINUTE", "ANY_INT"), _p("SECOND", "ANY_INT"), _p("MILLISECOND", "ANY_INT")],
+            "TOD",
+            helper="_concat_tod",
+        )
+    )
     add(FuncSig("DAY_OF_WEEK", [_p("IN", "DATE")], "INT", helper="_day_of_week"))
     add(_trunc_sig("TRUNC", None))
     # the PLC clock, for the standard timers
@@ -329,7 +435,7 @@ def _conversion(name: str, time_unit: str):
         if i == -1:
             left, right = "", up[3:]
         else:
-            left, right = up[:i], up[i + 4:]
+            left, right = up[:i], up[i + 4 :]
         src_bcd = dst_bcd = False
         if left == "BCD":
             left, src_bcd = "WORD", True
@@ -346,7 +452,7 @@ def _conversion(name: str, time_unit: str):
         if dst_bcd and src is not None and not src.is_intlike:
             continue
         if src is not None:
-            try:        # only pairs IEC defines exist (REAL_TO_TOD does not)
+            try:  # only pairs IEC defines exist (REAL_TO_TOD does not)
                 convert(py.Name("x", py.Load()), src, dst, src_bcd, dst_bcd, time_unit)
             except TypeError:
                 return None
@@ -358,11 +464,13 @@ def _conversion_sig(name, src, dst, src_bcd, dst_bcd, time_unit):
     def emit(ctx, args, types, rt):
         s = T.base_of(types[0])
         return convert(args[0], s, dst, src_bcd, dst_bcd, time_unit, ctx)
+
     constraint = src.name if src is not None else "ANY_ELEMENTARY"
     if src is not None and src.is_string:
         constraint = "ANY_STRING"
-    sig = FuncSig(name, [_p("IN", constraint)], dst.name if not isinstance(dst, T.StringType) else (
-        lambda ts: dst), emit=emit)
+    sig = FuncSig(
+        name, [_p("IN", constraint)], dst.name if not isinstance(dst, T.StringType) else (lambda ts: dst), emit=emit
+    )
     sig.exact = True
     return sig
 
@@ -444,7 +552,7 @@ def convert(node, s, d, src_bcd=False, dst_bcd=False, time_unit="ms", ctx=None):
     if sk == "real" and dk == "time":
         per = 1 if d.long else unit
         return call("_round", py.BinOp(node, py.Mult(), const(float(per))))
-    if sk == dk:                       # TIME ↔ LTIME, DATE ↔ LDATE, ...
+    if sk == dk:  # TIME ↔ LTIME, DATE ↔ LDATE, ...
         return node
     DAY = functions.DAY
     if sk == "dt" and dk == "date":
@@ -483,8 +591,11 @@ def standard_fbs_source(f_trig_first_scan: bool) -> str:
     ctud = _section(text, "CTUD")
     for suffix, ty in _COUNTER_TYPES[1:]:
         for tmpl, name in ((ctu, "CTU"), (ctd, "CTD"), (ctud, "CTUD")):
-            parts.append(tmpl.replace(f"FUNCTION_BLOCK {name}\n", f"FUNCTION_BLOCK {name}{suffix}\n")
-                         .replace(": INT;", f": {ty};"))
+            parts.append(
+                tmpl.replace(f"FUNCTION_BLOCK {name}\n", f"FUNCTION_BLOCK {name}{suffix}\n").replace(
+                    ": INT;", f": {ty};"
+                )
+            )
     if f_trig_first_scan:
         parts[0] = parts[0].replace("M : BOOL := TRUE; (* F_TRIG memory *)", "M : BOOL; (* F_TRIG memory *)")
     return "\n".join(parts)

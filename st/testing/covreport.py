@@ -5,6 +5,7 @@ arm of every IF/ELSIF/ELSE and CASE (implicit ELSE arms included). Reports follo
 conventions: `Stmts Miss Branch BrPart Cover Missing`, percent = (lines run + arms taken) /
 (lines + arms), rounded down, "12-14, 17->ELSE" for what did not run.
 """
+
 from __future__ import annotations
 
 import html
@@ -20,9 +21,9 @@ class Point:
 
     file: str
     line: int
-    kind: str           # "line" or "branch"
-    label: str = ""     # branches: "THEN", "ELSIF (line 14)", "ELSE", "implicit ELSE", "CASE 1, 2", "CASE ELSE"
-    target: int = 0     # branches: the line of the arm's first statement (0: an empty or implicit arm)
+    kind: str  # "line" or "branch"
+    label: str = ""  # branches: "THEN", "ELSIF (line 14)", "ELSE", "implicit ELSE", "CASE 1, 2", "CASE ELSE"
+    target: int = 0  # branches: the line of the arm's first statement (0: an empty or implicit arm)
 
 
 class CoverageData:
@@ -47,8 +48,7 @@ class CoverageData:
                 self.hits[i] = 1
 
     def to_json(self) -> dict:
-        return {"points": [[p.file, p.line, p.kind, p.label, p.target] for p in self.points],
-                "hits": list(self.hits)}
+        return {"points": [[p.file, p.line, p.kind, p.label, p.target] for p in self.points], "hits": list(self.hits)}
 
     @classmethod
     def from_json(cls, d: dict) -> CoverageData:
@@ -65,7 +65,7 @@ class FileCoverage:
     def __init__(self, path: str, items: list):
         self.path = path
         lines: dict = {}
-        self.arms: list = []                    # [(Point, hit)]
+        self.arms: list = []  # [(Point, hit)]
         for p, h in items:
             if p.kind == "line":
                 lines[p.line] = lines.get(p.line, False) or bool(h)
@@ -80,8 +80,9 @@ class FileCoverage:
         for p, h in self.arms:
             decisions.setdefault(p.line, []).append((p, h))
         self.decisions = decisions
-        self.partial = sorted(n for n, arms in decisions.items() if any(h for _, h in arms)
-                              and not all(h for _, h in arms))
+        self.partial = sorted(
+            n for n, arms in decisions.items() if any(h for _, h in arms) and not all(h for _, h in arms)
+        )
 
     @property
     def percent(self) -> float:
@@ -133,15 +134,24 @@ def terminal_report(data: CoverageData, file=None, show_missing: bool = True) ->
     """A coverage.py-style table; returns the total percent."""
     file = file or sys.stdout
     files = data.files()
-    rows = [(_display(f.path), len(f.statements), len(f.missed), f.branches, len(f.partial),
-             _floor_percent(f.percent), f.missing_ranges()) for f in files]
+    rows = [
+        (
+            _display(f.path),
+            len(f.statements),
+            len(f.missed),
+            f.branches,
+            len(f.partial),
+            _floor_percent(f.percent),
+            f.missing_ranges(),
+        )
+        for f in files
+    ]
     n_st = sum(len(f.statements) for f in files)
     n_run = sum(len(f.run_lines) for f in files)
     n_br = sum(f.branches for f in files)
     n_taken = sum(f.branches_taken for f in files)
     total = 100.0 if n_st + n_br == 0 else 100.0 * (n_run + n_taken) / (n_st + n_br)
-    rows.append(("TOTAL", n_st, n_st - n_run, n_br, sum(len(f.partial) for f in files),
-                 _floor_percent(total), ""))
+    rows.append(("TOTAL", n_st, n_st - n_run, n_br, sum(len(f.partial) for f in files), _floor_percent(total), ""))
     width = max([len("Name")] + [len(r[0]) for r in rows])
     head = f"{'Name':<{width}}  {'Stmts':>5}  {'Miss':>5}  {'Branch':>6}  {'BrPart':>6}  {'Cover':>5}"
     if show_missing:
@@ -173,13 +183,20 @@ def html_report(data: CoverageData, directory) -> str:
     for k, f in enumerate(data.files()):
         page = f"file_{k}.html"
         (out / page).write_text(_file_page(f), encoding="utf-8")
-        rows.append(f"<tr><td class='name'><a href='{page}'>{html.escape(_display(f.path))}</a></td>"
-                    f"<td>{len(f.statements)}</td><td>{len(f.missed)}</td><td>{f.branches}</td>"
-                    f"<td>{len(f.partial)}</td><td>{_floor_percent(f.percent)}</td></tr>")
+        rows.append(
+            f"<tr><td class='name'><a href='{page}'>{html.escape(_display(f.path))}</a></td>"
+            f"<td>{len(f.statements)}</td><td>{len(f.missed)}</td><td>{f.branches}</td>"
+            f"<td>{len(f.partial)}</td><td>{_floor_percent(f.percent)}</td></tr>"
+        )
     index = out / "index.html"
-    index.write_text(_page("ST coverage", "<h1>ST coverage</h1><table><tr><th class='name'>File</th>"
-                           "<th>Stmts</th><th>Miss</th><th>Branch</th><th>BrPart</th><th>Cover</th></tr>"
-                           + "".join(rows) + "</table>"), encoding="utf-8")
+    index.write_text(
+        _page(
+            "ST coverage",
+            "<h1>ST coverage</h1><table><tr><th class='name'>File</th>"
+            "<th>Stmts</th><th>Miss</th><th>Branch</th><th>BrPart</th><th>Cover</th></tr>" + "".join(rows) + "</table>",
+        ),
+        encoding="utf-8",
+    )
     return str(index)
 
 
@@ -201,11 +218,15 @@ def _file_page(f: FileCoverage) -> str:
             cls = "miss"
         note_html = f" <span class='note'>({html.escape(note)})</span>" if note else ""
         body.append(f"<tr class='{cls}'><td class='n'>{n}</td><td>{html.escape(text)}{note_html}</td></tr>")
-    head = (f"<h1>{title}</h1><p>{len(f.statements)} statements, {len(f.missed)} missed; {f.branches} "
-            f"branches, {f.branches_taken} taken; {_floor_percent(f.percent)}</p>")
+    head = (
+        f"<h1>{title}</h1><p>{len(f.statements)} statements, {len(f.missed)} missed; {f.branches} "
+        f"branches, {f.branches_taken} taken; {_floor_percent(f.percent)}</p>"
+    )
     return _page(title, head + "<table class='src'>" + "".join(body) + "</table>")
 
 
 def _page(title: str, body: str) -> str:
-    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{title}</title>"
-            f"<style>{_CSS}</style></head><body>{body}</body></html>\n")
+    return (
+        f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{title}</title>"
+        f"<style>{_CSS}</style></head><body>{body}</body></html>\n"
+    )

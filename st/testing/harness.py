@@ -6,6 +6,7 @@ and handles to call a single FUNCTION_BLOCK or FUNCTION from Python.
     p.run_until("main.green", timeout="5s")    # scans until TRUE; the PLC time it took
     ton = p.fb("TON"); ton(IN=True, PT="100ms"); p.advance("100ms"); ton(IN=True); assert ton.Q
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -19,7 +20,7 @@ from ..runtime.values import from_python, parse_duration_arg, to_python
 class TestPLC(PLC):
     """A PLC with test helpers. Time is virtual: nothing here sleeps."""
 
-    __test__ = False        # not a pytest test class
+    __test__ = False  # not a pytest test class
 
     def set(self, values: dict | None = None, **kw) -> TestPLC:
         """Write several variables: p.set({"main.start": True, "main.speed": 3})."""
@@ -47,8 +48,9 @@ class TestPLC(PLC):
         while not test(self):
             if self.time >= end:
                 what = condition if isinstance(condition, str) else getattr(condition, "__name__", "condition")
-                raise AssertionError(f"{what} did not become true within {parse_duration_arg(timeout) / 1e9:g} s "
-                                     f"of PLC time")
+                raise AssertionError(
+                    f"{what} did not become true within {parse_duration_arg(timeout) / 1e9:g} s of PLC time"
+                )
             self.scan()
         return self.time - start
 
@@ -87,8 +89,11 @@ class TestPLC(PLC):
             pyargs = []
             for p in pou.params():
                 if p.section == "VAR_INPUT":
-                    pyargs.append(from_python(given[p.name.lower()], p.type, f"{pou.name}.{p.name}")
-                                  if p.name.lower() in given else _initial(self, p))
+                    pyargs.append(
+                        from_python(given[p.name.lower()], p.type, f"{pou.name}.{p.name}")
+                        if p.name.lower() in given
+                        else _initial(self, p)
+                    )
                 elif p.section == "VAR_IN_OUT":
                     raise TypeError(f"{pou.name} has VAR_IN_OUT parameters; call it from ST")
                 else:

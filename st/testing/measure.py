@@ -1,4 +1,5 @@
 """Coverage data from coverage builds (`compile_*(..., coverage=True)`): the probes' table and hits."""
+
 from __future__ import annotations
 
 from .covreport import CoverageData, Point

@@ -8,6 +8,7 @@
 - `--st-cov` measures ST line and branch coverage (also of PLCs made by the fixture),
   `--st-cov-html DIR` writes it as HTML; with xdist the workers' data is merged.
 """
+
 from __future__ import annotations
 
 import io
@@ -18,19 +19,26 @@ import pytest
 from ..diagnostics import CompileError
 from .runner import TestSuite, is_test_file, resolve_sources
 
-_BUILDS_KEY = pytest.StashKey[list]()     # every CompiledProgram with coverage probes, this process
-_SUITES_KEY = pytest.StashKey[dict]()     # resolved file list → TestSuite (or the compile error)
+_BUILDS_KEY = pytest.StashKey[list]()  # every CompiledProgram with coverage probes, this process
+_SUITES_KEY = pytest.StashKey[dict]()  # resolved file list → TestSuite (or the compile error)
 
 
 def pytest_addoption(parser):
     group = parser.getgroup("st", "IEC 61131-3 Structured Text")
-    group.addoption("--st-cov", action="store_true", default=False,
-                    help="measure which ST lines and branches the tests ran; print a table")
+    group.addoption(
+        "--st-cov",
+        action="store_true",
+        default=False,
+        help="measure which ST lines and branches the tests ran; print a table",
+    )
     group.addoption("--st-cov-html", default=None, metavar="DIR", help="also write ST coverage as HTML into DIR")
-    group.addoption("--st-timeout", default="10s", metavar="DURATION",
-                    help="watchdog per ST TEST block (default 10s)")
-    parser.addini("st_sources", type="linelist", default=[],
-                  help="ST source files (globs, relative to the ini file) compiled with every ST test file")
+    group.addoption("--st-timeout", default="10s", metavar="DURATION", help="watchdog per ST TEST block (default 10s)")
+    parser.addini(
+        "st_sources",
+        type="linelist",
+        default=[],
+        help="ST source files (globs, relative to the ini file) compiled with every ST test file",
+    )
 
 
 def pytest_configure(config):
@@ -82,6 +90,7 @@ class StFile(pytest.File):
         cache = config.stash[_SUITES_KEY]
         if files not in cache:
             from ..api import compile_paths
+
             try:
                 compiled = compile_paths(list(files), coverage=_measuring(config))
             except CompileError as e:
@@ -143,11 +152,13 @@ def format_failure(result, sources: dict, context: int = 12) -> str:
 
 # ---------------------------------------------------------------------- the plc fixture
 
+
 @pytest.fixture(scope="session")
 def plc(request):
     """A factory of PLCs on virtual time: plc("programs/x.st"), plc(source="PROGRAM ..."), cycle="10ms"."""
     from ..api import compile_paths, compile_text
     from .harness import TestPLC
+
     config = request.config
 
     def make(*paths, source: str = None, cycle=None, **compile_kw):
@@ -167,8 +178,10 @@ def plc(request):
 
 # ---------------------------------------------------------------------- coverage
 
+
 def _collect_coverage(config):
     from .measure import coverage_data
+
     data = coverage_data(config.stash[_BUILDS_KEY])
     for extra in config.stash.get(_WORKER_DATA_KEY, []):
         data.merge(extra)
@@ -180,7 +193,7 @@ _WORKER_DATA_KEY = pytest.StashKey[list]()
 
 def pytest_sessionfinish(session):
     config = session.config
-    if _measuring(config) and hasattr(config, "workeroutput"):     # an xdist worker: hand the data over
+    if _measuring(config) and hasattr(config, "workeroutput"):  # an xdist worker: hand the data over
         config.workeroutput["st_cov"] = _collect_coverage(config).to_json()
 
 
@@ -190,6 +203,7 @@ def pytest_testnodedown(node, error):
     payload = getattr(node, "workeroutput", {}).get("st_cov")
     if payload is not None:
         from .covreport import CoverageData
+
         config = node.config
         config.stash.setdefault(_WORKER_DATA_KEY, []).append(CoverageData.from_json(payload))
 
@@ -198,6 +212,7 @@ def pytest_terminal_summary(terminalreporter, config):
     if not _measuring(config) or hasattr(config, "workeroutput"):
         return
     from .covreport import html_report, terminal_report
+
     data = _collect_coverage(config)
     terminalreporter.section("ST coverage")
     buf = io.StringIO()

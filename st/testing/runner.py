@@ -8,6 +8,7 @@ the helpers installed here: a failed assertion raises `TestFailed` with a
 other exception from ST code is a PLC fault at its ST line, and an endless loop
 is ended by the watchdog.
 """
+
 from __future__ import annotations
 
 import fnmatch
@@ -30,14 +31,14 @@ DEFAULT_TIMEOUT = "10s"
 class Report:
     """Why a test did not pass."""
 
-    kind: str                   # "assert" (a test statement failed) or "fault" (a PLC fault, the watchdog)
-    message: str                # first line, e.g. "ASSERT_EQ(c.CV, 3) failed"
+    kind: str  # "assert" (a test statement failed) or "fault" (a PLC fault, the watchdog)
+    message: str  # first line, e.g. "ASSERT_EQ(c.CV, 3) failed"
     file: str = ""
     line: int = 0
     col: int = 0
     actual: str = ""
     expected: str = ""
-    note: str = ""              # the assertion's optional message
+    note: str = ""  # the assertion's optional message
 
     def details(self) -> list:
         out = []
@@ -48,13 +49,14 @@ class Report:
         return out
 
     def __str__(self) -> str:
-        where = f"{self.file}:{self.line}:{self.col}: " if self.col else (f"{self.file}:{self.line}: " if self.file
-                                                                           else "")
+        where = (
+            f"{self.file}:{self.line}:{self.col}: " if self.col else (f"{self.file}:{self.line}: " if self.file else "")
+        )
         return "\n".join([where + self.message] + ["  " + d for d in self.details()])
 
 
 class TestFailed(Exception):
-    __test__ = False        # (the Test* names are not pytest classes)
+    __test__ = False  # (the Test* names are not pytest classes)
 
     def __init__(self, report: Report):
         super().__init__(str(report))
@@ -78,13 +80,13 @@ class TestResult:
     case: TestCase
     passed: bool
     report: Report | None
-    duration: float             # seconds of wall time
+    duration: float  # seconds of wall time
 
 
 class TestSuite:
     """The TEST blocks of one compiled program, and how to run them."""
-    __test__ = False
 
+    __test__ = False
 
     def __init__(self, compiled: CompiledProgram, timeout=DEFAULT_TIMEOUT):
         self.compiled = compiled
@@ -99,10 +101,10 @@ class TestSuite:
             self._code.update({k: f.__code__ for k, f in scratch.items() if k.startswith("_test_")})
 
     @classmethod
-    def from_paths(cls, paths: Iterable, *, coverage: bool = False, timeout=DEFAULT_TIMEOUT,
-                   **compile_kw) -> TestSuite:
+    def from_paths(cls, paths: Iterable, *, coverage: bool = False, timeout=DEFAULT_TIMEOUT, **compile_kw) -> TestSuite:
         """Compile the files (plus the sources each test file names by convention) into one suite."""
         from ..api import compile_paths
+
         return cls(compile_paths(resolve_sources(paths), coverage=coverage, **compile_kw), timeout)
 
     def select(self, keyword: str = "") -> list:
@@ -156,8 +158,13 @@ class _TestContext:
     def install(self, ns: dict) -> None:
         self.ns = ns
         self.watchdog = Watchdog(ns)
-        ns.update(_t_fail=self.fail, _t_advance=self.advance, _t_mock=self.mock,
-                  _t_mock_function=self.mock_function, _t_verify=self.verify)
+        ns.update(
+            _t_fail=self.fail,
+            _t_advance=self.advance,
+            _t_mock=self.mock,
+            _t_mock_function=self.mock_function,
+            _t_verify=self.verify,
+        )
 
     # ------------------------------------------------------------------ assertions
     def fail(self, idx: int, msg, *vals) -> None:
@@ -173,11 +180,27 @@ class _TestContext:
             expected = f"{fmt(b, types[1])} ± {fmt(tol, types[2])} (difference {_num(abs(a - b))})"
         else:
             actual = fmt(vals[0], types[0])
-            rel = {"ASSERT_EQ": "", "ASSERT_NEQ": "not ", "ASSERT_GT": "> ", "ASSERT_LT": "< ",
-                   "ASSERT_GE": ">= ", "ASSERT_LE": "<= "}[kind]
+            rel = {
+                "ASSERT_EQ": "",
+                "ASSERT_NEQ": "not ",
+                "ASSERT_GT": "> ",
+                "ASSERT_LT": "< ",
+                "ASSERT_GE": ">= ",
+                "ASSERT_LE": "<= ",
+            }[kind]
             expected = rel + fmt(vals[1], types[1])
-        raise TestFailed(Report("assert", f"{info.text or kind} failed", info.span.file, info.span.line,
-                                info.span.col, actual, expected, msg or ""))
+        raise TestFailed(
+            Report(
+                "assert",
+                f"{info.text or kind} failed",
+                info.span.file,
+                info.span.line,
+                info.span.col,
+                actual,
+                expected,
+                msg or "",
+            )
+        )
 
     def advance(self, duration) -> None:
         d = int(duration)
@@ -194,8 +217,11 @@ class _TestContext:
         def _body(self):
             type(self)._calls += 1
 
-        inst.__class__ = type(cls.__name__, (cls,), {"__slots__": (), "_body": _body, "_calls": 0,
-                                                     "_st_mock": True, "__module__": cls.__module__})
+        inst.__class__ = type(
+            cls.__name__,
+            (cls,),
+            {"__slots__": (), "_body": _body, "_calls": 0, "_st_mock": True, "__module__": cls.__module__},
+        )
 
     def mock_function(self, pyname: str, value) -> None:
         calls = self.function_calls
@@ -216,8 +242,15 @@ class _TestContext:
             count = type(target)._calls if getattr(type(target), "_st_mock", False) else None
             what = "MOCK"
         if count is None:
-            raise TestFailed(Report("assert", f"{info.text} failed: it is not mocked (use {what} first)",
-                                    info.span.file, info.span.line, info.span.col))
+            raise TestFailed(
+                Report(
+                    "assert",
+                    f"{info.text} failed: it is not mocked (use {what} first)",
+                    info.span.file,
+                    info.span.line,
+                    info.span.col,
+                )
+            )
         if expected is None:
             if count > 0:
                 return
@@ -226,8 +259,9 @@ class _TestContext:
             if count == expected:
                 return
             actual, want = _times(count), _times(expected)
-        raise TestFailed(Report("assert", f"{info.text} failed", info.span.file, info.span.line, info.span.col,
-                                actual, want))
+        raise TestFailed(
+            Report("assert", f"{info.text} failed", info.span.file, info.span.line, info.span.col, actual, want)
+        )
 
 
 def _times(n: int) -> str:
@@ -239,6 +273,7 @@ def _num(v) -> str:
 
 
 # ---------------------------------------------------------------------- sources
+
 
 def is_test_file(path) -> bool:
     name = Path(path).name.lower()

@@ -21,6 +21,7 @@ value written to a variable of that type reads back equal:
 Arrays and structs cannot be written whole through `plc[path] = value`: write them element by
 element (`plc["main.a[1,2]"] = v`, `plc["main.p.x"] = v`).
 """
+
 from __future__ import annotations
 
 import re
@@ -32,18 +33,41 @@ from ..model import types as T
 from ..runtime.values import from_python, parse_duration_arg
 
 __all__ = [
-    "for_type", "for_variable",
-    "bools", "sints", "ints", "dints", "lints", "usints", "uints", "udints", "ulints",
-    "bytes_", "words", "dwords", "lwords", "reals", "lreals",
-    "times", "ltimes", "dates", "tods", "dts", "strings", "wstrings", "chars", "wchars",
+    "for_type",
+    "for_variable",
+    "bools",
+    "sints",
+    "ints",
+    "dints",
+    "lints",
+    "usints",
+    "uints",
+    "udints",
+    "ulints",
+    "bytes_",
+    "words",
+    "dwords",
+    "lwords",
+    "reals",
+    "lreals",
+    "times",
+    "ltimes",
+    "dates",
+    "tods",
+    "dts",
+    "strings",
+    "wstrings",
+    "chars",
+    "wchars",
 ]
 
-_DAY = 86_400 * 10 ** 9
+_DAY = 86_400 * 10**9
 _WIDE_MAX = 0xFFFF
 _STRING_NAME = re.compile(r"\s*(W?STRING)\s*[\[(]\s*([0-9]+)\s*[\])]\s*$", re.I)
 
 
 # --------------------------------------------------------------------------- helpers
+
 
 def _check_bounds(tname: str, lo, hi, min_value, max_value, fmt=str):
     """The effective (min, max): the type's range narrowed by the options, which must lie inside it."""
@@ -97,8 +121,13 @@ def _floats(t: T.ElemType, min_value=None, max_value=None, *, allow_nan=False, a
         if a > b:
             raise ValueError(f"no REAL lies between min_value={min_value!r} and max_value={max_value!r}")
     # the type's own limits are only passed when the user gave a bound: infinities need an open side
-    core = st.floats(a if min_value is not None else None, b if max_value is not None else None,
-                     allow_nan=allow_nan, allow_infinity=allow_infinity, width=t.bits)
+    core = st.floats(
+        a if min_value is not None else None,
+        b if max_value is not None else None,
+        allow_nan=allow_nan,
+        allow_infinity=allow_infinity,
+        width=t.bits,
+    )
     # the extremes and zero on purpose: where conversions and overflow checks break, and hypothesis
     # versions differ in how often they reach them
     edges = sorted({v for v in (a, b, 0.0) if a <= v <= b})
@@ -118,8 +147,9 @@ def _durations(t: T.ElemType, min_value=None, max_value=None):
 
 def _datetimes(t: T.ElemType, min_value=None, max_value=None):
     """DATE/TOD/DT: bounds as int ns or IEC literals ('D#2024-01-31', 'TOD#12:00', 'DT#...')."""
-    conv = [None if v is None else from_python(v, t, opt) for opt, v in (("min_value", min_value),
-                                                                          ("max_value", max_value))]
+    conv = [
+        None if v is None else from_python(v, t, opt) for opt, v in (("min_value", min_value), ("max_value", max_value))
+    ]
     if t.kind == "tod":
         lo, hi = 0, _DAY - 1
     elif t.kind == "date":
@@ -129,7 +159,7 @@ def _datetimes(t: T.ElemType, min_value=None, max_value=None):
     a, b = _check_bounds(t.name, lo, hi, *conv, fmt=_fmt_ns)
     if t.kind != "date":
         return st.integers(a, b)
-    first, last = -(-a // _DAY), b // _DAY       # whole days only: a DATE is a midnight
+    first, last = -(-a // _DAY), b // _DAY  # whole days only: a DATE is a midnight
     if first > last:
         raise ValueError(f"no {t.name} (a midnight) lies between min_value and max_value")
     return st.integers(first, last).map(lambda d: d * _DAY)
@@ -152,7 +182,7 @@ def _check_alphabet(alphabet, wide: bool, tname: str):
         if not alphabet:
             raise ValueError("alphabet is empty")
         return st.sampled_from(sorted(set(alphabet)))
-    return alphabet    # a strategy for single characters: the caller's responsibility
+    return alphabet  # a strategy for single characters: the caller's responsibility
 
 
 def _strings(t: T.StringType, max_size=None, *, min_size=0, alphabet=None):
@@ -176,7 +206,7 @@ def _nest(flat: list, dims: list) -> list:
     inner = 1
     for lo, hi in dims[1:]:
         inner *= hi - lo + 1
-    return [_nest(flat[i:i + inner], dims[1:]) for i in range(0, len(flat), inner)]
+    return [_nest(flat[i : i + inner], dims[1:]) for i in range(0, len(flat), inner)]
 
 
 def _named_type(name: str) -> T.Type:
@@ -190,6 +220,7 @@ def _named_type(name: str) -> T.Type:
 
 
 # --------------------------------------------------------------------------- the entry points
+
 
 def for_type(t, **opts):
     """A strategy for values of IEC type `t` (a type name such as "INT" or "STRING[10]", or a Type).
@@ -212,7 +243,8 @@ def for_type(t, **opts):
             raise ValueError(f"{ut.name}: an ARRAY[*] has no fixed size")
         n = ut.size
         return st.lists(for_type(ut.element, **opts), min_size=n, max_size=n).map(
-            lambda flat, dims=ut.dims: _nest(flat, dims))
+            lambda flat, dims=ut.dims: _nest(flat, dims)
+        )
     if isinstance(ut, T.StructType):
         fields = {m.name.lower(): m for m in ut.members.values()}
         unknown = [k for k in opts if k.lower() not in fields]
@@ -222,7 +254,8 @@ def for_type(t, **opts):
         names = [m.name for m in fields.values()]
         # tuples, not fixed_dictionaries: keep the declared field order, as to_python does
         return st.tuples(*(given[k] if k in given else for_type(m.type) for k, m in fields.items())).map(
-            lambda vals, names=names: dict(zip(names, vals)))
+            lambda vals, names=names: dict(zip(names, vals))
+        )
     if isinstance(ut, T.RefType):
         if opts:
             raise TypeError(f"for_type({ut.name}) takes no options")
@@ -245,8 +278,9 @@ def for_type(t, **opts):
             return _datetimes(ut, **opts)
         if k == "char":
             return _chars(ut, **opts)
-    raise TypeError(f"no strategy for {getattr(ut, 'name', ut)!r}: not a value type "
-                    "(for a function block, generate its inputs)")
+    raise TypeError(
+        f"no strategy for {getattr(ut, 'name', ut)!r}: not a value type (for a function block, generate its inputs)"
+    )
 
 
 def for_variable(plc, path: str, **opts):
@@ -255,6 +289,7 @@ def for_variable(plc, path: str, **opts):
 
 
 # --------------------------------------------------------------------------- named shortcuts
+
 
 def bools():
     return st.booleans()

@@ -8,6 +8,7 @@ their type in `.ty`; names get their symbol in `.sym`; calls get `.target`.
 the parts that check declarations, constants, expressions, calls and statements
 refer to each other (`Semantics`) and are used by the passes.
 """
+
 from __future__ import annotations
 
 from ...diagnostics import DiagnosticSink
@@ -41,8 +42,14 @@ class Checker:
         self.dialect = self.options.dialect
 
     def run(self, units: list[A.Unit], library_units: set[str]) -> Project:
-        ctx = CheckContext(self.sink, self.libraries, Project(libraries=self.libraries), self.dialect,
-                           library_units=library_units, strict_enums=self.strict_enums)
+        ctx = CheckContext(
+            self.sink,
+            self.libraries,
+            Project(libraries=self.libraries),
+            self.dialect,
+            library_units=library_units,
+            strict_enums=self.strict_enums,
+        )
         sem = Semantics(ctx)
         collect(ctx, units)
         resolve_types(sem)

@@ -1,4 +1,5 @@
 """Calls: FB instances, user functions, native (library) functions, REF(); argument binding."""
+
 from __future__ import annotations
 
 import re
@@ -19,38 +20,49 @@ class Calls(Part):
         if isinstance(callee, A.Name):
             key = callee.name.lower()
             sym = self.exprs.lookup(key, scope)
-            if isinstance(sym, T.VarSym) and not isinstance(T.unalias(sym.type), T.POUType) and (
-                    key in self.p.pous or self.ctx.native(key) is not None):
-                sym = None      # LEN(x) is the function even where a variable is called len
+            if (
+                isinstance(sym, T.VarSym)
+                and not isinstance(T.unalias(sym.type), T.POUType)
+                and (key in self.p.pous or self.ctx.native(key) is not None)
+            ):
+                sym = None  # LEN(x) is the function even where a variable is called len
             if isinstance(sym, T.VarSym):
                 sym.used = True
                 callee.sym = sym
                 callee.ty = sym.type
                 return self._fb_call(c, sym.type, scope, statement)
             mt = method_of(scope.fb, key) if not isinstance(sym, T.VarSym) else None
-            if mt is not None and len(c.args) > len(mt.params()) and (
-                    self.ctx.native(key) is not None or key in self.p.pous):
-                mt = None       # LEN(s) inside a block with a method Len(): the arguments say which
-            if mt is not None:                     # a method of this instance: THIS^.M(...)
+            if (
+                mt is not None
+                and len(c.args) > len(mt.params())
+                and (self.ctx.native(key) is not None or key in self.p.pous)
+            ):
+                mt = None  # LEN(s) inside a block with a method Len(): the arguments say which
+            if mt is not None:  # a method of this instance: THIS^.M(...)
                 fn = self.p.pous.get(key)
                 sig = self.ctx.native(key)
                 n = len([a for a in c.args if not a.name or a.name.lower() not in ("en", "eno")])
-                fits = (sig is not None and (n == len(sig.params) or (sig.extensible and n >= len(sig.params)))) \
-                    or (fn is not None and fn.pou_kind == "FUNCTION"
-                        and n == len([p for p in fn.params() if p.section != "VAR_OUTPUT"]))
-                if fits:                           # the call would fit the function too: say which runs
-                    self.warn("W007", callee.span, f"'{callee.name}' calls the method {mt.name} of "
-                              f"{mt.owner_fb.name}, not the function of that name",
-                              f"write THIS^.{mt.name}(...) to say so, or rename the method")
+                fits = (sig is not None and (n == len(sig.params) or (sig.extensible and n >= len(sig.params)))) or (
+                    fn is not None
+                    and fn.pou_kind == "FUNCTION"
+                    and n == len([p for p in fn.params() if p.section != "VAR_OUTPUT"])
+                )
+                if fits:  # the call would fit the function too: say which runs
+                    self.warn(
+                        "W007",
+                        callee.span,
+                        f"'{callee.name}' calls the method {mt.name} of "
+                        f"{mt.owner_fb.name}, not the function of that name",
+                        f"write THIS^.{mt.name}(...) to say so, or rename the method",
+                    )
                 return self._method_call(c, mt, scope, None)
             if key in ("__new", "__delete") and sym is None:
                 self.feature("vendor", callee.span, key.upper())
                 return self._new_delete(c, key, scope, statement)
-            if key in ("adr", "sizeof", "__isvalidref", "__queryinterface") and sym is None \
-                    and key not in self.p.pous:
+            if key in ("adr", "sizeof", "__isvalidref", "__queryinterface") and sym is None and key not in self.p.pous:
                 self.feature("vendor", callee.span, key.upper())
             if key in ("ref", "adr") and sym is None and key not in self.p.pous:
-                return self._ref_call(c, scope)          # ADR: a POINTER TO the variable (no arithmetic)
+                return self._ref_call(c, scope)  # ADR: a POINTER TO the variable (no arithmetic)
             if key == "sizeof" and sym is None and key not in self.p.pous:
                 return self._sizeof(c, scope)
             if key in ("lower_bound", "upper_bound") and sym is None and key not in self.p.pous:
@@ -71,8 +83,11 @@ class Calls(Part):
                 return self._query_interface(c, scope)
             if key in TEST_CALLS and sym is None and key not in self.p.pous:
                 return self.tests.test_call(c, key, scope, statement)
-            if key in scope.actions or (scope.pou is not None and key in scope.pou.actions) or \
-                    (scope.fb is not None and key in scope.fb.actions):     # from a method too
+            if (
+                key in scope.actions
+                or (scope.pou is not None and key in scope.pou.actions)
+                or (scope.fb is not None and key in scope.fb.actions)
+            ):  # from a method too
                 if c.args:
                     self.err("E017", c.span, "an action takes no arguments")
                 c.target = CallTarget("action", name=key)
@@ -80,9 +95,13 @@ class Calls(Part):
             pou = self.p.pous.get(key)
             if pou is not None:
                 if pou.pou_kind != "FUNCTION":
-                    self.err("E020", c.span, f"'{callee.name}' is a {pou.pou_kind.replace('_', ' ')} type; "
-                             f"declare an instance and call that",
-                             f"VAR inst : {pou.name}; END_VAR ... inst(...);")
+                    self.err(
+                        "E020",
+                        c.span,
+                        f"'{callee.name}' is a {pou.pou_kind.replace('_', ' ')} type; "
+                        f"declare an instance and call that",
+                        f"VAR inst : {pou.name}; END_VAR ... inst(...);",
+                    )
                     return None
                 self.decls.resolve_interface(pou)
                 return self._function_call(c, pou, scope)
@@ -107,7 +126,7 @@ class Calls(Part):
                 if mt is not None:
                     return self._method_call(c, mt, scope, callee.base)
                 if callee.name.lower() in b.actions and b.pou_kind == "FUNCTION_BLOCK":
-                    if c.args:                     # inst.Action(): CODESYS and TwinCAT call actions so
+                    if c.args:  # inst.Action(): CODESYS and TwinCAT call actions so
                         self.err("E017", c.span, "an action takes no arguments")
                     c.target = CallTarget("action", name=callee.name.lower(), inst=callee.base)
                     return None
@@ -153,8 +172,11 @@ class Calls(Part):
         if "PRIVATE" in mods and scope.fb is not owner:
             self.err("E043", span, f"{what} of {owner.name} is PRIVATE: only {owner.name} itself may use it")
         elif "PROTECTED" in mods and (scope.fb is None or not T.implements(scope.fb, owner)):
-            self.err("E043", span, f"{what} of {owner.name} is PROTECTED: only {owner.name} and the blocks that "
-                     f"extend it may use it")
+            self.err(
+                "E043",
+                span,
+                f"{what} of {owner.name} is PROTECTED: only {owner.name} and the blocks that extend it may use it",
+            )
 
     def _new_delete(self, c: A.Call, key: str, scope: Scope, statement: bool):
         """__NEW(type): a POINTER TO a fresh value of that type; __DELETE(p): p becomes NULL (the value
@@ -173,8 +195,15 @@ class Calls(Part):
             c.target = CallTarget("delete", arg=arg)
             return None
         name = arg.name if isinstance(arg, A.Name) else ""
-        t = (T.ELEMENTARY.get(name.upper()) or self.decls.resolve_named_type(name.lower(), arg.span)
-             or self.p.pous.get(name.lower())) if name else None
+        t = (
+            (
+                T.ELEMENTARY.get(name.upper())
+                or self.decls.resolve_named_type(name.lower(), arg.span)
+                or self.p.pous.get(name.lower())
+            )
+            if name
+            else None
+        )
         if t is None or (isinstance(t, T.POUType) and t.pou_kind not in ("FUNCTION_BLOCK",)):
             self.err("E012", arg.span, "__NEW needs a data type or a FUNCTION_BLOCK type")
             return None
@@ -191,8 +220,11 @@ class Calls(Part):
         arg = c.args[0].value
         t = None
         if isinstance(arg, A.Name) and self.exprs.lookup(arg.name.lower(), scope) is None:
-            t = T.ELEMENTARY.get(arg.name.upper()) or self.decls.resolve_named_type(arg.name.lower(), arg.span) \
+            t = (
+                T.ELEMENTARY.get(arg.name.upper())
+                or self.decls.resolve_named_type(arg.name.lower(), arg.span)
                 or self.p.pous.get(arg.name.lower())
+            )
             if t is None:
                 self.err("E010", arg.span, f"'{arg.name}' is neither a variable nor a type")
                 return T.LIT_INT
@@ -209,8 +241,11 @@ class Calls(Part):
         """__QUERYINTERFACE(source, dest): does the instance behind `source` provide dest's
         interface? If so dest refers to it and the result is TRUE (CODESYS)."""
         if len(c.args) != 2 or any(a.name for a in c.args):
-            self.err("E017", c.span, "__QUERYINTERFACE takes two arguments: an interface (or instance) and an "
-                     "interface variable")
+            self.err(
+                "E017",
+                c.span,
+                "__QUERYINTERFACE takes two arguments: an interface (or instance) and an interface variable",
+            )
             return T.BOOL
         st = self.exprs.expr(c.args[0].value, scope)
         dt = self.stmts.lvalue(c.args[1].value, scope)
@@ -239,16 +274,26 @@ class Calls(Part):
 
     def _fb_call(self, c: A.Call, t: T.Type, scope: Scope, statement: bool):
         fb = T.unalias(t)
-        if not isinstance(fb, T.POUType) or fb.pou_kind in ("FUNCTION", "INTERFACE") or (
-                fb.decl is not None and "CLASS" in fb.decl.modifiers):
-            what = "an instance of the CLASS " + fb.name + " has no body; call its methods" if isinstance(
-                fb, T.POUType) and fb.decl is not None and "CLASS" in fb.decl.modifiers else f"a {t} is not callable"
+        if (
+            not isinstance(fb, T.POUType)
+            or fb.pou_kind in ("FUNCTION", "INTERFACE")
+            or (fb.decl is not None and "CLASS" in fb.decl.modifiers)
+        ):
+            what = (
+                "an instance of the CLASS " + fb.name + " has no body; call its methods"
+                if isinstance(fb, T.POUType) and fb.decl is not None and "CLASS" in fb.decl.modifiers
+                else f"a {t} is not callable"
+            )
             self.err("E020", c.span, what)
             return None
         self.decls.resolve_interface(fb)
         if not statement:
-            self.err("E049", c.span, "a function block call is a statement; it has no value",
-                     "call it, then read its outputs, e.g. inst(...); x := inst.Q;")
+            self.err(
+                "E049",
+                c.span,
+                "a function block call is a statement; it has no value",
+                "call it, then read its outputs, e.g. inst(...); x := inst.Q;",
+            )
         bind = self._bind_args(c, fb, scope, is_fb=True)
         c.target = CallTarget("fb", pou=fb, bind=bind)
         return None
@@ -256,10 +301,15 @@ class Calls(Part):
     def _method_call(self, c: A.Call, mt: T.POUType, scope: Scope, obj):
         """A METHOD call; obj is the instance expression (None: this instance)."""
         self.check_access(mt.decl.modifiers, mt.owner_fb, f"method {mt.name}", scope, c.span)
-        if "ABSTRACT" in mt.decl.modifiers and isinstance(obj, A.Deref) and isinstance(obj.base, A.Name) \
-                and getattr(obj.base.sym, "kind", "") == "super":
-            self.err("E043", c.span, f"method {mt.name} of {mt.owner_fb.name} is ABSTRACT: it has no "
-                     f"implementation to call")
+        if (
+            "ABSTRACT" in mt.decl.modifiers
+            and isinstance(obj, A.Deref)
+            and isinstance(obj.base, A.Name)
+            and getattr(obj.base.sym, "kind", "") == "super"
+        ):
+            self.err(
+                "E043", c.span, f"method {mt.name} of {mt.owner_fb.name} is ABSTRACT: it has no implementation to call"
+            )
         bind = self._bind_args(c, mt, scope, is_fb=False)
         c.target = CallTarget("method", pou=mt, bind=bind, obj=obj)
         return mt.return_type
@@ -293,7 +343,7 @@ class Calls(Part):
             elif key in ("en", "eno"):
                 extras[key] = a
                 if key == "eno" and "eno" in pou.vars:
-                    bind[key] = a       # the body sets ENO itself
+                    bind[key] = a  # the body sets ENO itself
             else:
                 p = pou.vars.get(key)
                 if p is None or p.section not in _SECTIONS_PARAM:
@@ -326,11 +376,15 @@ class Calls(Part):
                     self.err("E031", a.value.span, f"VAR_IN_OUT '{p.name}' needs a variable, not an expression")
                     continue
                 vt = self.stmts.lvalue(a.value, scope)
-                if vt is not None and not same_type(vt, p.type) and not T.extends(vt, p.type) and not (
-                        T.is_conformant(p.type) and _fits_conformant(vt, p.type)):
+                if (
+                    vt is not None
+                    and not same_type(vt, p.type)
+                    and not T.extends(vt, p.type)
+                    and not (T.is_conformant(p.type) and _fits_conformant(vt, p.type))
+                ):
                     if not (isinstance(T.base_of(vt), T.StringType) and isinstance(T.base_of(p.type), T.StringType)):
                         self.err("E013", a.value.span, f"VAR_IN_OUT '{p.name}' is {p.type}; {vt} cannot be passed")
-            elif T.is_reference(p.type):        # an input REFERENCE TO is bound to the argument
+            elif T.is_reference(p.type):  # an input REFERENCE TO is bound to the argument
                 want = cast(T.RefType, T.unalias(p.type)).target
                 if not isinstance(a.value, (A.Name, A.Field, A.Index, A.Deref)):
                     self.err("E031", a.value.span, f"'{p.name}' is a REFERENCE TO {want}: pass a variable")
@@ -358,8 +412,12 @@ class Calls(Part):
                 # a non-formal call gives every input and in-out, in order (IEC 61131-3 6.6.1.4.2)
                 needed = [p for p in params if p.section != "VAR_OUTPUT"]
                 if npos < len(needed):
-                    self.err("E017", c.span, f"{pou.name} takes {len(needed)} argument(s), not {npos}",
-                             "name the arguments (x := ...) to leave some out")
+                    self.err(
+                        "E017",
+                        c.span,
+                        f"{pou.name} takes {len(needed)} argument(s), not {npos}",
+                        "name the arguments (x := ...) to leave some out",
+                    )
                     return {"params": bind, "en": extras.get("en"), "eno": extras.get("eno")}
             for p in pou.in_outs():
                 if p.name.lower() not in bind:
@@ -394,8 +452,12 @@ class Calls(Part):
                         m = re.fullmatch(r"in(\d+)", key)
                         if sig.extensible and m:
                             continue
-                        self.err("E016", a.span, f"{sig.name} has no parameter '{a.name}' "
-                                 f"(parameters: {', '.join(p.name for p in sig.params)})")
+                        self.err(
+                            "E016",
+                            a.span,
+                            f"{sig.name} has no parameter '{a.name}' "
+                            f"(parameters: {', '.join(p.name for p in sig.params)})",
+                        )
                         return None
             pos = [a for a in args if not a.name]
             for p in sig.params:
@@ -405,8 +467,10 @@ class Calls(Part):
                 if a is not None:
                     ordered.append(a)
             if sig.extensible:
-                extra = sorted(((int(k[2:]), a) for k, a in named.items()
-                                if re.fullmatch(r"in\d+", k) and k not in names), key=lambda x: x[0])
+                extra = sorted(
+                    ((int(k[2:]), a) for k, a in named.items() if re.fullmatch(r"in\d+", k) and k not in names),
+                    key=lambda x: x[0],
+                )
                 ordered.extend(a for _, a in extra)
             ordered.extend(pos)
             args = ordered
@@ -438,12 +502,18 @@ class Calls(Part):
                     groups[p.group] = t
                 else:
                     ct = T.common_type(prev, t)
-                    if ct is None and isinstance(T.base_of(prev), T.StringType) and isinstance(T.base_of(t), T.StringType):
+                    if (
+                        ct is None
+                        and isinstance(T.base_of(prev), T.StringType)
+                        and isinstance(T.base_of(t), T.StringType)
+                    ):
                         ct = prev
                     if ct is None and isinstance(T.base_of(prev), T.EnumType) and T.base_of(prev) is T.base_of(t):
                         ct = prev
                     if ct is None:
-                        self.err("E013", a.value.span, f"arguments of {sig.name} have incompatible types {prev} and {t}")
+                        self.err(
+                            "E013", a.value.span, f"arguments of {sig.name} have incompatible types {prev} and {t}"
+                        )
                     else:
                         groups[p.group] = ct
             elif want is not None:
@@ -454,8 +524,13 @@ class Calls(Part):
             if isinstance(t, T.LiteralType):
                 # all-literal arguments take the type the context expects (IEC: ANY_NUM literals)
                 eb = T.base_of(expected) if expected is not None else None
-                if sig.result == g and eb is not None and isinstance(eb, T.ElemType) and \
-                        (eb.is_num or (eb.is_bit and t is T.LIT_INT)) and not (t is T.LIT_REAL and not eb.is_real):
+                if (
+                    sig.result == g
+                    and eb is not None
+                    and isinstance(eb, T.ElemType)
+                    and (eb.is_num or (eb.is_bit and t is T.LIT_INT))
+                    and not (t is T.LIT_REAL and not eb.is_real)
+                ):
                     groups[g] = eb
                 else:
                     groups[g] = T.default_type_for_literal(t)
@@ -471,14 +546,19 @@ class Calls(Part):
                 arg_types[i] = gt
         res = sig.result
         eb = T.base_of(expected) if expected is not None else None
-        if callable(res) and arg_types and all(isinstance(t, T.LiteralType) for t in arg_types) \
-                and isinstance(eb, T.ElemType) and eb.is_real:
+        if (
+            callable(res)
+            and arg_types
+            and all(isinstance(t, T.LiteralType) for t in arg_types)
+            and isinstance(eb, T.ElemType)
+            and eb.is_real
+        ):
             # SQRT(2.0) in a REAL context computes in REAL
             for a in args:
                 a.value.ty = eb
             arg_types = [eb] * len(arg_types)
         if getattr(sig, "result_from_context", False) and isinstance(eb, T.ElemType) and eb.is_int:
-            rt = eb             # TRUNC: ANY_REAL → the integer type the context wants
+            rt = eb  # TRUNC: ANY_REAL → the integer type the context wants
         elif callable(res):
             rt = res(arg_types)
             if isinstance(rt, str):
@@ -520,8 +600,11 @@ def _size_of(t: T.Type):
     if isinstance(u, (T.RefType, T.POUType)) and not (isinstance(u, T.POUType) and u.pou_kind != "INTERFACE"):
         return 8, 8
     if isinstance(u, (T.StructType, T.POUType)):
-        members = [m.type for m in u.members.values()] if isinstance(u, T.StructType) else \
-            [v.type for v in u.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP")]
+        members = (
+            [m.type for m in u.members.values()]
+            if isinstance(u, T.StructType)
+            else [v.type for v in u.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP")]
+        )
         off, align = 0, 1
         for mt in members:
             ms, ma = _size_of(mt)

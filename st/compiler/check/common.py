@@ -1,4 +1,5 @@
 """Shared pieces of the checker: call targets, scopes, the STEP and NULL pseudo-types, generic constraints."""
+
 from __future__ import annotations
 
 import re
@@ -29,7 +30,7 @@ class CallTarget:
     """What a call resolved to (kept on `Call.target` for code generation)."""
 
     def __init__(self, kind: str, **kw):
-        self.kind = kind            # fb, function, native, action, conversion
+        self.kind = kind  # fb, function, native, action, conversion
         self.__dict__.update(kw)
 
 
@@ -49,7 +50,7 @@ class Scope:
         self.steps: dict = {}
         self.actions: dict = {}
         self.library = library
-        self.test = False           # inside TEST/SETUP/TEARDOWN: test statements allowed
+        self.test = False  # inside TEST/SETUP/TEARDOWN: test statements allowed
         self.fb: T.POUType | None = None  # the function block whose body or METHOD this is (THIS, implicit calls)
 
 
@@ -86,6 +87,7 @@ _NULL = _NullType()
 
 class _ThisSym:
     """The symbol of THIS: a reference to the instance a function block body or method runs on."""
+
     kind = "this"
     name = "THIS"
 
@@ -95,6 +97,7 @@ THIS = _ThisSym()
 
 class _SuperSym:
     """SUPER: the instance seen as its base function block (calls are not virtual)."""
+
     kind = "super"
     name = "SUPER"
 
@@ -136,7 +139,7 @@ def _satisfies(t: T.Type, constraint: str) -> bool:
     if constraint == "ANY_NUM":
         return k in ("int", "real")
     if constraint == "ANY_REAL":
-        return k in ("int", "real")     # integers are accepted and computed as LREAL
+        return k in ("int", "real")  # integers are accepted and computed as LREAL
     if constraint == "ANY_INT":
         return k == "int" or k == "bit"
     if constraint == "ANY_BIT":
@@ -177,5 +180,7 @@ def same_type(a: T.Type, b: T.Type) -> bool:
 
 def signature(mt: T.POUType) -> tuple:
     """A method's parameters and return type, as an override or an implementation must repeat them."""
-    return ([(v.name.lower(), v.section, str(v.type)) for v in mt.params()],
-            str(mt.return_type) if mt.return_type is not None else None)
+    return (
+        [(v.name.lower(), v.section, str(v.type)) for v in mt.params()],
+        str(mt.return_type) if mt.return_type is not None else None,
+    )

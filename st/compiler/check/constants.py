@@ -1,5 +1,6 @@
 """Constant expressions: evaluated on demand wherever a constant is needed (array bounds, CASE
 labels, string lengths, initial values of CONSTANTs), before and after the globals are declared."""
+
 from __future__ import annotations
 
 from ...model import types as T

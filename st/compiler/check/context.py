@@ -1,4 +1,5 @@
 """The state one checker run works on, passed explicitly to every pass and part of the checker."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -65,8 +66,12 @@ class CheckContext:
         if (kind == "oop" and d.oop) or (kind == "vendor" and d.vendor_extensions):
             return True
         others = [n for n, p in PRESETS.items() if (p.oop if kind == "oop" else p.vendor_extensions)]
-        self.err("E044", span, f"{what} is not part of the {d.name} dialect",
-                 f"choose --dialect {' or '.join(others)} (or a {{dialect '…'}} pragma) to use it")
+        self.err(
+            "E044",
+            span,
+            f"{what} is not part of the {d.name} dialect",
+            f"choose --dialect {' or '.join(others)} (or a {{dialect '…'}} pragma) to use it",
+        )
         return False
 
     def feature_quiet(self, kind: str) -> bool:
@@ -76,8 +81,12 @@ class CheckContext:
 
     def enum_as_int(self, t) -> bool:
         """May this enumeration's values be read as integers (codesys/twincat, not 'strict')?"""
-        return self.dialect is not None and self.dialect.enum_as_int and isinstance(t, T.EnumType) \
+        return (
+            self.dialect is not None
+            and self.dialect.enum_as_int
+            and isinstance(t, T.EnumType)
             and t.name.lower() not in self.strict_enums
+        )
 
     # ---------------------------------------------------------------- libraries
     def native(self, key: str) -> FuncSig | None:

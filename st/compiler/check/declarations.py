@@ -1,6 +1,7 @@
 """Declarations: named types resolved, POU interfaces (variables, methods, properties, bases, interfaces)
 declared, variable blocks declared, initial values checked. Resolution is on demand: a type or a POU
 is resolved when first met, so declarations may come in any order."""
+
 from __future__ import annotations
 
 from typing import cast
@@ -38,14 +39,14 @@ class Declarations(Part):
         spec = td.spec
         if isinstance(spec, A.EnumType):
             if isinstance(td.init, A.Name) and not spec.default:
-                spec.default = td.init.name       # TYPE E : (A, B) := B;
+                spec.default = td.init.name  # TYPE E : (A, B) := B;
             elif td.init is not None and not spec.default:
                 self.err("E013", td.init.span, "an enumeration's default must be one of its values")
             return self._enum(td.name, spec)
         if isinstance(spec, A.StructType):
             st = T.StructType(td.name, pyname="_st_" + mangle(td.name))
-            self.p.types[td.name.lower()] = st     # allow references to itself through REF_TO
-            if spec.extends is not None:           # the base's fields come first, as declared there
+            self.p.types[td.name.lower()] = st  # allow references to itself through REF_TO
+            if spec.extends is not None:  # the base's fields come first, as declared there
                 self.feature("vendor", spec.extends.span, "STRUCT EXTENDS")
                 bt = T.unalias(self.resolve_type(spec.extends, None))
                 if isinstance(bt, T.StructType):
@@ -113,8 +114,11 @@ class Declarations(Part):
     def resolve_type(self, spec: A.TypeSpec, scope: Scope | None) -> T.Type:
         if isinstance(spec, A.NamedType):
             if spec.ctor_args:
-                self.err("E013", spec.span, "FB_init arguments belong where an instance is declared "
-                         "(`inst : FB(a := 1);`), not in a type")
+                self.err(
+                    "E013",
+                    spec.span,
+                    "FB_init arguments belong where an instance is declared (`inst : FB(a := 1);`), not in a type",
+                )
             key = spec.name.lower()
             up = spec.name.upper()
             if up in T.ELEMENTARY:
@@ -143,7 +147,7 @@ class Declarations(Part):
             dims = []
             for r in spec.ranges:
                 if r is None:
-                    dims.append((0, -1))      # ARRAY[*]: bounds come from the argument
+                    dims.append((0, -1))  # ARRAY[*]: bounds come from the argument
                     continue
                 lo, hi = self.consts.value(r[0], scope), self.consts.value(r[1], scope)
                 if not isinstance(lo, int) or not isinstance(hi, int):
@@ -156,8 +160,9 @@ class Declarations(Part):
             elem = self.resolve_type(spec.element, scope)
             at = T.ArrayType(dims, elem)
             if at.size > MAX_ARRAY_ELEMENTS:
-                self.err("E042", spec.span, f"an array of {at.size:,} elements is too large "
-                         f"(at most {MAX_ARRAY_ELEMENTS:,})")
+                self.err(
+                    "E042", spec.span, f"an array of {at.size:,} elements is too large (at most {MAX_ARRAY_ELEMENTS:,})"
+                )
             return at
         if isinstance(spec, A.RefType):
             if spec.kind != "REF_TO":
@@ -185,8 +190,11 @@ class Declarations(Part):
         self.feature("vendor", init.span, "FB_init arguments in a declaration")
         bt = T.unalias(t)
         if not (isinstance(bt, T.POUType) and bt.pou_kind == "FUNCTION_BLOCK"):
-            self.err("E013", init.span, f"arguments in a declaration go to a function block's FB_init; "
-                     f"{t} is not a function block")
+            self.err(
+                "E013",
+                init.span,
+                f"arguments in a declaration go to a function block's FB_init; {t} is not a function block",
+            )
             return
         self.resolve_interface(bt)
         mt = bt.methods.get("fb_init")
@@ -220,7 +228,7 @@ class Declarations(Part):
             if d.return_type is not None:
                 pou.return_type = self.resolve_type(d.return_type, scope)
         base = self._base_of(pou) if d.kind == "FUNCTION_BLOCK" and d.extends else None
-        if base is not None:                       # inherited variables come first, as declared there
+        if base is not None:  # inherited variables come first, as declared there
             pou.base = base
             for k, v in base.vars.items():
                 if k not in ("en", "eno"):
@@ -233,8 +241,9 @@ class Declarations(Part):
             for key, section in (("en", "VAR_INPUT"), ("eno", "VAR_OUTPUT")):
                 if key in mentioned and key not in pou.vars:
                     true = A.Literal(d.span, "bool", True, "", "TRUE")
-                    pou.vars[key] = T.VarSym(key.upper(), T.BOOL, section, d.span, true, pyname=key.upper(),
-                                             owner=pou, used=True)
+                    pou.vars[key] = T.VarSym(
+                        key.upper(), T.BOOL, section, d.span, true, pyname=key.upper(), owner=pou, used=True
+                    )
         for act in d.actions:
             if act.name.lower() in pou.actions:
                 self.err("E011", act.span, f"action '{act.name}' is declared twice")
@@ -245,11 +254,11 @@ class Declarations(Part):
             self._declare_property(pou, pr)
         if base is not None:
             for k, ba in base.actions.items():
-                pou.actions.setdefault(k, ba)        # actions are inherited; a same-named one replaces it
+                pou.actions.setdefault(k, ba)  # actions are inherited; a same-named one replaces it
             for k, bp in base.properties.items():
-                pou.properties.setdefault(k, bp)     # an own property of that name overrides it
+                pou.properties.setdefault(k, bp)  # an own property of that name overrides it
             for k, bm in base.methods.items():
-                pou.methods.setdefault(k, bm)        # an own method of that name overrides it
+                pou.methods.setdefault(k, bm)  # an own method of that name overrides it
         if d.kind == "FUNCTION_BLOCK" and d.implements:
             self._link_interfaces(pou)
 
@@ -287,12 +296,16 @@ class Declarations(Part):
             itf.interfaces.append(base)
         for m in d.methods:
             if m.body:
-                self.err("E047", m.span, f"a method of INTERFACE {itf.name} has no body; implement it in a "
-                         f"FUNCTION_BLOCK that IMPLEMENTS {itf.name}")
+                self.err(
+                    "E047",
+                    m.span,
+                    f"a method of INTERFACE {itf.name} has no body; implement it in a "
+                    f"FUNCTION_BLOCK that IMPLEMENTS {itf.name}",
+                )
             self._declare_method(itf, m)
         for pr in d.properties:
             bare = pr.get is None and pr.set is None
-            if bare:                                   # a bare prototype: both accessors
+            if bare:  # a bare prototype: both accessors
                 pr.get = A.Method(pr.span, pr.name, [], pr.type)
                 pr.set = A.Method(pr.span, pr.name, [])
             self._declare_property(itf, pr)
@@ -306,15 +319,19 @@ class Declarations(Part):
                 if mine is None:
                     itf.methods[k] = bm
                 elif signature(mine) != signature(bm):
-                    self.err("E047", mine.decl.span, f"method {mine.name} of {itf.name} differs from "
-                             f"{base.name}.{bm.name}")
+                    self.err(
+                        "E047", mine.decl.span, f"method {mine.name} of {itf.name} differs from {base.name}.{bm.name}"
+                    )
 
     def _declare_property(self, owner: T.POUType, pr) -> None:
         """PROPERTY: GET is a method returning the property's type under its name; SET a method whose
         input has the property's name."""
         key = pr.name.lower()
-        if key in owner.vars or key in owner.methods or (key in owner.properties
-                                                         and owner.properties[key].owner is owner):
+        if (
+            key in owner.vars
+            or key in owner.methods
+            or (key in owner.properties and owner.properties[key].owner is owner)
+        ):
             self.err("E011", pr.span, f"'{pr.name}' is declared twice in {owner.name}")
             return
         t = self.resolve_type(pr.type, Scope(owner, owner.vars))
@@ -351,9 +368,13 @@ class Declarations(Part):
             self.err("E010", d.span, f"{pou.name} extends '{d.extends}', which is not declared")
             return None
         if base.pou_kind != "FUNCTION_BLOCK":
-            kind = base.pou_kind.replace('_', ' ')
-            self.err("E012", d.span, f"{pou.name} can only extend a FUNCTION_BLOCK; '{base.name}' is "
-                     f"{'an' if kind[0] in 'AEIOU' else 'a'} {kind}")
+            kind = base.pou_kind.replace("_", " ")
+            self.err(
+                "E012",
+                d.span,
+                f"{pou.name} can only extend a FUNCTION_BLOCK; '{base.name}' is "
+                f"{'an' if kind[0] in 'AEIOU' else 'a'} {kind}",
+            )
             return None
         chain, b = {pou.name.lower()}, base
         while b is not None:
@@ -389,7 +410,7 @@ class Declarations(Part):
         for v in mt.vars.values():
             if v.name.lower() in fb.vars and v.section != "VAR_EXTERNAL":
                 self.warn("W006", v.span, f"'{v.name}' in method {m.name} hides the variable of {fb.name}")
-            if v.section == "VAR_INST":               # kept in the instance between calls
+            if v.section == "VAR_INST":  # kept in the instance between calls
                 self.feature("vendor", v.span, "VAR_INST")
                 v.pyname = "_mi_" + qualified(m.name, v.name)
             if key in CONSTRUCTION and v.section in ("VAR_IN_OUT", "VAR_OUTPUT"):
@@ -402,28 +423,42 @@ class Declarations(Part):
         if owner is not None:
             allowed = {
                 "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL", "VAR_STAT"},
-                "FUNCTION_BLOCK": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL",
-                                   "VAR_STAT"},
-                "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL",
-                            "VAR_GLOBAL"},
+                "FUNCTION_BLOCK": {
+                    "VAR",
+                    "VAR_INPUT",
+                    "VAR_OUTPUT",
+                    "VAR_IN_OUT",
+                    "VAR_TEMP",
+                    "VAR_EXTERNAL",
+                    "VAR_STAT",
+                },
+                "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL", "VAR_GLOBAL"},
                 "TEST": {"VAR", "VAR_TEMP"},
             }[owner.pou_kind]
             if getattr(owner, "owner_fb", None) is not None:
-                allowed = allowed | {"VAR_INST"}      # a METHOD's variables that live in the instance
+                allowed = allowed | {"VAR_INST"}  # a METHOD's variables that live in the instance
             if kind not in allowed:
                 self.err("E003", block.span, f"{kind} is not allowed in a {owner.pou_kind}")
                 if kind in ("VAR_GLOBAL", "VAR_ACCESS", "VAR_CONFIG"):
                     return
-                kind = "VAR"                   # still declare the names: no cascade of 'undeclared' errors
+                kind = "VAR"  # still declare the names: no cascade of 'undeclared' errors
             if kind == "VAR_GLOBAL":
                 self.ctx.global_blocks.append((owner.name, block))
                 return
         access = [q for q in block.qualifiers if q in ("PUBLIC", "PRIVATE", "PROTECTED", "INTERNAL")]
         if access:
-            if owner is None or owner.pou_kind != "FUNCTION_BLOCK" or kind != "VAR" \
-                    or getattr(owner, "owner_fb", None) is not None:
-                self.err("E003", block.span, f"{access[0]} applies to the VAR sections of function blocks and "
-                         f"classes (inputs and outputs are always public)")
+            if (
+                owner is None
+                or owner.pou_kind != "FUNCTION_BLOCK"
+                or kind != "VAR"
+                or getattr(owner, "owner_fb", None) is not None
+            ):
+                self.err(
+                    "E003",
+                    block.span,
+                    f"{access[0]} applies to the VAR sections of function blocks and "
+                    f"classes (inputs and outputs are always public)",
+                )
             else:
                 self.feature("oop", block.span, f"VAR {access[0]}")
             if len(access) > 1:
@@ -431,14 +466,25 @@ class Declarations(Part):
         for decl in block.decls:
             t = self.resolve_type(decl.type, scope)
             if T.is_conformant(t) and kind != "VAR_IN_OUT":
-                self.err("E012", decl.type.span, "ARRAY[*] takes its bounds from an argument: it is only allowed "
-                         "for a VAR_IN_OUT")
-            if isinstance(t, T.POUType) and t.pou_kind == "FUNCTION_BLOCK" and t.decl is not None \
-                    and "ABSTRACT" in t.decl.modifiers and kind not in ("VAR_IN_OUT", "VAR_EXTERNAL"):
-                self.err("E043", decl.type.span, f"'{t.name}' is ABSTRACT and cannot be instantiated; declare "
-                         f"an instance of a block that EXTENDS it")
-            if isinstance(t, T.POUType) and t.pou_kind == "PROGRAM" and owner is not None \
-                    and owner.pou_kind != "TEST":
+                self.err(
+                    "E012",
+                    decl.type.span,
+                    "ARRAY[*] takes its bounds from an argument: it is only allowed for a VAR_IN_OUT",
+                )
+            if (
+                isinstance(t, T.POUType)
+                and t.pou_kind == "FUNCTION_BLOCK"
+                and t.decl is not None
+                and "ABSTRACT" in t.decl.modifiers
+                and kind not in ("VAR_IN_OUT", "VAR_EXTERNAL")
+            ):
+                self.err(
+                    "E043",
+                    decl.type.span,
+                    f"'{t.name}' is ABSTRACT and cannot be instantiated; declare "
+                    f"an instance of a block that EXTENDS it",
+                )
+            if isinstance(t, T.POUType) and t.pou_kind == "PROGRAM" and owner is not None and owner.pou_kind != "TEST":
                 self.err("E012", decl.type.span, f"a PROGRAM ('{t.name}') cannot be instantiated inside a POU")
             for n, sp in decl.names:
                 key = n.lower()
@@ -448,9 +494,20 @@ class Declarations(Part):
                 if owner is not None and owner.pou_kind == "FUNCTION" and key == owner.name.lower():
                     self.err("E011", sp, f"'{n}' is the function's own name (its return value)")
                     continue
-                sym = T.VarSym(n, t, kind, sp, decl.init, decl.location,
-                               constant="CONSTANT" in quals, retain="RETAIN" in quals,
-                               persistent="PERSISTENT" in quals, edge=decl.edge, pyname=mangle(n), owner=owner)
+                sym = T.VarSym(
+                    n,
+                    t,
+                    kind,
+                    sp,
+                    decl.init,
+                    decl.location,
+                    constant="CONSTANT" in quals,
+                    retain="RETAIN" in quals,
+                    persistent="PERSISTENT" in quals,
+                    edge=decl.edge,
+                    pyname=mangle(n),
+                    owner=owner,
+                )
                 if kind == "VAR_EXTERNAL":
                     sym.is_global = True
                 if access:
@@ -459,8 +516,9 @@ class Declarations(Part):
                     # static: one variable shared by every instance and call, kept as a module global
                     self.feature("vendor", sp, "VAR_STAT")
                     sym.is_global = True
-                    where = [owner.name] if getattr(owner, "owner_fb", None) is None else \
-                        [owner.owner_fb.name, owner.name]
+                    where = (
+                        [owner.name] if getattr(owner, "owner_fb", None) is None else [owner.owner_fb.name, owner.name]
+                    )
                     sym.pyname = "_gs_" + qualified(*where, n)
                     self.p.globals[sym.pyname] = sym
                 table[key] = sym
@@ -493,8 +551,12 @@ class Declarations(Part):
         want = _DIRECT_TYPES[size]
         bt = T.base_of(t)
         if not (isinstance(bt, T.EnumType) or isinstance(bt, T.ElemType) and bt.kind not in ("string", "char")):
-            self.err("E013", span, f"'{loc}' is one cell of the process image; it cannot hold a value of type {t}",
-                     "locate a number, a bit string, BOOL, a time or a date, or use an unlocated variable")
+            self.err(
+                "E013",
+                span,
+                f"'{loc}' is one cell of the process image; it cannot hold a value of type {t}",
+                "locate a number, a bit string, BOOL, a time or a date, or use an unlocated variable",
+            )
             return
         if isinstance(bt, T.ElemType) and bt.bits != want.bits and not (size in ("", "X") and bt.is_bool):
             self.err("E013", span, f"'{loc}' is {want.bits} bit(s) wide; it cannot hold a {t}")
@@ -544,7 +606,11 @@ class Declarations(Part):
             st = self.exprs.expr(init, scope or Scope(None, {}), t)
             for n in _names_in([init]):
                 if isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
-                    self.err("E029", n.span, f"an initial value must be a constant; '{n.name}' is a variable",
-                             "assign it in the code instead, or declare it CONSTANT")
+                    self.err(
+                        "E029",
+                        n.span,
+                        f"an initial value must be a constant; '{n.name}' is a variable",
+                        "assign it in the code instead, or declare it CONSTANT",
+                    )
                     return
             self.stmts.assignable(init, st, t, init.span)

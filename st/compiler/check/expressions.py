@@ -1,4 +1,5 @@
 """Expressions: typing of literals, names, operators, fields, indices."""
+
 from __future__ import annotations
 
 from typing import cast
@@ -13,8 +14,9 @@ from .part import Part
 
 class Expressions(Part):
     # ---------------------------------------------------------------- expressions
-    def expr(self, e: A.Expr, scope: Scope | None, expected: T.Type | None = None, *,
-             lvalue: bool = False) -> T.Type | None:
+    def expr(
+        self, e: A.Expr, scope: Scope | None, expected: T.Type | None = None, *, lvalue: bool = False
+    ) -> T.Type | None:
         t = self._expr(e, scope or Scope(None, {}), expected, lvalue)
         e.ty = t
         return t
@@ -56,7 +58,7 @@ class Expressions(Part):
             bt = self.expr(e.base, scope)
             b = T.unalias(bt) if bt is not None else None
             if not isinstance(b, T.RefType):
-                if bt is not None:                 # else the base already has its error
+                if bt is not None:  # else the base already has its error
                     self.err("E023", e.span, f"'^' needs a reference, not {bt}")
                 return None
             return b.target
@@ -82,7 +84,7 @@ class Expressions(Part):
                 self.err("E004", e.span, problem)
                 return _DIRECT_TYPES[m.group(2)]
             t = _DIRECT_TYPES[m.group(2)]
-            e.address = canonical(e.address)           # %q0.1 and %QX0.1 are one variable
+            e.address = canonical(e.address)  # %q0.1 and %QX0.1 are one variable
             self.p.direct_vars[e.address] = ("_d_" + e.address[1:].replace(".", "_"), t)
             e.const = None
             return t
@@ -97,10 +99,24 @@ class Expressions(Part):
         if e.type_name:
             tn = e.type_name
             if k in ("time", "date", "tod", "dt"):
-                name = {"T": "TIME", "TIME": "TIME", "LT": "LTIME", "LTIME": "LTIME", "D": "DATE",
-                        "DATE": "DATE", "LD": "LDATE", "LDATE": "LDATE", "TOD": "TOD", "TIME_OF_DAY": "TOD",
-                        "LTOD": "LTOD", "LTIME_OF_DAY": "LTOD", "DT": "DT", "DATE_AND_TIME": "DT", "LDT": "LDT",
-                        "LDATE_AND_TIME": "LDT"}[tn]
+                name = {
+                    "T": "TIME",
+                    "TIME": "TIME",
+                    "LT": "LTIME",
+                    "LTIME": "LTIME",
+                    "D": "DATE",
+                    "DATE": "DATE",
+                    "LD": "LDATE",
+                    "LDATE": "LDATE",
+                    "TOD": "TOD",
+                    "TIME_OF_DAY": "TOD",
+                    "LTOD": "LTOD",
+                    "LTIME_OF_DAY": "LTOD",
+                    "DT": "DT",
+                    "DATE_AND_TIME": "DT",
+                    "LDT": "LDT",
+                    "LDATE_AND_TIME": "LDT",
+                }[tn]
                 return T.ELEMENTARY[name]
             t = T.ELEMENTARY.get(tn)
             if t is None:
@@ -186,15 +202,19 @@ class Expressions(Part):
             e.sym = SUPER
             return T.RefType(cast(T.POUType, scope.fb).base)
         eb = T.base_of(expected) if expected is not None else None
-        if isinstance(sym, T.VarSym) and isinstance(eb, T.EnumType) and key in eb.members \
-                and not isinstance(T.base_of(sym.type), T.EnumType):
-            sym = None      # an enum value of the expected type wins over a same-named variable
+        if (
+            isinstance(sym, T.VarSym)
+            and isinstance(eb, T.EnumType)
+            and key in eb.members
+            and not isinstance(T.base_of(sym.type), T.EnumType)
+        ):
+            sym = None  # an enum value of the expected type wins over a same-named variable
         if isinstance(sym, T.VarSym) and sym.access:
             self.calls.check_access((sym.access,), sym.owner, f"variable {sym.name}", scope, e.span)
         if isinstance(sym, T.VarSym) and T.is_reference(sym.type):
             sym.used = True
             e.sym = sym
-            return cast(T.RefType, T.unalias(sym.type)).target          # REFERENCE TO: the variable it refers to
+            return cast(T.RefType, T.unalias(sym.type)).target  # REFERENCE TO: the variable it refers to
         if isinstance(sym, T.VarSym):
             sym.used = True
             e.sym = sym
@@ -214,8 +234,12 @@ class Expressions(Part):
                         pick = m
             if pick is None:
                 if len(mems) > 1:
-                    self.err("E010", e.span, f"'{e.name}' is a value of several enumerations",
-                             f"qualify it, e.g. {mems[0][0].name}#{e.name}")
+                    self.err(
+                        "E010",
+                        e.span,
+                        f"'{e.name}' is a value of several enumerations",
+                        f"qualify it, e.g. {mems[0][0].name}#{e.name}",
+                    )
                 pick = mems[0]
             e.sym = pick[0]
             e.const = pick[2]
@@ -224,8 +248,11 @@ class Expressions(Part):
             self.err("E026", e.span, f"'{e.name}' is a POU, not a value")
             return None
         if key in ("this", "super") and self.ctx.feature_quiet("oop"):
-            where = "a function block or one of its methods" if key == "this" else \
-                "a function block that EXTENDS another (or one of its methods)"
+            where = (
+                "a function block or one of its methods"
+                if key == "this"
+                else "a function block that EXTENDS another (or one of its methods)"
+            )
             self.err("E010", e.span, f"{e.name.upper()} exists only inside {where}")
             return None
         self.err("E010", e.span, f"undeclared identifier '{e.name}'", self._suggest(key, scope))
@@ -233,6 +260,7 @@ class Expressions(Part):
 
     def _suggest(self, key: str, scope: Scope) -> str:
         import difflib
+
         names = [s.name for s in scope.vars.values()] + [s[0].name for s in self.p.global_names.values()]
         m = difflib.get_close_matches(key, [n.lower() for n in names], n=1, cutoff=0.75)
         if m:
@@ -256,7 +284,7 @@ class Expressions(Part):
             lt = cast(T.EnumType, la).base
         elif self.ctx.enum_as_int(rb) and not isinstance(la, T.EnumType) and (la.is_num or la is T.LIT_INT):
             rt = cast(T.EnumType, rb).base
-        if op in ("=", "<>"):                   # CODESYS: p = 0 tests a POINTER for NULL
+        if op in ("=", "<>"):  # CODESYS: p = 0 tests a POINTER for NULL
             if _zero_pointer(self.ctx, e.right, lt):
                 e.right, rt = _null_at(e.right), _NULL
             elif _zero_pointer(self.ctx, e.left, rt):
@@ -284,9 +312,12 @@ class Expressions(Part):
                 return T.BOOL
             if isinstance(a, T.RefType) and (isinstance(b, T.RefType) or b is _NULL) or a is _NULL:
                 return T.BOOL
-            if op in ("=", "<>") and any(isinstance(x, T.POUType) and x.pou_kind == "INTERFACE" for x in (a, b)) \
-                    and all(x is _NULL or isinstance(x, T.POUType) and x.pou_kind != "FUNCTION" for x in (a, b)):
-                return T.BOOL                      # the same instance (or NULL) behind both?
+            if (
+                op in ("=", "<>")
+                and any(isinstance(x, T.POUType) and x.pou_kind == "INTERFACE" for x in (a, b))
+                and all(x is _NULL or isinstance(x, T.POUType) and x.pou_kind != "FUNCTION" for x in (a, b))
+            ):
+                return T.BOOL  # the same instance (or NULL) behind both?
             c = T.common_type(a, b)
             if c is None or isinstance(c, (T.ArrayType, T.StructType, T.POUType)):
                 return self._bad_operands(e, lt, rt)
@@ -340,8 +371,7 @@ class Expressions(Part):
         return None
 
     def _bad_operands(self, e: A.Binary, lt, rt):
-        self.err("E014", e.span, f"operator {e.op} cannot combine {lt} and {rt}",
-                 self._conv_hint(lt, rt))
+        self.err("E014", e.span, f"operator {e.op} cannot combine {lt} and {rt}", self._conv_hint(lt, rt))
         return T.BOOL if e.op in _CMP else lt
 
     def _conv_hint(self, lt, rt) -> str:
@@ -425,7 +455,7 @@ class Expressions(Part):
                 self.calls.check_access((v.access,), v.owner, f"variable {v.name}", scope, e.name_span)
             v.used = True
             e.sym = v
-            if T.is_reference(v.type):                 # inst.r of a REFERENCE TO: what it refers to
+            if T.is_reference(v.type):  # inst.r of a REFERENCE TO: what it refers to
                 return cast(T.RefType, T.unalias(v.type)).target
             return v.type
         if isinstance(b, T.ElemType) and b.is_intlike and e.name.isdigit():
@@ -437,7 +467,9 @@ class Expressions(Part):
         bt = self.expr(e.base, scope)
         for i in e.indices:
             it = self.expr(i, scope, T.DINT)
-            if it is not None and not (T.base_of(it).is_intlike or it is T.LIT_INT or isinstance(T.base_of(it), T.EnumType)):
+            if it is not None and not (
+                T.base_of(it).is_intlike or it is T.LIT_INT or isinstance(T.base_of(it), T.EnumType)
+            ):
                 self.err("E013", i.span, f"an array index must be an integer, not {it}")
         if bt is None:
             return None
@@ -463,8 +495,12 @@ def _zero_pointer(ctx: CheckContext, e, other) -> bool:
     """The literal 0 where a POINTER, a REF_TO or an interface is compared or assigned: NULL, as
     CODESYS and TwinCAT write it (a vendor extension)."""
     u = T.unalias(other) if other is not None else None
-    is_link = isinstance(u, T.RefType) and u.ref_kind in ("POINTER", "REF_TO") or \
-        isinstance(u, T.POUType) and u.pou_kind == "INTERFACE"
+    is_link = (
+        isinstance(u, T.RefType)
+        and u.ref_kind in ("POINTER", "REF_TO")
+        or isinstance(u, T.POUType)
+        and u.pou_kind == "INTERFACE"
+    )
     return isinstance(e, A.Literal) and e.value == 0 and e.kind == "int" and is_link and ctx.feature_quiet("vendor")
 
 

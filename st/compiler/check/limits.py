@@ -6,14 +6,15 @@ Depth: an elementary type is 0; a STRUCT, an ARRAY or a function block instance 
 its deepest part. Values: an elementary value (or a reference) is 1; an array holds its size
 times its element's; a STRUCT or block the sum of its parts.
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 
 from ...model import types as T
 
-MAX_NESTING = 100             # real programs nest types and blocks a handful of levels deep
-MAX_VALUES = 50_000_000       # the same bound as one array's elements (E042)
+MAX_NESTING = 100  # real programs nest types and blocks a handful of levels deep
+MAX_VALUES = 50_000_000  # the same bound as one array's elements (E042)
 _STORED = ("VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_STAT", "VAR_INST", "VAR_TEMP", "VAR_GLOBAL")
 
 
@@ -48,7 +49,7 @@ class _Measure:
                 continue
             parts = [pt for _, pt in _parts(cur)]
             if not expanded:
-                memo[key] = None                 # in progress: a cycle (reported elsewhere) is a leaf
+                memo[key] = None  # in progress: a cycle (reported elsewhere) is a leaf
                 stack.append((cur, True))
                 stack.extend((pt, False) for pt in parts if id(pt) not in memo)
                 continue
@@ -68,7 +69,7 @@ def check_storage_limits(project, err: Callable, in_library: Callable) -> None:
     """Report E041 where nesting crosses MAX_NESTING and E042 at the innermost declaration that
     holds more than MAX_VALUES values (each problem once, where it starts)."""
     m = _Measure()
-    decls: list = []                         # (span, type) of every declaration with storage
+    decls: list = []  # (span, type) of every declaration with storage
     seen_types: set = set()
     for pou in project.pous.values():
         for v in pou.vars.values():
@@ -87,15 +88,23 @@ def check_storage_limits(project, err: Callable, in_library: Callable) -> None:
         reported.add((span, id(t)))
         depth, values = m.measure(t)
         if depth == MAX_NESTING + 1:
-            err("E041", span, f"this declaration's type nests {MAX_NESTING + 1} levels deep "
+            err(
+                "E041",
+                span,
+                f"this declaration's type nests {MAX_NESTING + 1} levels deep "
                 f"(structures, arrays and function blocks inside each other; at most {MAX_NESTING})",
-                "flatten the data: keep a few levels of structure and use arrays of them")
+                "flatten the data: keep a few levels of structure and use arrays of them",
+            )
         if values > MAX_VALUES and not _too_large_inside(t, m):
             u = T.unalias(t)
             if isinstance(u, T.ArrayType) and u.size > MAX_VALUES:
-                continue                     # the array itself is already E042 (its elements)
-            err("E042", span, f"this declaration holds {values:,} values (at most {MAX_VALUES:,})",
-                "make the arrays smaller")
+                continue  # the array itself is already E042 (its elements)
+            err(
+                "E042",
+                span,
+                f"this declaration holds {values:,} values (at most {MAX_VALUES:,})",
+                "make the arrays smaller",
+            )
 
 
 def _too_large_inside(t, m: _Measure) -> bool:

@@ -1,5 +1,6 @@
 """The base of the checker's mutually recursive parts (declarations, constants, expressions, calls,
 statements, test statements): each holds the context and its peers as explicit fields."""
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING

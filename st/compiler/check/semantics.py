@@ -1,4 +1,5 @@
 """The checker's parts, made and wired together for one run."""
+
 from __future__ import annotations
 
 from .calls import Calls

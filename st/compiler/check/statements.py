@@ -1,4 +1,5 @@
 """Bodies: statements, SFC networks, assignability and lvalues."""
+
 from __future__ import annotations
 
 from typing import cast
@@ -18,7 +19,7 @@ class Statements(Part):
         self.feature("vendor", s.span, "REF=")
         tgt = s.target
         sym = self.exprs.lookup(tgt.name.lower(), scope) if isinstance(tgt, A.Name) else None
-        if isinstance(tgt, A.Field):                  # inst.r REF= x: an instance's REFERENCE TO
+        if isinstance(tgt, A.Field):  # inst.r REF= x: an instance's REFERENCE TO
             bt = self.exprs.expr(tgt.base, scope)
             b = T.unalias(bt) if bt is not None else None
             if isinstance(b, T.POUType):
@@ -29,7 +30,7 @@ class Statements(Part):
             self.err("E013", tgt.span, "REF= binds a REFERENCE TO variable; this is not one")
             return
         sym.used = sym.written = True
-        cast(A.Name, tgt).sym = sym       # a Name or a Field
+        cast(A.Name, tgt).sym = sym  # a Name or a Field
         tgt.ty = sym.type
         want = cast(T.RefType, T.unalias(sym.type)).target
         v = s.value
@@ -56,8 +57,11 @@ class Statements(Part):
 
         def classify(t):
             u = T.unalias(t)
-            if isinstance(u, T.RefType) and isinstance(T.unalias(u.target), T.POUType) \
-                    and T.unalias(u.target).pou_kind in ("FUNCTION_BLOCK", "INTERFACE"):
+            if (
+                isinstance(u, T.RefType)
+                and isinstance(T.unalias(u.target), T.POUType)
+                and T.unalias(u.target).pou_kind in ("FUNCTION_BLOCK", "INTERFACE")
+            ):
                 return T.unalias(u.target), True
             if isinstance(u, T.POUType) and u.pou_kind in ("FUNCTION_BLOCK", "INTERFACE"):
                 return u, False
@@ -65,16 +69,18 @@ class Statements(Part):
 
         kind, dest_ref = classify(tt)
         if kind is None or (not dest_ref and kind.pou_kind != "INTERFACE"):
-            self.err("E013", s.target.span, f"?= needs an interface or a REF_TO a function block on the left, "
-                     f"not {tt}")
+            self.err("E013", s.target.span, f"?= needs an interface or a REF_TO a function block on the left, not {tt}")
             return
         if vt is _NULL:
             s.attempt = (kind.name.lower(), False, dest_ref)
             return
         src, src_ref = classify(vt)
         if src is None:
-            self.err("E013", s.value.span, f"?= needs an interface, a function block instance or a reference to "
-                     f"one on the right, not {vt}")
+            self.err(
+                "E013",
+                s.value.span,
+                f"?= needs an interface, a function block instance or a reference to one on the right, not {vt}",
+            )
             return
         s.attempt = (kind.name.lower(), src_ref, dest_ref)
 
@@ -103,13 +109,13 @@ class Statements(Part):
                 return
             vt = self.exprs.expr(s.value, scope, tt)
             if _zero_pointer(self.ctx, s.value, tt):
-                s.value, vt = _null_at(s.value), _NULL       # p := 0 (CODESYS): NULL
+                s.value, vt = _null_at(s.value), _NULL  # p := 0 (CODESYS): NULL
             if tt is not None:
                 self.assignable(s.value, vt, tt, s.value.span)
         elif isinstance(s, A.CallStmt):
             rt = self.calls.call(s.call, scope, statement=True)
             if s.call.ty is None:
-                s.call.ty = rt           # a function's result, unused: code generation still needs its type
+                s.call.ty = rt  # a function's result, unused: code generation still needs its type
         elif isinstance(s, A.If):
             for cond, body in s.branches:
                 self.condition(cond, scope, "IF")
@@ -159,8 +165,12 @@ class Statements(Part):
     def condition(self, e: A.Expr, scope: Scope, what: str) -> None:
         t = self.exprs.expr(e, scope, T.BOOL)
         if t is not None and not T.base_of(t).is_bool:
-            self.err("E015", e.span, f"the {what} condition must be BOOL, not {t}",
-                     "compare explicitly, e.g. x <> 0" if T.base_of(t).is_num else "")
+            self.err(
+                "E015",
+                e.span,
+                f"the {what} condition must be BOOL, not {t}",
+                "compare explicitly, e.g. x <> 0" if T.base_of(t).is_num else "",
+            )
 
     def _case(self, s: A.Case, scope: Scope) -> None:
         st = self.exprs.expr(s.selector, scope)
@@ -187,17 +197,17 @@ class Statements(Part):
                         self.err("E029", e.span, "a CASE label must be a constant")
                     vals.append(v)
                 if not all(isinstance(v, int) for v in vals):
-                    continue        # a wrong label type was reported above
+                    continue  # a wrong label type was reported above
                 if len(vals) == 2:
                     a, b = vals
-                    for (c, d, _sp) in seen:
+                    for c, d, _sp in seen:
                         if a <= d and c <= b:
                             self.err("E019", lo.span, f"CASE label {a}..{b} overlaps an earlier label")
                             break
                     seen.append((a, b, lo.span))
                 elif len(vals) == 1:
                     a = vals[0]
-                    for (c, d, _sp) in seen:
+                    for c, d, _sp in seen:
                         if c <= a <= d:
                             self.err("E019", lo.span, f"duplicate CASE label {a}")
                             break
@@ -249,9 +259,12 @@ class Statements(Part):
             return True
         if T.widens_to(s, d):
             return True
-        if self.ctx.enum_as_int(s) and (d.is_intlike or d.is_real) and (
-                cast(T.EnumType, s).base is d or T.widens_to(cast(T.EnumType, s).base, d) or d.is_real):
-            return True                 # CODESYS: a (non-strict) enumeration value as its integer
+        if (
+            self.ctx.enum_as_int(s)
+            and (d.is_intlike or d.is_real)
+            and (cast(T.EnumType, s).base is d or T.widens_to(cast(T.EnumType, s).base, d) or d.is_real)
+        ):
+            return True  # CODESYS: a (non-strict) enumeration value as its integer
         if isinstance(s, T.ArrayType) and isinstance(d, T.ArrayType):
             if same_type(s, d):
                 return True
@@ -260,7 +273,7 @@ class Statements(Part):
                 return True
             st_, dt_ = T.unalias(s.target), T.unalias(d.target)
             if isinstance(st_, T.POUType) and isinstance(dt_, T.POUType) and T.implements(st_, dt_):
-                return True            # a reference to a derived block is a reference to its base
+                return True  # a reference to a derived block is a reference to its base
         if s is _NULL and isinstance(d, T.RefType):
             return True
         if isinstance(d, T.POUType) and d.pou_kind == "INTERFACE":
@@ -269,12 +282,25 @@ class Statements(Part):
                 return True
             self.err("E013", span, f"cannot {what} {src} to {dst}: {src} does not implement {dst}")
             return False
-        if isinstance(s, T.ElemType) and isinstance(d, T.ElemType) and (
-                s.kind in ("int", "real", "bit") and d.kind in ("int", "real", "bit")
-                or s.kind == d.kind and s.kind in ("time", "date", "tod", "dt") and s.long and not d.long):
+        if (
+            isinstance(s, T.ElemType)
+            and isinstance(d, T.ElemType)
+            and (
+                s.kind in ("int", "real", "bit")
+                and d.kind in ("int", "real", "bit")
+                or s.kind == d.kind
+                and s.kind in ("time", "date", "tod", "dt")
+                and s.long
+                and not d.long
+            )
+        ):
             conv = f"{s.name}_TO_{d.name}"
-            self.err("E027", span, f"implicit conversion from {src} to {dst} may lose data",
-                     f"convert explicitly with {conv}(...)")
+            self.err(
+                "E027",
+                span,
+                f"implicit conversion from {src} to {dst} may lose data",
+                f"convert explicitly with {conv}(...)",
+            )
             return False
         self.err("E013", span, f"type mismatch: cannot {what} {src} to {dst}")
         return False
@@ -290,19 +316,33 @@ class Statements(Part):
             if prop.set is None:
                 self.err("E018", e.span, f"property {prop.name} has no SET: it cannot be written")
             return t
-        if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym) or isinstance(root, A.Name) \
-                and isinstance(root.sym, T.VarSym):
+        if (
+            isinstance(e, A.Name)
+            and isinstance(e.sym, T.VarSym)
+            or isinstance(root, A.Name)
+            and isinstance(root.sym, T.VarSym)
+        ):
             sym = cast(T.VarSym, e.sym if isinstance(e, A.Name) else cast(A.Name, root).sym)
             sym.written = True
             g = sym.global_ref or sym
             if g.constant or sym.constant:
                 self.err("E018", e.span, f"'{sym.name}' is a CONSTANT")
                 return t
-            if sym.section == "VAR_INPUT" and scope.pou is not None and sym.owner is scope.pou \
-                    and not isinstance(T.unalias(sym.type), (T.POUType,)) and isinstance(e, A.Name) \
-                    and not T.is_reference(sym.type) and not (self.ctx.dialect and self.ctx.dialect.writable_inputs):
-                self.err("E048", e.span, f"'{sym.name}' is an input of {scope.pou.name} and cannot be written here",
-                         "copy it into a local variable first")
+            if (
+                sym.section == "VAR_INPUT"
+                and scope.pou is not None
+                and sym.owner is scope.pou
+                and not isinstance(T.unalias(sym.type), (T.POUType,))
+                and isinstance(e, A.Name)
+                and not T.is_reference(sym.type)
+                and not (self.ctx.dialect and self.ctx.dialect.writable_inputs)
+            ):
+                self.err(
+                    "E048",
+                    e.span,
+                    f"'{sym.name}' is an input of {scope.pou.name} and cannot be written here",
+                    "copy it into a local variable first",
+                )
                 return t
         elif isinstance(e, (A.Literal, A.Call, A.Binary, A.Unary, A.EnumLit)):
             self.err("E013", e.span, "this expression cannot be assigned to")

@@ -6,6 +6,7 @@ Its statements may use the test statements below; everywhere else they are
 E033. What codegen and the test runner need is kept in `model.TestModel` and
 `model.AssertInfo`.
 """
+
 from __future__ import annotations
 
 from typing import cast
@@ -18,13 +19,27 @@ from .part import Part
 
 # name → (minimum, maximum) number of arguments, the message included
 TEST_CALLS = {
-    "assert_eq": (2, 3), "assert_neq": (2, 3), "assert_true": (1, 2), "assert_false": (1, 2),
-    "assert_gt": (2, 3), "assert_lt": (2, 3), "assert_ge": (2, 3), "assert_le": (2, 3),
-    "assert_near": (3, 4), "advance_time": (1, 1),
-    "mock_verify_called": (1, 1), "mock_verify_call_count": (2, 2),
+    "assert_eq": (2, 3),
+    "assert_neq": (2, 3),
+    "assert_true": (1, 2),
+    "assert_false": (1, 2),
+    "assert_gt": (2, 3),
+    "assert_lt": (2, 3),
+    "assert_ge": (2, 3),
+    "assert_le": (2, 3),
+    "assert_near": (3, 4),
+    "advance_time": (1, 1),
+    "mock_verify_called": (1, 1),
+    "mock_verify_call_count": (2, 2),
 }
-_CMP_OF = {"assert_eq": "=", "assert_neq": "<>", "assert_gt": ">", "assert_lt": "<", "assert_ge": ">=",
-           "assert_le": "<="}
+_CMP_OF = {
+    "assert_eq": "=",
+    "assert_neq": "<>",
+    "assert_gt": ">",
+    "assert_lt": "<",
+    "assert_ge": ">=",
+    "assert_le": "<=",
+}
 
 
 class TestStatements(Part):
@@ -42,8 +57,12 @@ class TestStatements(Part):
         if t is None:
             return
         if not _is_instance(t):
-            self.err("E013", s.target.span, f"MOCK needs a function block or program instance, not a {t}",
-                     "functions are mocked with MOCK_FUNCTION name RETURNS value;")
+            self.err(
+                "E013",
+                s.target.span,
+                f"MOCK needs a function block or program instance, not a {t}",
+                "functions are mocked with MOCK_FUNCTION name RETURNS value;",
+            )
 
     def mock_function(self, s: A.MockFunction, scope: Scope) -> None:
         if not self._test_only(s.span, "MOCK_FUNCTION", scope):
@@ -96,12 +115,11 @@ class TestStatements(Part):
         elif key == "advance_time":
             t = self.exprs.expr(values[0], scope, T.TIME)
             ok = t is not None
-            if ok and not (T.base_of(t).is_time or T.base_of(t).is_intlike or
-                           isinstance(T.base_of(t), T.LiteralType)):
+            if ok and not (T.base_of(t).is_time or T.base_of(t).is_intlike or isinstance(T.base_of(t), T.LiteralType)):
                 self.err("E013", values[0].span, f"ADVANCE_TIME needs a TIME or a number of nanoseconds, not {t}")
                 ok = False
             info.types = [t]
-        else:   # mock_verify_called / mock_verify_call_count
+        else:  # mock_verify_called / mock_verify_call_count
             ok = self._check_verify(key, name, values, scope, info)
         if ok:
             info.index = len(self.p.test_asserts)

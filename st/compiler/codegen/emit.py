@@ -5,6 +5,7 @@ A `FuncSig.emit(ctx, args, arg_types, result_type)` (compiler/library.py) return
 the `ast` node classes themselves. Generated code may only name `_`-prefixed helpers that a
 library installs (`Library.helpers`), so `call` takes such a name or an expression.
 """
+
 from __future__ import annotations
 
 import ast as py

@@ -1,4 +1,5 @@
 """Expressions and initial values: typed ST expressions → Python expressions."""
+
 from __future__ import annotations
 
 import ast as py
@@ -36,7 +37,7 @@ class InitGen:
                 return self._with_fields(obj, init, lambda n: ut.members.get(n.lower()))
             return obj
         if isinstance(ut, T.POUType) and ut.pou_kind == "INTERFACE":
-            return _const(None)                     # an interface variable: no instance yet (NULL)
+            return _const(None)  # an interface variable: no instance yet (NULL)
         if isinstance(ut, T.POUType):
             ctor = init if isinstance(init, A.CtorInit) else None
             if ctor is not None:
@@ -45,7 +46,7 @@ class InitGen:
             if isinstance(init, A.StructInit):
                 obj = self._with_fields(obj, init, lambda n: _member_of_pou(ut, n))
             block = self.mod.blocks.get(ut)
-            if block is not None and block.constructor is not None:     # FB_init runs once the values are set
+            if block is not None and block.constructor is not None:  # FB_init runs once the values are set
                 keys, values = [], []
                 if ctor is not None:
                     inputs = block.constructor.inputs
@@ -88,7 +89,9 @@ class InitGen:
             rest = n - len(values)
             if rest:
                 proto = self.initial(elem, None)
-                comp = py.ListComp(proto, [py.comprehension(_name("_", py.Store()), _call("_range", _const(rest)), [], 0)])
+                comp = py.ListComp(
+                    proto, [py.comprehension(_name("_", py.Store()), _call("_range", _const(rest)), [], 0)]
+                )
                 if elts:
                     return py.BinOp(py.List(elts, py.Load()), py.Add(), comp)
                 return comp
@@ -114,9 +117,9 @@ class ExprGen:
     def __init__(self, mod: ModuleGen, pou: T.POUType | None):
         self.mod = mod
         self.pou = pou
-        self.cached: set = set()        # VarSyms held in Python locals
-        self.boxed: set = set()         # VarSyms held in one-element lists (passed by reference)
-        self.through: set = set()       # in-outs used through the caller's reference (their box)
+        self.cached: set = set()  # VarSyms held in Python locals
+        self.boxed: set = set()  # VarSyms held in one-element lists (passed by reference)
+        self.through: set = set()  # in-outs used through the caller's reference (their box)
         self.self_name = "self"
         self.globals_written: set = set()
         self.loop_vars: list = []
@@ -234,10 +237,10 @@ class ExprGen:
             vals = [v for _, v in t.members.values()] or [0]
             return (min(vals), max(vals))
         sub = T.unalias(e.ty)
-        declared = (sub.lo, sub.hi) if isinstance(sub, T.SubrangeType) else (
-            (t.lo, t.hi) if t.is_intlike else None)
+        declared = (sub.lo, sub.hi) if isinstance(sub, T.SubrangeType) else ((t.lo, t.hi) if t.is_intlike else None)
         if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit, A.AccessorCall)) or (
-                isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method")):
+            isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method")
+        ):
             return declared
         if isinstance(e, A.Binary):
             op = e.op
@@ -316,10 +319,10 @@ class ExprGen:
                     if t is T.REAL:
                         v = f32(v)
                 return _const(v)
-            if T.is_reference(sym.type):              # REFERENCE TO: through the reference
+            if T.is_reference(sym.type):  # REFERENCE TO: through the reference
                 return _call(_attr(self.var_load(sym), "get"))
             return self.var_load(sym)
-        if isinstance(sym, T.POUType):      # a function's own result variable
+        if isinstance(sym, T.POUType):  # a function's own result variable
             return _name(self.result_name)
         if sym is STEP:
             return _const(e.const)
@@ -332,7 +335,7 @@ class ExprGen:
         raise Unsupported(e.span, f"cannot use '{e.name}' here")
 
     def x_Direct(self, e: A.Direct) -> py.expr:
-        found = self.mod.p.direct_vars.get(e.address)      # the checker made the address canonical
+        found = self.mod.p.direct_vars.get(e.address)  # the checker made the address canonical
         if found is None:
             raise Unsupported(e.span, f"unknown address {e.address}")
         return _name(found[0])
@@ -351,7 +354,7 @@ class ExprGen:
             return self._bit_read(base, int(e.name), bt)
         sym = e.sym
         if isinstance(sym, T.VarSym) and T.is_reference(sym.type):
-            return _call(_attr(_attr(base, sym.pyname), "get"))     # inst.r: through the reference
+            return _call(_attr(_attr(base, sym.pyname), "get"))  # inst.r: through the reference
         return _attr(base, sym.pyname)
 
     def x_AccessorCall(self, e: A.AccessorCall, *args) -> py.expr:
@@ -409,11 +412,14 @@ class ExprGen:
                 term: py.expr = _const((c - lo) * st)
             else:
                 iv = self.expr(i)
-                if hi < lo:          # ARRAY[*]: bounds known only at run time
+                if hi < lo:  # ARRAY[*]: bounds known only at run time
                     term = iv
                 else:
-                    term = _call("_ix", iv, _const(lo), _const(hi)) if not self._index_safe(i, lo, hi) else (
-                        py.BinOp(iv, py.Sub(), _const(lo)) if lo else iv)
+                    term = (
+                        _call("_ix", iv, _const(lo), _const(hi))
+                        if not self._index_safe(i, lo, hi)
+                        else (py.BinOp(iv, py.Sub(), _const(lo)) if lo else iv)
+                    )
                 if st != 1:
                     term = py.BinOp(term, py.Mult(), _const(st))
             flat = term if flat is None else py.BinOp(flat, py.Add(), term)
@@ -429,7 +435,7 @@ class ExprGen:
 
     def x_Deref(self, e: A.Deref) -> py.expr:
         if isinstance(e.base, A.Name) and getattr(e.base.sym, "kind", "") in ("this", "super"):
-            return _name(self.self_name)            # THIS^ (and SUPER^): the instance itself
+            return _name(self.self_name)  # THIS^ (and SUPER^): the instance itself
         return _call(_attr(self.expr(e.base), "get"))
 
     def x_Unary(self, e: A.Unary) -> py.expr:
@@ -485,11 +491,25 @@ class ExprGen:
         if op == "/":
             if res is not None and (res.is_real or res is T.LIT_REAL):
                 return _call("_fdiv", l, r)
-            if lt is not None and rt is not None and lt.is_intlike and rt.is_intlike and not lt.signed and not rt.signed:
+            if (
+                lt is not None
+                and rt is not None
+                and lt.is_intlike
+                and rt.is_intlike
+                and not lt.signed
+                and not rt.signed
+            ):
                 return py.BinOp(l, py.FloorDiv(), r)
             return _call("_idiv", l, r)
         if op == "MOD":
-            if lt is not None and rt is not None and lt.is_intlike and rt.is_intlike and not lt.signed and not rt.signed:
+            if (
+                lt is not None
+                and rt is not None
+                and lt.is_intlike
+                and rt.is_intlike
+                and not lt.signed
+                and not rt.signed
+            ):
                 return _call("_umod", l, r)
             return _call("_imod", l, r)
         if op == "**":
@@ -511,19 +531,27 @@ class ExprGen:
             return self.method_call(e, tgt)
         if tgt.kind == "sizeof":
             return _const(tgt.value)
-        if tgt.kind == "bound":                        # LOWER_BOUND / UPPER_BOUND
+        if tgt.kind == "bound":  # LOWER_BOUND / UPPER_BOUND
             if tgt.value is not None:
                 return _const(tgt.value)
             dims = _attr(self.expr(tgt.arg), "dims")
-            return py.Subscript(py.Subscript(dims, _const(tgt.dim - 1), py.Load()), _const(1 if tgt.upper else 0),
-                                py.Load())
-        if tgt.kind == "new":                          # a one-element box the pointer refers to
-            return _call("_ItemRef", py.List([InitGen(self.mod).initial(tgt.type, None)], py.Load()), _const(0),
-                         _const(_wrap_spec(tgt.type)))
+            return py.Subscript(
+                py.Subscript(dims, _const(tgt.dim - 1), py.Load()), _const(1 if tgt.upper else 0), py.Load()
+            )
+        if tgt.kind == "new":  # a one-element box the pointer refers to
+            return _call(
+                "_ItemRef",
+                py.List([InitGen(self.mod).initial(tgt.type, None)], py.Load()),
+                _const(0),
+                _const(_wrap_spec(tgt.type)),
+            )
         if tgt.kind == "isvalidref":
             a = tgt.arg
-            raw = self.var_load(a.sym) if isinstance(a, A.Name) and isinstance(a.sym, T.VarSym) \
-                and T.is_reference(a.sym.type) else self.expr(a)
+            raw = (
+                self.var_load(a.sym)
+                if isinstance(a, A.Name) and isinstance(a.sym, T.VarSym) and T.is_reference(a.sym.type)
+                else self.expr(a)
+            )
             return py.Compare(raw, [py.IsNot()], [_const(None)])
         if tgt.kind == "queryitf":
             return _call("_query_itf", self.expr(tgt.src), _const(tgt.itf.name.lower()), self.ref_to(tgt.dst))
@@ -533,8 +561,9 @@ class ExprGen:
         """inst.M(...): a Python method call on the instance, so a derived block's override runs;
         SUPER^.M(...): the base block's method on this instance (not virtual)."""
         if tgt.nonvirtual is not None:
-            return self.function_call(e, tgt, fn=_attr(_name(tgt.nonvirtual.pyname), tgt.pou.pyname),
-                                      first=_name(self.self_name))
+            return self.function_call(
+                e, tgt, fn=_attr(_name(tgt.nonvirtual.pyname), tgt.pou.pyname), first=_name(self.self_name)
+            )
         obj = _name(self.self_name) if tgt.obj is None else self.expr(tgt.obj)
         return self.function_call(e, tgt, fn=_attr(obj, tgt.pou.pyname))
 
@@ -550,14 +579,18 @@ class ExprGen:
                 want = _group_type(tgt, sig, p.group)
             else:
                 want = T.ELEMENTARY.get(p.constraint)
-            if want is not None and (T.base_of(want).is_num) and a.value.ty is not None and \
-                    T.base_of(a.value.ty) is not T.base_of(want):
+            if (
+                want is not None
+                and (T.base_of(want).is_num)
+                and a.value.ty is not None
+                and T.base_of(a.value.ty) is not T.base_of(want)
+            ):
                 v = self.coerce(v, a.value, want)
             args.append(v)
         if sig.emit is not None:
             try:
                 node = sig.emit(self, args, tgt.arg_types, e.ty)
-            except TypeError as exc:       # e.g. TO_TOD of a REAL: no such conversion
+            except TypeError as exc:  # e.g. TO_TOD of a REAL: no such conversion
                 raise Unsupported(e.span, f"{sig.name}: {exc}") from None
         else:
             extra = sig.extra(tgt.arg_types, e.ty) if sig.extra else ()
@@ -575,7 +608,7 @@ class ExprGen:
             if p.section == "VAR_INPUT":
                 if a is None:
                     args.append(InitGen(self.mod).initial(p.type, p.init))
-                elif T.is_reference(p.type):               # bound to the argument
+                elif T.is_reference(p.type):  # bound to the argument
                     args.append(self.ref_to(a.value))
                 else:
                     v = self.expr(a.value)
@@ -585,8 +618,11 @@ class ExprGen:
                         v = _call("_copy", v)
                     args.append(self.coerce(v, a.value, p.type))
             elif p.section == "VAR_IN_OUT":
-                args.append(self.ref_to(a.value) if not T.unalias(p.type).is_aggregate else
-                            self.conformant_arg(self.expr(a.value), a.value.ty, p.type))
+                args.append(
+                    self.ref_to(a.value)
+                    if not T.unalias(p.type).is_aggregate
+                    else self.conformant_arg(self.expr(a.value), a.value.ty, p.type)
+                )
             else:  # VAR_OUTPUT
                 if a is None:
                     args.append(_const(None))
@@ -604,7 +640,7 @@ class ExprGen:
         if negated:
             return _call("_NegRef", self.ref_to(e))
         if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym) and T.is_reference(e.sym.type):
-            return self.var_load(e.sym)                # the reference a REFERENCE TO variable holds
+            return self.var_load(e.sym)  # the reference a REFERENCE TO variable holds
         if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym):
             sym = e.sym
             t = sym.type
@@ -612,14 +648,14 @@ class ExprGen:
                 name = sym.global_ref.pyname if sym.global_ref else sym.pyname
                 return _call("_ItemRef", _name("_ns"), _const(name), _const(_wrap_spec(t)))
             if sym in self.through:
-                return _name(sym.pyname)               # the caller's own reference
+                return _name(sym.pyname)  # the caller's own reference
             if sym in self.boxed:
                 return _call("_ItemRef", _name(sym.pyname), _const(0), _const(_wrap_spec(t)))
             if sym in self.cached or self.self_name is None:
                 raise Unsupported(e.span, f"internal: '{sym.name}' is held in a local but passed by reference")
             return _call("_AttrRef", _name(self.self_name), _const(sym.pyname), _const(_wrap_spec(t)))
         if isinstance(e, A.Field) and isinstance(e.sym, T.VarSym) and T.is_reference(e.sym.type):
-            return _attr(self.expr(e.base), e.sym.pyname)     # the reference inst.r holds
+            return _attr(self.expr(e.base), e.sym.pyname)  # the reference inst.r holds
         if isinstance(e, A.Field):
             return _call("_AttrRef", self.expr(e.base), _const(e.sym.pyname), _const(_wrap_spec(e.ty)))
         if isinstance(e, A.Index):
@@ -646,8 +682,11 @@ def _wrap_spec(t):
 
 
 def _group_type(tgt, sig, group):
-    ts = [t for t, i in zip(tgt.arg_types, range(len(tgt.arg_types)))
-          if sig.params[min(i, len(sig.params) - 1)].group == group]
+    ts = [
+        t
+        for t, i in zip(tgt.arg_types, range(len(tgt.arg_types)))
+        if sig.params[min(i, len(sig.params) - 1)].group == group
+    ]
     out = None
     for t in ts:
         out = t if out is None else (T.common_type(out, t) or out)

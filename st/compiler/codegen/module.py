@@ -1,4 +1,5 @@
 """The whole program: one Python module per ST file, globals, structs, configuration glue."""
+
 from __future__ import annotations
 
 import ast as py
@@ -21,9 +22,9 @@ class ModuleGen:
         self.sink = sink
         self.tmp = 0
         self.coverage = coverage
-        self.cov_points: list = []      # [(file, line, kind, label, target)]; index = probe id
+        self.cov_points: list = []  # [(file, line, kind, label, target)]; index = probe id
         self._line_probe: dict = {}
-        self.tests_by_file: dict = {}       # path → [FunctionDef]: unit tests, kept apart from the program
+        self.tests_by_file: dict = {}  # path → [FunctionDef]: unit tests, kept apart from the program
 
     def test_modules(self) -> list:
         """[(st file path, Python module)] holding the `_test_<n>` functions (after `generate`)."""
@@ -120,8 +121,9 @@ class ModuleGen:
         g_out.self_name = None
         for p, value, is_out in im.args:
             if is_out:
-                outs.extend(g_out.assign(value, g_out.coerce(_attr(_name("inst"), p.pyname), _Typed(p.type),
-                                                             value.ty), None))
+                outs.extend(
+                    g_out.assign(value, g_out.coerce(_attr(_name("inst"), p.pyname), _Typed(p.type), value.ty), None)
+                )
         fns = []
         for name, body, gen in (("_cfg_in_", ins, g_in), ("_cfg_out_", outs, g_out)):
             if body:
@@ -135,11 +137,16 @@ class ModuleGen:
         init = InitGen(self)
         body = []
         for m in st.members.values():
-            body.append(_set_lines(py.Assign([_attr(_name("self"), m.pyname, py.Store())],
-                                              init.initial(m.type, m.init)), m.span.line if m.span else 1))
+            body.append(
+                _set_lines(
+                    py.Assign([_attr(_name("self"), m.pyname, py.Store())], init.initial(m.type, m.init)),
+                    m.span.line if m.span else 1,
+                )
+            )
         fn = py.FunctionDef("__init__", _args(["self"]), body or [py.Pass()], [], None, None)
-        slots = py.Assign([_name("__slots__", py.Store())],
-                          py.Tuple([_const(m.pyname) for m in st.members.values()], py.Load()))
+        slots = py.Assign(
+            [_name("__slots__", py.Store())], py.Tuple([_const(m.pyname) for m in st.members.values()], py.Load())
+        )
         line = next(iter(st.members.values())).span.line if st.members else 1
         cls = py.ClassDef(st.pyname, [_name("_Struct")], [], [slots, fn], [])
         return _set_lines(cls, line)

@@ -1,4 +1,5 @@
 """POUs: FUNCTIONs → Python functions; FUNCTION_BLOCKs and PROGRAMs → slotted classes."""
+
 from __future__ import annotations
 
 import ast as py
@@ -27,13 +28,21 @@ class FuncGen(StmtGen):
         d = pou.decl
         by_ref = _by_ref_names(d.body)
         self.boxed = {v for v in by_ref if v.owner is pou and not T.unalias(v.type).is_aggregate}
-        self.boxed |= {v for v in pou.vars.values() if v.address_taken and v.owner is pou
-                       and v.section in ("VAR", "VAR_TEMP", "VAR_INPUT", "VAR_OUTPUT")
-                       and not T.unalias(v.type).is_aggregate}
+        self.boxed |= {
+            v
+            for v in pou.vars.values()
+            if v.address_taken
+            and v.owner is pou
+            and v.section in ("VAR", "VAR_TEMP", "VAR_INPUT", "VAR_OUTPUT")
+            and not T.unalias(v.type).is_aggregate
+        }
         # an in-out whose address is taken (REF=, REF, ADR) is used through the caller's reference
         # itself (it works as the one-element box), so a reference made here outlives the call
-        through = {p for p in pou.params() if p.section == "VAR_IN_OUT" and p.address_taken
-                   and not T.unalias(p.type).is_aggregate}
+        through = {
+            p
+            for p in pou.params()
+            if p.section == "VAR_IN_OUT" and p.address_taken and not T.unalias(p.type).is_aggregate
+        }
         self.boxed |= through
         self.through = through
         params = []
@@ -63,12 +72,18 @@ class FuncGen(StmtGen):
             else:
                 params.append("_r_" + p.pyname)
                 prologue.append(box(p, InitGen(self.mod).initial(p.type, p.init)))
-                epilogue.append(py.If(py.Compare(_name("_r_" + p.pyname), [py.IsNot()], [_const(None)]),
-                                      [py.Expr(_call(_attr(_name("_r_" + p.pyname), "set"), unbox(p)))], []))
+                epilogue.append(
+                    py.If(
+                        py.Compare(_name("_r_" + p.pyname), [py.IsNot()], [_const(None)]),
+                        [py.Expr(_call(_attr(_name("_r_" + p.pyname), "set"), unbox(p)))],
+                        [],
+                    )
+                )
         locals_init = []
         if pou.return_type is not None:
-            locals_init.append(py.Assign([_name(self.result_name, py.Store())],
-                                         InitGen(self.mod).initial(pou.return_type, None)))
+            locals_init.append(
+                py.Assign([_name(self.result_name, py.Store())], InitGen(self.mod).initial(pou.return_type, None))
+            )
         for v in pou.vars.values():
             if v.section in ("VAR", "VAR_TEMP"):
                 locals_init.append(_set_lines(box(v, InitGen(self.mod).initial(v.type, v.init)), v.span.line))
@@ -98,10 +113,10 @@ class MethodGen(FuncGen):
         mt = self.pou
         by_ref = _by_ref_names(mt.decl.body)
         boxed = {v for v in by_ref if v.owner is mt and not T.unalias(v.type).is_aggregate}
-        boxed |= {v for v in mt.vars.values() if v.address_taken and v.owner is mt
-                  and not T.unalias(v.type).is_aggregate}
-        self.cached = {v for v in mt.vars.values() if v not in boxed and v.section not in ("VAR_EXTERNAL",
-                                                                                            "VAR_INST")}
+        boxed |= {
+            v for v in mt.vars.values() if v.address_taken and v.owner is mt and not T.unalias(v.type).is_aggregate
+        }
+        self.cached = {v for v in mt.vars.values() if v not in boxed and v.section not in ("VAR_EXTERNAL", "VAR_INST")}
         fn = super().function()
         fn.args.args.insert(0, _set_lines(py.arg("self"), mt.decl.span.line))
         return fn
@@ -109,8 +124,7 @@ class MethodGen(FuncGen):
 
 def _mentions_this(body) -> bool:
     """THIS or SUPER in a body: other code then works on the instance while it runs."""
-    return any(isinstance(e, A.Name) and getattr(e.sym, "kind", "") in ("this", "super")
-               for e in _walk_exprs_in(body))
+    return any(isinstance(e, A.Name) and getattr(e.sym, "kind", "") in ("this", "super") for e in _walk_exprs_in(body))
 
 
 def _lines(nodes, line):
@@ -141,38 +155,63 @@ class BodyGen(StmtGen):
         slots += ["_e_" + v.pyname for v in edges]
         init_body = []
         for v in block.variables:
-            init_body.append(_set_lines(py.Assign([_attr(_name("self"), v.pyname, py.Store())],
-                                                  init.initial(v.type, v.init)), v.span.line))
+            init_body.append(
+                _set_lines(
+                    py.Assign([_attr(_name("self"), v.pyname, py.Store())], init.initial(v.type, v.init)), v.span.line
+                )
+            )
         for v in edges:
-            init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_e_" + v.pyname, py.Store())],
-                                                  _const(v.edge == "F_EDGE")), v.span.line))
-        for v in block.method_variables:              # METHOD VAR_INST: attributes of the instance
+            init_body.append(
+                _set_lines(
+                    py.Assign([_attr(_name("self"), "_e_" + v.pyname, py.Store())], _const(v.edge == "F_EDGE")),
+                    v.span.line,
+                )
+            )
+        for v in block.method_variables:  # METHOD VAR_INST: attributes of the instance
             slots.append(v.pyname)
-            init_body.append(_set_lines(py.Assign([_attr(_name("self"), v.pyname, py.Store())],
-                                                  init.initial(v.type, v.init)), v.span.line))
+            init_body.append(
+                _set_lines(
+                    py.Assign([_attr(_name("self"), v.pyname, py.Store())], init.initial(v.type, v.init)), v.span.line
+                )
+            )
         if sfc is not None:
             slots += ["_sfc", "_sfc_x"]
-            init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_sfc", py.Store())],
-                                                  _call("_SfcState", _name("_sfc_" + pou.pyname))), d.span.line))
-            init_body.append(_set_lines(py.Assign([_attr(_name("self"), "_sfc_x", py.Store())],
-                                                  _attr(_attr(_name("self"), "_sfc"), "x")), d.span.line))
-        members = [py.Assign([_name("__slots__", py.Store())], py.Tuple([_const(s) for s in slots], py.Load())),
-                   py.Assign([_name("_kinds", py.Store())], _const(block.kinds)),
-                   py.FunctionDef("__init__", _args(["self"]), init_body or [py.Pass()], [], None, None)]
+            init_body.append(
+                _set_lines(
+                    py.Assign(
+                        [_attr(_name("self"), "_sfc", py.Store())], _call("_SfcState", _name("_sfc_" + pou.pyname))
+                    ),
+                    d.span.line,
+                )
+            )
+            init_body.append(
+                _set_lines(
+                    py.Assign([_attr(_name("self"), "_sfc_x", py.Store())], _attr(_attr(_name("self"), "_sfc"), "x")),
+                    d.span.line,
+                )
+            )
+        members = [
+            py.Assign([_name("__slots__", py.Store())], py.Tuple([_const(s) for s in slots], py.Load())),
+            py.Assign([_name("_kinds", py.Store())], _const(block.kinds)),
+            py.FunctionDef("__init__", _args(["self"]), init_body or [py.Pass()], [], None, None),
+        ]
         # caching policy: with actions, methods, THIS or SFC other code touches the variables during
         # the body: keep them attributes
-        can_cache = not pou.actions and sfc is None and not pou.methods and not pou.properties \
-            and not _mentions_this(d.body)
+        can_cache = (
+            not pou.actions and sfc is None and not pou.methods and not pou.properties and not _mentions_this(d.body)
+        )
         if sfc is not None:
             run = py.Expr(_call(_attr(_attr(_name("self"), "_sfc"), "run"), _name("self"), _name("_now")))
-            members.append(_set_lines(py.FunctionDef("_body", _args(["self"]), [run], [], None, None),
-                                      d.span.line))
+            members.append(_set_lines(py.FunctionDef("_body", _args(["self"]), [run], [], None, None), d.span.line))
         else:
-            members.append(self.method("_body", d.body, can_cache, edges, d.span.line,
-                                       d.end_span.line if d.end_span else d.span.line))
+            members.append(
+                self.method(
+                    "_body", d.body, can_cache, edges, d.span.line, d.end_span.line if d.end_span else d.span.line
+                )
+            )
         if block.constructor is not None:
             members.append(self._constructor(block.constructor, d.span.line))
-        for act in block.actions:                     # its own and inherited ones
+        for act in block.actions:  # its own and inherited ones
             g = BodyGen(self.mod, pou)
             members.append(g.method("_act_" + act.name.lower(), act.body, False, [], act.span.line, act.span.line))
         for mt in block.methods:
@@ -203,8 +242,14 @@ class BodyGen(StmtGen):
                 actions.append(("act", "_act_" + name))
             else:
                 actions.append(("var", pou.vars[name].pyname))
-        desc = _call("_SfcDesc", _const(len(sfc.steps)), _const(initial), _const(trans), _const(tuple(steps)),
-                     _const(tuple(actions)))
+        desc = _call(
+            "_SfcDesc",
+            _const(len(sfc.steps)),
+            _const(initial),
+            _const(trans),
+            _const(tuple(steps)),
+            _const(tuple(actions)),
+        )
         return _set_lines(py.Assign([_name("_sfc_" + pou.pyname, py.Store())], desc), pou.decl.span.line)
 
     def _constructor(self, ctor: Constructor, line: int) -> py.FunctionDef:
@@ -216,9 +261,13 @@ class BodyGen(StmtGen):
             if isinstance(a, bool):
                 return _const(a)
             return _call(_attr(_name("a"), "get"), _const(a.name.lower()), init.initial(a.type, a.init))
-        body = [py.Expr(_call(_attr(_name(c.method.owner_fb.pyname), c.method.pyname), _name("self"),
-                              *[arg(a) for a in c.args]))
-                for c in ctor.calls]
+
+        body = [
+            py.Expr(
+                _call(_attr(_name(c.method.owner_fb.pyname), c.method.pyname), _name("self"), *[arg(a) for a in c.args])
+            )
+            for c in ctor.calls
+        ]
         body.append(py.Return(_name("self")))
         return _set_lines(py.FunctionDef("_ctor", _args(["self", "a"]), body, [], None, None), line)
 
@@ -227,8 +276,13 @@ class BodyGen(StmtGen):
         by_ref = _by_ref_names(body)
         used = set()
         for e in _walk_exprs_in(body):
-            if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym) and e.sym.owner is pou \
-                    and e.sym.section != "VAR_EXTERNAL" and not e.sym.is_global:
+            if (
+                isinstance(e, A.Name)
+                and isinstance(e.sym, T.VarSym)
+                and e.sym.owner is pou
+                and e.sym.section != "VAR_EXTERNAL"
+                and not e.sym.is_global
+            ):
                 used.add(e.sym)
         for v in edges:
             used.add(v)
@@ -245,8 +299,9 @@ class BodyGen(StmtGen):
         init = InitGen(self.mod)
         for v in temps:
             val = init.initial(v.type, v.init)
-            prologue.append(py.Assign([_name(v.pyname, py.Store())],
-                                      py.List([val], py.Load()) if v in self.boxed else val))
+            prologue.append(
+                py.Assign([_name(v.pyname, py.Store())], py.List([val], py.Load()) if v in self.boxed else val)
+            )
         for v in sorted(self.cached, key=lambda s: s.pyname):
             if v.section == "VAR_TEMP":
                 continue
@@ -260,8 +315,9 @@ class BodyGen(StmtGen):
             else:
                 test = py.BoolOp(py.And(), [py.UnaryOp(py.Not(), cur), prev])
             prologue.append(py.Assign([prev], cur))
-            prologue[-1] = py.Assign([py.Tuple([_store(cur), _store(prev)], py.Store())],
-                                     py.Tuple([test, cur], py.Load()))
+            prologue[-1] = py.Assign(
+                [py.Tuple([_store(cur), _store(prev)], py.Store())], py.Tuple([test, cur], py.Load())
+            )
         writeback = []
         for v in sorted(self.cached & self.written_locals, key=lambda s: s.pyname):
             if T.unalias(v.type).is_aggregate or v.section == "VAR_TEMP":
@@ -295,7 +351,9 @@ class BodyGen(StmtGen):
             for i, (_act, _q, texpr) in enumerate(s.actions):
                 if texpr is not None:
                     g = BodyGen(self.mod, self.pou)
-                    fn = py.FunctionDef(f"_at_{s.index}_{i}", _args(["self"]), [py.Return(g.expr(texpr))], [], None, None)
+                    fn = py.FunctionDef(
+                        f"_at_{s.index}_{i}", _args(["self"]), [py.Return(g.expr(texpr))], [], None, None
+                    )
                     _set_lines(fn, texpr.span.line)
                     out.append(fn)
         return out

@@ -1,4 +1,5 @@
 """Small builders for Python `ast` nodes, and value helpers shared by the generators."""
+
 from __future__ import annotations
 
 import ast as py
@@ -76,7 +77,7 @@ def default_value(t: T.Type):
     """The Python value of a scalar type's default, or None for aggregates."""
     t = T.unalias(t)
     if isinstance(t, T.SubrangeType):
-        return t.lo                             # IEC: a subrange starts at its lower limit
+        return t.lo  # IEC: a subrange starts at its lower limit
     if isinstance(t, T.ElemType):
         if t.kind == "char":
             return "\0"

@@ -5,6 +5,7 @@ text shows it as a trailing comment, `x = 1  # st:12`. Built on the standard lib
 unparser (Python 3.11's `ast._Unparser`): a statement's first output line gets its mark,
 continuation lines (`else:`, `finally:`) none, an `elif` the line of its condition.
 """
+
 from __future__ import annotations
 
 import ast as py
@@ -18,9 +19,9 @@ def python_text(module: py.Module) -> str:
 class _MarkedUnparser(py._Unparser):
     def __init__(self):
         super().__init__()
-        self._mark = None           # the line of the statement about to start an output line
-        self._open = None           # the line of the output line being written
-        self._elifs: list = []      # per If being printed: the lines of its elif arms
+        self._mark = None  # the line of the statement about to start an output line
+        self._open = None  # the line of the output line being written
+        self._elifs: list = []  # per If being printed: the lines of its elif arms
 
     def visit(self, node) -> str:
         text = super().visit(node)

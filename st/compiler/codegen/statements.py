@@ -1,4 +1,5 @@
 """Statements: typed ST statements → Python statements (loops, calls, assignments)."""
+
 from __future__ import annotations
 
 import ast as py
@@ -28,7 +29,7 @@ class StmtGen(ExprGen):
                 raise
             except Exception as exc:
                 if not hasattr(exc, "st_span"):
-                    exc.st_span = s.span      # where the internal error happened, for the report
+                    exc.st_span = s.span  # where the internal error happened, for the report
                 raise
             if covered and r and not isinstance(s, A.LoopGuard):
                 r.insert(0, self.mod.probe(s.span.file, s.span.line, "line"))
@@ -43,8 +44,10 @@ class StmtGen(ExprGen):
         if not self.covered:
             return code or [py.Pass()]
         target = body[0].span.line if body else 0
-        probe = _set_lines(self.mod.probe(decision.span.file, decision.span.line, "branch", label, target),
-                           target or decision.span.line)
+        probe = _set_lines(
+            self.mod.probe(decision.span.file, decision.span.line, "branch", label, target),
+            target or decision.span.line,
+        )
         return [probe] + code
 
     def block(self, body) -> list:
@@ -80,7 +83,7 @@ class StmtGen(ExprGen):
     def s_Assign(self, s: A.Assign) -> list:
         tgt = s.target
         tt = tgt.ty
-        if s.kind == "REF=":                           # bind a REFERENCE TO variable
+        if s.kind == "REF=":  # bind a REFERENCE TO variable
             v = s.value
             ref = _const(None) if isinstance(v, A.Name) and getattr(v.sym, "kind", "") == "null" else self.ref_to(v)
             if isinstance(tgt, A.Field):
@@ -90,6 +93,7 @@ class StmtGen(ExprGen):
             # a property: its SET with the value (S=/R= only when the condition holds)
             def setter(value):
                 return py.Expr(self.x_AccessorCall(tgt, value))
+
             if s.kind in ("S=", "R="):
                 return [py.If(self.expr(s.value), [setter(_const(s.kind == "S="))], [])]
             return [setter(self.coerce(self.expr(s.value), s.value, tt))]
@@ -97,15 +101,24 @@ class StmtGen(ExprGen):
             return [py.If(self.expr(s.value), self.assign(tgt, _const(s.kind == "S="), None), [])]
         if s.kind == "?=":
             kind, src_ref, dest_ref = s.attempt
-            return self.assign(tgt, _call("_attempt", self.expr(s.value), _const(kind), _const(src_ref),
-                                          _const(dest_ref)), None)
+            return self.assign(
+                tgt, _call("_attempt", self.expr(s.value), _const(kind), _const(src_ref), _const(dest_ref)), None
+            )
         # a call with EN: assign only when enabled
         v = s.value
-        if isinstance(v, A.Call) and isinstance(v.target, CallTarget) and v.target.kind in ("function", "method") \
-                and (v.target.bind.get("en") is not None or v.target.bind.get("eno") is not None):
+        if (
+            isinstance(v, A.Call)
+            and isinstance(v.target, CallTarget)
+            and v.target.kind in ("function", "method")
+            and (v.target.bind.get("en") is not None or v.target.bind.get("eno") is not None)
+        ):
             return self._en_call_assign(s, v)
-        if isinstance(v, A.Call) and isinstance(v.target, CallTarget) and v.target.kind == "native" \
-                and (v.target.en is not None or v.target.eno is not None):
+        if (
+            isinstance(v, A.Call)
+            and isinstance(v.target, CallTarget)
+            and v.target.kind == "native"
+            and (v.target.en is not None or v.target.eno is not None)
+        ):
             en, eno = v.target.en, v.target.eno
             v.target.en = None
             body = self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
@@ -136,7 +149,7 @@ class StmtGen(ExprGen):
 
     def assign(self, tgt, value: py.expr, src_expr) -> list:
         if isinstance(tgt, A.Name) and isinstance(tgt.sym, T.VarSym) and T.is_reference(tgt.sym.type):
-            return [py.Expr(_call(_attr(self.var_load(tgt.sym), "set"), value))]   # through the reference
+            return [py.Expr(_call(_attr(self.var_load(tgt.sym), "set"), value))]  # through the reference
         if isinstance(tgt, A.Field) and isinstance(tgt.sym, T.VarSym) and T.is_reference(tgt.sym.type):
             return [py.Expr(_call(_attr(_attr(self.expr(tgt.base), tgt.sym.pyname), "set"), value))]
         if isinstance(tgt, A.Name):
@@ -155,8 +168,15 @@ class StmtGen(ExprGen):
             if tgt.size != "X":
                 width = {"B": 8, "W": 16, "D": 32, "L": 64}[tgt.size]
                 bt = T.base_of(tgt.base.ty)
-                new = _call("_setbits", self.expr(tgt.base), _const(tgt.index * width), _const(width), value,
-                            _const(bt.bits), _const(bt.signed))
+                new = _call(
+                    "_setbits",
+                    self.expr(tgt.base),
+                    _const(tgt.index * width),
+                    _const(width),
+                    value,
+                    _const(bt.bits),
+                    _const(bt.signed),
+                )
                 return self.assign(tgt.base, new, None)
             return self._bit_write(tgt.base, tgt.index, value)
         if isinstance(tgt, A.Deref):
@@ -218,18 +238,26 @@ class StmtGen(ExprGen):
             ut = T.unalias(p.type)
             if p.section == "VAR_IN_OUT":
                 if ut.is_aggregate:
-                    out.append(py.Assign([_attr(inst, p.pyname, py.Store())],
-                                         self.conformant_arg(self.expr(a.value), a.value.ty, p.type)))
+                    out.append(
+                        py.Assign(
+                            [_attr(inst, p.pyname, py.Store())],
+                            self.conformant_arg(self.expr(a.value), a.value.ty, p.type),
+                        )
+                    )
                 else:
                     out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.expr(a.value)))
-                    after.extend(self.assign(a.value, self.coerce(_attr(inst, p.pyname), _Typed(p.type), a.value.ty), None))
-            elif T.is_reference(p.type):                  # an input REFERENCE TO: bound to the argument
+                    after.extend(
+                        self.assign(a.value, self.coerce(_attr(inst, p.pyname), _Typed(p.type), a.value.ty), None)
+                    )
+            elif T.is_reference(p.type):  # an input REFERENCE TO: bound to the argument
                 out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.ref_to(a.value)))
             elif ut.is_aggregate:
                 out.append(py.Expr(_call("_assign", _attr(inst, p.pyname), self.expr(a.value))))
             else:
-                out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.coerce(self.expr(a.value), a.value, p.type)))
-        if tgt.nonvirtual is not None:             # SUPER^(): the base block's body on this instance
+                out.append(
+                    py.Assign([_attr(inst, p.pyname, py.Store())], self.coerce(self.expr(a.value), a.value, p.type))
+                )
+        if tgt.nonvirtual is not None:  # SUPER^(): the base block's body on this instance
             out.append(py.Expr(_call(_attr(_name(tgt.nonvirtual.pyname), "_body"), inst)))
         else:
             out.append(py.Expr(_call(_attr(inst, "_body"))))
@@ -249,8 +277,10 @@ class StmtGen(ExprGen):
 
     def s_If(self, s: A.If) -> list:
         # arms first, in source order (coverage probes are numbered in that order)
-        arms = [self._arm(body, s, "THEN" if i == 0 else f"ELSIF (line {cond.span.line})")
-                for i, (cond, body) in enumerate(s.branches)]
+        arms = [
+            self._arm(body, s, "THEN" if i == 0 else f"ELSIF (line {cond.span.line})")
+            for i, (cond, body) in enumerate(s.branches)
+        ]
         if s.orelse is not None:
             orelse = self._arm(s.orelse, s, "ELSE") if s.orelse or self.covered else []
         else:
@@ -332,12 +362,19 @@ class StmtGen(ExprGen):
             stop = py.BinOp(end, py.Add(), _call("_for_dir", step))
         else:
             step = _const(step_c)
-            stop = py.BinOp(end, py.Add(), _const(1 if step_c > 0 else -1)) if not isinstance(end, py.Constant) \
+            stop = (
+                py.BinOp(end, py.Add(), _const(1 if step_c > 0 else -1))
+                if not isinstance(end, py.Constant)
                 else _const(end.value + (1 if step_c > 0 else -1))
+            )
         rng = _call("_range", start, stop, step) if step_c != 1 else _call("_range", start, stop)
         # the loop variable, or a Python local that mirrors it
-        direct = isinstance(var, A.Name) and isinstance(var.sym, T.VarSym) and \
-            (var.sym in self.cached or self.self_name is None) and not var.sym.is_global
+        direct = (
+            isinstance(var, A.Name)
+            and isinstance(var.sym, T.VarSym)
+            and (var.sym in self.cached or self.self_name is None)
+            and not var.sym.is_global
+        )
         if direct:
             loopvar = var.sym.pyname
             self.written_locals.add(var.sym)
@@ -368,9 +405,11 @@ class StmtGen(ExprGen):
             stp = self.new_tmp()
             out.append(py.Assign([_name(stp, py.Store())], self.expr(s.step)))
             step = _name(stp)
-            test = py.IfExp(py.Compare(step, [py.Gt()], [_const(0)]),
-                            py.Compare(self.expr(var), [py.LtE()], [_name(endt)]),
-                            py.Compare(self.expr(var), [py.GtE()], [_name(endt)]))
+            test = py.IfExp(
+                py.Compare(step, [py.Gt()], [_const(0)]),
+                py.Compare(self.expr(var), [py.LtE()], [_name(endt)]),
+                py.Compare(self.expr(var), [py.GtE()], [_name(endt)]),
+            )
         else:
             step = _const(step_c)
             test = py.Compare(self.expr(var), [py.LtE() if step_c > 0 else py.GtE()], [_name(endt)])
@@ -378,8 +417,13 @@ class StmtGen(ExprGen):
         # CONTINUE must still increment: use try/finally-free form: increment at loop top after the first pass
         first = self.new_tmp()
         out.append(py.Assign([_name(first, py.Store())], _const(True)))
-        body = self.loop_body(s.body, [py.If(_name(first), [py.Assign([_name(first, py.Store())], _const(False))], incr),
-                                       py.If(py.UnaryOp(py.Not(), test), [py.Break()], [])])
+        body = self.loop_body(
+            s.body,
+            [
+                py.If(_name(first), [py.Assign([_name(first, py.Store())], _const(False))], incr),
+                py.If(py.UnaryOp(py.Not(), test), [py.Break()], []),
+            ],
+        )
         out.append(py.While(_const(True), body, []))
         return out
 
@@ -497,8 +541,12 @@ def _by_ref_names(body) -> set:
                 root = root.base
             if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
                 names.add(root.sym)
-        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "native" \
-                and e.target.sig.name.upper() in ("REF", "ADR"):
+        if (
+            isinstance(e, A.Call)
+            and isinstance(e.target, CallTarget)
+            and e.target.kind == "native"
+            and e.target.sig.name.upper() in ("REF", "ADR")
+        ):
             for a in e.target.args:
                 root = a.value
                 while isinstance(root, (A.Field, A.Index, A.Bit)):

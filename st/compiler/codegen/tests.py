@@ -5,6 +5,7 @@ SETUP statements run first and TEARDOWN in a `finally`. Test statements become
 calls of helpers the test runner puts into the namespace (`st.testing.runner`):
 `_t_fail`, `_t_advance`, `_t_mock`, `_t_mock_function`, `_t_verify`.
 """
+
 from __future__ import annotations
 
 import ast as py
@@ -15,8 +16,14 @@ from .expressions import InitGen
 from .pyast import _args, _call, _const, _name, _set_lines
 from .statements import StmtGen, _by_ref_names
 
-_PYCMP = {"ASSERT_EQ": py.Eq, "ASSERT_NEQ": py.NotEq, "ASSERT_GT": py.Gt, "ASSERT_LT": py.Lt,
-          "ASSERT_GE": py.GtE, "ASSERT_LE": py.LtE}
+_PYCMP = {
+    "ASSERT_EQ": py.Eq,
+    "ASSERT_NEQ": py.NotEq,
+    "ASSERT_GT": py.Gt,
+    "ASSERT_LT": py.Lt,
+    "ASSERT_GE": py.GtE,
+    "ASSERT_LE": py.LtE,
+}
 
 
 class TestGen(StmtGen):
@@ -30,8 +37,9 @@ class TestGen(StmtGen):
         t = self.test
         everything = t.setup + t.body + t.teardown
         by_ref = _by_ref_names(everything)
-        self.boxed = {v for v in t.pou.vars.values()
-                      if (v in by_ref or v.address_taken) and not T.unalias(v.type).is_aggregate}
+        self.boxed = {
+            v for v in t.pou.vars.values() if (v in by_ref or v.address_taken) and not T.unalias(v.type).is_aggregate
+        }
         init = InitGen(self.mod)
         main = []
         for v in t.pou.vars.values():
@@ -69,14 +77,21 @@ class TestGen(StmtGen):
             fail_args = [_name(a), _const(op == "assert_true")]
         elif op == "assert_near":
             tol = self.new_tmp()
-            store = [py.Assign([py.Tuple([_name(a, py.Store()), _name(b, py.Store()), _name(tol, py.Store())],
-                                         py.Store())], py.Tuple(vals, py.Load()))]
+            store = [
+                py.Assign(
+                    [py.Tuple([_name(a, py.Store()), _name(b, py.Store()), _name(tol, py.Store())], py.Store())],
+                    py.Tuple(vals, py.Load()),
+                )
+            ]
             diff = py.BinOp(_name(a), py.Sub(), _name(b))
             test = py.Compare(py.UnaryOp(py.USub(), _name(tol)), [py.LtE(), py.LtE()], [diff, _name(tol)])
             fail_args = [_name(a), _name(b), _name(tol)]
         else:
-            store = [py.Assign([py.Tuple([_name(a, py.Store()), _name(b, py.Store())], py.Store())],
-                               py.Tuple(vals, py.Load()))]
+            store = [
+                py.Assign(
+                    [py.Tuple([_name(a, py.Store()), _name(b, py.Store())], py.Store())], py.Tuple(vals, py.Load())
+                )
+            ]
             test = py.Compare(_name(a), [_PYCMP[info.kind]()], [_name(b)])
             fail_args = [_name(a), _name(b)]
         fail = py.Expr(_call("_t_fail", idx, msg, *fail_args))

@@ -9,6 +9,7 @@ and rewrites the bodies in place (the checked project is built for one compilati
   with fb_init.py's explicit constructor for its FB_init chain; which implementation each
   method or block call runs (SUPER^ calls are the base's).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -20,14 +21,15 @@ from .walk import bodies
 
 @dataclass(slots=True)
 class LowerOptions:
-    loop_guards: bool = True        # the watchdog's check in every loop (off only to measure its cost)
+    loop_guards: bool = True  # the watchdog's check in every loop (off only to measure its cost)
 
 
 @dataclass(slots=True)
 class LoweredProgram:
     """What code generation prints: the project with lowered bodies, and each block's class."""
+
     project: Project
-    blocks: dict                    # POUType → inheritance.Block
+    blocks: dict  # POUType → inheritance.Block
 
 
 def lower(project: Project, options: LowerOptions | None = None) -> LoweredProgram:

@@ -6,6 +6,7 @@ values are in place: each block's own FB_init runs, the base's first. The implic
 FALSE and every other input the declaration's argument of that name (`inst : FB(nId := 5)`)
 or its default; the arguments are checked against the most derived FB_init's inputs.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -17,14 +18,14 @@ FIXED = {"binitretains": True, "bincopycode": False}
 
 @dataclass(slots=True)
 class InitCall:
-    method: T.POUType           # one block's own FB_init
-    args: list                  # per input, in order: a fixed bool, or the input (its declared argument or default)
+    method: T.POUType  # one block's own FB_init
+    args: list  # per input, in order: a fixed bool, or the input (its declared argument or default)
 
 
 @dataclass(slots=True)
 class Constructor:
-    calls: list                 # [InitCall], base first
-    inputs: dict                # lower-case name → VarSym: what a declaration's arguments are checked against
+    calls: list  # [InitCall], base first
+    inputs: dict  # lower-case name → VarSym: what a declaration's arguments are checked against
 
 
 def constructor(pou: T.POUType) -> Constructor | None:

@@ -10,6 +10,7 @@ Every call of a method or a block gets `nonvirtual` on its call target: None for
 method call (the instance's most derived implementation runs), else the block whose method
 or body runs on this instance: the base, for SUPER^.M(…) and SUPER^().
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -24,12 +25,12 @@ from .walk import is_super, rewrite_exprs, rewrite_outside_bodies
 @dataclass(slots=True)
 class Block:
     pou: T.POUType
-    kinds: tuple                # sorted lower-case names
-    variables: list             # [VarSym] an instance holds (VAR_EXTERNAL, VAR_TEMP, VAR_STAT are elsewhere)
-    method_variables: list      # [VarSym] its methods' VAR_INST, kept in the instance
-    actions: list               # [ast.ActionDecl]
-    methods: list               # [POUType]
-    accessors: list             # [POUType] GET and SET of its properties
+    kinds: tuple  # sorted lower-case names
+    variables: list  # [VarSym] an instance holds (VAR_EXTERNAL, VAR_TEMP, VAR_STAT are elsewhere)
+    method_variables: list  # [VarSym] its methods' VAR_INST, kept in the instance
+    actions: list  # [ast.ActionDecl]
+    methods: list  # [POUType]
+    accessors: list  # [POUType] GET and SET of its properties
     constructor: Constructor | None
 
 
@@ -40,13 +41,15 @@ def blocks(project) -> dict:
         if pou.decl is None or pou.pou_kind in ("INTERFACE", "FUNCTION"):
             continue
         out[pou] = Block(
-            pou, tuple(sorted(kinds_of(pou))),
+            pou,
+            tuple(sorted(kinds_of(pou))),
             [v for v in pou.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP", "VAR_STAT")],
             [v for mt in pou.methods.values() for v in mt.vars.values() if v.section == "VAR_INST"],
             list(pou.actions.values()),
             list(pou.methods.values()),
             [acc for ps in pou.properties.values() for acc in (ps.get, ps.set) if acc is not None],
-            constructor(pou))
+            constructor(pou),
+        )
     return out
 
 

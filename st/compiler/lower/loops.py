@@ -7,6 +7,7 @@ can run for longer than a job's budget (a FOR's bounds are values too). A FOR be
 (directly, through a nested FOR or as an output argument) is a "while" form that re-tests the
 counter each round, and is guarded like the others.
 """
+
 from __future__ import annotations
 
 from .. import ast as A
@@ -51,7 +52,11 @@ def assigns_counter(body: list, var) -> bool:
             return True
         if isinstance(s, A.CallStmt):
             for a in s.call.args:
-                if (a.output or isinstance(s.call.target, CallTarget)) and isinstance(a.value, A.Name) \
-                        and a.value.name.lower() == key and a.output:
+                if (
+                    (a.output or isinstance(s.call.target, CallTarget))
+                    and isinstance(a.value, A.Name)
+                    and a.value.name.lower() == key
+                    and a.output
+                ):
                     return True
     return False

@@ -4,6 +4,7 @@
 `S=`/`R=`, which set it only when their condition holds) they write through SET. SUPER^.P
 calls the base block's accessor on this instance, not the most derived one.
 """
+
 from __future__ import annotations
 
 from ...model import types as T

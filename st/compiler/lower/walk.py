@@ -1,4 +1,5 @@
 """Where the statements are: every body code generation prints, and walking nested statements."""
+
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
@@ -59,12 +60,14 @@ def walk_stmts(body: list) -> Iterator:
 def rewrite_outside_bodies(project: Project, fn: Callable) -> None:
     """`rewrite_exprs` for the expressions that are not in a statement: SFC transition
     conditions and action durations, a configuration's program arguments."""
+
     def one(e):
         if e is None:
             return None
         holder = [e]
         rewrite_exprs(holder, fn)
         return holder[0]
+
     for sfc in project.sfc.values():
         for t in sfc.transitions:
             t.cond = one(t.cond)
@@ -89,7 +92,7 @@ def rewrite_exprs(body: list, fn: Callable) -> None:
     def expr(e):
         if id(e) in memo:
             return memo[id(e)]
-        memo[id(e)] = e                 # the same node reached again while rewriting its parts
+        memo[id(e)] = e  # the same node reached again while rewriting its parts
         fields(e)
         out = memo[id(e)] = fn(e)
         return out

@@ -13,10 +13,10 @@ and the scan binding that moves PLCopen axes with CiA 402 drives.
     config.py   the segment configuration (TOML);  plan.py  the cycle-time arithmetic;  esi.py  ESI XML
     driver.py   EtherCATDriver: the per-scan exchange, DriveLink: CiA 402 ↔ PLCopen axis
 """
+
 from .config import ConfigError, SegmentConfig
 from .config import load as load_segment
 from .driver import DriveLink, EtherCATDriver
 from .master import FrameMaster, MasterError
 
-__all__ = ["ConfigError", "SegmentConfig", "load_segment", "DriveLink", "EtherCATDriver", "FrameMaster",
-           "MasterError"]
+__all__ = ["ConfigError", "SegmentConfig", "load_segment", "DriveLink", "EtherCATDriver", "FrameMaster", "MasterError"]

@@ -6,6 +6,7 @@ Mailbox header (6 bytes): length of what follows, address, channel/priority, typ
 (bits 12-15: 1 emergency, 2 SDO request, 3 SDO response). Then the SDO command byte, index,
 subindex and data as in CiA 301.
 """
+
 from __future__ import annotations
 
 import struct
@@ -36,8 +37,8 @@ class SdoServer:
         self.od = od
         self.mbx_size = mbx_size
         self.counter = 0
-        self._up = None          # segmented upload in progress: [data, pos, toggle, index, sub]
-        self._down = None        # segmented download: [buffer, size, toggle, index, sub, complete]
+        self._up = None  # segmented upload in progress: [data, pos, toggle, index, sub]
+        self._down = None  # segmented download: [buffer, size, toggle, index, sub, complete]
 
     def _out(self, payload: bytes) -> bytes:
         self.counter = self.counter % 7 + 1
@@ -50,7 +51,7 @@ class SdoServer:
         if len(frame) < 6:
             return []
         length, _addr, _prio, mtype = MBX_HDR.unpack_from(frame, 0)
-        payload = frame[6:6 + length]
+        payload = frame[6 : 6 + length]
         if mtype & 0x0F != MBX_TYPE_COE:
             # mailbox error reply: unsupported protocol (type 0, service 1, detail 2)
             return [mbx_frame(struct.pack("<HH", 1, 2), 0, 0, MBX_TYPE_ERR)]
@@ -63,7 +64,7 @@ class SdoServer:
         try:
             res = self._sdo(body)
         except SdoAbort as a:
-            idx, sub = (struct.unpack_from("<HB", body, 1) if len(body) >= 4 else (0, 0))
+            idx, sub = struct.unpack_from("<HB", body, 1) if len(body) >= 4 else (0, 0)
             self._up = self._down = None
             res = abort_body(idx, sub, a.code)
         return [self._out(coe_sdo(COE_SDO_RES, res))]
@@ -71,13 +72,13 @@ class SdoServer:
     def _sdo(self, body: bytes) -> bytes:
         cmd = body[0]
         ccs = cmd >> 5
-        if ccs == 3:                                         # upload segment request
+        if ccs == 3:  # upload segment request
             return self._upload_segment(cmd)
-        if ccs == 0:                                         # download segment request
+        if ccs == 0:  # download segment request
             return self._download_segment(cmd, body)
         index, sub = struct.unpack_from("<HB", body, 1)
         complete = bool(cmd & 0x10)
-        if ccs == 2:                                         # initiate upload
+        if ccs == 2:  # initiate upload
             data = self.od.upload(index, sub, complete)
             head = struct.pack("<HB", index, sub)
             if len(data) <= 4 and not complete:
@@ -88,11 +89,11 @@ class SdoServer:
                 return bytes([flags]) + head + struct.pack("<I", len(data)) + data
             self._up = [data, room, 0, index, sub]
             return bytes([flags]) + head + struct.pack("<I", len(data)) + data[:room]
-        if ccs == 1:                                         # initiate download
+        if ccs == 1:  # initiate download
             head_len = 4
-            if cmd & 0x02:                                   # expedited
+            if cmd & 0x02:  # expedited
                 n = 4 - ((cmd >> 2) & 3) if cmd & 0x01 else 4
-                data = body[4:4 + n]
+                data = body[4 : 4 + n]
                 self.od.download(index, sub, data, complete)
                 return bytes([0x60 | (0x10 if complete else 0)]) + struct.pack("<HB", index, sub) + bytes(4)
             size = struct.unpack_from("<I", body, head_len)[0]
@@ -112,7 +113,7 @@ class SdoServer:
             self._up = None
             raise SdoAbort(ABORT_TOGGLE)
         room = self.mbx_size - 6 - 2 - 1
-        chunk = data[pos:pos + room]
+        chunk = data[pos : pos + room]
         pos += len(chunk)
         last = pos >= len(data)
         self._up = None if last else [data, pos, toggle ^ 1, index, sub]
@@ -129,7 +130,7 @@ class SdoServer:
         last = bool(cmd & 1)
         seg = body[1:]
         if len(seg) <= 7:
-            seg = seg[:7 - ((cmd >> 1) & 7)]
+            seg = seg[: 7 - ((cmd >> 1) & 7)]
         buf += seg
         if last or len(buf) >= size:
             self._down = None
@@ -140,6 +141,7 @@ class SdoServer:
 
 
 # ---------------------------------------------------------------------------- the master's client
+
 
 class SdoError(Exception):
     def __init__(self, message: str, abort: int = 0):
@@ -168,12 +170,13 @@ def download_request(index: int, sub: int, data: bytes, complete: bool, mbx_size
     pos, toggle = len(first), 0
     seg_room = mbx_size - 6 - 2 - 1
     while pos < len(data):
-        chunk = data[pos:pos + seg_room]
+        chunk = data[pos : pos + seg_room]
         pos += len(chunk)
         last = pos >= len(data)
         n = max(0, 7 - len(chunk))
-        segs.append(coe_sdo(COE_SDO_REQ, bytes([(toggle << 4) | (n << 1) | (1 if last else 0)]) +
-                            chunk.ljust(7, b"\0")))
+        segs.append(
+            coe_sdo(COE_SDO_REQ, bytes([(toggle << 4) | (n << 1) | (1 if last else 0)]) + chunk.ljust(7, b"\0"))
+        )
         toggle ^= 1
     return req, segs
 
@@ -181,7 +184,7 @@ def download_request(index: int, sub: int, data: bytes, complete: bool, mbx_size
 def parse_response(frame: bytes):
     """A mailbox frame from the slave → ("sdo", body) | ("emergency", (code, reg, data)) | ("error", detail)."""
     length, _a, _p, mtype = MBX_HDR.unpack_from(frame, 0)
-    payload = frame[6:6 + length]
+    payload = frame[6 : 6 + length]
     if mtype & 0x0F == MBX_TYPE_ERR:
         return "error", struct.unpack_from("<H", payload, 2)[0] if len(payload) >= 4 else 0
     service = struct.unpack_from("<H", payload, 0)[0] >> 12
@@ -200,9 +203,9 @@ def upload_data(body: bytes):
     cmd = body[0]
     if cmd >> 5 != 2:
         raise SdoError(f"unexpected SDO response command {cmd:#04x}", ABORT_GENERAL)
-    if cmd & 0x02:                                           # expedited
+    if cmd & 0x02:  # expedited
         n = 4 - ((cmd >> 2) & 3) if cmd & 0x01 else 4
-        return bytes(body[4:4 + n]), n, False
+        return bytes(body[4 : 4 + n]), n, False
     size = struct.unpack_from("<I", body, 4)[0]
     data = bytes(body[8:])
     return data[:size], size, len(data) < size
@@ -214,5 +217,5 @@ def upload_segment_data(body: bytes):
         raise SdoError(f"unexpected SDO segment response {cmd:#04x}", ABORT_GENERAL)
     seg = bytes(body[1:])
     if len(seg) <= 7:
-        seg = seg[:7 - ((cmd >> 1) & 7)]
+        seg = seg[: 7 - ((cmd >> 1) & 7)]
     return seg, bool(cmd & 1)

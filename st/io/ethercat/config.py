@@ -31,6 +31,7 @@
 
 Errors name the file and the slave; TOML syntax errors carry the line and column.
 """
+
 from __future__ import annotations
 
 import re
@@ -56,7 +57,7 @@ class SlaveConfig:
     outputs: int = 8
     inputs_at: str = ""
     outputs_at: str = ""
-    bind: dict = field(default_factory=dict)          # "0xIIII:SS" or entry name → "%I…"/"%Q…"
+    bind: dict = field(default_factory=dict)  # "0xIIII:SS" or entry name → "%I…"/"%Q…"
     motor: dict = field(default_factory=dict)
     rx_pdos: list | None = None
     tx_pdos: list | None = None
@@ -86,7 +87,7 @@ def parse_duration(v, where: str) -> float:
         return float(v)
     m = _DUR.match(str(v))
     if not m:
-        raise ConfigError(f"{where}: '{v}' is not a duration like \"1ms\" or \"250us\"")
+        raise ConfigError(f'{where}: \'{v}\' is not a duration like "1ms" or "250us"')
     return float(m.group(1)) * _SCALE[m.group(2)]
 
 
@@ -103,8 +104,16 @@ def load(path: str) -> SegmentConfig:
 
 def from_dict(doc: dict, path: str = "<segment>") -> SegmentConfig:
     seg = dict(doc.get("segment", {}))
-    known = {"cycle", "task", "dc", "host_delay_us", "forwarding_delay_us", "cable_m", "lost_frame_limit",
-             "compensate_delay"}
+    known = {
+        "cycle",
+        "task",
+        "dc",
+        "host_delay_us",
+        "forwarding_delay_us",
+        "cable_m",
+        "lost_frame_limit",
+        "compensate_delay",
+    }
     for k in seg:
         if k not in known:
             raise ConfigError(f"{path}: [segment]: unknown setting '{k}' (known: {', '.join(sorted(known))})")
@@ -122,7 +131,7 @@ def from_dict(doc: dict, path: str = "<segment>") -> SegmentConfig:
         if sc.type not in ("cia402", "dio", "esi"):
             raise ConfigError(f"{where}: type must be cia402, dio or esi, not '{sc.type}'")
         if sc.type == "esi" and not sc.esi:
-            raise ConfigError(f"{where}: type esi needs esi = \"file.xml\"")
+            raise ConfigError(f'{where}: type esi needs esi = "file.xml"')
         for key, addr in list(sc.bind.items()) + [("inputs_at", sc.inputs_at), ("outputs_at", sc.outputs_at)]:
             if addr and not re.match(r"^%[IQM][XBWDL]?\d+(\.\d+)?$", addr.strip(), re.I):
                 raise ConfigError(f"{where}: '{addr}' (for {key}) is not a located address like %IX0.0 or %QW4")
@@ -155,6 +164,7 @@ def from_dict(doc: dict, path: str = "<segment>") -> SegmentConfig:
 def build_devices(cfg: SegmentConfig) -> list:
     """The emulated devices of a configuration (the `sim` backend and `st ethercat serve`)."""
     from .devices import CiA402Drive, DigitalIO
+
     out = []
     for sc in cfg.slaves:
         kw = {}
@@ -167,6 +177,7 @@ def build_devices(cfg: SegmentConfig) -> list:
             continue
         if sc.esi:
             from .esi import EsiError, load_esi
+
             try:
                 dev = load_esi(sc.esi, product_code=sc.product_code)[0]
             except EsiError as e:
@@ -176,6 +187,7 @@ def build_devices(cfg: SegmentConfig) -> list:
             kw["rx_mapping"] = dev.rx_entries()
             kw["tx_mapping"] = dev.tx_entries()
         from .devices.motor import MotorParams
+
         try:
             params = MotorParams(**{"encoder_bits": sc.encoder_bits, **sc.motor})
         except TypeError as e:
@@ -189,8 +201,13 @@ def build_devices(cfg: SegmentConfig) -> list:
 
 def build_segment(cfg: SegmentConfig):
     from .segment import Segment
-    seg = Segment(build_devices(cfg), host_delay=cfg.host_delay_us * 1e-6,
-                  forwarding_delay=cfg.forwarding_delay_us * 1e-6, cable_m=cfg.cable_m)
+
+    seg = Segment(
+        build_devices(cfg),
+        host_delay=cfg.host_delay_us * 1e-6,
+        forwarding_delay=cfg.forwarding_delay_us * 1e-6,
+        cable_m=cfg.cable_m,
+    )
     for sc, s in zip(cfg.slaves, seg.slaves):
         if sc.forwarding_delay_us is not None:
             s.forwarding_delay = sc.forwarding_delay_us * 1e-6

@@ -12,6 +12,7 @@ drive fault, an unexpected loss of Operation Enabled or `lost_frame_limit` conse
 frames / wrong working counters into ErrorStop of the bound axis. When frames come back, slaves
 that fell out of OP are brought back; the axes wait for MC_Reset as the standard wants.
 """
+
 from __future__ import annotations
 
 from ...runtime.iodriver import IODriverBase
@@ -23,9 +24,16 @@ from .config import SegmentConfig, build_segment
 from .master import FrameMaster, MasterError
 
 # CiA 402 statusword → state (mask, value), in the order they are tested
-_SW_STATES = ((0x4F, 0x08, "FAULT"), (0x4F, 0x0F, "FAULT_REACTION_ACTIVE"), (0x4F, 0x00, "NOT_READY_TO_SWITCH_ON"),
-              (0x4F, 0x40, "SWITCH_ON_DISABLED"), (0x6F, 0x21, "READY_TO_SWITCH_ON"), (0x6F, 0x23, "SWITCHED_ON"),
-              (0x6F, 0x27, "OPERATION_ENABLED"), (0x6F, 0x07, "QUICK_STOP_ACTIVE"))
+_SW_STATES = (
+    (0x4F, 0x08, "FAULT"),
+    (0x4F, 0x0F, "FAULT_REACTION_ACTIVE"),
+    (0x4F, 0x00, "NOT_READY_TO_SWITCH_ON"),
+    (0x4F, 0x40, "SWITCH_ON_DISABLED"),
+    (0x6F, 0x21, "READY_TO_SWITCH_ON"),
+    (0x6F, 0x23, "SWITCHED_ON"),
+    (0x6F, 0x27, "OPERATION_ENABLED"),
+    (0x6F, 0x07, "QUICK_STOP_ACTIVE"),
+)
 CSP = 8
 
 
@@ -45,19 +53,19 @@ class DriveLink:
         self.axis_no = axis_no
         self.axis = None
         self.increments_per_rev = increments_per_rev
-        self.scale = 1.0                    # increments per user unit, set when the axis is attached
+        self.scale = 1.0  # increments per user unit, set when the axis is attached
         self.want = False
         self.reset_phase = 0
         self.status = 0
         self.state = "NOT_READY_TO_SWITCH_ON"
         self.was_enabled = False
         self.raw_pos: int | None = None  # the last 32-bit actual position, for unwrapping
-        self.turns = 0                      # multiples of 2**32 increments
-        self.actual = 0                     # unwrapped increments
+        self.turns = 0  # multiples of 2**32 increments
+        self.actual = 0  # unwrapped increments
         self.velocity = 0
         self.error_code = 0
-        self.offset_s = 0.0                 # delay compensation: how far ahead the setpoint is taken
-        self.resetting = 0                  # cycles left for a fault reset to show
+        self.offset_s = 0.0  # delay compensation: how far ahead the setpoint is taken
+        self.resetting = 0  # cycles left for a fault reset to show
         m = driver.master.slaves[slave]
         rx, tx = m.rx_layout, m.tx_layout
         self.rx_layout, self.tx_layout = rx, tx
@@ -90,7 +98,7 @@ class DriveLink:
     def fault_reset(self) -> None:
         if self.state in ("FAULT", "FAULT_REACTION_ACTIVE"):
             self.reset_phase = 2
-            self.resetting = 50                     # cycles the drive gets to leave Fault
+            self.resetting = 50  # cycles the drive gets to leave Fault
 
     # ------------------------------------------------------------------ each cycle
     def attach(self, ax) -> None:
@@ -109,7 +117,7 @@ class DriveLink:
 
     def pack(self) -> bytes:
         st = self.state
-        if self.reset_phase:                       # a rising edge of bit 7: one cycle 0, then 0x80
+        if self.reset_phase:  # a rising edge of bit 7: one cycle 0, then 0x80
             cw = 0x00 if self.reset_phase == 2 else 0x80
             self.reset_phase -= 1
         elif st in ("FAULT", "FAULT_REACTION_ACTIVE"):
@@ -120,7 +128,7 @@ class DriveLink:
             cw = 0x06
         elif st == "READY_TO_SWITCH_ON":
             cw = 0x07
-        else:                                      # switched on, operation enabled, quick stop active
+        else:  # switched on, operation enabled, quick stop active
             cw = 0x0F
         ax = self.axis
         if ax is not None and self.enabled and ax.power_on:
@@ -156,7 +164,7 @@ class DriveLink:
             return
         if self.state in ("FAULT", "FAULT_REACTION_ACTIVE"):
             ax.power_on = False
-            if self.resetting:                      # MC_Reset asked the drive to leave Fault: give it time
+            if self.resetting:  # MC_Reset asked the drive to leave Fault: give it time
                 self.resetting -= 1
             elif ax.state != "ErrorStop":
                 ax.error_stop(E.DRIVE_FAULT)
@@ -180,7 +188,7 @@ class EtherCATDriver(IODriverBase):
         self.segment = None
         self.task = None
         self.links: list = []
-        self.io_in: list = []                # (slave, entry index, table, index, kind)
+        self.io_in: list = []  # (slave, entry index, table, index, kind)
         self.io_out: list = []
         self.counters = {"frames": 0, "lost_frames": 0, "wkc_errors": 0, "outages": 0, "recoveries": 0}
         self.bad_run = 0
@@ -189,18 +197,21 @@ class EtherCATDriver(IODriverBase):
         self._t_offset = 0.0
         self.iface = iface
         self._choose_task()
-        cycle_ns = int(round((config.cycle_s or (self.task.interval / 1e9 if self.task and self.task.interval
-                                                 else 0.001)) * 1e9))
+        cycle_ns = int(
+            round((config.cycle_s or (self.task.interval / 1e9 if self.task and self.task.interval else 0.001)) * 1e9)
+        )
         self.cycle_ns = cycle_ns
         if backend == "sim":
             self.segment = build_segment(config)
             if capture:
                 self.segment.open_capture(capture)
             self._setup_t = 0.0
-            self.master = FrameMaster(self._sim_transport, pause=self._sim_pause,
-                                      now_ns=lambda: int(round(self._now() * 1e9)))
+            self.master = FrameMaster(
+                self._sim_transport, pause=self._sim_pause, now_ns=lambda: int(round(self._now() * 1e9))
+            )
         elif backend == "soem":
             from .soem import SoemMaster
+
             if not iface:
                 raise MasterError("the soem backend needs --ethercat-iface (a network interface)")
             self.master = SoemMaster(iface)
@@ -216,7 +227,7 @@ class EtherCATDriver(IODriverBase):
         return self.segment.exchange(frame, self._now())
 
     def _sim_pause(self, s: float) -> None:
-        self._setup_t += s                       # polling during setup lets simulated time pass
+        self._setup_t += s  # polling during setup lets simulated time pass
 
     # ------------------------------------------------------------------ startup
     def _choose_task(self) -> None:
@@ -226,8 +237,10 @@ class EtherCATDriver(IODriverBase):
                 if t.name.lower() == self.cfg.task.lower():
                     self.task = t
                     return
-            raise MasterError(f"{self.cfg.path}: [segment] task '{self.cfg.task}' is not a task of the program "
-                              f"({', '.join(t.name for t in tasks)})")
+            raise MasterError(
+                f"{self.cfg.path}: [segment] task '{self.cfg.task}' is not a task of the program "
+                f"({', '.join(t.name for t in tasks)})"
+            )
         cyclic = [t for t in tasks if t.interval]
         self.task = min(cyclic, key=lambda t: t.interval) if cyclic else (tasks[0] if tasks else None)
 
@@ -237,13 +250,16 @@ class EtherCATDriver(IODriverBase):
         found = m.scan()
         cfg = self.cfg
         if len(found) != len(cfg.slaves):
-            raise MasterError(f"{cfg.path}: {len(cfg.slaves)} slave(s) configured but {len(found)} found on the "
-                              f"segment")
+            raise MasterError(
+                f"{cfg.path}: {len(cfg.slaves)} slave(s) configured but {len(found)} found on the segment"
+            )
         assign = {}
         for i, (sc, info) in enumerate(zip(cfg.slaves, found)):
             if sc.product_code is not None and info.product_code != sc.product_code:
-                raise MasterError(f"{cfg.path}: slave {i} ({sc.name}) is product {info.product_code:#x}, "
-                                  f"configured {sc.product_code:#x}")
+                raise MasterError(
+                    f"{cfg.path}: slave {i} ({sc.name}) is product {info.product_code:#x}, "
+                    f"configured {sc.product_code:#x}"
+                )
             if sc.rx_pdos is not None or sc.tx_pdos is not None:
                 assign[i] = (sc.rx_pdos, sc.tx_pdos)
         m.configure(pdo_assign=assign, dc_cycle_ns=self.cycle_ns if cfg.dc else 0)
@@ -259,7 +275,7 @@ class EtherCATDriver(IODriverBase):
                     link.offset_s = self.segment.d_comm(i) - self.segment.d_comm(0)
                 self.links.append(link)
             self._bind_io(i, sc)
-        self._exchange()                           # the first inputs, so the axes start where the drives are
+        self._exchange()  # the first inputs, so the axes start where the drives are
         m.set_state("OP")
         self._exchange()
         self._claim_axes()
@@ -285,9 +301,11 @@ class EtherCATDriver(IODriverBase):
             table = image.tables[(area, size)]
             lay = info.tx_layout if area == "I" else info.rx_layout
             if e not in lay.data_entries:
-                raise MasterError(f"{self.cfg.path}: slave {sc.name}: {addr} is an "
-                                  f"{'input' if area == 'I' else 'output'} but entry {e.index:#06x}:{e.sub:02x} is "
-                                  f"{'an output' if area == 'I' else 'an input'}")
+                raise MasterError(
+                    f"{self.cfg.path}: slave {sc.name}: {addr} is an "
+                    f"{'input' if area == 'I' else 'output'} but entry {e.index:#06x}:{e.sub:02x} is "
+                    f"{'an output' if area == 'I' else 'an input'}"
+                )
             pos = lay.data_entries.index(e)
             (self.io_in if area == "I" else self.io_out).append((i, pos, table, idx, size))
         self._slave_io = sorted({x[0] for x in self.io_in + self.io_out})
@@ -303,7 +321,7 @@ class EtherCATDriver(IODriverBase):
             reg.add_drive(link)
 
     def after_job(self, task: Task | None = None) -> None:
-        if task is None:                            # stop or fault: outputs safe, drives disabled
+        if task is None:  # stop or fault: outputs safe, drives disabled
             for link in self.links:
                 link.want = False
             self._exchange()

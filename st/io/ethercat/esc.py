@@ -11,6 +11,7 @@ watchdog. The application behind it is a `Device` (object dictionary, process da
 Time: the segment passes the moment a datagram reaches the slave (seconds on its clock); the
 device's physics is advanced lazily up to that moment, so each slave sees its own D_comm(n).
 """
+
 from __future__ import annotations
 
 import struct
@@ -42,10 +43,25 @@ REG_DCRX, REG_DCSYS, REG_DCRXPU, REG_DCOFS, REG_DCDLY, REG_DCDIFF = 0x0900, 0x09
 REG_DCCUC, REG_DCACT, REG_DCSTART, REG_DCCYC0 = 0x0980, 0x0981, 0x0990, 0x09A0
 
 # writable register ranges (end exclusive); the rest of 0x0000-0x0FFF is read-only
-_WRITABLE_RANGES = ((0x0010, 0x0014), (0x0100, 0x0104), (0x0120, 0x0122), (0x0200, 0x0204), (0x0300, 0x0314),
-             (0x0400, 0x0402), (0x0410, 0x0412), (0x0420, 0x0422), (0x0500, 0x0502), (0x0502, 0x0510),
-             (0x0600, 0x0700), (0x0800, 0x0880), (0x0900, 0x0904), (0x0910, 0x0918), (0x0920, 0x0930),
-             (0x0930, 0x0936), (0x0980, 0x09A8))
+_WRITABLE_RANGES = (
+    (0x0010, 0x0014),
+    (0x0100, 0x0104),
+    (0x0120, 0x0122),
+    (0x0200, 0x0204),
+    (0x0300, 0x0314),
+    (0x0400, 0x0402),
+    (0x0410, 0x0412),
+    (0x0420, 0x0422),
+    (0x0500, 0x0502),
+    (0x0502, 0x0510),
+    (0x0600, 0x0700),
+    (0x0800, 0x0880),
+    (0x0900, 0x0904),
+    (0x0910, 0x0918),
+    (0x0920, 0x0930),
+    (0x0930, 0x0936),
+    (0x0980, 0x09A8),
+)
 
 MBX_OUT, MBX_IN, PD_OUT, PD_IN = 0x1000, 0x1080, 0x1100, 0x1400
 _SM_STATUS_MBX_FULL = 0x08
@@ -56,14 +72,14 @@ class SlaveController:
         self.device = device
         self.mem = bytearray(0x10000)
         m = self.mem
-        m[0x0000], m[0x0001] = 0x11, 0x00                    # ET1100-class
+        m[0x0000], m[0x0001] = 0x11, 0x00  # ET1100-class
         struct.pack_into("<H", m, 0x0002, 0x0001)
         m[0x0004], m[0x0005], m[0x0006], m[0x0007] = 8, 8, 8, 0x0F
-        struct.pack_into("<H", m, 0x0008, 0x01CC)           # DC, 64-bit DC, enhanced link detection …
+        struct.pack_into("<H", m, 0x0008, 0x01CC)  # DC, 64-bit DC, enhanced link detection …
         struct.pack_into("<H", m, REG_ALSTAT, INIT)
-        struct.pack_into("<H", m, REG_EEPCTL, 0x0040)       # 8-byte reads
-        struct.pack_into("<H", m, REG_WDDIV, 0x09C2)        # 100 µs watchdog unit
-        struct.pack_into("<H", m, REG_WDSM, 1000)           # SM watchdog 100 ms
+        struct.pack_into("<H", m, REG_EEPCTL, 0x0040)  # 8-byte reads
+        struct.pack_into("<H", m, REG_WDDIV, 0x09C2)  # 100 µs watchdog unit
+        struct.pack_into("<H", m, REG_WDSM, 1000)  # SM watchdog 100 ms
         m[0x0140] = 0x08
         self.mbx_size = mbx_size if device.has_mailbox else 0
         rx, tx = device.rx_layout.size, device.tx_layout.size
@@ -72,28 +88,43 @@ class SlaveController:
             sms += [siimod.SmConfig(MBX_OUT, mbx_size, 0x26, 1, 1), siimod.SmConfig(MBX_IN, mbx_size, 0x22, 1, 2)]
         else:
             sms += [siimod.SmConfig(0, 0, 0, 0, 0), siimod.SmConfig(0, 0, 0, 0, 0)]
-        sms += [siimod.SmConfig(PD_OUT, rx, 0x64, 1 if rx else 0, 3), siimod.SmConfig(PD_IN, tx, 0x20, 1 if tx else 0, 4)]
+        sms += [
+            siimod.SmConfig(PD_OUT, rx, 0x64, 1 if rx else 0, 3),
+            siimod.SmConfig(PD_IN, tx, 0x20, 1 if tx else 0, 4),
+        ]
         self.sii_sms = sms
-        self.sii = bytearray(siimod.build(device.vendor_id, device.product_code, device.revision, device.serial,
-                                          device.name, device.group, device.name, sms, [1, 2, 3, 0],
-                                          mailbox=device.has_mailbox, alias=alias,
-                                          rx_pdos=_sii_pdos(device, device.rx_assign, 2),
-                                          tx_pdos=_sii_pdos(device, device.tx_assign, 3)))
+        self.sii = bytearray(
+            siimod.build(
+                device.vendor_id,
+                device.product_code,
+                device.revision,
+                device.serial,
+                device.name,
+                device.group,
+                device.name,
+                sms,
+                [1, 2, 3, 0],
+                mailbox=device.has_mailbox,
+                alias=alias,
+                rx_pdos=_sii_pdos(device, device.rx_assign, 2),
+                tx_pdos=_sii_pdos(device, device.tx_assign, 3),
+            )
+        )
         struct.pack_into("<H", m, REG_ALIAS, alias)
         self.sdo = SdoServer(device.od, mbx_size) if device.has_mailbox else None
         self.mbx_queue: list = []
         self.last_mbx = b""
         self.clock_base_ns = clock_base_ns
-        self.t_dev = 0.0                  # how far the device's physics has been advanced (s)
+        self.t_dev = 0.0  # how far the device's physics has been advanced (s)
         self.rx_latch_ns = 0
-        self.last_commit = None           # segment time of the last output commit (SM watchdog)
+        self.last_commit = None  # segment time of the last output commit (SM watchdog)
         self.has_downstream = False
         self.set_links(False)
-        self.pending_outputs = None       # (apply_at, bytes) when DC SYNC0 defers outputs
+        self.pending_outputs = None  # (apply_at, bytes) when DC SYNC0 defers outputs
         self.stats = {"frames": 0, "commits": 0}
         self._sm_cache = self._fmmu_cache = None
-        self._plans: dict = {}            # (read, write, address, length) → a logical datagram's plan
-        self._grid = False                # SYNC0 pulse grid cache (False: to be computed)
+        self._plans: dict = {}  # (read, write, address, length) → a logical datagram's plan
+        self._grid = False  # SYNC0 pulse grid cache (False: to be computed)
         self._wd_limit = self._watchdog_limit()
 
     # ------------------------------------------------------------------ helpers
@@ -180,8 +211,13 @@ class SlaveController:
         if t > self.t_dev:
             self.device.step(t, t - self.t_dev)
             self.t_dev = t
-        if self.last_commit is not None and t - self.last_commit > self._wd_limit and self.al_state == OP \
-                and self._wd_limit > 0 and self.device.rx_layout.size:
+        if (
+            self.last_commit is not None
+            and t - self.last_commit > self._wd_limit
+            and self.al_state == OP
+            and self._wd_limit > 0
+            and self.device.rx_layout.size
+        ):
             self.mem[REG_WDSTAT] = 0
             self._enter(SAFEOP, AL_SYNC_WATCHDOG)
 
@@ -214,14 +250,14 @@ class SlaveController:
         cur, err = status & 0x0F, bool(status & 0x10)
         order = [INIT, PREOP, SAFEOP, OP]
         if err and not ack and req in order and order.index(req) > order.index(cur):
-            return                                         # an error must be acknowledged before going up
+            return  # an error must be acknowledged before going up
         if req not in STATE_NAMES:
             return self._enter(cur, AL_UNKNOWN_STATE)
         if req == BOOT:
             return self._enter(cur, AL_BOOTSTRAP_UNSUPPORTED)
         if req == cur:
             return self._enter(cur) if ack or not err else None
-        if req < cur or req == INIT:                       # going down is always allowed
+        if req < cur or req == INIT:  # going down is always allowed
             return self._enter(req)
         if order.index(req) != order.index(cur) + 1:
             return self._enter(cur, AL_INVALID_STATE_CHANGE)
@@ -243,8 +279,10 @@ class SlaveController:
             if code:
                 return code
             rx, tx = d.rx_layout.size, d.tx_layout.size
-            for k, size, direction, code in ((2, rx, 0x04, AL_INVALID_OUTPUT_CONFIG),
-                                             (3, tx, 0x00, AL_INVALID_INPUT_CONFIG)):
+            for k, size, direction, code in (
+                (2, rx, 0x04, AL_INVALID_OUTPUT_CONFIG),
+                (3, tx, 0x00, AL_INVALID_INPUT_CONFIG),
+            ):
                 start, length, ctl, _st, en = self.sm(k)
                 if size and (not en or length != size or (ctl & 0x0C) != direction):
                     return code
@@ -263,16 +301,16 @@ class SlaveController:
         cmd = (ctl >> 8) & 0x07
         addr = struct.unpack_from("<I", self.mem, REG_EEPADR)[0]
         status = 0x0040
-        if cmd == 0x01:                                    # read 8 bytes at a word address
+        if cmd == 0x01:  # read 8 bytes at a word address
             a = addr * 2
-            chunk = bytes(self.sii[a:a + 8]).ljust(8, b"\xff")
-            self.mem[REG_EEPDAT:REG_EEPDAT + 8] = chunk
-        elif cmd == 0x02:                                  # write one word (needs write enable)
+            chunk = bytes(self.sii[a : a + 8]).ljust(8, b"\xff")
+            self.mem[REG_EEPDAT : REG_EEPDAT + 8] = chunk
+        elif cmd == 0x02:  # write one word (needs write enable)
             if ctl & 0x0001 and addr * 2 + 2 <= len(self.sii):
-                self.sii[addr * 2:addr * 2 + 2] = self.mem[REG_EEPDAT:REG_EEPDAT + 2]
+                self.sii[addr * 2 : addr * 2 + 2] = self.mem[REG_EEPDAT : REG_EEPDAT + 2]
             else:
-                status |= 0x2000                           # command error
-        elif cmd == 0x04:                                  # reload
+                status |= 0x2000  # command error
+        elif cmd == 0x04:  # reload
             pass
         elif cmd:
             status |= 0x2000
@@ -281,8 +319,8 @@ class SlaveController:
     # ------------------------------------------------------------------ mailbox
     def _mailbox_written(self, t: float) -> None:
         start, length, *_ = self.sm(0)
-        req = bytes(self.mem[start:start + length])
-        self._set_sm_status(0, False)                      # the application consumed the request
+        req = bytes(self.mem[start : start + length])
+        self._set_sm_status(0, False)  # the application consumed the request
         if self.sdo is not None:
             self.advance(t)
             self.mbx_queue.extend(self.sdo.handle(req))
@@ -299,7 +337,7 @@ class SlaveController:
             return
         msg = self.mbx_queue.pop(0)
         self.last_mbx = msg
-        self.mem[start:start + length] = msg[:length].ljust(length, b"\0")
+        self.mem[start : start + length] = msg[:length].ljust(length, b"\0")
         self._set_sm_status(1, True)
 
     # ------------------------------------------------------------------ memory access with side effects
@@ -311,9 +349,9 @@ class SlaveController:
             struct.pack_into("<Q", mem, REG_DCSYS, self.system_ns(t))
         if end > 0x1000:
             for k, start, stop, ctl in self._sms():
-                if end <= start or ado >= stop or ctl & 0x0C:   # written by the master: reading is plain RAM
+                if end <= start or ado >= stop or ctl & 0x0C:  # written by the master: reading is plain RAM
                     continue
-                if ctl & 0x03 == 0x02:                     # mailbox the master reads
+                if ctl & 0x03 == 0x02:  # mailbox the master reads
                     if not mem[REG_SM + 8 * k + 5] & _SM_STATUS_MBX_FULL:
                         return None
                     data = bytes(mem[ado:end])
@@ -321,8 +359,8 @@ class SlaveController:
                         self._set_sm_status(k, False)
                         self._fill_mailbox()
                     return data
-                self.advance(t)                            # buffered inputs: the device's latest image
-                mem[start:stop] = self.device.read_inputs()[:stop - start]
+                self.advance(t)  # buffered inputs: the device's latest image
+                mem[start:stop] = self.device.read_inputs()[: stop - start]
         return bytes(mem[ado:end])
 
     def write(self, ado: int, data, t: float) -> bool:
@@ -339,7 +377,7 @@ class SlaveController:
                 return True
         commit = None
         for k, start, stop, ctl in self._sms():
-            if end <= start or ado >= stop or not ctl & 0x04:   # read by the master: writes are plain RAM
+            if end <= start or ado >= stop or not ctl & 0x04:  # read by the master: writes are plain RAM
                 continue
             if ctl & 0x03 == 0x02:
                 if mem[REG_SM + 8 * k + 5] & _SM_STATUS_MBX_FULL:
@@ -349,7 +387,7 @@ class SlaveController:
             elif end >= stop:
                 commit = ("pd", k, start, stop - start)
         lo = max(ado, 0x1000)
-        mem[lo:end] = data[lo - ado:]
+        mem[lo:end] = data[lo - ado :]
         if commit is not None:
             if commit[0] == "mbx":
                 self._set_sm_status(commit[1], True)
@@ -358,16 +396,16 @@ class SlaveController:
                 _, k, start, length = commit
                 self.last_commit = t
                 self.stats["commits"] += 1
-                self._outputs(bytes(mem[start:start + length]), t)
+                self._outputs(bytes(mem[start : start + length]), t)
         return True
 
     def _outputs(self, data: bytes, t: float) -> None:
         grid = self._sync_grid()
-        if grid is not None:                               # DC SYNC0: outputs take effect at the next pulse
+        if grid is not None:  # DC SYNC0: outputs take effect at the next pulse
             t0, cyc = grid
             apply_at = t0 if t < t0 else t0 + (int((t - t0) / cyc + 1e-9) + 1) * cyc
             self.advance(t)
-            self.pending_outputs = (apply_at, data)        # a newer frame before the pulse wins
+            self.pending_outputs = (apply_at, data)  # a newer frame before the pulse wins
             return
         self.advance(t)
         self.device.write_outputs(data)
@@ -397,11 +435,14 @@ class SlaveController:
             self.rx_latch_ns = self.local_ns(t)
         if hit(REG_DCSYS, 8):
             # the reference clock's time written by the master (ARMW/FRMW): correct this clock
-            written = struct.unpack_from("<Q", self.mem, REG_DCSYS)[0] if end - ado >= 8 or ado != REG_DCSYS \
+            written = (
+                struct.unpack_from("<Q", self.mem, REG_DCSYS)[0]
+                if end - ado >= 8 or ado != REG_DCSYS
                 else struct.unpack_from("<I", self.mem, REG_DCSYS)[0]
+            )
             delay = struct.unpack_from("<I", self.mem, REG_DCDLY)[0]
             mine = self.system_ns(t)
-            if end - ado < 8:                              # a 32-bit write compares the low halves
+            if end - ado < 8:  # a 32-bit write compares the low halves
                 diff = ((mine & 0xFFFFFFFF) - ((written + delay) & 0xFFFFFFFF) + (1 << 31)) % (1 << 32) - (1 << 31)
             else:
                 diff = mine - (written + delay)
@@ -410,19 +451,20 @@ class SlaveController:
                 struct.pack_into("<Q", self.mem, REG_DCOFS, (ofs - diff) & 0xFFFFFFFFFFFFFFFF)
                 self._grid = False
             struct.pack_into("<I", self.mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
-        if hit(REG_SM + 8 + 6, 1):                         # SM1 repeat request: resend the last mail
+        if hit(REG_SM + 8 + 6, 1):  # SM1 repeat request: resend the last mail
             act = self.mem[REG_SM + 8 + 6]
             pdi = self.mem[REG_SM + 8 + 7]
             if bool(act & 0x02) != bool(pdi & 0x02) and self.last_mbx:
                 start, length, *_ = self.sm(1)
-                self.mem[start:start + length] = self.last_mbx[:length].ljust(length, b"\0")
+                self.mem[start : start + length] = self.last_mbx[:length].ljust(length, b"\0")
                 self._set_sm_status(1, True)
                 self.mem[REG_SM + 8 + 7] = (pdi & ~0x02 & 0xFF) | (act & 0x02)
 
     def receive_times(self, t_port0: float, t_port1: float) -> None:
         """The 0x0900 latch: local times at which the frame passed port 0 (out) and port 1 (back)."""
-        struct.pack_into("<II", self.mem, REG_DCRX, self.local_ns(t_port0) & 0xFFFFFFFF,
-                         self.local_ns(t_port1) & 0xFFFFFFFF)
+        struct.pack_into(
+            "<II", self.mem, REG_DCRX, self.local_ns(t_port0) & 0xFFFFFFFF, self.local_ns(t_port1) & 0xFFFFFFFF
+        )
         struct.pack_into("<Q", self.mem, REG_DCRXPU, self.local_ns(t_port0))
 
     # ------------------------------------------------------------------ FMMUs
@@ -454,7 +496,7 @@ class SlaveController:
         for out, off, start, stop in plan:
             n = stop - start
             if out:
-                chunk = bytes(original[off:off + n])
+                chunk = bytes(original[off : off + n])
                 mem[start:stop] = chunk
                 if mem[REG_ALSTAT] & 0x0F == OP:
                     self.last_commit = t
@@ -465,7 +507,7 @@ class SlaveController:
                 self.advance(t)
                 inp = self.device.read_inputs()[:n]
                 mem[start:stop] = inp
-                data[off:off + n] = inp
+                data[off : off + n] = inp
                 inc |= 1
         return (1 if inc & 1 else 0) + (2 if inc & 2 else 0) if cmd_read and cmd_write else (1 if inc else 0)
 
@@ -496,8 +538,9 @@ class SlaveController:
         original = bytes(data) if cmd_read and cmd_write else data
         for lstart, ln, lsb, leb, pstart, psb, typ in self.fmmus():
             if lsb or leb != 7 or psb:
-                inc |= self._logical_bits(cmd_read, cmd_write, addr, data, original, t,
-                                          lstart, ln, lsb, leb, pstart, psb, typ)
+                inc |= self._logical_bits(
+                    cmd_read, cmd_write, addr, data, original, t, lstart, ln, lsb, leb, pstart, psb, typ
+                )
                 continue
             lo, hi = max(addr, lstart), min(end, lstart + ln)
             if lo >= hi:
@@ -505,13 +548,13 @@ class SlaveController:
             phys = pstart + (lo - lstart)
             n = hi - lo
             off = lo - addr
-            if typ & 0x02 and cmd_write:                   # the slave takes outputs from the frame
-                if self.write(phys, original[off:off + n], t):
+            if typ & 0x02 and cmd_write:  # the slave takes outputs from the frame
+                if self.write(phys, original[off : off + n], t):
                     inc |= 2
-            if typ & 0x01 and cmd_read:                    # the slave puts inputs into the frame
+            if typ & 0x01 and cmd_read:  # the slave puts inputs into the frame
                 got = self.read(phys, n, t)
                 if got is not None:
-                    data[off:off + n] = got
+                    data[off : off + n] = got
                     inc |= 1
         return (1 if inc & 1 else 0) + (2 if inc & 2 else 0) if cmd_read and cmd_write else (1 if inc else 0)
 
@@ -532,7 +575,7 @@ class SlaveController:
         inc = 0
         if typ & 0x02 and cmd_write:
             frame_bits = (int.from_bytes(original, "little") >> dshift) & mask
-            cur = int.from_bytes(self.mem[pbyte:pbyte + pn], "little")
+            cur = int.from_bytes(self.mem[pbyte : pbyte + pn], "little")
             new = (cur & ~(mask << pshift)) | (frame_bits << pshift)
             if self.write(pbyte, new.to_bytes(pn, "little"), t):
                 inc |= 2
@@ -550,23 +593,36 @@ class SlaveController:
 def _writable(a: int) -> bool:
     for lo, hi in _WRITABLE_RANGES:
         if lo <= a < hi:
-            return not (REG_SM <= a < REG_SM + 0x80 and (a - REG_SM) % 8 == 5)   # SM status is read-only
+            return not (REG_SM <= a < REG_SM + 0x80 and (a - REG_SM) % 8 == 5)  # SM status is read-only
     return False
 
 
 _WRITABLE = bytes(_writable(a) for a in range(0x1000))
 # registers whose write has a side effect (see _register_effects)
-_EFFECTS = bytes(any(lo <= a < hi for lo, hi in ((REG_SM, REG_SM + 0x80), (REG_FMMU, REG_FMMU + 0x100),
-                                                   (REG_WDDIV, REG_WDDIV + 2), (REG_WDSM, REG_WDSM + 2),
-                                                   (REG_ALCTL, REG_ALCTL + 2), (REG_EEPCTL, REG_EEPCTL + 2),
-                                                   (REG_DCRX, REG_DCRX + 4), (REG_DCSYS, REG_DCSYS + 8),
-                                                   (REG_DCOFS, REG_DCOFS + 8), (REG_DCCUC, REG_DCCUC + 0x28)))
-                 for a in range(0x1000))
+_EFFECTS = bytes(
+    any(
+        lo <= a < hi
+        for lo, hi in (
+            (REG_SM, REG_SM + 0x80),
+            (REG_FMMU, REG_FMMU + 0x100),
+            (REG_WDDIV, REG_WDDIV + 2),
+            (REG_WDSM, REG_WDSM + 2),
+            (REG_ALCTL, REG_ALCTL + 2),
+            (REG_EEPCTL, REG_EEPCTL + 2),
+            (REG_DCRX, REG_DCRX + 4),
+            (REG_DCSYS, REG_DCSYS + 8),
+            (REG_DCOFS, REG_DCOFS + 8),
+            (REG_DCCUC, REG_DCCUC + 0x28),
+        )
+    )
+    for a in range(0x1000)
+)
 
 
 def _sii_pdos(device, assign: int, sm: int) -> list:
     """The assigned PDOs of a device for the SII PDO categories."""
     from .od import DTYPES
+
     od = device.od
     if not od.has(assign):
         return []

@@ -19,6 +19,7 @@ SyncManager by default (Sm="2" outputs and Sm="3" inputs behind the two mailbox 
 Sm="0"/"1" on a terminal without mailbox); one without is an alternative the master may assign
 instead. An entry with Index 0 is padding. Namespaces on the tags are ignored.
 """
+
 from __future__ import annotations
 
 import os
@@ -27,14 +28,33 @@ from dataclasses import dataclass, field
 
 # ESI data type names → the CoE type names pdo.PdoLayout and od.DTYPES know
 _DTYPE_ALIASES = {
-    "BOOL": "BOOL", "BOOLEAN": "BOOL", "BIT": "BOOL",
-    "SINT": "SINT", "INT": "INT", "DINT": "DINT", "LINT": "LINT",
-    "USINT": "USINT", "UINT": "UINT", "UDINT": "UDINT", "ULINT": "ULINT",
-    "REAL": "REAL", "LREAL": "LREAL",
-    "BYTE": "USINT", "WORD": "UINT", "DWORD": "UDINT", "LWORD": "ULINT",
-    "INT8": "SINT", "INT16": "INT", "INT32": "DINT", "INT64": "LINT",
-    "UINT8": "USINT", "UINT16": "UINT", "UINT32": "UDINT", "UINT64": "ULINT",
-    "REAL32": "REAL", "REAL64": "LREAL",
+    "BOOL": "BOOL",
+    "BOOLEAN": "BOOL",
+    "BIT": "BOOL",
+    "SINT": "SINT",
+    "INT": "INT",
+    "DINT": "DINT",
+    "LINT": "LINT",
+    "USINT": "USINT",
+    "UINT": "UINT",
+    "UDINT": "UDINT",
+    "ULINT": "ULINT",
+    "REAL": "REAL",
+    "LREAL": "LREAL",
+    "BYTE": "USINT",
+    "WORD": "UINT",
+    "DWORD": "UDINT",
+    "LWORD": "ULINT",
+    "INT8": "SINT",
+    "INT16": "INT",
+    "INT32": "DINT",
+    "INT64": "LINT",
+    "UINT8": "USINT",
+    "UINT16": "UINT",
+    "UINT32": "UDINT",
+    "UINT64": "ULINT",
+    "REAL32": "REAL",
+    "REAL64": "LREAL",
 }
 
 
@@ -51,12 +71,12 @@ class EsiError(Exception):
 
 @dataclass
 class EsiPdoEntry:
-    index: int                  # 0: padding
+    index: int  # 0: padding
     sub: int
     bits: int
-    dtype: str                  # a CoE type name ("PAD" for padding)
+    dtype: str  # a CoE type name ("PAD" for padding)
     name: str = ""
-    esi_type: str = ""          # the DataType text as written in the file
+    esi_type: str = ""  # the DataType text as written in the file
 
     def as_tuple(self) -> tuple:
         """The (index, sub, bits, dtype, name) form pdo.PdoLayout takes."""
@@ -68,7 +88,7 @@ class EsiPdo:
     index: int
     name: str
     entries: list
-    sm: int | None = None    # the SyncManager it is assigned to by default; None: not assigned
+    sm: int | None = None  # the SyncManager it is assigned to by default; None: not assigned
     fixed: bool = False
     mandatory: bool = False
     excludes: list = field(default_factory=list)
@@ -86,8 +106,8 @@ class EsiPdo:
 class EsiOpMode:
     name: str
     desc: str = ""
-    assign_activate: int = 0            # value for register 0x0980 (0x0300: SYNC0 on)
-    cycle_time_sync0: int | None = None      # ns; 0 means "the master's cycle"
+    assign_activate: int = 0  # value for register 0x0980 (0x0300: SYNC0 on)
+    cycle_time_sync0: int | None = None  # ns; 0 means "the master's cycle"
     cycle_time_sync0_factor: int | None = None
     shift_time_sync0: int | None = None
     cycle_time_sync1: int | None = None
@@ -99,14 +119,14 @@ class EsiDevice:
     vendor_id: int
     product_code: int
     revision: int
-    name: str                   # the Name element (the English one when several), else the Type text
-    type_name: str              # the Type element's text
+    name: str  # the Name element (the English one when several), else the Type text
+    type_name: str  # the Type element's text
     group: str = ""
     vendor_name: str = ""
     rx_pdos: list = field(default_factory=list)
     tx_pdos: list = field(default_factory=list)
     mailbox: bool = False
-    mailbox_protocols: tuple = ()       # e.g. ("CoE", "FoE")
+    mailbox_protocols: tuple = ()  # e.g. ("CoE", "FoE")
     coe: bool = False
     coe_complete_access: bool = False
     dc_opmodes: list = field(default_factory=list)
@@ -156,11 +176,20 @@ def load_esi(path, product_code: int | None = None, revision: int | None = None)
         raise EsiError(f"cannot read: {e.strerror or e}", path) from None
     devices = parse_esi(data, path)
     if product_code is not None or revision is not None:
-        found = [d for d in devices if (product_code is None or d.product_code == product_code)
-                 and (revision is None or d.revision == revision)]
+        found = [
+            d
+            for d in devices
+            if (product_code is None or d.product_code == product_code) and (revision is None or d.revision == revision)
+        ]
         if not found:
-            want = " ".join(x for x in (f"product code {product_code:#010x}" if product_code is not None else "",
-                                        f"revision {revision:#010x}" if revision is not None else "") if x)
+            want = " ".join(
+                x
+                for x in (
+                    f"product code {product_code:#010x}" if product_code is not None else "",
+                    f"revision {revision:#010x}" if revision is not None else "",
+                )
+                if x
+            )
             have = ", ".join(f"{d.product_code:#010x} rev {d.revision:#010x}" for d in devices)
             raise EsiError(f"no device with {want} (the file has: {have})", path)
         devices = found
@@ -173,7 +202,7 @@ def parse_esi(data, path: str = "<esi>") -> list:
         root = ET.fromstring(data)
     except ET.ParseError as e:
         line, col = e.position
-        msg = str(e).split(":")[0]          # "mismatched tag: line 3, column 2" → the cause
+        msg = str(e).split(":")[0]  # "mismatched tag: line 3, column 2" → the cause
         raise EsiError(f"malformed XML: {msg}", path, line, col + 1) from None
     for el in root.iter():
         if isinstance(el.tag, str) and "}" in el.tag:
@@ -226,7 +255,7 @@ def _dtype(esi_type: str, bits: int) -> str:
         if dt == "BOOL" and bits != 1:
             return _by_bits(bits)
         return dt
-    return _by_bits(bits)           # BIT2..BIT8, arrays, strings: an unsigned integer of that width
+    return _by_bits(bits)  # BIT2..BIT8, arrays, strings: an unsigned integer of that width
 
 
 def _by_bits(bits: int) -> str:
@@ -248,16 +277,18 @@ def _device(dev, vendor_id: int, vendor_name: str, path: str, pos: int) -> EsiDe
         raise EsiError(f"{where}: Type has no ProductCode", path)
     product = _num(typ.get("ProductCode"), path, f"{where}: ProductCode")
     revision = _num(typ.get("RevisionNo"), path, f"{where}: RevisionNo") if typ.get("RevisionNo") else 0
-    d = EsiDevice(vendor_id, product, revision, _name(dev) or type_name, type_name,
-                  _text(dev.find("GroupType")), vendor_name)
+    d = EsiDevice(
+        vendor_id, product, revision, _name(dev) or type_name, type_name, _text(dev.find("GroupType")), vendor_name
+    )
     d.rx_pdos = [_pdo(p, path, f"{where}: RxPdo") for p in dev.findall("RxPdo")]
     d.tx_pdos = [_pdo(p, path, f"{where}: TxPdo") for p in dev.findall("TxPdo")]
 
     mbx = dev.find("Mailbox")
     if mbx is not None:
         d.mailbox = True
-        d.mailbox_protocols = tuple(c.tag for c in mbx if isinstance(c.tag, str) and c.tag in
-                                    ("AoE", "EoE", "CoE", "FoE", "SoE", "VoE"))
+        d.mailbox_protocols = tuple(
+            c.tag for c in mbx if isinstance(c.tag, str) and c.tag in ("AoE", "EoE", "CoE", "FoE", "SoE", "VoE")
+        )
         coe = mbx.find("CoE")
         d.coe = coe is not None
         d.coe_complete_access = coe is not None and _flag(coe, "CompleteAccess")
@@ -268,9 +299,11 @@ def _device(dev, vendor_id: int, vendor_name: str, path: str, pos: int) -> EsiDe
         aa = om.find("AssignActivate")
         if aa is not None:
             mode.assign_activate = _num(aa.text, path, f"{ow}: AssignActivate")
-        for tag, attr, fattr in (("CycleTimeSync0", "cycle_time_sync0", "cycle_time_sync0_factor"),
-                                 ("CycleTimeSync1", "cycle_time_sync1", "cycle_time_sync1_factor"),
-                                 ("ShiftTimeSync0", "shift_time_sync0", None)):
+        for tag, attr, fattr in (
+            ("CycleTimeSync0", "cycle_time_sync0", "cycle_time_sync0_factor"),
+            ("CycleTimeSync1", "cycle_time_sync1", "cycle_time_sync1_factor"),
+            ("ShiftTimeSync0", "shift_time_sync0", None),
+        ):
             el = om.find(tag)
             if el is None:
                 continue

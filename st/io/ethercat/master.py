@@ -11,6 +11,7 @@ assignment read over CoE, process-data SyncManagers and FMMUs with outputs first
 one logical image, DC delay measurement, SAFEOP, OP) and hands each frame to a transport:
 `Segment.exchange` for the `sim` backend, a raw socket for a real or served segment.
 """
+
 from __future__ import annotations
 
 import struct
@@ -35,7 +36,7 @@ class MasterError(Exception):
 
 @dataclass
 class SlaveInfo:
-    position: int                     # 0-based place on the line
+    position: int  # 0-based place on the line
     station: int
     vendor_id: int = 0
     product_code: int = 0
@@ -53,21 +54,24 @@ class SlaveInfo:
     al_status_code: int = 0
     out_bytes: int = 0
     in_bytes: int = 0
-    out_offset: int = 0               # byte offsets in the logical image
+    out_offset: int = 0  # byte offsets in the logical image
     in_offset: int = 0
     rx_layout: PdoLayout | None = None
     tx_layout: PdoLayout | None = None
     delay_ns: int = 0
-    sii_pdos: tuple = ((), ())        # the SII PDO categories (RxPDOs, TxPDOs)
+    sii_pdos: tuple = ((), ())  # the SII PDO categories (RxPDOs, TxPDOs)
     emergencies: list = field(default_factory=list)
 
     def describe(self) -> str:
-        return (f"{self.position:>3}  {self.station:#06x}  {self.vendor_id:#010x}  {self.product_code:#010x}  "
-                f"rev {self.revision:#x}  {self.name}  [{self.state}]  out {self.out_bytes} B  in {self.in_bytes} B")
+        return (
+            f"{self.position:>3}  {self.station:#06x}  {self.vendor_id:#010x}  {self.product_code:#010x}  "
+            f"rev {self.revision:#x}  {self.name}  [{self.state}]  out {self.out_bytes} B  in {self.in_bytes} B"
+        )
 
 
 class Master:
     """What every backend offers."""
+
     slaves: list
     expected_wkc: int = 0
     dc_time: int = 0
@@ -75,8 +79,13 @@ class Master:
     def open(self) -> None: ...
     def close(self) -> None: ...
     def scan(self) -> list: ...
-    def configure(self, pdo_assign: dict | None = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
-                  preop_hook: Callable | None = None) -> None: ...
+    def configure(
+        self,
+        pdo_assign: dict | None = None,
+        dc_cycle_ns: int = 0,
+        dc_shift_ns: int = 0,
+        preop_hook: Callable | None = None,
+    ) -> None: ...
     def set_state(self, state: str, timeout: float = 2.0) -> str: ...
     def exchange(self) -> int: ...
     def sdo_read(self, slave: int, index: int, sub: int, complete: bool = False) -> bytes: ...
@@ -97,7 +106,7 @@ class FrameMaster(Master):
     def __init__(self, transport: Callable, pause: Callable | None = None, now_ns: Callable | None = None):
         self.transport = transport
         self.pause = pause or (lambda s: time.sleep(s))
-        self.now_ns = now_ns or (lambda: time.time_ns() - 946_684_800_000_000_000)   # DC epoch: 2000-01-01
+        self.now_ns = now_ns or (lambda: time.time_ns() - 946_684_800_000_000_000)  # DC epoch: 2000-01-01
         self.slaves: list = []
         self.image = bytearray()
         self.out_size = self.in_size = 0
@@ -146,10 +155,10 @@ class FrameMaster(Master):
 
     def scan(self) -> list:
         n = self._one(BRD, 0, 0x0000, bytes(2)).wkc
-        self._one(BWR, 0, 0x0120, struct.pack("<H", INIT | 0x10))      # everyone to INIT, errors acknowledged
-        self._one(BWR, 0, 0x0600, bytes(256))                          # FMMUs off
-        self._one(BWR, 0, 0x0800, bytes(128))                          # SyncManagers off
-        self._one(BWR, 0, 0x0981, bytes(1))                            # DC sync off
+        self._one(BWR, 0, 0x0120, struct.pack("<H", INIT | 0x10))  # everyone to INIT, errors acknowledged
+        self._one(BWR, 0, 0x0600, bytes(256))  # FMMUs off
+        self._one(BWR, 0, 0x0800, bytes(128))  # SyncManagers off
+        self._one(BWR, 0, 0x0981, bytes(1))  # DC sync off
         self.slaves = []
         for pos in range(n):
             station = STATION_BASE + pos
@@ -159,8 +168,12 @@ class FrameMaster(Master):
             info = SlaveInfo(pos, station)
             image = self._read_sii(station)
             si = siimod.parse(image)
-            info.vendor_id, info.product_code, info.revision, info.serial = (si.vendor_id, si.product_code,
-                                                                           si.revision, si.serial)
+            info.vendor_id, info.product_code, info.revision, info.serial = (
+                si.vendor_id,
+                si.product_code,
+                si.revision,
+                si.serial,
+            )
             info.alias, info.name, info.coe_details, info.sms = si.alias, si.name, si.coe_details, si.sms
             info.sii_pdos = (si.rx_pdos, si.tx_pdos)
             info.mailbox = bool(si.mbx_protocols & siimod.MBX_COE) and si.mbx_out[1] > 0
@@ -172,7 +185,7 @@ class FrameMaster(Master):
         return self.slaves
 
     def _read_sii(self, station: int, max_bytes: int = 4096) -> bytes:
-        self._fpwr(station, 0x0500, b"\x00\x00")                       # the master owns the EEPROM
+        self._fpwr(station, 0x0500, b"\x00\x00")  # the master owns the EEPROM
         out = bytearray()
         addr = 0
         end = None
@@ -223,8 +236,10 @@ class FrameMaster(Master):
             waited += 0.001
         if bad:
             s = bad[0]
-            raise MasterError(f"slave {s.position} ({s.name}) refused {state}: it is {s.state}, AL status code "
-                              f"{s.al_status_code:#06x}")
+            raise MasterError(
+                f"slave {s.position} ({s.name}) refused {state}: it is {s.state}, AL status code "
+                f"{s.al_status_code:#06x}"
+            )
         return state
 
     # ------------------------------------------------------------------ mailbox / SDO
@@ -299,8 +314,13 @@ class FrameMaster(Master):
         return out
 
     # ------------------------------------------------------------------ configuration
-    def configure(self, pdo_assign: dict | None = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
-                  preop_hook: Callable | None = None) -> None:
+    def configure(
+        self,
+        pdo_assign: dict | None = None,
+        dc_cycle_ns: int = 0,
+        dc_shift_ns: int = 0,
+        preop_hook: Callable | None = None,
+    ) -> None:
         """INIT → PREOP → PDO mapping, SyncManagers, FMMUs, DC → SAFEOP.
 
         pdo_assign: {slave: (rx_pdos, tx_pdos)} written to 0x1C12/0x1C13 before mapping;
@@ -355,10 +375,22 @@ class FrameMaster(Master):
 
     def _read_layouts(self, s: SlaveInfo):
         if not s.mailbox or not s.coe_details & siimod.COE_PDO_ASSIGN:
-            return tuple(PdoLayout([(ix, sx, bits, _TYPE_CODES.get(code) or _dtype(bits, ix, sx),
-                                     KNOWN_NAMES.get(ix, f"{ix:#06x}:{sx:02x}"))
-                                    for _pdo, _sm, entries in pdos for ix, sx, bits, code in entries])
-                         for pdos in s.sii_pdos)
+            return tuple(
+                PdoLayout(
+                    [
+                        (
+                            ix,
+                            sx,
+                            bits,
+                            _TYPE_CODES.get(code) or _dtype(bits, ix, sx),
+                            KNOWN_NAMES.get(ix, f"{ix:#06x}:{sx:02x}"),
+                        )
+                        for _pdo, _sm, entries in pdos
+                        for ix, sx, bits, code in entries
+                    ]
+                )
+                for pdos in s.sii_pdos
+            )
         out = []
         for assign in (0x1C12, 0x1C13):
             items = []
@@ -379,7 +411,7 @@ class FrameMaster(Master):
         if not dcs:
             self.dc_ref = None
             return
-        self._one(BWR, 0, 0x0900, bytes(4))                            # latch receive times everywhere
+        self._one(BWR, 0, 0x0900, bytes(4))  # latch receive times everywhere
         master_ns = self.now_ns()
         prev = None
         for s in dcs:
@@ -396,7 +428,7 @@ class FrameMaster(Master):
             self._fpwr(s.station, 0x0928, struct.pack("<I", s.delay_ns))
             prev = s
         self.dc_ref = dcs[0].station
-        for _ in range(15):                                            # static drift compensation
+        for _ in range(15):  # static drift compensation
             self._one(FRMW, self.dc_ref, 0x0910, bytes(8))
         if cycle_ns:
             now = struct.unpack("<Q", self._one(FRMW, self.dc_ref, 0x0910, bytes(8)).data)[0]
@@ -421,26 +453,26 @@ class FrameMaster(Master):
         if back is None:
             return -1
         got = back[0]
-        self.image[self.out_size:] = got.data[self.out_size:]
+        self.image[self.out_size :] = got.data[self.out_size :]
         if len(back) > 1:
             self.dc_time = struct.unpack_from("<Q", back[1].data)[0]
         return got.wkc
 
     def write_outputs(self, slave: int, data: bytes) -> None:
         s = self.slaves[slave]
-        self.image[s.out_offset:s.out_offset + s.out_bytes] = data
+        self.image[s.out_offset : s.out_offset + s.out_bytes] = data
 
     def read_inputs(self, slave: int) -> bytes:
         s = self.slaves[slave]
-        return bytes(self.image[s.in_offset:s.in_offset + s.in_bytes])
+        return bytes(self.image[s.in_offset : s.in_offset + s.in_bytes])
 
     def outputs(self, slave: int) -> memoryview:
         s = self.slaves[slave]
-        return memoryview(self.image)[s.out_offset:s.out_offset + s.out_bytes]
+        return memoryview(self.image)[s.out_offset : s.out_offset + s.out_bytes]
 
     def inputs(self, slave: int) -> memoryview:
         s = self.slaves[slave]
-        return memoryview(self.image)[s.in_offset:s.in_offset + s.in_bytes]
+        return memoryview(self.image)[s.in_offset : s.in_offset + s.in_bytes]
 
 
 def _sm_bytes(start: int, length: int, control: int, enable: int) -> bytes:

@@ -5,6 +5,7 @@ and PDO mapping objects (0x1600…, 0x1A00…) plus the SyncManager assignment (
 which entries travel in process data. Values are Python ints/floats/bytes; the byte form is
 little endian as on the wire.
 """
+
 from __future__ import annotations
 
 import struct
@@ -13,10 +14,19 @@ from dataclasses import dataclass
 
 # CoE data types: name → (struct format or None, bit length, CoE data type index)
 DTYPES = {
-    "BOOL": ("<B", 1, 0x0001), "SINT": ("<b", 8, 0x0002), "INT": ("<h", 16, 0x0003), "DINT": ("<i", 32, 0x0004),
-    "USINT": ("<B", 8, 0x0005), "UINT": ("<H", 16, 0x0006), "UDINT": ("<I", 32, 0x0007),
-    "REAL": ("<f", 32, 0x0008), "STRING": (None, 0, 0x0009), "OCTETS": (None, 0, 0x000A),
-    "LREAL": ("<d", 64, 0x0011), "LINT": ("<q", 64, 0x0015), "ULINT": ("<Q", 64, 0x001B),
+    "BOOL": ("<B", 1, 0x0001),
+    "SINT": ("<b", 8, 0x0002),
+    "INT": ("<h", 16, 0x0003),
+    "DINT": ("<i", 32, 0x0004),
+    "USINT": ("<B", 8, 0x0005),
+    "UINT": ("<H", 16, 0x0006),
+    "UDINT": ("<I", 32, 0x0007),
+    "REAL": ("<f", 32, 0x0008),
+    "STRING": (None, 0, 0x0009),
+    "OCTETS": (None, 0, 0x000A),
+    "LREAL": ("<d", 64, 0x0011),
+    "LINT": ("<q", 64, 0x0015),
+    "ULINT": ("<Q", 64, 0x001B),
 }
 
 # SDO abort codes (CiA 301)
@@ -26,7 +36,7 @@ ABORT_COMMAND = 0x05040001
 ABORT_UNSUPPORTED = 0x06010000
 ABORT_WRITE_ONLY = 0x06010001
 ABORT_READ_ONLY = 0x06010002
-ABORT_SUBINDEX_CA = 0x06010004     # complete access not supported
+ABORT_SUBINDEX_CA = 0x06010004  # complete access not supported
 ABORT_NO_OBJECT = 0x06020000
 ABORT_NOT_MAPPABLE = 0x06040041
 ABORT_PDO_TOO_LONG = 0x06040042
@@ -36,7 +46,7 @@ ABORT_TOO_SHORT = 0x06070013
 ABORT_NO_SUBINDEX = 0x06090011
 ABORT_VALUE_RANGE = 0x06090030
 ABORT_GENERAL = 0x08000000
-ABORT_STATE = 0x08000022           # not in this device state
+ABORT_STATE = 0x08000022  # not in this device state
 
 
 class SdoAbort(Exception):
@@ -52,10 +62,10 @@ class Entry:
     name: str
     dtype: str
     value: object = 0
-    access: str = "rw"                 # ro, rw, wo
-    pdo: bool = False                  # may be mapped into process data
-    size: int = 0                      # bytes, for STRING/OCTETS
-    on_write: Callable | None = None    # f(entry, new_value) → abort code or 0 (before the store)
+    access: str = "rw"  # ro, rw, wo
+    pdo: bool = False  # may be mapped into process data
+    size: int = 0  # bytes, for STRING/OCTETS
+    on_write: Callable | None = None  # f(entry, new_value) → abort code or 0 (before the store)
     writable_in: tuple = ("PREOP", "SAFEOP", "OP")
 
     @property
@@ -68,7 +78,7 @@ class Entry:
         fmt = DTYPES[self.dtype][0]
         if fmt is None:
             b = v.encode("latin-1") if isinstance(v, str) else bytes(v)
-            return b[:self.size].ljust(self.size, b"\0") if self.size else b
+            return b[: self.size].ljust(self.size, b"\0") if self.size else b
         if self.dtype == "BOOL":
             return struct.pack(fmt, 1 if v else 0)
         return struct.pack(fmt, v)
@@ -86,13 +96,24 @@ class Entry:
 
 class ObjectDictionary:
     def __init__(self):
-        self.entries: dict = {}        # (index, sub) → Entry
-        self._by_key: dict = {}        # the same entries by (index, sub) and, for subindex 0, by index
-        self.state = "INIT"            # the device's AL state, for writable_in checks
+        self.entries: dict = {}  # (index, sub) → Entry
+        self._by_key: dict = {}  # the same entries by (index, sub) and, for subindex 0, by index
+        self.state = "INIT"  # the device's AL state, for writable_in checks
 
     # ------------------------------------------------------------------ building
-    def add(self, index: int, sub: int, name: str, dtype: str, value=0, access: str = "rw", pdo: bool = False,
-            size: int = 0, on_write=None, writable_in=("PREOP", "SAFEOP", "OP")) -> Entry:
+    def add(
+        self,
+        index: int,
+        sub: int,
+        name: str,
+        dtype: str,
+        value=0,
+        access: str = "rw",
+        pdo: bool = False,
+        size: int = 0,
+        on_write=None,
+        writable_in=("PREOP", "SAFEOP", "OP"),
+    ) -> Entry:
         if dtype not in DTYPES:
             raise ValueError(f"unknown CoE data type {dtype}")
         e = Entry(index, sub, name, dtype, value, access, pdo, size, on_write, writable_in)
@@ -111,8 +132,12 @@ class ObjectDictionary:
 
     def add_pdo_mapping(self, index: int, name: str, mapped: list, access: str = "rw") -> None:
         """A PDO mapping object: mapped = [(index, sub, bits)] → UDINT entries 0xIIIISSBB."""
-        self.add_record(index, name, [(f"entry {i}", "UDINT", (ix << 16) | (sx << 8) | bits)
-                                      for i, (ix, sx, bits) in enumerate(mapped, 1)], access)
+        self.add_record(
+            index,
+            name,
+            [(f"entry {i}", "UDINT", (ix << 16) | (sx << 8) | bits) for i, (ix, sx, bits) in enumerate(mapped, 1)],
+            access,
+        )
         subs = self.entries[(index, 0)]
         subs.on_write = self._check_count(index)
 
@@ -125,6 +150,7 @@ class ObjectDictionary:
         def check(entry, value):
             n = max(s for (i, s) in self.entries if i == index)
             return 0 if 0 <= value <= n else ABORT_VALUE_RANGE
+
         return check
 
     # ------------------------------------------------------------------ access
@@ -162,7 +188,7 @@ class ObjectDictionary:
                     break
                 e = self.entries[(index, s)]
                 b = e.encode()
-                out += b if s != 0 else b[:1] + b"\0"     # CiA 301 CA: subindex 0 padded to 16 bits
+                out += b if s != 0 else b[:1] + b"\0"  # CiA 301 CA: subindex 0 padded to 16 bits
             return bytes(out)
         e = self.entry(index, sub)
         if e.access == "wo":
@@ -181,7 +207,7 @@ class ObjectDictionary:
                     break
                 e = self.entries[(index, s)]
                 n = 2 if s == 0 else e.bits // 8 or len(data) - pos
-                chunk = data[pos:pos + n]
+                chunk = data[pos : pos + n]
                 values.append((e, e.decode(chunk[:1] if s == 0 else chunk)))
                 pos += n
             if pos < len(data):

@@ -45,31 +45,32 @@ Delays (thesis eq. 3.5-3.6 and 4.5-4.7)
                      between receiving inputs and sending the next outputs, by default 20 % of the
                      cycle. Utilisation = wire time / cycle.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 # Frame arithmetic (bytes)
-ETH_HEADER = 14             # destination, source, EtherType 0x88A4
-ECAT_HEADER = 2             # 11-bit length, type 1
-DATAGRAM_HEADER = 10        # cmd, idx, address, length/flags, irq
+ETH_HEADER = 14  # destination, source, EtherType 0x88A4
+ECAT_HEADER = 2  # 11-bit length, type 1
+DATAGRAM_HEADER = 10  # cmd, idx, address, length/flags, irq
 WKC = 2
 DATAGRAM_OVERHEAD = DATAGRAM_HEADER + WKC
 FCS = 4
-MIN_FRAME_NO_FCS = 60       # 64-byte Ethernet minimum less the FCS
+MIN_FRAME_NO_FCS = 60  # 64-byte Ethernet minimum less the FCS
 PREAMBLE_SFD = 8
 INTER_FRAME_GAP = 12
-MAX_ECAT_PAYLOAD = 1498     # datagrams of one frame: 1500-byte MTU less the EtherCAT header
-MAX_LRW_DATA = MAX_ECAT_PAYLOAD - DATAGRAM_OVERHEAD          # 1486
-DC_TIME_REGISTER = 0x0910   # the reference clock's 64-bit system time
+MAX_ECAT_PAYLOAD = 1498  # datagrams of one frame: 1500-byte MTU less the EtherCAT header
+MAX_LRW_DATA = MAX_ECAT_PAYLOAD - DATAGRAM_OVERHEAD  # 1486
+DC_TIME_REGISTER = 0x0910  # the reference clock's 64-bit system time
 DC_DATAGRAM_DATA = 8
-DC_DATAGRAM_BYTES = DATAGRAM_OVERHEAD + DC_DATAGRAM_DATA     # 20
+DC_DATAGRAM_BYTES = DATAGRAM_OVERHEAD + DC_DATAGRAM_DATA  # 20
 
 # Timing defaults
-FORWARDING_DELAY_S = 1.0e-6       # an ESC with two 100BASE-TX PHYs, port to port (~1 us per slave)
-PROPAGATION_S_PER_M = 5e-9        # twisted pair, about 2/3 of the speed of light
-LINK_BPS = 100e6                  # Fast Ethernet
-MASTER_BUDGET_FRACTION = 0.2      # default compute share of the cycle for the master
+FORWARDING_DELAY_S = 1.0e-6  # an ESC with two 100BASE-TX PHYs, port to port (~1 us per slave)
+PROPAGATION_S_PER_M = 5e-9  # twisted pair, about 2/3 of the speed of light
+LINK_BPS = 100e6  # Fast Ethernet
+MASTER_BUDGET_FRACTION = 0.2  # default compute share of the cycle for the master
 
 
 @dataclass
@@ -80,6 +81,7 @@ class DriveTiming:
     the worst-case response times of the PDO interrupt task (R_MsgInt) and of the motor-action task
     (R_MotorAct) are taken as a few microseconds, as for a drive MCU with a small RTOS.
     """
+
     r_msgint_s: float = 5e-6
     c_motoract_s: float = 62.5e-6
     r_motoract_s: float = 10e-6
@@ -93,13 +95,14 @@ class DriveTiming:
 class SlaveTiming:
     """One slave in bus order. cable_m is the cable leading into this slave (from the master or the
     previous slave); forwarding_delay_s is its ESC's delay per pass of a frame."""
+
     name: str
     out_bytes: int
     in_bytes: int
     forwarding_delay_s: float = FORWARDING_DELAY_S
     cable_m: float = 1.0
     is_drive: bool = False
-    drive_delay_s: float | None = None          # overrides drive_timing when given
+    drive_delay_s: float | None = None  # overrides drive_timing when given
     drive_timing: DriveTiming = field(default_factory=DriveTiming)
 
     @property
@@ -115,6 +118,7 @@ class SegmentTiming:
 
     host_s is t_host: the master stack and NIC latency until the frame leaves towards the first
     slave. master_budget_s None means MASTER_BUDGET_FRACTION of the cycle."""
+
     slaves: list
     cycle_s: float
     host_s: float = 0.0
@@ -130,60 +134,60 @@ class SegmentTiming:
 
 @dataclass
 class DatagramPlan:
-    cmd: str                # "LRW" or "FRMW"
+    cmd: str  # "LRW" or "FRMW"
     data_bytes: int
-    logical: int | None = None       # LRW: logical address (offset into the image)
-    register: int | None = None      # FRMW: register offset (0x0910)
+    logical: int | None = None  # LRW: logical address (offset into the image)
+    register: int | None = None  # FRMW: register offset (0x0910)
 
 
 @dataclass
 class FramePlan:
-    index: int                          # 0-based, in sending order
+    index: int  # 0-based, in sending order
     datagrams: list
-    bytes_no_fcs: int                   # Ethernet header .. last WKC, padded to 60
-    frame_bytes: int                    # with the FCS (what a capture with FCS shows)
-    wire_bytes: int                     # with preamble, SFD and inter-frame gap
+    bytes_no_fcs: int  # Ethernet header .. last WKC, padded to 60
+    frame_bytes: int  # with the FCS (what a capture with FCS shows)
+    wire_bytes: int  # with preamble, SFD and inter-frame gap
     wire_s: float
-    start_s: float                      # when its first bit leaves, relative to the first frame's
+    start_s: float  # when its first bit leaves, relative to the first frame's
 
 
 @dataclass
 class SlavePlan:
-    position: int                       # 1-based, bus order
+    position: int  # 1-based, bus order
     name: str
     out_bytes: int
     in_bytes: int
-    out_offset: int                     # logical offset of its outputs in the image
-    in_offset: int                      # logical offset of its inputs in the image
-    out_frames: tuple                   # indexes of the frames carrying its outputs (empty: none)
+    out_offset: int  # logical offset of its outputs in the image
+    in_offset: int  # logical offset of its inputs in the image
+    out_frames: tuple  # indexes of the frames carrying its outputs (empty: none)
     in_frames: tuple
-    propagation_s: float                # of the cable into this slave
+    propagation_s: float  # of the cable into this slave
     forwarding_s: float
-    d_comm_s: float                     # D_comm(n)
-    d_drive_s: float | None          # D_drive, drives only
-    d_s: float | None                # D(n) = D_comm(n) + D_drive, drives only
+    d_comm_s: float  # D_comm(n)
+    d_drive_s: float | None  # D_drive, drives only
+    d_s: float | None  # D(n) = D_comm(n) + D_drive, drives only
     is_drive: bool = False
 
 
 @dataclass
 class Plan:
     segment: SegmentTiming
-    slaves: list                        # [SlavePlan]
-    frames: list                        # [FramePlan]
+    slaves: list  # [SlavePlan]
+    frames: list  # [FramePlan]
     image_out_bytes: int
     image_in_bytes: int
     image_bytes: int
-    frame_bytes: int                    # all frames, with FCS
-    wire_bytes: int                     # all frames on the wire
-    wire_s: float                       # D_t of all frames
-    propagation_s: float                # one way, all cables
-    forwarding_s: float                 # one way, all slaves
+    frame_bytes: int  # all frames, with FCS
+    wire_bytes: int  # all frames on the wire
+    wire_s: float  # D_t of all frames
+    propagation_s: float  # one way, all cables
+    forwarding_s: float  # one way, all slaves
     round_trip_s: float
     master_budget_s: float
-    used_s: float                       # host + round trip + master budget
-    slack_s: float                      # cycle - used (negative: does not fit)
+    used_s: float  # host + round trip + master budget
+    slack_s: float  # cycle - used (negative: does not fit)
     fits: bool
-    utilisation_pct: float              # wire time / cycle
+    utilisation_pct: float  # wire time / cycle
 
 
 def frame_bytes(datagram_data_sizes) -> tuple:
@@ -211,10 +215,10 @@ def _split_image(blocks, first_cap: int, cap: int) -> list:
     for b in blocks:
         if b == 0:
             continue
-        if cur and cur + b > room and b <= cap:      # move the whole block to the next frame
+        if cur and cur + b > room and b <= cap:  # move the whole block to the next frame
             chunks.append(cur)
             cur, room = 0, cap
-        while cur + b > room:                        # a block larger than a frame: cut it
+        while cur + b > room:  # a block larger than a frame: cut it
             take = room - cur
             chunks.append(cur + take)
             b -= take
@@ -245,7 +249,7 @@ def plan(seg: SegmentTiming) -> Plan:
     frames = []
     t = 0.0
     addr = 0
-    ranges = []                                       # (start, end) of each frame's LRW
+    ranges = []  # (start, end) of each frame's LRW
     for i in range(max(len(chunks), 1 if seg.dc else 0)):
         dgs = []
         if i < len(chunks):
@@ -269,10 +273,24 @@ def plan(seg: SegmentTiming) -> Plan:
         prop = s.cable_m * seg.propagation_s_per_m
         d_comm += s.forwarding_delay_s + prop
         dd = s.d_drive_s
-        slaves.append(SlavePlan(n, s.name, s.out_bytes, s.in_bytes, out_off, in_off,
-                                frames_of(out_off, s.out_bytes), frames_of(in_off, s.in_bytes),
-                                prop, s.forwarding_delay_s, d_comm, dd,
-                                None if dd is None else d_comm + dd, s.is_drive))
+        slaves.append(
+            SlavePlan(
+                n,
+                s.name,
+                s.out_bytes,
+                s.in_bytes,
+                out_off,
+                in_off,
+                frames_of(out_off, s.out_bytes),
+                frames_of(in_off, s.in_bytes),
+                prop,
+                s.forwarding_delay_s,
+                d_comm,
+                dd,
+                None if dd is None else d_comm + dd,
+                s.is_drive,
+            )
+        )
         out_off += s.out_bytes
         in_off += s.in_bytes
 
@@ -283,10 +301,25 @@ def plan(seg: SegmentTiming) -> Plan:
     budget = seg.budget_s
     used = seg.host_s + round_trip + budget
     slack = seg.cycle_s - used
-    return Plan(seg, slaves, frames, total_out, total_in, image,
-                sum(f.frame_bytes for f in frames), sum(f.wire_bytes for f in frames), wire_s,
-                prop_s, fwd_s, round_trip, budget, used, slack, slack >= -1e-12,
-                100.0 * wire_s / seg.cycle_s)
+    return Plan(
+        seg,
+        slaves,
+        frames,
+        total_out,
+        total_in,
+        image,
+        sum(f.frame_bytes for f in frames),
+        sum(f.wire_bytes for f in frames),
+        wire_s,
+        prop_s,
+        fwd_s,
+        round_trip,
+        budget,
+        used,
+        slack,
+        slack >= -1e-12,
+        100.0 * wire_s / seg.cycle_s,
+    )
 
 
 def _us(s: float) -> str:
@@ -302,18 +335,33 @@ def _frames(ix: tuple) -> str:
 def format_plan(p: Plan) -> str:
     """A readable report: the slave table, the frames, the totals and the verdict."""
     seg = p.segment
-    lines = [f"EtherCAT segment: {len(p.slaves)} slave(s), cycle {_us(seg.cycle_s)} "
-             f"({seg.cycle_s * 1e3:.3f} ms), DC {'on' if seg.dc else 'off'}, "
-             f"link {seg.link_bps / 1e6:g} Mbit/s, t_host {_us(seg.host_s)}",
-             ""]
+    lines = [
+        f"EtherCAT segment: {len(p.slaves)} slave(s), cycle {_us(seg.cycle_s)} "
+        f"({seg.cycle_s * 1e3:.3f} ms), DC {'on' if seg.dc else 'off'}, "
+        f"link {seg.link_bps / 1e6:g} Mbit/s, t_host {_us(seg.host_s)}",
+        "",
+    ]
     head = ("#", "slave", "out B", "in B", "out @", "in @", "frame", "D_comm(n) µs", "D(n) µs")
-    rows = [(str(s.position), s.name, str(s.out_bytes), str(s.in_bytes), str(s.out_offset), str(s.in_offset),
-             _frames(tuple(sorted(set(s.out_frames + s.in_frames)))), f"{s.d_comm_s * 1e6:.3f}",
-             "-" if s.d_s is None else f"{s.d_s * 1e6:.3f}") for s in p.slaves]
+    rows = [
+        (
+            str(s.position),
+            s.name,
+            str(s.out_bytes),
+            str(s.in_bytes),
+            str(s.out_offset),
+            str(s.in_offset),
+            _frames(tuple(sorted(set(s.out_frames + s.in_frames)))),
+            f"{s.d_comm_s * 1e6:.3f}",
+            "-" if s.d_s is None else f"{s.d_s * 1e6:.3f}",
+        )
+        for s in p.slaves
+    ]
     widths = [max(len(r[i]) for r in [head] + rows) for i in range(len(head))]
     left = {1}
+
     def fmt_row(r):
         return "  ".join(c.ljust(w) if i in left else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths))).rstrip()
+
     lines.append(fmt_row(head))
     lines.append("  ".join("-" * w for w in widths))
     lines += [fmt_row(r) for r in rows]
@@ -325,15 +373,14 @@ def format_plan(p: Plan) -> str:
     lines.append(f"image: {p.image_out_bytes} B out + {p.image_in_bytes} B in = {p.image_bytes} B")
     for f in p.frames:
         dgs = " + ".join(f"{d.cmd} {d.data_bytes} B" for d in f.datagrams)
-        lines.append(f"frame {f.index + 1}: {dgs}: {f.frame_bytes} B frame, {f.wire_bytes} B on the wire, "
-                     f"{_us(f.wire_s)}")
-    lines.append(f"frames: {len(p.frames)}, {p.frame_bytes} B, {p.wire_bytes} B on the wire, "
-                 f"wire time {_us(p.wire_s)}")
+        lines.append(
+            f"frame {f.index + 1}: {dgs}: {f.frame_bytes} B frame, {f.wire_bytes} B on the wire, {_us(f.wire_s)}"
+        )
+    lines.append(f"frames: {len(p.frames)}, {p.frame_bytes} B, {p.wire_bytes} B on the wire, wire time {_us(p.wire_s)}")
     lines.append(f"propagation {_us(p.propagation_s)} + forwarding {_us(p.forwarding_s)} each way")
     lines.append(f"round trip: {_us(p.round_trip_s)}")
     lines.append(f"master budget: {_us(p.master_budget_s)}")
-    lines.append(f"used: {_us(p.used_s)} of {_us(seg.cycle_s)} "
-                 f"(t_host + round trip + master budget)")
+    lines.append(f"used: {_us(p.used_s)} of {_us(seg.cycle_s)} (t_host + round trip + master budget)")
     verdict = "yes" if p.fits else "NO"
     lines.append(f"fits: {verdict}, slack {p.slack_s * 1e6:.3f} µs; bus utilisation {p.utilisation_pct:.2f} %")
     return "\n".join(lines)

@@ -10,6 +10,7 @@ eq. 4.7, applied to the device's physics, DC receive-time latches and system tim
 Faults for tests: `drop_frames(n)` loses the next n frames, `break_after(k)` cuts the cable after
 slave k (the frame returns from there, so the slaves beyond stop answering: working-counter errors).
 """
+
 from __future__ import annotations
 
 from . import wire
@@ -24,8 +25,15 @@ _BCAST = {BRD, BWR, BRW}
 
 
 class Segment:
-    def __init__(self, devices, host_delay: float = 5e-6, forwarding_delay: float = 1e-6, cable_m: float = 1.0,
-                 propagation_per_m: float = 5e-9, clock_spread_ns: int = 1_000_003):
+    def __init__(
+        self,
+        devices,
+        host_delay: float = 5e-6,
+        forwarding_delay: float = 1e-6,
+        cable_m: float = 1.0,
+        propagation_per_m: float = 5e-9,
+        clock_spread_ns: int = 1_000_003,
+    ):
         self.slaves = [SlaveController(d, clock_base_ns=(i + 1) * clock_spread_ns) for i, d in enumerate(devices)]
         self.host_delay = host_delay
         self.propagation = cable_m * propagation_per_m
@@ -34,7 +42,7 @@ class Segment:
         self.t = 0.0
         self.capture = None
         self._drop = 0
-        self._cut = None              # index of the last reachable slave, or None
+        self._cut = None  # index of the last reachable slave, or None
         self.frames = 0
         self._relink()
 
@@ -54,7 +62,7 @@ class Segment:
 
     def d_comm(self, n: int) -> float:
         """When slave n (0-based) sees a frame, after it was sent (s): t_host + Σ (forwarding + cable)."""
-        return self.host_delay + sum(s.forwarding_delay + self.propagation for s in self.slaves[:n + 1])
+        return self.host_delay + sum(s.forwarding_delay + self.propagation for s in self.slaves[: n + 1])
 
     def _arrivals(self, t: float, n: int) -> list:
         out = []
@@ -93,14 +101,14 @@ class Segment:
         except FrameError:
             return None
         self.frames += 1
-        reach = self.slaves if self._cut is None else self.slaves[:self._cut + 1]
+        reach = self.slaves if self._cut is None else self.slaves[: self._cut + 1]
         n_reach = len(reach)
         arrive = self._arrivals(t, n_reach)
         for dg in dgs:
             self._datagram(dg, reach, arrive)
         out = dst + bytes([src[0] | 0x02]) + src[1:] + frame[12:16] + wire.encode_datagrams(dgs)
         if len(out) < len(frame):
-            out += frame[len(out):]
+            out += frame[len(out) :]
         if self.capture is not None:
             self.capture.write(out, (2 * arrive[-1] - t) if arrive else t)
         return out
@@ -123,14 +131,14 @@ class Segment:
             auto, multi = c in _AUTO, c in (ARMW, FRMW)
             for i, s in enumerate(reach):
                 hit = dg.adp == 0 if auto else s.station == dg.adp
-                if hit and multi:                      # ARMW/FRMW: the addressed slave reads …
+                if hit and multi:  # ARMW/FRMW: the addressed slave reads …
                     got = s.read(dg.ado, n, arrive[i])
                     if got is not None:
                         dg.data[:] = got
                         dg.wkc += 1
                 elif hit:
                     self._access(s, dg, c, arrive[i], i, len(reach))
-                elif multi:                            # … and every other slave writes
+                elif multi:  # … and every other slave writes
                     if s.write(dg.ado, bytes(dg.data), arrive[i]):
                         dg.wkc += 1
                 if auto:
@@ -138,8 +146,7 @@ class Segment:
             return
         # NOP and unknown commands pass untouched
 
-    def _access(self, s: SlaveController, dg, c: int, t: float, i: int,
-                n_reach: int, bcast: bool = False) -> None:
+    def _access(self, s: SlaveController, dg, c: int, t: float, i: int, n_reach: int, bcast: bool = False) -> None:
         """A register read and/or write at one slave; a write stores the data as it arrives there."""
         n = len(dg.data)
         inc = 0
@@ -156,7 +163,7 @@ class Segment:
             if s.write(dg.ado, original, t):
                 inc += 2 if c in _READ_OR_RW else 1
                 if dg.ado <= wire_dc_latch < dg.ado + n:
-                    downstream = self.slaves[i + 1:n_reach]
+                    downstream = self.slaves[i + 1 : n_reach]
                     back = t + 2 * sum(x.forwarding_delay + self.propagation for x in downstream)
                     s.receive_times(t, back)
         dg.wkc += inc

@@ -7,6 +7,7 @@ process: pysoem holds the interpreter lock in several calls, so a segment served
 the master's process would starve. Readiness is announced (a line on stdout, or a file) only
 once the socket is bound, so a master that starts after it finds every slave.
 """
+
 from __future__ import annotations
 
 import os
@@ -61,7 +62,7 @@ def serve(iface: str, segment, ready_file: str | None = None, announce=print, du
             frame = sock.recv(0.2)
             if frame is None:
                 continue
-            if len(frame) >= 12 and frame[6] & 0x02:       # our own answer echoed back: not a request
+            if len(frame) >= 12 and frame[6] & 0x02:  # our own answer echoed back: not a request
                 continue
             out = segment.exchange(frame, time.monotonic() - t0)
             if out is not None:
@@ -76,7 +77,9 @@ def serve(iface: str, segment, ready_file: str | None = None, announce=print, du
 def create_veth(master_if: str = "ecm0", slave_if: str = "ecs0") -> None:
     """A veth pair for a master and a served segment (root)."""
     import subprocess
-    subprocess.run(["ip", "link", "add", master_if, "type", "veth", "peer", "name", slave_if], check=True,
-                   capture_output=True)
+
+    subprocess.run(
+        ["ip", "link", "add", master_if, "type", "veth", "peer", "name", slave_if], check=True, capture_output=True
+    )
     for i in (master_if, slave_if):
         subprocess.run(["ip", "link", "set", i, "up"], check=True, capture_output=True)

@@ -6,6 +6,7 @@ PREOP → SAFEOP hook → config_map → config_dc and SYNC0 per DC slave → SA
 exchanging process data. pysoem holds the interpreter lock in config_map, config_dc and state
 checks, so an emulated segment must be served from another process (`st ethercat serve`).
 """
+
 from __future__ import annotations
 
 import struct
@@ -32,6 +33,7 @@ class SoemMaster(Master):
         if why:
             raise MasterError(why)
         import pysoem
+
         self.pysoem = pysoem
         self.iface = iface
         self.timeout_us = frame_timeout_us
@@ -75,10 +77,11 @@ class SoemMaster(Master):
             out.append(info.state)
         return out
 
-    def configure(self, pdo_assign: dict | None = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0,
-                  preop_hook=None) -> None:
+    def configure(
+        self, pdo_assign: dict | None = None, dc_cycle_ns: int = 0, dc_shift_ns: int = 0, preop_hook=None
+    ) -> None:
         assign = pdo_assign or {}
-        if preop_hook is not None:                  # config_init left the slaves in PREOP
+        if preop_hook is not None:  # config_init left the slaves in PREOP
             preop_hook(self)
         for i, s in enumerate(self.m.slaves):
             if i in assign:
@@ -93,6 +96,7 @@ class SoemMaster(Master):
                         for k, p in enumerate(pdos, 1):
                             sl.sdo_write(idx, k, struct.pack("<H", p))
                         sl.sdo_write(idx, 0, bytes([len(pdos)]))
+
                 s.config_func = setup
         try:
             self.m.config_map()
@@ -122,7 +126,9 @@ class SoemMaster(Master):
                     w = struct.unpack("<I", s.sdo_read(pdo, j)[:4])[0]
                     ix, sx, bits = w >> 16, (w >> 8) & 0xFF, w & 0xFF
                     dtype = KNOWN_TYPES.get(ix) or {1: "BOOL", 8: "USINT", 16: "UINT", 32: "UDINT"}.get(bits, "OCTETS")
-                    items.append((ix, sx, bits, "PAD" if ix == 0 else dtype, KNOWN_NAMES.get(ix, f"{ix:#06x}:{sx:02x}")))
+                    items.append(
+                        (ix, sx, bits, "PAD" if ix == 0 else dtype, KNOWN_NAMES.get(ix, f"{ix:#06x}:{sx:02x}"))
+                    )
         except Exception:  # noqa: BLE001 - no CoE: the raw image only
             return PdoLayout([])
         return PdoLayout(items)
@@ -143,8 +149,10 @@ class SoemMaster(Master):
         self.states()
         if got != code:
             bad = next((s for s in self.slaves if s.state != state), None)
-            raise MasterError(f"slave {bad.position if bad else '?'} refused {state}: "
-                              f"{bad.state if bad else got} (AL status code {bad.al_status_code if bad else 0:#06x})")
+            raise MasterError(
+                f"slave {bad.position if bad else '?'} refused {state}: "
+                f"{bad.state if bad else got} (AL status code {bad.al_status_code if bad else 0:#06x})"
+            )
         return state
 
     def exchange(self) -> int:
@@ -176,4 +184,3 @@ class SoemMaster(Master):
 
     def poll_emergencies(self, slave: int) -> list:
         return []
-

@@ -8,6 +8,7 @@
 The length in the EtherCAT header is trusted, not the frame length (SOEM sends unpadded frames
 on a veth). `PcapWriter` writes a capture Wireshark/tshark opens (link type Ethernet).
 """
+
 from __future__ import annotations
 
 import struct
@@ -16,11 +17,26 @@ from dataclasses import dataclass, field
 
 ETHERTYPE = 0x88A4
 BROADCAST = b"\xff" * 6
-MASTER_MAC = b"\x01\x01\x01\x01\x01\x01"     # SOEM's primary source address
+MASTER_MAC = b"\x01\x01\x01\x01\x01\x01"  # SOEM's primary source address
 
 NOP, APRD, APWR, APRW, FPRD, FPWR, FPRW, BRD, BWR, BRW, LRD, LWR, LRW, ARMW, FRMW = range(15)
-NAMES = ["NOP", "APRD", "APWR", "APRW", "FPRD", "FPWR", "FPRW", "BRD", "BWR", "BRW", "LRD", "LWR", "LRW",
-         "ARMW", "FRMW"]
+NAMES = [
+    "NOP",
+    "APRD",
+    "APWR",
+    "APRW",
+    "FPRD",
+    "FPWR",
+    "FPRW",
+    "BRD",
+    "BWR",
+    "BRW",
+    "LRD",
+    "LWR",
+    "LRW",
+    "ARMW",
+    "FRMW",
+]
 READS = {APRD, FPRD, BRD, LRD}
 WRITES = {APWR, FPWR, BWR, LWR}
 READ_WRITES = {APRW, FPRW, BRW, LRW}
@@ -29,8 +45,8 @@ CONFIGURED = {FPRD, FPWR, FPRW, FRMW}
 BROADCASTS = {BRD, BWR, BRW}
 LOGICAL = {LRD, LWR, LRW}
 
-_DG = struct.Struct("<BBHHHH")          # cmd, idx, adp, ado, len|flags, irq
-_DG_LOG = struct.Struct("<BBIHH")       # cmd, idx, logical address, len|flags, irq
+_DG = struct.Struct("<BBHHHH")  # cmd, idx, adp, ado, len|flags, irq
+_DG_LOG = struct.Struct("<BBIHH")  # cmd, idx, logical address, len|flags, irq
 
 
 class FrameError(ValueError):
@@ -41,8 +57,8 @@ class FrameError(ValueError):
 class Datagram:
     cmd: int
     idx: int = 0
-    adp: int = 0                 # position (auto-increment, as a 16-bit value) or station address
-    ado: int = 0                 # register offset
+    adp: int = 0  # position (auto-increment, as a 16-bit value) or station address
+    ado: int = 0  # register offset
     data: bytearray = field(default_factory=bytearray)
     wkc: int = 0
     irq: int = 0
@@ -57,8 +73,10 @@ class Datagram:
         return cls(cmd, idx, addr & 0xFFFF, (addr >> 16) & 0xFFFF, bytearray(data))
 
     def __repr__(self):
-        return (f"Datagram({NAMES[self.cmd] if self.cmd < len(NAMES) else self.cmd}, idx={self.idx}, "
-                f"adp={self.adp:#06x}, ado={self.ado:#06x}, len={len(self.data)}, wkc={self.wkc})")
+        return (
+            f"Datagram({NAMES[self.cmd] if self.cmd < len(NAMES) else self.cmd}, idx={self.idx}, "
+            f"adp={self.adp:#06x}, ado={self.ado:#06x}, len={len(self.data)}, wkc={self.wkc})"
+        )
 
 
 def encode_datagrams(dgs) -> bytes:
@@ -97,7 +115,7 @@ def decode_datagrams(body, length: int) -> list:
         pos += 10
         if pos + n + 2 > length:
             raise FrameError(f"datagram {len(dgs)} ({n} bytes) runs past the EtherCAT length {length}")
-        data = bytearray(body[pos:pos + n])
+        data = bytearray(body[pos : pos + n])
         pos += n
         wkc = struct.unpack_from("<H", body, pos)[0]
         pos += 2
@@ -112,7 +130,7 @@ def decode_frame(frame):
         raise FrameError(f"frame of {len(frame)} bytes is too short")
     etype = struct.unpack_from(">H", frame, 12)[0]
     off = 14
-    if etype == 0x8100:                  # a VLAN tag
+    if etype == 0x8100:  # a VLAN tag
         etype = struct.unpack_from(">H", frame, 16)[0]
         off = 18
     if etype != ETHERTYPE:
@@ -121,7 +139,7 @@ def decode_frame(frame):
     length, ftype = hdr & 0x7FF, hdr >> 12
     if ftype != 1:
         raise FrameError(f"EtherCAT frame type {ftype} is not 1 (commands)")
-    body = memoryview(frame)[off + 2:]
+    body = memoryview(frame)[off + 2 :]
     if length > len(body):
         raise FrameError(f"EtherCAT length {length} exceeds the frame ({len(body)} bytes)")
     return bytes(frame[:6]), bytes(frame[6:12]), decode_datagrams(body, length)

@@ -1,4 +1,5 @@
 """Modbus TCP slave for HMIs: OpenPLC's address map, a map file for any variable, a server process."""
+
 from .addressmap import MapError, effective_map, load_map
 from .slave import ModbusSlave, parse_endpoint, parse_ranges
 

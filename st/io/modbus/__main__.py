@@ -1,4 +1,5 @@
 """The Modbus server process: `python -m st.io.modbus`, its configuration pickled on stdin."""
+
 import pickle
 import sys
 

@@ -26,6 +26,7 @@ REAL takes two registers (IEEE 754), LREAL four, DINT/UDINT/DWORD two, LINT/ULIN
 INT/UINT/WORD/SINT/USINT/BYTE one, BOOL one coil (or one register, 0/1), STRING(n) n/2 registers
 rounded up (two characters per register, first character in the high byte, NUL padded).
 """
+
 from __future__ import annotations
 
 import re
@@ -35,9 +36,19 @@ from dataclasses import dataclass
 
 from .exchange import COILS, DISCRETE, HOLDING, INPUT, TABLE_NAMES, N
 
-TABLES = {"coil": COILS, "coils": COILS, "discrete": DISCRETE, "discrete_input": DISCRETE,
-          "discrete_inputs": DISCRETE, "input": INPUT, "input_register": INPUT, "input_registers": INPUT,
-          "holding": HOLDING, "holding_register": HOLDING, "holding_registers": HOLDING}
+TABLES = {
+    "coil": COILS,
+    "coils": COILS,
+    "discrete": DISCRETE,
+    "discrete_input": DISCRETE,
+    "discrete_inputs": DISCRETE,
+    "input": INPUT,
+    "input_register": INPUT,
+    "input_registers": INPUT,
+    "holding": HOLDING,
+    "holding_register": HOLDING,
+    "holding_registers": HOLDING,
+}
 OPENPLC_LIMIT = {COILS: 8192, DISCRETE: 8192, INPUT: 1024, HOLDING: 8192}
 
 
@@ -86,16 +97,32 @@ def modbus_address(area: str, size: str, index: int):
 
 # ---------------------------------------------------------------------------- encodings
 
-_WIDTH = {"BOOL": 1, "SINT": 1, "USINT": 1, "BYTE": 1, "INT": 1, "UINT": 1, "WORD": 1,
-          "DINT": 2, "UDINT": 2, "DWORD": 2, "REAL": 2, "LINT": 4, "ULINT": 4, "LWORD": 4, "LREAL": 4}
+_WIDTH = {
+    "BOOL": 1,
+    "SINT": 1,
+    "USINT": 1,
+    "BYTE": 1,
+    "INT": 1,
+    "UINT": 1,
+    "WORD": 1,
+    "DINT": 2,
+    "UDINT": 2,
+    "DWORD": 2,
+    "REAL": 2,
+    "LINT": 4,
+    "ULINT": 4,
+    "LWORD": 4,
+    "LREAL": 4,
+}
 _SIGNED = {"SINT": 8, "INT": 16, "DINT": 32, "LINT": 64}
 
 
 @dataclass
 class Encoding:
     """How one variable's value becomes registers (or one bit) and back."""
-    type_name: str               # BOOL, INT, REAL, STRING, …
-    registers: int               # 0 for a coil/discrete bit
+
+    type_name: str  # BOOL, INT, REAL, STRING, …
+    registers: int  # 0 for a coil/discrete bit
     word_order: str = "big"
     strlen: int = 0
 
@@ -161,6 +188,7 @@ class MapEntry:
 def _type_info(t):
     """(type name, string length) of a compiled type, for the encodings above."""
     from ...model import types as T
+
     bt = T.base_of(t)
     name = getattr(bt, "name", str(bt)).upper()
     if name.startswith("STRING") or name.startswith("WSTRING"):
@@ -213,7 +241,7 @@ def _entry(path, lines, item: dict, plc) -> MapEntry:
         raise MapError(f"{path}:{ln}:{col}: error: {msg}" + (f"\n  = hint: {hint}" if hint else ""))
 
     if not isinstance(var, str):
-        fail("an entry needs path = \"program.variable\"")
+        fail('an entry needs path = "program.variable"')
     extra = set(item) - {"path", "table", "address", "type", "word_order", "access"}
     if extra:
         fail(f"unknown key '{sorted(extra)[0]}'", "keys: path, table, address, type, word_order, access")
@@ -229,8 +257,10 @@ def _entry(path, lines, item: dict, plc) -> MapEntry:
         fail(f"no variable '{var}' in the program: {e.args[0] if e.args else e}")
     tname, strlen = _type_info(t)
     if tname not in _WIDTH and tname != "STRING":
-        fail(f"'{var}' is a {tname}: only elementary types and strings can be mapped",
-             "map the fields of a structure or the elements of an array one by one")
+        fail(
+            f"'{var}' is a {tname}: only elementary types and strings can be mapped",
+            "map the fields of a structure or the elements of an array one by one",
+        )
     want = item.get("type")
     if want is not None and str(want).upper() != tname:
         fail(f"'{var}' is {tname}, the map says {want}")
@@ -257,11 +287,14 @@ def _check_overlaps(path: str, entries: list) -> None:
     spans = sorted(entries, key=lambda e: (e.table, e.address))
     for a, b in zip(spans, spans[1:]):
         if a.table == b.table and b.address < a.end:
-            raise MapError(f"{path}:{b.line}:1: error: '{b.path}' at {TABLE_NAMES[b.table]} {b.address} overlaps "
-                           f"'{a.path}' ({a.address}..{a.end - 1})")
+            raise MapError(
+                f"{path}:{b.line}:1: error: '{b.path}' at {TABLE_NAMES[b.table]} {b.address} overlaps "
+                f"'{a.path}' ({a.address}..{a.end - 1})"
+            )
 
 
 # ---------------------------------------------------------------------------- the effective map
+
 
 @dataclass
 class Row:
@@ -297,8 +330,11 @@ def effective_map(plc, entries: list | None = None) -> list:
         rows.append(Row(table, first, first + n - 1, b.addr.upper(), str(b.type), enc, table in (COILS, HOLDING)))
     for e in entries or []:
         enc = e.encoding
-        desc = "bit" if enc.registers == 0 else (
-            f"{enc.registers} registers, {enc.word_order} word order" if enc.registers > 1 else "16-bit")
+        desc = (
+            "bit"
+            if enc.registers == 0
+            else (f"{enc.registers} registers, {enc.word_order} word order" if enc.registers > 1 else "16-bit")
+        )
         if enc.type_name == "STRING":
             desc = f"{enc.registers} registers, 2 characters each"
         rows.append(Row(e.table, e.address, e.end - 1, e.path, enc.type_name, desc, e.writable))

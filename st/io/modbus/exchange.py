@@ -14,6 +14,7 @@ for the interpreter lock under load: ../shared/notes/realtime.md). The two excha
   one message per write request to PLC-owned cells; the PLC drains the ring at the start of the
   next job. A full ring makes the server answer exception 06 (busy) instead of blocking.
 """
+
 from __future__ import annotations
 
 import struct
@@ -23,13 +24,13 @@ N = 65536
 COILS, DISCRETE, INPUT, HOLDING = 0, 1, 2, 3
 TABLE_NAMES = {COILS: "coils", DISCRETE: "discrete inputs", INPUT: "input registers", HOLDING: "holding registers"}
 
-_HDR = 64                       # seq u64 @0, ring head u32 @8, ring tail u32 @12, port u32 @16, state u32 @20
+_HDR = 64  # seq u64 @0, ring head u32 @8, ring tail u32 @12, port u32 @16, state u32 @20
 _OFF = {COILS: _HDR, DISCRETE: _HDR + N, INPUT: _HDR + 2 * N, HOLDING: _HDR + 4 * N}
 _RING = _HDR + 6 * N
 RING_SIZE = 1 << 16
 SIZE = _RING + RING_SIZE
 
-_MSG = struct.Struct("<HBHH")   # total length, table, address, count; then the values
+_MSG = struct.Struct("<HBHH")  # total length, table, address, count; then the values
 
 
 class Exchange:
@@ -42,11 +43,13 @@ class Exchange:
         self.name = self.shm.name
         buf = self.shm.buf
         self.seq = buf[0:8].cast("Q")
-        self.ctl = buf[8:24].cast("I")           # head, tail, port, state
-        self.bits = {COILS: buf[_OFF[COILS]:_OFF[COILS] + N], DISCRETE: buf[_OFF[DISCRETE]:_OFF[DISCRETE] + N]}
-        self.regs = {INPUT: buf[_OFF[INPUT]:_OFF[INPUT] + 2 * N].cast("H"),
-                     HOLDING: buf[_OFF[HOLDING]:_OFF[HOLDING] + 2 * N].cast("H")}
-        self.ring = buf[_RING:_RING + RING_SIZE]
+        self.ctl = buf[8:24].cast("I")  # head, tail, port, state
+        self.bits = {COILS: buf[_OFF[COILS] : _OFF[COILS] + N], DISCRETE: buf[_OFF[DISCRETE] : _OFF[DISCRETE] + N]}
+        self.regs = {
+            INPUT: buf[_OFF[INPUT] : _OFF[INPUT] + 2 * N].cast("H"),
+            HOLDING: buf[_OFF[HOLDING] : _OFF[HOLDING] + 2 * N].cast("H"),
+        }
+        self.ring = buf[_RING : _RING + RING_SIZE]
 
     # ---------------------------------------------------------------- snapshot (seqlock)
     def begin_write(self) -> None:
@@ -63,7 +66,7 @@ class Exchange:
             s1 = seq[0]
             if s1 & 1:
                 continue
-            values = src[address:address + count].tolist()
+            values = src[address : address + count].tolist()
             if seq[0] == s1:
                 return values
         return None
@@ -77,7 +80,7 @@ class Exchange:
         if RING_SIZE - ((head - tail) & 0xFFFFFFFF) < len(msg):
             return False
         self._copy_in(head % RING_SIZE, msg)
-        self.ctl[0] = (head + len(msg)) & 0xFFFFFFFF          # publish after the bytes are in place
+        self.ctl[0] = (head + len(msg)) & 0xFFFFFFFF  # publish after the bytes are in place
         return True
 
     def pending(self) -> bool:
@@ -99,15 +102,15 @@ class Exchange:
 
     def _copy_in(self, pos: int, data: bytes) -> None:
         first = min(len(data), RING_SIZE - pos)
-        self.ring[pos:pos + first] = data[:first]
+        self.ring[pos : pos + first] = data[:first]
         if first < len(data):
-            self.ring[0:len(data) - first] = data[first:]
+            self.ring[0 : len(data) - first] = data[first:]
 
     def _copy_out(self, pos: int, n: int) -> bytes:
         first = min(n, RING_SIZE - pos)
-        data = bytes(self.ring[pos:pos + first])
+        data = bytes(self.ring[pos : pos + first])
         if first < n:
-            data += bytes(self.ring[0:n - first])
+            data += bytes(self.ring[0 : n - first])
         return data
 
     # ---------------------------------------------------------------- server state

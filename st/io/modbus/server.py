@@ -25,6 +25,7 @@ So a client opening short connections in a loop churns through its own connectio
 older clients alone. When every other connection is regular the new one is refused (closed);
 refusals are logged at most once per REFUSAL_LOG_INTERVAL, with their count.
 """
+
 from __future__ import annotations
 
 import asyncio
@@ -43,24 +44,36 @@ MAX_BITS_READ, MAX_REGS_READ = 2000, 125
 MAX_BITS_WRITE, MAX_REGS_WRITE, MAX_REGS_RW_WRITE = 1968, 123, 121
 ILLEGAL_FUNCTION, ILLEGAL_ADDRESS, ILLEGAL_VALUE, SERVER_FAILURE, BUSY, GATEWAY_NO_RESPONSE = 1, 2, 3, 4, 6, 0x0B
 READ_TABLE = {1: COILS, 2: DISCRETE, 3: HOLDING, 4: INPUT}
-REGULAR_AFTER = 1.0            # s between a connection's first and latest request: it polls, never evicted
-REFUSAL_LOG_INTERVAL = 10.0    # s: refused connections are logged at most this often, with their count
+REGULAR_AFTER = 1.0  # s between a connection's first and latest request: it polls, never evicted
+REFUSAL_LOG_INTERVAL = 10.0  # s: refused connections are logged at most this often, with their count
 
 
 class ServerConfig:
     """Everything the server process needs (picklable)."""
 
-    def __init__(self, host="127.0.0.1", port=5020, valid=None, owned=None, writable=None, read_only=False,
-                 max_connections=16, idle_timeout=60.0, max_rate=1000.0, unit_ids=None, identity=None):
+    def __init__(
+        self,
+        host="127.0.0.1",
+        port=5020,
+        valid=None,
+        owned=None,
+        writable=None,
+        read_only=False,
+        max_connections=16,
+        idle_timeout=60.0,
+        max_rate=1000.0,
+        unit_ids=None,
+        identity=None,
+    ):
         self.host, self.port = host, port
-        self.valid = valid or {}          # table → sorted [(first, end)] addresses that exist
-        self.owned = owned or {}          # table → [(first, end)] cells the PLC owns (writes queued)
-        self.writable = writable          # None (everything writable) or table → [(first, end)]
+        self.valid = valid or {}  # table → sorted [(first, end)] addresses that exist
+        self.owned = owned or {}  # table → [(first, end)] cells the PLC owns (writes queued)
+        self.writable = writable  # None (everything writable) or table → [(first, end)]
         self.read_only = read_only
         self.max_connections = max_connections
         self.idle_timeout = idle_timeout
         self.max_rate = max_rate
-        self.unit_ids = unit_ids          # None: every unit id; else a set
+        self.unit_ids = unit_ids  # None: every unit id; else a set
         self.identity = identity or {}
 
 
@@ -85,6 +98,7 @@ class Handler:
 
     def __init__(self, cfg: ServerConfig, ex: Exchange):
         from pymodbus.pdu import DecodePDU
+
         self.cfg, self.ex = cfg, ex
         self.decoder = DecodePDU(is_server=True)
 
@@ -103,6 +117,7 @@ class Handler:
     def _dispatch(self, fc: int, pdu: bytes) -> bytes:
         from pymodbus.pdu import bit_message as B
         from pymodbus.pdu import register_message as R
+
         n = len(pdu)
         if fc in (1, 2, 3, 4):
             if n != 5:
@@ -112,8 +127,12 @@ class Handler:
             if not 1 <= count <= limit:
                 raise _Exc(ILLEGAL_VALUE)
             values = self._read(READ_TABLE[fc], address, count)
-            cls = {1: B.ReadCoilsResponse, 2: B.ReadDiscreteInputsResponse,
-                   3: R.ReadHoldingRegistersResponse, 4: R.ReadInputRegistersResponse}[fc]
+            cls = {
+                1: B.ReadCoilsResponse,
+                2: B.ReadDiscreteInputsResponse,
+                3: R.ReadHoldingRegistersResponse,
+                4: R.ReadInputRegistersResponse,
+            }[fc]
             resp = cls(bits=[bool(v) for v in values]) if fc in (1, 2) else cls(registers=values)
             return bytes((fc,)) + resp.encode()
         if fc == 5:
@@ -152,15 +171,19 @@ class Handler:
             if n < 10:
                 raise _Exc(ILLEGAL_VALUE)
             raddr, rcount, waddr, wcount, nbytes = struct.unpack(">HHHHB", pdu[1:10])
-            if (not 1 <= rcount <= MAX_REGS_READ or not 1 <= wcount <= MAX_REGS_RW_WRITE
-                    or nbytes != 2 * wcount or n != 10 + nbytes):
+            if (
+                not 1 <= rcount <= MAX_REGS_READ
+                or not 1 <= wcount <= MAX_REGS_RW_WRITE
+                or nbytes != 2 * wcount
+                or n != 10 + nbytes
+            ):
                 raise _Exc(ILLEGAL_VALUE)
             req = self.decoder.decode(pdu)
             written = list(req.write_registers)
             self._check(HOLDING, raddr, rcount, write=False)
-            self._write(HOLDING, waddr, written)           # the write happens before the read
+            self._write(HOLDING, waddr, written)  # the write happens before the read
             values = self._read(HOLDING, raddr, rcount)
-            for i in range(rcount):                        # a queued write shows in this reply already
+            for i in range(rcount):  # a queued write shows in this reply already
                 a = raddr + i
                 if waddr <= a < waddr + wcount:
                     values[i] = written[a - waddr]
@@ -204,6 +227,7 @@ class Handler:
 
     def _device_identification(self, pdu: bytes) -> bytes:
         from pymodbus.pdu.mei_message import ReadDeviceInformationResponse
+
         if len(pdu) != 4 or pdu[1] != 0x0E:
             raise _Exc(ILLEGAL_FUNCTION if len(pdu) >= 2 and pdu[1] != 0x0E else ILLEGAL_VALUE)
         read_code, object_id = pdu[2], pdu[3]
@@ -235,8 +259,8 @@ class Server:
         self.handler = Handler(cfg, ex)
         self.conns: set = set()
         self.served = 0
-        self.accepted = 0                  # connections seen: their sequence numbers (newest = highest)
-        self.refused = 0                   # refused since the last report
+        self.accepted = 0  # connections seen: their sequence numbers (newest = highest)
+        self.refused = 0  # refused since the last report
         self.refused_last = "?"
         self.refused_reported = float("-inf")
 
@@ -259,16 +283,26 @@ class Server:
         # never active first (the oldest: it had the longest chance to send a request), then the peer
         # address holding the most evictable slots, then the newest
         victim = min(candidates, key=lambda c: (c.requests > 0, -held[c.host], -c.seq if c.requests else c.seq))
-        log.info("connection limit %d: closing %s (%d request(s), idle %.1f s) for %s", self.cfg.max_connections,
-                 victim.peer, victim.requests, now - victim.last_activity, new.peer)
+        log.info(
+            "connection limit %d: closing %s (%d request(s), idle %.1f s) for %s",
+            self.cfg.max_connections,
+            victim.peer,
+            victim.requests,
+            now - victim.last_activity,
+            new.peer,
+        )
         victim.close()
         return True
 
     def report_refusals(self, now: float, final: bool = False) -> None:
         if self.refused and (final or now - self.refused_reported >= REFUSAL_LOG_INTERVAL):
-            log.warning("connection limit %d: every connection is a regular client; refused %d new "
-                        "connection(s), the last from %s", self.cfg.max_connections, self.refused,
-                        self.refused_last)
+            log.warning(
+                "connection limit %d: every connection is a regular client; refused %d new "
+                "connection(s), the last from %s",
+                self.cfg.max_connections,
+                self.refused,
+                self.refused_last,
+            )
             self.refused = 0
             self.refused_reported = now
 
@@ -291,10 +325,10 @@ class Connection(asyncio.Protocol):
         self.peer = self.host = "?"
         server.accepted += 1
         self.seq = server.accepted
-        self.last_activity = time.monotonic()      # the latest complete request (or the connect)
+        self.last_activity = time.monotonic()  # the latest complete request (or the connect)
         self.requests = 0
         self.first_request = 0.0
-        self.regular = False                       # requests REGULAR_AFTER s apart: never evicted
+        self.regular = False  # requests REGULAR_AFTER s apart: never evicted
         self.write_paused = False
         self.rate_paused = False
         self.tokens = server.cfg.max_rate
@@ -314,7 +348,7 @@ class Connection(asyncio.Protocol):
         self.buf.clear()
 
     def close(self) -> None:
-        self.server.conns.discard(self)          # at once: connection_lost comes a loop turn later
+        self.server.conns.discard(self)  # at once: connection_lost comes a loop turn later
         if self.transport is not None:
             self.transport.abort()
 
@@ -322,7 +356,7 @@ class Connection(asyncio.Protocol):
         self.buf += data
         self.process()
 
-    def pause_writing(self) -> None:          # the client does not read its replies: stop reading it
+    def pause_writing(self) -> None:  # the client does not read its replies: stop reading it
         self.write_paused = True
         self.transport.pause_reading()
 
@@ -344,8 +378,13 @@ class Connection(asyncio.Protocol):
         while len(buf) >= 7 and not self.write_paused and not self.rate_paused:
             tid, pid, length = struct.unpack_from(">HHH", buf)
             if pid != 0 or not 2 <= length <= 254:
-                log.warning("%s: malformed MBAP header (protocol id %d, length %d): %s…; closing", self.peer,
-                            pid, length, bytes(buf[:12]).hex(" "))
+                log.warning(
+                    "%s: malformed MBAP header (protocol id %d, length %d): %s…; closing",
+                    self.peer,
+                    pid,
+                    length,
+                    bytes(buf[:12]).hex(" "),
+                )
                 self._flush(out)
                 self.close()
                 return
@@ -354,8 +393,8 @@ class Connection(asyncio.Protocol):
             if not self._take_token():
                 break
             unit = buf[6]
-            pdu = bytes(buf[7:6 + length])
-            del buf[:6 + length]
+            pdu = bytes(buf[7 : 6 + length])
+            del buf[: 6 + length]
             now = time.monotonic()
             if not self.requests:
                 self.first_request = now
@@ -391,14 +430,14 @@ class Connection(asyncio.Protocol):
 def serve(cfg: ServerConfig, shm_name: str, parent_pid: int) -> None:
     """Entry point of the server process."""
     from multiprocessing import resource_tracker
-    logging.basicConfig(level=os.environ.get("ST_MODBUS_LOG", "WARNING"),
-                        format="st modbus: %(levelname)s %(message)s")
+
+    logging.basicConfig(level=os.environ.get("ST_MODBUS_LOG", "WARNING"), format="st modbus: %(levelname)s %(message)s")
     ex = Exchange(shm_name)
     try:
-        resource_tracker.unregister(ex.shm._name, "shared_memory")   # the PLC owns and unlinks it
+        resource_tracker.unregister(ex.shm._name, "shared_memory")  # the PLC owns and unlinks it
     except Exception:  # noqa: BLE001 - best effort
         pass
-    signal.signal(signal.SIGINT, signal.SIG_IGN)        # Ctrl-C goes to the PLC, which stops us
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C goes to the PLC, which stops us
     try:
         asyncio.run(_main(cfg, ex, parent_pid))
     finally:
@@ -411,8 +450,7 @@ async def _main(cfg: ServerConfig, ex: Exchange, parent_pid: int) -> None:
     stop = loop.create_future()
     loop.add_signal_handler(signal.SIGTERM, lambda: stop.done() or stop.set_result(None))
     try:
-        srv = await loop.create_server(lambda: Connection(server), cfg.host, cfg.port, reuse_address=True,
-                                       backlog=1024)
+        srv = await loop.create_server(lambda: Connection(server), cfg.host, cfg.port, reuse_address=True, backlog=1024)
     except OSError as e:
         log.error("cannot listen on %s:%s: %s", cfg.host, cfg.port, e.strerror)
         ex.set_state(2)
@@ -425,6 +463,7 @@ async def _main(cfg: ServerConfig, ex: Exchange, parent_pid: int) -> None:
         while os.getppid() == parent_pid:
             await asyncio.sleep(0.5)
         stop.done() or stop.set_result(None)
+
     watch = loop.create_task(orphan_watch())
     await stop
     reaper.cancel()
@@ -433,4 +472,3 @@ async def _main(cfg: ServerConfig, ex: Exchange, parent_pid: int) -> None:
     srv.close()
     for c in list(server.conns):
         c.close()
-

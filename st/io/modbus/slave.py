@@ -6,6 +6,7 @@ writes the server queued are applied (in arrival order, so the last writer wins)
 blocks: publishing is a few memory stores per cell inside a seqlock, taking writes is one
 comparison when there are none.
 """
+
 from __future__ import annotations
 
 import os
@@ -21,8 +22,15 @@ from .addressmap import OPENPLC_LIMIT, TABLES, Encoding, effective_map, load_map
 from .exchange import COILS, DISCRETE, HOLDING, INPUT, Exchange
 from .server import ServerConfig
 
-DEFAULT_IDENTITY = {0: "st", 1: "st-plc", 2: "0.1", 3: "https://example.invalid/st", 4: "st soft PLC",
-                    5: "st Modbus TCP slave", 6: ""}
+DEFAULT_IDENTITY = {
+    0: "st",
+    1: "st-plc",
+    2: "0.1",
+    3: "https://example.invalid/st",
+    4: "st soft PLC",
+    5: "st Modbus TCP slave",
+    6: "",
+}
 
 
 def parse_endpoint(text: str, default_host: str = "127.0.0.1"):
@@ -75,19 +83,37 @@ class ModbusSlave(IODriverBase):
     unit_ids: the unit ids answered (None = all; others get exception 0x0B); log_path: append the
     server's log there instead of to stderr."""
 
-    def __init__(self, plc, host: str = "127.0.0.1", port: int = 5020, map_file: str | None = None,
-                 read_only: bool = False, writable=None, max_connections: int = 16, idle_timeout: float = 60.0,
-                 max_rate: float = 1000.0, unit_ids=None, identity: dict | None = None,
-                 log_path: str | None = None):
+    def __init__(
+        self,
+        plc,
+        host: str = "127.0.0.1",
+        port: int = 5020,
+        map_file: str | None = None,
+        read_only: bool = False,
+        writable=None,
+        max_connections: int = 16,
+        idle_timeout: float = 60.0,
+        max_rate: float = 1000.0,
+        unit_ids=None,
+        identity: dict | None = None,
+        log_path: str | None = None,
+    ):
         self.plc = plc
         self.log_path = log_path
         self.entries = load_map(map_file, plc) if map_file else []
         if isinstance(writable, str):
             writable = parse_ranges(writable)
-        self.cfg = ServerConfig(host, port, writable=writable, read_only=read_only,
-                                max_connections=max_connections, idle_timeout=idle_timeout, max_rate=max_rate,
-                                unit_ids=set(unit_ids) if unit_ids is not None else None,
-                                identity={**DEFAULT_IDENTITY, **(identity or {})})
+        self.cfg = ServerConfig(
+            host,
+            port,
+            writable=writable,
+            read_only=read_only,
+            max_connections=max_connections,
+            idle_timeout=idle_timeout,
+            max_rate=max_rate,
+            unit_ids=set(unit_ids) if unit_ids is not None else None,
+            identity={**DEFAULT_IDENTITY, **(identity or {})},
+        )
         self.ex: Exchange | None = None
         self.proc = None
         self.writes_applied = 0
@@ -105,8 +131,9 @@ class ModbusSlave(IODriverBase):
         # multiprocessing's spawn: it would re-run the user's main module)
         log = open(self.log_path, "ab") if self.log_path else None
         try:
-            self.proc = subprocess.Popen([sys.executable, "-m", "st.io.modbus"], stdin=subprocess.PIPE,
-                                         stderr=log, start_new_session=True)
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "st.io.modbus"], stdin=subprocess.PIPE, stderr=log, start_new_session=True
+            )
         finally:
             if log is not None:
                 log.close()
@@ -117,8 +144,10 @@ class ModbusSlave(IODriverBase):
             time.sleep(0.01)
         if self.ex.state != 1:
             self.stop()
-            raise OSError(f"the Modbus server could not listen on {self.cfg.host}:{self.cfg.port}"
-                          + (" (ports below 1024 need root)" if 0 < self.cfg.port < 1024 else " (address in use?)"))
+            raise OSError(
+                f"the Modbus server could not listen on {self.cfg.host}:{self.cfg.port}"
+                + (" (ports below 1024 need root)" if 0 < self.cfg.port < 1024 else " (address in use?)")
+            )
         self.plc.io.append(self)
         self.after_job()
         return self
@@ -156,7 +185,7 @@ class ModbusSlave(IODriverBase):
     def _set_ranges(self) -> None:
         owned: dict = {}
         valid: dict = {t: [(0, OPENPLC_LIMIT[t])] for t in (COILS, DISCRETE, INPUT, HOLDING)}
-        for (table, address) in self._route:
+        for table, address in self._route:
             owned.setdefault(table, []).append((address, address + 1))
         for e in self.entries:
             valid[e.table].append((e.address, e.end))
@@ -252,7 +281,7 @@ class ModbusSlave(IODriverBase):
         try:
             v = from_python(value, ref.type, ref.path)
         except (ValueError, TypeError, OverflowError):
-            return                                   # e.g. a REAL pattern that is NaN for an integer
+            return  # e.g. a REAL pattern that is NaN for an integer
         ref.set(v)
         b = ref.binding
         if b is not None:

@@ -3,6 +3,7 @@
 The blocks are declared in `plcopen.st` and run natively (`fbs.py`); each axis (`axis.py`) keeps
 its state, command ledger and buffer and is advanced by the kernel after its task's job.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -75,6 +76,7 @@ def load_axes(path: str) -> dict:
     """[[axis]] tables of a TOML file → {AxisNo: AxisConfig}; errors name the file and the entry."""
     import dataclasses
     import tomllib
+
     try:
         with open(path, "rb") as f:
             doc = tomllib.load(f)
@@ -91,8 +93,9 @@ def load_axes(path: str) -> dict:
             raise ValueError(f"{path}: axis entry {i}: needs no = <AxisNo>, a positive integer")
         unknown = set(item) - fields
         if unknown:
-            raise ValueError(f"{path}: axis {no}: unknown setting '{sorted(unknown)[0]}' "
-                             f"(known: {', '.join(sorted(fields))})")
+            raise ValueError(
+                f"{path}: axis {no}: unknown setting '{sorted(unknown)[0]}' (known: {', '.join(sorted(fields))})"
+            )
         out[no] = AxisConfig(**{"name": f"axis{no}", **item})
     return out
 

@@ -9,6 +9,7 @@ duration T started in cycle n therefore reports Done in the FB call of cycle n +
 
 Positions are user units, times seconds. A virtual axis's actual values follow its set values.
 """
+
 from __future__ import annotations
 
 import math
@@ -19,7 +20,14 @@ from .errors import E
 from .profiles import Profile, RuckigProfile, position_profile, velocity_profile
 
 DISABLED, STANDSTILL, HOMING, DISCRETE, CONTINUOUS, STOPPING, ERRORSTOP = (
-    "Disabled", "Standstill", "Homing", "DiscreteMotion", "ContinuousMotion", "Stopping", "ErrorStop")
+    "Disabled",
+    "Standstill",
+    "Homing",
+    "DiscreteMotion",
+    "ContinuousMotion",
+    "Stopping",
+    "ErrorStop",
+)
 
 ABORTING, BUFFERED, BLEND_LOW, BLEND_PREVIOUS, BLEND_NEXT, BLEND_HIGH = range(6)
 POSITIVE, SHORTEST, NEGATIVE, CURRENT = range(4)
@@ -30,11 +38,12 @@ QUEUED, ACTIVE, DONE, ABORTED, ERROR = "queued", "active", "done", "aborted", "e
 class Drive(Protocol):
     """A drive that moves an axis (EtherCAT's DriveLink): claimed for its AxisNo with
     MotionRegistry.add_drive, attached as `Axis.drive`. An axis without one is virtual."""
+
     axis_no: int
     axis: Axis | None
 
     @property
-    def enabled(self) -> bool: ...             # the power stage is on (CiA 402 Operation Enabled)
+    def enabled(self) -> bool: ...  # the power stage is on (CiA 402 Operation Enabled)
 
     def attach(self, ax: Axis) -> None: ...
 
@@ -46,19 +55,20 @@ class Drive(Protocol):
 @dataclass
 class AxisConfig:
     """What a project file (or the defaults) says about one axis."""
+
     name: str = ""
-    units_per_rev: float = 360.0        # user units per motor revolution (drives)
-    increments_per_unit: float = 0.0    # drive increments per user unit (0: encoder increments / units_per_rev)
-    modulo: float = 0.0                 # period of a modulo axis (0: linear)
+    units_per_rev: float = 360.0  # user units per motor revolution (drives)
+    increments_per_unit: float = 0.0  # drive increments per user unit (0: encoder increments / units_per_rev)
+    modulo: float = 0.0  # period of a modulo axis (0: linear)
     max_velocity: float = math.inf
     max_acceleration: float = math.inf
     max_deceleration: float = math.inf
-    stop_deceleration: float = 0.0      # the ramp used on entering ErrorStop (0: max_deceleration or 10 × the last)
+    stop_deceleration: float = 0.0  # the ramp used on entering ErrorStop (0: max_deceleration or 10 × the last)
     sw_limit_min: float = -math.inf
     sw_limit_max: float = math.inf
     following_error_window: float = math.inf
-    enable_timeout: float = 2.0         # s
-    enable_delay: float = 0.0           # simulated drive: seconds until the power stage is on (inf: never)
+    enable_timeout: float = 2.0  # s
+    enable_delay: float = 0.0  # simulated drive: seconds until the power stage is on (inf: never)
     buffer_size: int = 8
     # MC_Home: "current" references at the current position; "switch" moves at home_velocity in
     # home_direction (+1/-1) until a reference switch changes, latches there, brakes and shifts
@@ -72,25 +82,25 @@ class AxisConfig:
     home_direction: int = -1
     home_velocity: float = 10.0
     home_acceleration: float = 100.0
-    home_search_distance: float = math.inf   # no edge within this distance: ErrorStop HOMING_FAILED
+    home_search_distance: float = math.inf  # no edge within this distance: ErrorStop HOMING_FAILED
 
 
 @dataclass(eq=False)
 class Command:
     id: int
-    kind: str                           # move_abs, move_rel, move_vel, halt, stop, home, set_pos
+    kind: str  # move_abs, move_rel, move_vel, halt, stop, home, set_pos
     params: dict
     buffer_mode: int = ABORTING
     status: str = QUEUED
     error_id: int = 0
     in_velocity: bool = False
     profile: object = None
-    steps: int = 0                      # kernel cycles run
-    total_steps: int = 0                # cycles the profile needs
+    steps: int = 0  # kernel cycles run
+    total_steps: int = 0  # cycles the profile needs
     target: float = 0.0
     end_v: float = 0.0
-    execute_low: bool = False           # MC_Stop: its Execute has been seen FALSE
-    shown: bool = False                 # the terminal status was reported while Execute was TRUE
+    execute_low: bool = False  # MC_Stop: its Execute has been seen FALSE
+    shown: bool = False  # the terminal status was reported while Execute was TRUE
     continuous_update: bool = False
 
     @property
@@ -108,18 +118,18 @@ class Axis:
         self.active: Command | None = None
         self.queue: list = []
         self.stop_cmd: Command | None = None
-        self.power_owner = 0            # id of the MC_Power instance that owns the axis
-        self.power_on = False           # MC_Power.Status
+        self.power_owner = 0  # id of the MC_Power instance that owns the axis
+        self.power_on = False  # MC_Power.Status
         self.power_request = False
-        self.power_wait = 0.0           # seconds waited for the power stage
-        self.axis_error = 0             # ErrorID of the pending axis error (MC_ReadAxisError)
+        self.power_wait = 0.0  # seconds waited for the power stage
+        self.axis_error = 0  # ErrorID of the pending axis error (MC_ReadAxisError)
         self.last_dir = 1.0
-        self.cycle = 0.0                # s, set by the task that calls the axis's FBs
+        self.cycle = 0.0  # s, set by the task that calls the axis's FBs
         self.task = None
         self._next_id = 1
-        self.commands: dict = {}        # id → Command, for the FBs' ledgers
-        self.drive: Drive | None = None      # an attached drive (EtherCAT); None: virtual axis
-        self.home_signal = None         # callable → bool: the reference switch (config home_switch)
+        self.commands: dict = {}  # id → Command, for the FBs' ledgers
+        self.drive: Drive | None = None  # an attached drive (EtherCAT); None: virtual axis
+        self.home_signal = None  # callable → bool: the reference switch (config home_switch)
         self.axis_no = 0
 
     # ------------------------------------------------------------------ helpers
@@ -203,8 +213,9 @@ class Axis:
         self.stop_cmd = None
         self.axis_error = code
         self.state = ERRORSTOP
-        dec = self.cfg.stop_deceleration or (self.cfg.max_deceleration if math.isfinite(self.cfg.max_deceleration)
-                                             else 0.0)
+        dec = self.cfg.stop_deceleration or (
+            self.cfg.max_deceleration if math.isfinite(self.cfg.max_deceleration) else 0.0
+        )
         self._ramp = velocity_profile(self.set_pos, self.set_vel, 0.0, 1.0, dec) if dec and self.set_vel else None
         self._ramp_t = 0.0
         if not self._ramp:
@@ -216,7 +227,7 @@ class Axis:
         self.axis_error = 0
         self._ramp = None
         self.set_vel = self.set_acc = 0.0
-        if self.drive is not None:                # fault reset in the drive; power returns through MC_Power
+        if self.drive is not None:  # fault reset in the drive; power returns through MC_Power
             self.drive.fault_reset()
             if not self.drive.enabled:
                 self.power_on = False
@@ -254,8 +265,12 @@ class Axis:
             self.act_pos += delta
             cmd.status = DONE
             return cmd
-        blocked = {DISABLED: E.AXIS_DISABLED, ERRORSTOP: E.AXIS_ERRORSTOP, STOPPING: E.AXIS_STOPPING,
-                   HOMING: E.AXIS_HOMING}.get(st)
+        blocked = {
+            DISABLED: E.AXIS_DISABLED,
+            ERRORSTOP: E.AXIS_ERRORSTOP,
+            STOPPING: E.AXIS_STOPPING,
+            HOMING: E.AXIS_HOMING,
+        }.get(st)
         if blocked:
             return self._fail(cmd, blocked)
         if cmd.kind == "home":
@@ -335,16 +350,19 @@ class Axis:
             delta = fwd
         elif d == NEGATIVE:
             delta = back
-        else:                                   # shortest; exactly half a period goes positive
+        else:  # shortest; exactly half a period goes positive
             delta = fwd if fwd <= period / 2 else back
         return start + delta
 
     def _limits(self, cmd: Command):
         p = cmd.params
         c = self.cfg
-        return (min(abs(p.get("vel", 0.0)) or c.max_velocity, c.max_velocity),
-                min(p.get("acc", math.inf), c.max_acceleration), min(p.get("dec", math.inf), c.max_deceleration),
-                p.get("jerk", 0.0))
+        return (
+            min(abs(p.get("vel", 0.0)) or c.max_velocity, c.max_velocity),
+            min(p.get("acc", math.inf), c.max_acceleration),
+            min(p.get("dec", math.inf), c.max_deceleration),
+            p.get("jerk", 0.0),
+        )
 
     def _activate(self, cmd: Command, end_v: float = 0.0) -> None:
         """Plan `cmd` from the current set state and make it the active command."""
@@ -353,7 +371,7 @@ class Axis:
         vmax, acc, dec, jerk = self._limits(cmd)
         k = cmd.kind
         if k in ("move_abs", "move_rel"):
-            if k == "move_rel":                 # measured from the set position where the command starts
+            if k == "move_rel":  # measured from the set position where the command starts
                 cmd.params.setdefault("_start", self.set_pos)
                 cmd.target = cmd.params["_start"] + cmd.params["dist"]
             else:
@@ -387,8 +405,17 @@ class Axis:
 
     def _plan_position(self, target, vmax, acc, dec, jerk, end_v):
         if jerk > 0:
-            return RuckigProfile(self.set_pos, self.set_vel, self.set_acc, target=target, vmax=vmax, acc=acc,
-                                 dec=dec, jerk=jerk, end_v=end_v)
+            return RuckigProfile(
+                self.set_pos,
+                self.set_vel,
+                self.set_acc,
+                target=target,
+                vmax=vmax,
+                acc=acc,
+                dec=dec,
+                jerk=jerk,
+                end_v=end_v,
+            )
         return position_profile(self.set_pos, self.set_vel, target, vmax, acc, dec, end_v)
 
     def _plan_velocity(self, v, acc, dec, jerk):
@@ -406,12 +433,13 @@ class Axis:
     def _start_homing_search(self, cmd: Command) -> None:
         c = self.cfg
         direction = 1.0 if c.home_direction > 0 else -1.0
-        want = True                               # look for the switch becoming active
-        if self._switch():                        # already on it: leave it the other way
+        want = True  # look for the switch becoming active
+        if self._switch():  # already on it: leave it the other way
             direction, want = -direction, False
         cmd.params.update(_phase="search", _want=want, _from=self.act_pos)
-        cmd.profile = velocity_profile(self.set_pos, self.set_vel, direction * abs(c.home_velocity),
-                                       c.home_acceleration, c.home_acceleration)
+        cmd.profile = velocity_profile(
+            self.set_pos, self.set_vel, direction * abs(c.home_velocity), c.home_acceleration, c.home_acceleration
+        )
         cmd.steps = 0
 
     def _step_homing(self, cmd: Command) -> None:
@@ -424,13 +452,16 @@ class Axis:
         if p["_phase"] == "search":
             if self._switch() == p["_want"]:
                 x = self.cfg.home_switch_position
-                latch = x if (self.home_signal is None and min(prev_act, self.act_pos) <= x <= max(prev_act,
-                                                                                                    self.act_pos)) \
+                latch = (
+                    x
+                    if (self.home_signal is None and min(prev_act, self.act_pos) <= x <= max(prev_act, self.act_pos))
                     else self.act_pos
+                )
                 p["_shift"] = p["pos"] - latch
                 p["_phase"] = "brake"
-                cmd.profile = velocity_profile(self.set_pos, self.set_vel, 0.0, self.cfg.home_acceleration,
-                                               self.cfg.home_acceleration)
+                cmd.profile = velocity_profile(
+                    self.set_pos, self.set_vel, 0.0, self.cfg.home_acceleration, self.cfg.home_acceleration
+                )
                 cmd.steps = 0
             elif abs(self.act_pos - p["_from"]) > self.cfg.home_search_distance:
                 self.error_stop(E.HOMING_FAILED)
@@ -457,7 +488,7 @@ class Axis:
         d1 = prev.target - (prev.profile.p0 if prev.profile else self.set_pos)
         d2 = self._target(nxt, start) - start
         if d1 == 0 or d2 == 0 or (d1 > 0) != (d2 > 0):
-            return 0.0                          # opposite directions: degrade to Buffered
+            return 0.0  # opposite directions: degrade to Buffered
         v1, v2 = abs(prev.params["vel"]), abs(nxt.params["vel"])
         v = {BLEND_LOW: min(v1, v2), BLEND_PREVIOUS: v1, BLEND_NEXT: v2, BLEND_HIGH: max(v1, v2)}[nxt.buffer_mode]
         return math.copysign(v, d1)
@@ -501,9 +532,9 @@ class Axis:
             cmd.steps += 1
             t = cmd.steps * dt
             finished = cmd.steps >= cmd.total_steps
-            p, v, a = cmd.profile.sample(t)       # past its end a velocity profile holds the speed
+            p, v, a = cmd.profile.sample(t)  # past its end a velocity profile holds the speed
             if finished and cmd.kind in ("move_abs", "move_rel"):
-                p = cmd.target                    # exactly, without the closed form's rounding
+                p = cmd.target  # exactly, without the closed form's rounding
             elif finished and cmd.kind != "move_vel":
                 v = a = 0.0
             self.set_pos, self.set_vel, self.set_acc = p, v, a
@@ -530,7 +561,7 @@ class Axis:
                 self.stop_cmd = None
                 self.state = STANDSTILL
             return
-        if cmd.kind == "home":                    # referencing at the current position
+        if cmd.kind == "home":  # referencing at the current position
             self.set_pos = self.act_pos = cmd.params["pos"]
         self.active = None
         if self.queue:
@@ -542,7 +573,7 @@ class Axis:
     def _next(self) -> None:
         prev = self.active
         if prev is not None and prev.status == ACTIVE:
-            prev.status = ABORTED                 # MoveVelocity (no Done output) hands over at InVelocity
+            prev.status = ABORTED  # MoveVelocity (no Done output) hands over at InVelocity
             prev.in_velocity = False
         nxt = self.queue.pop(0)
         self.active = None
@@ -560,9 +591,9 @@ class Axis:
             self.error_stop(E.SW_LIMIT_REACHED)
 
     def _follow(self) -> None:
-        if self.drive is None:                    # a virtual axis: the actual value follows the set value
+        if self.drive is None:  # a virtual axis: the actual value follows the set value
             self.act_pos, self.act_vel = self.set_pos, self.set_vel
-        elif not self.power_on:                   # a drive without power: the set value follows the actual
+        elif not self.power_on:  # a drive without power: the set value follows the actual
             self.set_pos, self.set_vel, self.set_acc = self.act_pos, 0.0, 0.0
             self._ramp = None
         elif abs(self.set_pos - self.act_pos) > self.cfg.following_error_window and self.state != ERRORSTOP:

@@ -5,6 +5,7 @@ interfaces); when a PLC's namespace is built, `install(ns)` replaces their `_bod
 functions below and adds a `MotionRegistry`, which the PLC runs as an I/O driver: after each
 task's job it advances the axes that task commands (the kernel phase).
 """
+
 from __future__ import annotations
 
 from ...runtime.iodriver import IODriver, IODriverBase
@@ -37,12 +38,12 @@ class MotionRegistry(IODriverBase):
     per_namespace = True
 
     def __init__(self):
-        self.axes: dict = {}            # handle → Axis
-        self.configs: dict = {}         # AxisNo → AxisConfig
-        self.signals: dict = {}         # AxisNo → callable: the reference switch of MC_Home
-        self.drives: dict = {}          # AxisNo → the Drive (EtherCAT) that claims the axis
+        self.axes: dict = {}  # handle → Axis
+        self.configs: dict = {}  # AxisNo → AxisConfig
+        self.signals: dict = {}  # AxisNo → callable: the reference switch of MC_Home
+        self.drives: dict = {}  # AxisNo → the Drive (EtherCAT) that claims the axis
         self.task = None
-        self.traces: list = []          # [AxisTrace]
+        self.traces: list = []  # [AxisTrace]
 
     def axis(self, ref) -> Axis:
         """The Axis behind an AXIS_REF value (created on first use)."""
@@ -76,11 +77,11 @@ class MotionRegistry(IODriverBase):
 
     def adopt(self, old: IODriver) -> None:
         """Online change: the new program's AXIS_REFs carry their handles over, so keep the axes."""
-        assert isinstance(old, MotionRegistry)          # the PLC hands over a driver of the same type
+        assert isinstance(old, MotionRegistry)  # the PLC hands over a driver of the same type
         self.axes, self.configs, self.traces, self.signals = old.axes, old.configs, old.traces, old.signals
         self.drives = old.drives
         for ax in self.axes.values():
-            ax.task = None                  # the new program's tasks claim their axes on the next call
+            ax.task = None  # the new program's tasks claim their axes on the next call
 
     # the I/O driver interface
     def before_job(self, task: Task | None = None) -> None:
@@ -99,6 +100,7 @@ class MotionRegistry(IODriverBase):
 
 
 # ---------------------------------------------------------------------------- output helpers
+
 
 def _execute_outputs(fb, cmd, execute: bool, has_active=True, has_aborted=True) -> None:
     """Busy/Active/Done/CommandAborted/Error/ErrorID from the command's ledger entry (PLCopen §2.4.1):
@@ -120,11 +122,11 @@ def _execute_outputs(fb, cmd, execute: bool, has_active=True, has_aborted=True) 
         if cmd.terminal:
             if execute:
                 cmd.shown = True
-            elif cmd.shown:                       # already reported while Execute was TRUE: cleared
+            elif cmd.shown:  # already reported while Execute was TRUE: cleared
                 busy = active = done = aborted = error = False
                 code = 0
                 fb.CmdId = 0
-            else:                                 # Execute fell before the end: this one call shows it
+            else:  # Execute fell before the end: this one call shows it
                 fb.CmdId = 0
     fb.Busy, fb.Error, fb.ErrorID = busy, error, code
     names = type(fb).__slots__
@@ -174,6 +176,7 @@ def _motion_body(kind: str, params):
                 self.Busy = self.Active = True
         if cmd is not None and cmd.terminal and not self.Execute and self.CmdId == 0:
             ax.forget(cmd.id)
+
     return body
 
 
@@ -191,18 +194,34 @@ def _continuous_update(ax: Axis, cmd, new: dict) -> None:
 
 
 def _p_abs(fb):
-    return {"pos": float(fb.Position), "vel": float(fb.Velocity), "acc": float(fb.Acceleration),
-            "dec": float(fb.Deceleration), "jerk": float(fb.Jerk), "dir": int(fb.Direction)}
+    return {
+        "pos": float(fb.Position),
+        "vel": float(fb.Velocity),
+        "acc": float(fb.Acceleration),
+        "dec": float(fb.Deceleration),
+        "jerk": float(fb.Jerk),
+        "dir": int(fb.Direction),
+    }
 
 
 def _p_rel(fb):
-    return {"dist": float(fb.Distance), "vel": float(fb.Velocity), "acc": float(fb.Acceleration),
-            "dec": float(fb.Deceleration), "jerk": float(fb.Jerk)}
+    return {
+        "dist": float(fb.Distance),
+        "vel": float(fb.Velocity),
+        "acc": float(fb.Acceleration),
+        "dec": float(fb.Deceleration),
+        "jerk": float(fb.Jerk),
+    }
 
 
 def _p_vel(fb):
-    return {"vel": float(fb.Velocity), "acc": float(fb.Acceleration), "dec": float(fb.Deceleration),
-            "jerk": float(fb.Jerk), "dir": int(fb.Direction)}
+    return {
+        "vel": float(fb.Velocity),
+        "acc": float(fb.Acceleration),
+        "dec": float(fb.Deceleration),
+        "jerk": float(fb.Jerk),
+        "dir": int(fb.Direction),
+    }
 
 
 def _p_stop(fb):

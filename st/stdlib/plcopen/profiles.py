@@ -5,6 +5,7 @@ falling, whatever the sign of the velocity. A profile is a list of constant-acce
 (trapezoid) or a ruckig trajectory; both answer `sample(t) -> (position, velocity, acceleration)`
 and have a `duration`. Plans always start from the axis's *set* state, never from the measured one.
 """
+
 from __future__ import annotations
 
 import math
@@ -15,7 +16,7 @@ EPS = 1e-12
 
 @dataclass
 class Segment:
-    t0: float           # start time within the profile
+    t0: float  # start time within the profile
     p0: float
     v0: float
     a: float
@@ -29,10 +30,11 @@ class Segment:
 @dataclass
 class Profile:
     """Constant-acceleration pieces, exact in closed form."""
+
     p0: float
     v0: float
     segments: list = field(default_factory=list)
-    end_velocity: float = 0.0       # what the plan actually reaches (a blending hand-over may be lower)
+    end_velocity: float = 0.0  # what the plan actually reaches (a blending hand-over may be lower)
 
     @property
     def duration(self) -> float:
@@ -82,7 +84,7 @@ def _speed_change(prof: Profile, target_v: float, acc: float, dec: float) -> Non
     acceleration (magnitude rising) and deceleration (magnitude falling) limits."""
     _, v, _ = prof.end
     if v != 0 and (target_v == 0 or (v > 0) != (target_v > 0)):
-        prof.add(-math.copysign(dec, v), abs(v) / dec)          # through zero first, with Dec
+        prof.add(-math.copysign(dec, v), abs(v) / dec)  # through zero first, with Dec
         v = 0.0
     if abs(target_v) > abs(v):
         prof.add(math.copysign(acc, target_v), (abs(target_v) - abs(v)) / acc)
@@ -98,8 +100,9 @@ def velocity_profile(p0: float, v0: float, target_v: float, acc: float, dec: flo
     return prof
 
 
-def position_profile(p0: float, v0: float, target: float, vmax: float, acc: float, dec: float,
-                     end_v: float = 0.0) -> Profile:
+def position_profile(
+    p0: float, v0: float, target: float, vmax: float, acc: float, dec: float, end_v: float = 0.0
+) -> Profile:
     """The time-optimal trapezoid from (p0, v0) to `target`, cruising at most at vmax, arriving with
     speed |end_v| in the direction of travel (0 for a stop at the target). A start faster than vmax
     first slows to vmax; a start moving away from the target, or too fast to stop in time, brakes to
@@ -110,7 +113,7 @@ def position_profile(p0: float, v0: float, target: float, vmax: float, acc: floa
 
 
 def _plan_position(prof: Profile, target: float, vmax: float, acc: float, dec: float, ue: float) -> None:
-    for _ in range(4):                   # at most: brake, reverse, and the final trapezoid
+    for _ in range(4):  # at most: brake, reverse, and the final trapezoid
         p, v, _ = prof.end
         d = target - p
         if abs(d) <= EPS and abs(v) <= EPS:
@@ -118,10 +121,10 @@ def _plan_position(prof: Profile, target: float, vmax: float, acc: float, dec: f
             return
         s = 1.0 if d > 0 or (d == 0 and v > 0) else -1.0
         L, u0 = abs(d), s * v
-        if u0 < 0:                       # moving away from the target: stop first
+        if u0 < 0:  # moving away from the target: stop first
             prof.add(s * dec, -u0 / dec)
             continue
-        if u0 > vmax + EPS:              # faster than allowed: slow down to vmax first
+        if u0 > vmax + EPS:  # faster than allowed: slow down to vmax first
             t = (u0 - vmax) / dec
             dist = (u0 + vmax) / 2 * t
             if dist <= L:
@@ -129,8 +132,8 @@ def _plan_position(prof: Profile, target: float, vmax: float, acc: float, dec: f
                 continue
         ue_eff = min(ue, vmax)
         brake = (u0 * u0 - ue_eff * ue_eff) / (2 * dec) if u0 > ue_eff else 0.0
-        if brake > L + 1e-12:            # too fast to reach the hand-over speed (or a stop) in time
-            if ue_eff > 0:               # blending: arrive faster than asked, braking all the way
+        if brake > L + 1e-12:  # too fast to reach the hand-over speed (or a stop) in time
+            if ue_eff > 0:  # blending: arrive faster than asked, braking all the way
                 arrive = math.sqrt(u0 * u0 - 2 * dec * L)
                 prof.add(-s * dec, (u0 - arrive) / dec)
                 prof.end_velocity = s * arrive
@@ -139,7 +142,7 @@ def _plan_position(prof: Profile, target: float, vmax: float, acc: float, dec: f
             prof.add(-s * dec, u0 / dec)  # stop beyond the target, then come back
             continue
         if u0 < ue_eff and (ue_eff * ue_eff - u0 * u0) / (2 * acc) >= L:
-            reach = math.sqrt(u0 * u0 + 2 * acc * L)     # accelerate all the way, arriving slower
+            reach = math.sqrt(u0 * u0 + 2 * acc * L)  # accelerate all the way, arriving slower
             prof.add(s * acc, (reach - u0) / acc)
             prof.end_velocity = s * reach
             _snap(prof, target)
@@ -175,9 +178,9 @@ class RuckigProfile:
     Deceleration keep their meaning: while the speed must fall (or reverse) the stage uses Dec on
     both sides, then the final stage uses Acc rising / Dec falling for a move in one direction."""
 
-    def __init__(self, p0, v0, a0, *, target=None, target_v=0.0, vmax=0.0, acc=1.0, dec=1.0, jerk=1.0,
-                 end_v=0.0):
+    def __init__(self, p0, v0, a0, *, target=None, target_v=0.0, vmax=0.0, acc=1.0, dec=1.0, jerk=1.0, end_v=0.0):
         from ruckig import ControlInterface, InputParameter, Ruckig, Trajectory
+
         self.stages = []
         p, v, a = p0, v0, a0
         t0 = 0.0
@@ -201,7 +204,7 @@ class RuckigProfile:
             t0 += traj.duration
             p, v, a = (x[0] for x in traj.at_time(traj.duration))
 
-        if target is None:                                   # velocity goal
+        if target is None:  # velocity goal
             if v != 0 and (target_v == 0 or (v > 0) != (target_v > 0) or abs(target_v) < abs(v)):
                 stop_at = 0.0 if (target_v == 0 or (v > 0) != (target_v > 0)) else target_v
                 plan("velocity", tv=stop_at, max_a=dec, min_a=-dec)
@@ -209,12 +212,18 @@ class RuckigProfile:
                 plan("velocity", tv=target_v, max_a=acc, min_a=-acc)
         else:
             d = target - p
-            if v * d < 0:                                     # moving away: brake to zero first
+            if v * d < 0:  # moving away: brake to zero first
                 plan("velocity", tv=0.0, max_a=dec, min_a=-dec)
                 d = target - p
             up = d >= 0
-            plan("position", tp=target, tv=math.copysign(abs(end_v), d) if end_v else 0.0,
-                 max_a=acc if up else dec, min_a=-dec if up else -acc, vlim=vmax)
+            plan(
+                "position",
+                tp=target,
+                tv=math.copysign(abs(end_v), d) if end_v else 0.0,
+                max_a=acc if up else dec,
+                min_a=-dec if up else -acc,
+                vlim=vmax,
+            )
         self.duration = t0
         self.end_velocity = v
         self.p0, self.v0 = p0, v0

@@ -4,6 +4,7 @@
 behind the AXIS_REF `main.axis1` and, when the run ends, writes `motion.csv` and draws
 position, velocity and acceleration over time (matplotlib).
 """
+
 from __future__ import annotations
 
 import csv
@@ -18,7 +19,7 @@ class AxisTrace:
         self.plc = plc
         self.path = path
         self._axis = None
-        self.rows: list = []            # (t, set_pos, set_vel, set_acc, act_pos, act_vel, state)
+        self.rows: list = []  # (t, set_pos, set_vel, set_acc, act_pos, act_vel, state)
 
     @property
     def axis(self):
@@ -33,8 +34,9 @@ class AxisTrace:
     def sample(self) -> None:
         ax = self._axis
         if len(self.rows) < MAX_SAMPLES:
-            self.rows.append((self.plc.time / 1e9, ax.set_pos, ax.set_vel, ax.set_acc, ax.act_pos, ax.act_vel,
-                              ax.state))
+            self.rows.append(
+                (self.plc.time / 1e9, ax.set_pos, ax.set_vel, ax.set_acc, ax.act_pos, ax.act_vel, ax.state)
+            )
 
 
 def start_traces(plc, paths: list) -> list:
@@ -56,8 +58,18 @@ def start_traces(plc, paths: list) -> list:
 def write_csv(traces: list, path: str) -> None:
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["time_s", "axis", "set_position", "set_velocity", "set_acceleration", "actual_position",
-                    "actual_velocity", "state"])
+        w.writerow(
+            [
+                "time_s",
+                "axis",
+                "set_position",
+                "set_velocity",
+                "set_acceleration",
+                "actual_position",
+                "actual_velocity",
+                "state",
+            ]
+        )
         for tr in traces:
             for row in tr.rows:
                 w.writerow([f"{row[0]:.6f}", tr.path, *(f"{x:.9g}" for x in row[1:6]), row[6]])
@@ -66,6 +78,7 @@ def write_csv(traces: list, path: str) -> None:
 def plot(traces: list, path: str, title: str | None = None) -> None:
     try:
         import matplotlib
+
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:

@@ -1,5 +1,6 @@
 """Bodies: every POU's statements, its methods' and property accessors', its actions and its SFC
 network, typed and checked; the call graph (`ctx.calls`) is filled on the way."""
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING

@@ -1,5 +1,6 @@
 """Pass 1, collect: every TYPE, POU, INTERFACE, CONFIGURATION, global block and TEST block of the
 units, by name, before anything is resolved (so declarations may come in any order)."""
+
 from __future__ import annotations
 
 from ....model import types as T
@@ -34,11 +35,19 @@ def _collect(ctx: CheckContext, u: A.Unit) -> None:
                 old = ctx.project.pous.get(key)
                 if old is not None and old.library and not ctx.lib_of(item.span) and old.pou_kind != item.kind:
                     # the library's own code uses it as what it is: another kind cannot stand in for it
-                    kinds = {"FUNCTION": "function", "FUNCTION_BLOCK": "function block", "PROGRAM": "program",
-                             "INTERFACE": "interface"}
-                    ctx.err("E011", item.span, f"'{item.name}' is a {kinds.get(old.pou_kind, old.pou_kind)} of the "
-                            f"standard library; a {item.kind} cannot replace it",
-                            f"rename it, or declare it as a {old.pou_kind} to replace the library's")
+                    kinds = {
+                        "FUNCTION": "function",
+                        "FUNCTION_BLOCK": "function block",
+                        "PROGRAM": "program",
+                        "INTERFACE": "interface",
+                    }
+                    ctx.err(
+                        "E011",
+                        item.span,
+                        f"'{item.name}' is a {kinds.get(old.pou_kind, old.pou_kind)} of the "
+                        f"standard library; a {item.kind} cannot replace it",
+                        f"rename it, or declare it as a {old.pou_kind} to replace the library's",
+                    )
                     continue
                 if old is not None and old.library and not ctx.lib_of(item.span):
                     # a user POU replaces a library POU of the same name
@@ -47,8 +56,9 @@ def _collect(ctx: CheckContext, u: A.Unit) -> None:
                     _dup(ctx, item.name, item.span)
                     continue
             pt = T.POUType(item.name, item.kind, decl=item, library=ctx.lib_of(item.span))
-            pt.pyname = {"FUNCTION": "_fn_", "FUNCTION_BLOCK": "_fb_", "PROGRAM": "_prg_",
-                         "INTERFACE": "_itf_"}[item.kind] + mangle(item.name)
+            pt.pyname = {"FUNCTION": "_fn_", "FUNCTION_BLOCK": "_fb_", "PROGRAM": "_prg_", "INTERFACE": "_itf_"}[
+                item.kind
+            ] + mangle(item.name)
             ctx.project.pous[key] = pt
             ctx.decl_span[key] = item.span
         elif isinstance(item, A.Configuration):

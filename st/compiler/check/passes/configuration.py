@@ -1,5 +1,6 @@
 """Configurations: tasks, program instances and their connections, VAR_CONFIG; without a
 CONFIGURATION, an implicit one runs every PROGRAM in one task."""
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING

@@ -1,5 +1,6 @@
 """Self-containment and recursion, once the bodies are checked (they fill the call graph): a type
 may not contain itself, and POUs may not call themselves (IEC forbids recursion)."""
+
 from __future__ import annotations
 
 from ....model import types as T
@@ -9,6 +10,7 @@ from ..context import CheckContext
 
 def check_cycles(ctx: CheckContext) -> None:
     """A type may not contain itself, and POUs may not call themselves (IEC forbids recursion)."""
+
     def members(t):
         t = T.unalias(t)
         if isinstance(t, T.ArrayType):

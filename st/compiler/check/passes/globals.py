@@ -1,5 +1,6 @@
 """Globals: every VAR_GLOBAL (of the files, the configurations and their resources) declared under
 its scope's name, their initial values checked once all are known, VAR_EXTERNALs bound to them."""
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
@@ -19,7 +20,7 @@ def declare_globals(sem: Semantics) -> None:
         for r in cfg.resources:
             for b in r.var_blocks:
                 ctx.global_blocks.append((cfg.name + "." + r.name, b))
-    declared: dict = {}           # scope + lower-case name → symbol (ST names ignore case)
+    declared: dict = {}  # scope + lower-case name → symbol (ST names ignore case)
     for prefix, block in ctx.global_blocks:
         table: dict = {}
         if block.kind == "VAR_CONFIG":
@@ -33,8 +34,11 @@ def declare_globals(sem: Semantics) -> None:
             uniq = sym.pyname.lower()
             other = declared.get(uniq)
             if other is not None:
-                ctx.err("E011", sym.span, f"global '{sym.name}' is declared twice "
-                        f"(first at {other.span.file}:{other.span.line})")
+                ctx.err(
+                    "E011",
+                    sym.span,
+                    f"global '{sym.name}' is declared twice (first at {other.span.file}:{other.span.line})",
+                )
                 continue
             declared[uniq] = sym
             ctx.project.globals[sym.pyname] = sym
@@ -60,5 +64,8 @@ def declare_globals(sem: Semantics) -> None:
                 sym.global_ref = g
                 sym.pyname = g.pyname
                 if not same_type(g.type, sym.type):
-                    ctx.err("E013", sym.span, f"VAR_EXTERNAL '{sym.name}' is declared {sym.type} "
-                            f"but the VAR_GLOBAL is {g.type}")
+                    ctx.err(
+                        "E013",
+                        sym.span,
+                        f"VAR_EXTERNAL '{sym.name}' is declared {sym.type} but the VAR_GLOBAL is {g.type}",
+                    )

@@ -1,6 +1,7 @@
 """Object-oriented rules, checked once every POU interface is resolved: overrides keep the
 signature and the access of what they override, FINAL is not overridden, ABSTRACT methods and
 properties are implemented, interfaces are implemented with their signatures."""
+
 from __future__ import annotations
 
 from ....model import types as T
@@ -18,8 +19,9 @@ def check_oop_rules(ctx: CheckContext) -> None:
             for k, bp in base.properties.items():
                 mine = fb.properties[k]
                 if mine is not bp and mine.owner is fb and str(mine.type) != str(bp.type):
-                    ctx.err("E047", mine.span, f"property {mine.name} overrides {base.name}.{bp.name} with "
-                            f"another type")
+                    ctx.err(
+                        "E047", mine.span, f"property {mine.name} overrides {base.name}.{bp.name} with another type"
+                    )
             for k, bm in base.methods.items():
                 mine = fb.methods[k]
                 # each block's FB_init has its own inputs
@@ -42,15 +44,17 @@ def _check_abstract_and_override(ctx: CheckContext, fb: T.POUType, base) -> None
         mods = mt.decl.modifiers
         if mt.owner_fb is fb:
             if "OVERRIDE" in mods and (base is None or mt.name.lower() not in base.methods):
-                ctx.err("E043", mt.decl.span, f"method {mt.name} is marked OVERRIDE but {fb.name} inherits "
-                        f"no method of that name")
+                ctx.err(
+                    "E043",
+                    mt.decl.span,
+                    f"method {mt.name} is marked OVERRIDE but {fb.name} inherits no method of that name",
+                )
             if "ABSTRACT" in mods and not abstract_fb:
                 ctx.err("E043", mt.decl.span, f"ABSTRACT method {mt.name} in {fb.name}, which is not ABSTRACT")
             if "ABSTRACT" in mods and mt.decl.body:
                 ctx.err("E043", mt.decl.span, f"ABSTRACT method {mt.name} has a body")
         elif "ABSTRACT" in mods and not abstract_fb:
-            ctx.err("E043", d.span, f"{fb.name} does not implement the ABSTRACT method {mt.name} of "
-                    f"{mt.owner_fb.name}")
+            ctx.err("E043", d.span, f"{fb.name} does not implement the ABSTRACT method {mt.name} of {mt.owner_fb.name}")
     for ps in fb.properties.values():
         acc = ps.get or ps.set
         if acc is None or acc.decl is None or "ABSTRACT" not in acc.decl.modifiers:
@@ -61,8 +65,7 @@ def _check_abstract_and_override(ctx: CheckContext, fb: T.POUType, base) -> None
             if any(a is not None and a.decl.body for a in (ps.get, ps.set)):
                 ctx.err("E043", ps.span, f"ABSTRACT property {ps.name} has a body")
         elif not abstract_fb:
-            ctx.err("E043", d.span, f"{fb.name} does not implement the ABSTRACT property {ps.name} of "
-                    f"{ps.owner.name}")
+            ctx.err("E043", d.span, f"{fb.name} does not implement the ABSTRACT property {ps.name} of {ps.owner.name}")
 
 
 def _check_override(ctx: CheckContext, fb: T.POUType, mine: T.POUType, theirs: T.POUType) -> None:
@@ -73,11 +76,19 @@ def _check_override(ctx: CheckContext, fb: T.POUType, mine: T.POUType, theirs: T
         return
 
     if signature(mine) != signature(theirs):
-        ctx.err("E047", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a different "
-                f"signature (parameters and return type must be the same)")
+        ctx.err(
+            "E047",
+            m.span,
+            f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a different "
+            f"signature (parameters and return type must be the same)",
+        )
     if _access_rank(m.modifiers) > _access_rank(theirs.decl.modifiers):
-        ctx.err("E043", m.span, f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a narrower "
-                f"access (an override keeps the base's access or widens it)")
+        ctx.err(
+            "E043",
+            m.span,
+            f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a narrower "
+            f"access (an override keeps the base's access or widens it)",
+        )
 
 
 def _check_implements(ctx: CheckContext, fb: T.POUType) -> None:
@@ -87,21 +98,34 @@ def _check_implements(ctx: CheckContext, fb: T.POUType) -> None:
     for itf in fb.interfaces:
         for k, ip in itf.properties.items():
             mine = fb.properties.get(k)
-            if mine is None or str(mine.type) != str(ip.type) or (not ip.bare and (
-                    (ip.get and not mine.get) or (ip.set and not mine.set))):
+            if (
+                mine is None
+                or str(mine.type) != str(ip.type)
+                or (not ip.bare and ((ip.get and not mine.get) or (ip.set and not mine.set)))
+            ):
                 if mine is None and abstract:
                     continue
-                ctx.err("E047", d.span, f"{fb.name} does not implement property {ip.name} of interface "
-                        f"{itf.name} (same type, GET and SET as declared there)")
+                ctx.err(
+                    "E047",
+                    d.span,
+                    f"{fb.name} does not implement property {ip.name} of interface "
+                    f"{itf.name} (same type, GET and SET as declared there)",
+                )
         for k, im in itf.methods.items():
             mine = fb.methods.get(k)
             if mine is None:
                 if not abstract:
-                    ctx.err("E047", d.span, f"{fb.name} does not implement method {im.name} of interface "
-                            f"{itf.name}")
+                    ctx.err("E047", d.span, f"{fb.name} does not implement method {im.name} of interface {itf.name}")
             elif signature(mine) != signature(im):
-                ctx.err("E047", mine.decl.span, f"method {mine.name} of {fb.name} does not match "
-                        f"{itf.name}.{im.name} (parameters and return type must be the same)")
+                ctx.err(
+                    "E047",
+                    mine.decl.span,
+                    f"method {mine.name} of {fb.name} does not match "
+                    f"{itf.name}.{im.name} (parameters and return type must be the same)",
+                )
             elif {"PRIVATE", "PROTECTED"} & set(mine.decl.modifiers):
-                ctx.err("E043", mine.decl.span, f"method {mine.name} of {fb.name} implements "
-                        f"{itf.name}.{im.name}: it must be PUBLIC")
+                ctx.err(
+                    "E043",
+                    mine.decl.span,
+                    f"method {mine.name} of {fb.name} implements {itf.name}.{im.name}: it must be PUBLIC",
+                )

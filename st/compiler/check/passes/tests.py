@@ -1,5 +1,6 @@
 """TEST blocks: each TEST is checked as a pseudo-POU of kind TEST whose variables are its file's
 SETUP variables, its own and TEARDOWN's; its statements may use the test statements."""
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
@@ -27,8 +28,9 @@ def check_tests(sem: Semantics) -> None:
             if tb.kind != "TEST":
                 continue
             if tb.name in seen:
-                ctx.err("E011", tb.span, f"a TEST named '{tb.name}' already exists in this file "
-                        f"(line {seen[tb.name].line})")
+                ctx.err(
+                    "E011", tb.span, f"a TEST named '{tb.name}' already exists in this file (line {seen[tb.name].line})"
+                )
                 continue
             seen[tb.name] = tb.span
             _check_test(sem, tb, setup, teardown)
@@ -37,8 +39,7 @@ def check_tests(sem: Semantics) -> None:
 def _single_block(ctx: CheckContext, blocks: list[A.TestBlock], kind: str) -> A.TestBlock | None:
     found = [b for b in blocks if b.kind == kind]
     for extra in found[1:]:
-        ctx.err("E011", extra.span, f"a file may have one {kind} block (the first is at line "
-                f"{found[0].span.line})")
+        ctx.err("E011", extra.span, f"a file may have one {kind} block (the first is at line {found[0].span.line})")
     return found[0] if found else None
 
 

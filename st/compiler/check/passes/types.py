@@ -1,6 +1,7 @@
 """Types: every named TYPE resolved, then every POU's interface (variables, methods, properties,
 base and interfaces). Resolution is on demand (`Declarations`), so this pass only makes sure that
 everything is resolved once, whether or not something else used it first."""
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING

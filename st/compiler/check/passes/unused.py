@@ -1,4 +1,5 @@
 """The last pass: variables declared and never used (W002)."""
+
 from __future__ import annotations
 
 from ..context import CheckContext

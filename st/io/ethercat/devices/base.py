@@ -6,6 +6,7 @@ TxPDO image from it. Process data lives in the object dictionary: an RxPDO write
 mapped entries, `on_outputs()` reacts, `step()` advances the physics on the segment's clock and
 updates the entries a TxPDO read then packs.
 """
+
 from __future__ import annotations
 
 from ..od import ObjectDictionary
@@ -41,12 +42,19 @@ class Device:
         self.od.add(0x1000, 0, "Device type", "UDINT", 0, "ro")
         self.od.add(0x1008, 0, "Device name", "STRING", self.name, "ro", size=len(self.name))
         self.od.add(0x1018, 0, "Identity", "USINT", 4, "ro")
-        for sub, (n, v) in enumerate((("Vendor ID", self.vendor_id), ("Product code", self.product_code),
-                                      ("Revision", self.revision), ("Serial number", self.serial)), 1):
+        for sub, (n, v) in enumerate(
+            (
+                ("Vendor ID", self.vendor_id),
+                ("Product code", self.product_code),
+                ("Revision", self.revision),
+                ("Serial number", self.serial),
+            ),
+            1,
+        ):
             self.od.add(0x1018, sub, n, "UDINT", v, "ro")
         # SyncManager communication types: 0/1 mailbox out/in, 2/3 process data out/in
         self.od.add_record(0x1C00, "Sync manager type", [(f"SM{k}", "USINT", k + 1) for k in range(4)], "ro")
-        self.emergencies: list = []          # (error code, error register, 5 bytes) waiting for the mailbox
+        self.emergencies: list = []  # (error code, error register, 5 bytes) waiting for the mailbox
         self._rx = self._tx = None
 
     # ------------------------------------------------------------------ process data
@@ -84,7 +92,7 @@ class Device:
         if new in ("SAFEOP", "OP") and old in ("PREOP", "INIT"):
             self.remap()
             try:
-                _ = (self.rx_layout, self.tx_layout)          # both layouts must be computable
+                _ = (self.rx_layout, self.tx_layout)  # both layouts must be computable
             except (KeyError, TypeError):
                 return AL_INVALID_OUTPUT_CONFIG
         return AL_OK

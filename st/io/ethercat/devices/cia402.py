@@ -30,6 +30,7 @@ rated torque. 0x6064/0x607A are 32-bit and wrap; the drive follows target differ
 2**32, so long moves work. 0x6080 is in rev/min and 0x6085 in rev/min per second (the drive has
 no factor group).
 """
+
 from __future__ import annotations
 
 from enum import IntEnum
@@ -40,13 +41,12 @@ from .base import Device
 from .motor import CSP, CST, CSV, MotorModel, MotorParams
 
 RX_MAPPING, TX_MAPPING = 0x1600, 0x1A00
-PDO_CAPACITY = 12            # entries a mapping object can hold
+PDO_CAPACITY = 12  # entries a mapping object can hold
 PDO_MAX_BYTES = 64
 
 FAULT_FOLLOWING_ERROR = 0x8611
-FAULT_UNDERVOLTAGE = 0x3220      # DC link under-voltage (mains lost while the power stage was on)
-FAULT_GENERIC = 0x7500           # communication, the default of inject_fault
-
+FAULT_UNDERVOLTAGE = 0x3220  # DC link under-voltage (mains lost while the power stage was on)
+FAULT_GENERIC = 0x7500  # communication, the default of inject_fault
 
 
 class State(IntEnum):
@@ -62,9 +62,14 @@ class State(IntEnum):
 
 # statusword bits 0-3, 5, 6 per state (bit 5, quick stop, is 1 where the profile requires it)
 STATE_BITS = {
-    State.NOT_READY_TO_SWITCH_ON: 0x0000, State.SWITCH_ON_DISABLED: 0x0040,
-    State.READY_TO_SWITCH_ON: 0x0021, State.SWITCHED_ON: 0x0023, State.OPERATION_ENABLED: 0x0027,
-    State.QUICK_STOP_ACTIVE: 0x0007, State.FAULT_REACTION_ACTIVE: 0x000F, State.FAULT: 0x0008,
+    State.NOT_READY_TO_SWITCH_ON: 0x0000,
+    State.SWITCH_ON_DISABLED: 0x0040,
+    State.READY_TO_SWITCH_ON: 0x0021,
+    State.SWITCHED_ON: 0x0023,
+    State.OPERATION_ENABLED: 0x0027,
+    State.QUICK_STOP_ACTIVE: 0x0007,
+    State.FAULT_REACTION_ACTIVE: 0x000F,
+    State.FAULT: 0x0008,
 }
 SW_VOLTAGE, SW_WARNING, SW_REMOTE = 0x0010, 0x0080, 0x0200
 SW_TARGET_REACHED, SW_INTERNAL_LIMIT, SW_FOLLOWING, SW_FOLLOWING_ERROR = 0x0400, 0x0800, 0x1000, 0x2000
@@ -85,7 +90,7 @@ def decode_command(cw: int) -> int:
     if not cw & 0x01:
         return CMD_SHUTDOWN
     if not cw & 0x08:
-        return CMD_SWITCH_ON            # also "disable operation" from Operation enabled
+        return CMD_SWITCH_ON  # also "disable operation" from Operation enabled
     return CMD_ENABLE
 
 
@@ -101,11 +106,22 @@ class CiA402Drive(Device):
     group = "Drive"
     has_mailbox = True
 
-    def __init__(self, name: str = "", *, vendor_id: int | None = None, product_code: int | None = None,
-                 revision: int | None = None, serial: int | None = None,
-                 motor: MotorParams | None = None, encoder_bits: int | None = None,
-                 rx_mapping: list | None = None, tx_mapping: list | None = None,
-                 enable_delay: float = 0.0, substep: float = 125e-6, modes: tuple = (CSP, CSV, CST)):
+    def __init__(
+        self,
+        name: str = "",
+        *,
+        vendor_id: int | None = None,
+        product_code: int | None = None,
+        revision: int | None = None,
+        serial: int | None = None,
+        motor: MotorParams | None = None,
+        encoder_bits: int | None = None,
+        rx_mapping: list | None = None,
+        tx_mapping: list | None = None,
+        enable_delay: float = 0.0,
+        substep: float = 125e-6,
+        modes: tuple = (CSP, CSV, CST),
+    ):
         """`motor`: the motor's parameters (the model itself is `self.motor`); `encoder_bits`
         overrides theirs. `rx_mapping` / `tx_mapping`: the default contents of 0x1600 / 0x1A00 as
         [(index, sub, bits, dtype, name)] (index 0 = padding), CIA402_RX / CIA402_TX if None.
@@ -123,33 +139,33 @@ class CiA402Drive(Device):
         params = motor or MotorParams()
         if encoder_bits is not None and encoder_bits != params.encoder_bits:
             from dataclasses import replace
+
             params = replace(params, encoder_bits=encoder_bits)
         self.motor = MotorModel(params, substep)
         self.modes = tuple(modes)
         self.enable_delay = float(enable_delay)
         self.state = State.NOT_READY_TO_SWITCH_ON
-        self.mode = CSP if CSP in self.modes else self.modes[0]   # the mode in effect (0x6061)
-        self.mains_on = True            # DC link supplied: statusword bit 4; switch-on needs it
-        self.warning = False            # statusword bit 7, for tests
-        self.velocity_window = int(10 * self.motor.cpr / 60)   # target reached in CSV: 10 rev/min
-        self.torque_window = 10         # per-mille, target reached in CST
-        self.t = 0.0                    # segment time of the last step
+        self.mode = CSP if CSP in self.modes else self.modes[0]  # the mode in effect (0x6061)
+        self.mains_on = True  # DC link supplied: statusword bit 4; switch-on needs it
+        self.warning = False  # statusword bit 7, for tests
+        self.velocity_window = int(10 * self.motor.cpr / 60)  # target reached in CSV: 10 rev/min
+        self.torque_window = 10  # per-mille, target reached in CST
+        self.t = 0.0  # segment time of the last step
         self.error_code = 0
-        self._persistent = False        # an injected fault that a reset cannot clear yet
-        self._fe_latched = False        # statusword bit 13 until the fault is reset
+        self._persistent = False  # an injected fault that a reset cannot clear yet
+        self._fe_latched = False  # statusword bit 13 until the fault is reset
         self._fe_time = 0.0
         self._prev_bit7 = False
         self._reset_edge = False
         self._enable_req_t = None
         self._fra_steps = 0
         self._in_step = False
-        self._last_t32 = None           # last 0x607A seen while following (CSP)
-        self._target = 0                # the unwrapped CSP target (increments)
+        self._last_t32 = None  # last 0x607A seen while following (CSP)
+        self._target = 0  # the unwrapped CSP target (increments)
         self._last_outputs_t = None
-        self._cycle = None              # measured interval between on_outputs() calls
+        self._cycle = None  # measured interval between on_outputs() calls
         self._ip_written = False
-        self._build_od(CIA402_RX if rx_mapping is None else rx_mapping,
-                       CIA402_TX if tx_mapping is None else tx_mapping)
+        self._build_od(CIA402_RX if rx_mapping is None else rx_mapping, CIA402_TX if tx_mapping is None else tx_mapping)
         self._publish()
 
     # ------------------------------------------------------------------ object dictionary
@@ -157,7 +173,7 @@ class CiA402Drive(Device):
         od = self.od
         p = self.motor.params
         cpr = self.motor.cpr
-        od[0x1000] = 0x00020192                 # CiA 402, servo drive
+        od[0x1000] = 0x00020192  # CiA 402, servo drive
         od.add(0x1001, 0, "Error register", "USINT", 0, "ro")
         od.add(0x1C00, 0, "Sync manager type", "USINT", 4, "ro")
         for sub, kind in enumerate((1, 2, 3, 4), 1):
@@ -166,12 +182,35 @@ class CiA402Drive(Device):
         od.add(0x603F, 0, "Error code", "UINT", 0, "ro", pdo=True)
         od.add(0x6040, 0, "Controlword", "UINT", 0, "rw", pdo=True, writable_in=pd)
         od.add(0x6041, 0, "Statusword", "UINT", 0, "ro", pdo=True)
-        od.add(0x605A, 0, "Quick stop option code", "INT", 2, "rw",
-               on_write=lambda e, v: 0 if 0 <= v <= 8 else ABORT_VALUE_RANGE)
-        od.add(0x605E, 0, "Fault reaction option code", "INT", 0, "rw",
-               on_write=lambda e, v: 0 if 0 <= v <= 4 else ABORT_VALUE_RANGE)
-        od.add(0x6060, 0, "Modes of operation", "SINT", self.mode, "rw", pdo=True, writable_in=pd,
-               on_write=lambda e, v: 0 if v in self.modes else ABORT_VALUE_RANGE)
+        od.add(
+            0x605A,
+            0,
+            "Quick stop option code",
+            "INT",
+            2,
+            "rw",
+            on_write=lambda e, v: 0 if 0 <= v <= 8 else ABORT_VALUE_RANGE,
+        )
+        od.add(
+            0x605E,
+            0,
+            "Fault reaction option code",
+            "INT",
+            0,
+            "rw",
+            on_write=lambda e, v: 0 if 0 <= v <= 4 else ABORT_VALUE_RANGE,
+        )
+        od.add(
+            0x6060,
+            0,
+            "Modes of operation",
+            "SINT",
+            self.mode,
+            "rw",
+            pdo=True,
+            writable_in=pd,
+            on_write=lambda e, v: 0 if v in self.modes else ABORT_VALUE_RANGE,
+        )
         od.add(0x6061, 0, "Modes of operation display", "SINT", self.mode, "ro", pdo=True)
         od.add(0x6062, 0, "Position demand value", "DINT", 0, "ro", pdo=True)
         od.add(0x6064, 0, "Position actual value", "DINT", 0, "ro", pdo=True)
@@ -185,24 +224,53 @@ class CiA402Drive(Device):
         od.add(0x6077, 0, "Torque actual value", "INT", 0, "ro", pdo=True)
         od.add(0x607A, 0, "Target position", "DINT", 0, "rw", pdo=True, writable_in=pd)
         max_rpm = int(round(p.max_speed_rpm))
-        od.add(0x6080, 0, "Max motor speed", "UDINT", max_rpm, "rw",
-               on_write=lambda e, v: 0 if 0 < v <= max_rpm else ABORT_VALUE_RANGE)
-        od.add(0x6085, 0, "Quick stop deceleration", "UDINT", 60000, "rw",
-               on_write=lambda e, v: 0 if v > 0 else ABORT_VALUE_RANGE)
+        od.add(
+            0x6080,
+            0,
+            "Max motor speed",
+            "UDINT",
+            max_rpm,
+            "rw",
+            on_write=lambda e, v: 0 if 0 < v <= max_rpm else ABORT_VALUE_RANGE,
+        )
+        od.add(
+            0x6085,
+            0,
+            "Quick stop deceleration",
+            "UDINT",
+            60000,
+            "rw",
+            on_write=lambda e, v: 0 if v > 0 else ABORT_VALUE_RANGE,
+        )
         od.add(0x608F, 0, "Position encoder resolution", "USINT", 2, "ro")
         od.add(0x608F, 1, "Encoder increments", "UDINT", cpr, "ro")
         od.add(0x608F, 2, "Motor revolutions", "UDINT", 1, "ro")
         od.add(0x60B1, 0, "Velocity offset", "DINT", 0, "rw", pdo=True, writable_in=pd)
         od.add(0x60B2, 0, "Torque offset", "INT", 0, "rw", pdo=True, writable_in=pd)
         od.add(0x60C2, 0, "Interpolation time period", "USINT", 2, "ro")
-        od.add(0x60C2, 1, "Interpolation time period value", "USINT", 1, "rw", writable_in=("PREOP", "SAFEOP"),
-               on_write=self._ip_write)
-        od.add(0x60C2, 2, "Interpolation time index", "SINT", -3, "rw", writable_in=("PREOP", "SAFEOP"),
-               on_write=self._ip_write)
+        od.add(
+            0x60C2,
+            1,
+            "Interpolation time period value",
+            "USINT",
+            1,
+            "rw",
+            writable_in=("PREOP", "SAFEOP"),
+            on_write=self._ip_write,
+        )
+        od.add(
+            0x60C2,
+            2,
+            "Interpolation time index",
+            "SINT",
+            -3,
+            "rw",
+            writable_in=("PREOP", "SAFEOP"),
+            on_write=self._ip_write,
+        )
         od.add(0x60F4, 0, "Following error actual value", "DINT", 0, "ro", pdo=True)
         od.add(0x60FF, 0, "Target velocity", "DINT", 0, "rw", pdo=True, writable_in=pd)
-        od.add(0x6502, 0, "Supported drive modes", "UDINT",
-               sum(1 << (m - 1) for m in self.modes), "ro")
+        od.add(0x6502, 0, "Supported drive modes", "UDINT", sum(1 << (m - 1) for m in self.modes), "ro")
         for index, name, mapped in ((RX_MAPPING, "RxPDO mapping", rx), (TX_MAPPING, "TxPDO mapping", tx)):
             words = []
             for ix, sx, bits, dtype, ename in mapped:
@@ -211,8 +279,15 @@ class CiA402Drive(Device):
                         dtype = {1: "BOOL", 8: "USINT", 16: "UINT", 32: "UDINT", 64: "ULINT"}.get(bits)
                         if dtype is None:
                             raise ValueError(f"{name}: {ix:#06x}:{sx} ({ename}): no data type of {bits} bits")
-                    od.add(ix, sx, ename or f"object {ix:#06x}:{sx}", dtype, 0,
-                           "rw" if index == RX_MAPPING else "ro", pdo=True)
+                    od.add(
+                        ix,
+                        sx,
+                        ename or f"object {ix:#06x}:{sx}",
+                        dtype,
+                        0,
+                        "rw" if index == RX_MAPPING else "ro",
+                        pdo=True,
+                    )
                 if ix and self._check_word(index, (ix << 16) | (sx << 8) | bits):
                     raise ValueError(f"{name}: {ix:#06x}:{sx} ({ename}) cannot be mapped with {bits} bits")
                 words.append((ix, sx, bits))
@@ -238,7 +313,7 @@ class CiA402Drive(Device):
             return 0
         ix, sx, bits = word >> 16, (word >> 8) & 0xFF, word & 0xFF
         if ix == 0:
-            return 0 if bits else ABORT_NOT_MAPPABLE          # padding
+            return 0 if bits else ABORT_NOT_MAPPABLE  # padding
         e = self.od.entries.get((ix, sx))
         if e is None or not e.pdo or e.bits != bits:
             return ABORT_NOT_MAPPABLE
@@ -263,6 +338,7 @@ class CiA402Drive(Device):
                 return ABORT_PDO_TOO_LONG
             self.remap()
             return 0
+
         return check
 
     def _check_assigned(self, lo: int, value: int, allow_zero: bool) -> int:
@@ -284,6 +360,7 @@ class CiA402Drive(Device):
                     return code
             self.remap()
             return 0
+
         return check
 
     def _ip_write(self, entry, value) -> int:
@@ -428,7 +505,10 @@ class CiA402Drive(Device):
         if new != State.SWITCHED_ON:
             self._enable_req_t = None
         if old in (State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE) and new not in (
-                State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE, State.FAULT_REACTION_ACTIVE):
+            State.OPERATION_ENABLED,
+            State.QUICK_STOP_ACTIVE,
+            State.FAULT_REACTION_ACTIVE,
+        ):
             self.motor.disable()
         if new == State.OPERATION_ENABLED:
             self._start_mode()
@@ -465,53 +545,53 @@ class CiA402Drive(Device):
         reset, self._reset_edge = self._reset_edge, False
         mo = self.motor
         if s == State.NOT_READY_TO_SWITCH_ON:
-            self._set_state(State.SWITCH_ON_DISABLED)                     # 1 (after the self test)
+            self._set_state(State.SWITCH_ON_DISABLED)  # 1 (after the self test)
             return
         if s == State.FAULT_REACTION_ACTIVE:
             if self._fra_steps >= 1 and (not mo.enabled or mo.stopped):
                 mo.disable()
-                self._set_state(State.FAULT)                              # 14
+                self._set_state(State.FAULT)  # 14
             else:
                 self._fra_steps += 1
             return
         if s == State.FAULT:
-            if reset and not self._persistent:                           # 15
+            if reset and not self._persistent:  # 15
                 self.error_code = 0
                 self._fe_latched = False
-                self.emergency(0x0000, 0x00)                              # CiA 301: error reset
+                self.emergency(0x0000, 0x00)  # CiA 301: error reset
                 self._set_state(State.SWITCH_ON_DISABLED)
             return
         cmd = decode_command(int(E[0x6040].value))
         qs_option = int(E[0x605A].value)
         if s == State.SWITCH_ON_DISABLED:
             if cmd == CMD_SHUTDOWN:
-                self._set_state(State.READY_TO_SWITCH_ON)                 # 2
+                self._set_state(State.READY_TO_SWITCH_ON)  # 2
         elif s == State.READY_TO_SWITCH_ON:
             if cmd in (CMD_SWITCH_ON, CMD_ENABLE) and self.mains_on:
-                self._set_state(State.SWITCHED_ON)                        # 3
+                self._set_state(State.SWITCHED_ON)  # 3
             elif cmd in (CMD_DISABLE_VOLTAGE, CMD_QUICK_STOP):
-                self._set_state(State.SWITCH_ON_DISABLED)                 # 7
+                self._set_state(State.SWITCH_ON_DISABLED)  # 7
         elif s == State.SWITCHED_ON:
             if cmd == CMD_ENABLE:
                 start = t - dt
                 if self._enable_req_t is None:
                     self._enable_req_t = start
                 if start - self._enable_req_t >= self.enable_delay - 1e-12:
-                    self._set_state(State.OPERATION_ENABLED)              # 4
+                    self._set_state(State.OPERATION_ENABLED)  # 4
                 return
             self._enable_req_t = None
             if cmd == CMD_SHUTDOWN:
-                self._set_state(State.READY_TO_SWITCH_ON)                 # 6
+                self._set_state(State.READY_TO_SWITCH_ON)  # 6
             elif cmd in (CMD_DISABLE_VOLTAGE, CMD_QUICK_STOP):
-                self._set_state(State.SWITCH_ON_DISABLED)                 # 10
+                self._set_state(State.SWITCH_ON_DISABLED)  # 10
         elif s == State.OPERATION_ENABLED:
             if cmd == CMD_SWITCH_ON:
-                self._set_state(State.SWITCHED_ON)                        # 5
+                self._set_state(State.SWITCHED_ON)  # 5
             elif cmd == CMD_SHUTDOWN:
-                self._set_state(State.READY_TO_SWITCH_ON)                 # 8
+                self._set_state(State.READY_TO_SWITCH_ON)  # 8
             elif cmd == CMD_DISABLE_VOLTAGE:
-                self._set_state(State.SWITCH_ON_DISABLED)                 # 9
-            elif cmd == CMD_QUICK_STOP:                                   # 11
+                self._set_state(State.SWITCH_ON_DISABLED)  # 9
+            elif cmd == CMD_QUICK_STOP:  # 11
                 self.state = State.QUICK_STOP_ACTIVE
                 if qs_option == 0:
                     mo.disable()
@@ -521,18 +601,17 @@ class CiA402Drive(Device):
                     mo.stop(None)
         elif s == State.QUICK_STOP_ACTIVE:
             if cmd == CMD_DISABLE_VOLTAGE:
-                self._set_state(State.SWITCH_ON_DISABLED)                 # 12
+                self._set_state(State.SWITCH_ON_DISABLED)  # 12
             elif qs_option in (5, 6, 7, 8):
                 if cmd == CMD_ENABLE:
-                    self._set_state(State.OPERATION_ENABLED)              # 16
+                    self._set_state(State.OPERATION_ENABLED)  # 16
             elif not mo.enabled or mo.stopped:
-                self._set_state(State.SWITCH_ON_DISABLED)                 # 12 (after the ramp)
+                self._set_state(State.SWITCH_ON_DISABLED)  # 12 (after the ramp)
 
     def _supervise(self, dt: float) -> None:
         """After the physics: following error, DC link, fault reaction progress."""
         E = self.od._by_key
-        if not self.mains_on and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED,
-                                                State.QUICK_STOP_ACTIVE):
+        if not self.mains_on and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE):
             self._fault(FAULT_UNDERVOLTAGE)
             return
         if self.state == State.OPERATION_ENABLED and self.mode == CSP and self.motor.enabled:

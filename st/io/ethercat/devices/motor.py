@@ -14,6 +14,7 @@ in increments/s, torques in per-mille of the rated torque.
 Defaults are modelled on a Panasonic MINAS A6 100 W motor (MSMF012): 0.32 N·m rated, about 3×
 peak, 6000 rev/min, rotor inertia 0.051e-4 kg·m², 23-bit encoder.
 """
+
 from __future__ import annotations
 
 import math
@@ -24,27 +25,27 @@ TWO_PI = 2.0 * math.pi
 
 # modes the model understands (the CiA 402 numbers of the cyclic synchronous modes)
 CSP, CSV, CST = 8, 9, 10
-_STOP, _HOLD = -1, -2            # internal: a deceleration ramp, then holding the stop position
+_STOP, _HOLD = -1, -2  # internal: a deceleration ramp, then holding the stop position
 
 
 @dataclass
 class MotorParams:
-    rated_torque: float = 0.32            # N·m
-    max_torque: float = 0.95              # N·m, the current limit (≈ 3× rated)
-    max_speed_rpm: float = 6000.0         # rev/min
-    rotor_inertia: float = 0.051e-4       # kg·m²
-    load_inertia: float = 0.051e-4        # kg·m² (1:1 load by default)
-    viscous_friction: float = 5e-6        # N·m per rad/s
-    coulomb_friction: float = 0.002       # N·m; lets a coasting motor come to rest in finite time
-    torque_constant: float = 0.29         # N·m/A (only used for `current`)
+    rated_torque: float = 0.32  # N·m
+    max_torque: float = 0.95  # N·m, the current limit (≈ 3× rated)
+    max_speed_rpm: float = 6000.0  # rev/min
+    rotor_inertia: float = 0.051e-4  # kg·m²
+    load_inertia: float = 0.051e-4  # kg·m² (1:1 load by default)
+    viscous_friction: float = 5e-6  # N·m per rad/s
+    coulomb_friction: float = 0.002  # N·m; lets a coasting motor come to rest in finite time
+    torque_constant: float = 0.29  # N·m/A (only used for `current`)
     encoder_bits: int = 23
     velocity_bandwidth_hz: float = 500.0  # used when velocity_kp / velocity_ki are None
-    velocity_kp: float | None = None   # N·m per rad/s
-    velocity_ki: float | None = None   # N·m per rad (integral gain, per second)
-    position_kp: float = 300.0            # 1/s (velocity reference per position error)
-    current_tau: float = 1e-4             # s, first-order lag of the current loop (0 = ideal)
-    torque_noise: float = 0.0             # N·m standard deviation per substep; 0 = no randomness
-    seed: int = 0                         # seed of the noise generator (only used if torque_noise > 0)
+    velocity_kp: float | None = None  # N·m per rad/s
+    velocity_ki: float | None = None  # N·m per rad (integral gain, per second)
+    position_kp: float = 300.0  # 1/s (velocity reference per position error)
+    current_tau: float = 1e-4  # s, first-order lag of the current loop (0 = ideal)
+    torque_noise: float = 0.0  # N·m standard deviation per substep; 0 = no randomness
+    seed: int = 0  # seed of the noise generator (only used if torque_noise > 0)
 
     @property
     def inertia(self) -> float:
@@ -68,7 +69,7 @@ def _coulomb_step(w: float, drive: float, tc: float, J: float, h: float) -> floa
         return (drive - tc) / J * h
     if drive < -tc:
         return (drive + tc) / J * h
-    return 0.0                          # sticking
+    return 0.0  # sticking
 
 
 class MotorModel:
@@ -82,7 +83,7 @@ class MotorModel:
             raise ValueError("substep must be positive")
         self.substep = substep
         self.cpr = p.counts_per_rev
-        self.k = self.cpr / TWO_PI                          # increments per rad
+        self.k = self.cpr / TWO_PI  # increments per rad
         J = p.inertia
         wc = TWO_PI * p.velocity_bandwidth_hz
         # PI tuned for a critically damped loop around the inertia: ω_n = ωc/2, ζ = 1
@@ -91,33 +92,33 @@ class MotorModel:
         self.max_speed = p.max_speed_rpm * TWO_PI / 60.0  # rad/s
         self._rng = random.Random(p.seed) if p.torque_noise > 0 else None
         # mechanical state
-        self.turns = 0.0          # shaft angle in revolutions (exact encoder maths: cpr is a power of 2)
-        self.omega = 0.0          # rad/s
-        self.torque_nm = 0.0      # torque produced by the motor (after the current loop), N·m
-        self.load_torque = 0.0    # external torque on the shaft, N·m (positive accelerates forwards)
+        self.turns = 0.0  # shaft angle in revolutions (exact encoder maths: cpr is a power of 2)
+        self.omega = 0.0  # rad/s
+        self.torque_nm = 0.0  # torque produced by the motor (after the current loop), N·m
+        self.load_torque = 0.0  # external torque on the shaft, N·m (positive accelerates forwards)
         self.time = 0.0
         # inputs
         self.enabled = False
         self.mode = CSP
-        self.target_velocity = 0      # increments/s (CSV)
-        self.target_torque = 0        # per-mille of rated torque (CST)
-        self.velocity_offset = 0      # increments/s, added to the velocity reference (CSP/CSV)
-        self.torque_offset = 0        # per-mille, added to the torque reference
-        self.torque_limit = None      # per-mille; None = max_torque
-        self.speed_limit = None       # rad/s; None = max_speed
+        self.target_velocity = 0  # increments/s (CSV)
+        self.target_torque = 0  # per-mille of rated torque (CST)
+        self.velocity_offset = 0  # increments/s, added to the velocity reference (CSP/CSV)
+        self.torque_offset = 0  # per-mille, added to the torque reference
+        self.torque_limit = None  # per-mille; None = max_torque
+        self.speed_limit = None  # rad/s; None = max_speed
         # controller state
-        self._integ = 0.0             # velocity-loop integrator, N·m
+        self._integ = 0.0  # velocity-loop integrator, N·m
         self._torque_ref = 0.0
-        self._demand = 0.0            # position demand, increments (float)
+        self._demand = 0.0  # position demand, increments (float)
         self._ip_start = 0.0
         self._ip_target = 0.0
         self._ip_period = 0.0
         self._ip_elapsed = 0.0
-        self._stop_v = 0.0            # ramp velocity during a stop, rad/s
-        self._stop_decel = None       # rad/s² or None = at the current limit
+        self._stop_v = 0.0  # ramp velocity during a stop, rad/s
+        self._stop_decel = None  # rad/s² or None = at the current limit
         self._stop_done = False
         self._resume_mode = CSP
-        self.limited = False          # a torque or speed limit was active during the last step()
+        self.limited = False  # a torque or speed limit was active during the last step()
 
     # ------------------------------------------------------------------ outputs
     @property
@@ -244,9 +245,14 @@ class MotorModel:
         J = p.inertia
         b = p.viscous_friction
         tc = p.coulomb_friction
-        if (not self.enabled and self.omega == 0.0 and abs(self.load_torque) <= tc
-                and self._rng is None and self.torque_nm == 0.0):
-            self.time += dt                 # at rest and unpowered: nothing changes
+        if (
+            not self.enabled
+            and self.omega == 0.0
+            and abs(self.load_torque) <= tc
+            and self._rng is None
+            and self.torque_nm == 0.0
+        ):
+            self.time += dt  # at rest and unpowered: nothing changes
             return
         cpr = self.cpr
         k = self.k
@@ -261,7 +267,7 @@ class MotorModel:
             self._step_following(n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha)
             self.time += dt
             return
-        standstill = TWO_PI / 60.0       # 1 rev/min
+        standstill = TWO_PI / 60.0  # 1 rev/min
         for _ in range(n):
             w = self.omega
             if self.enabled:
@@ -270,7 +276,7 @@ class MotorModel:
                 if mode == CST:
                     u = self.target_torque * rated / 1000.0 + toff
                     if (w > vmax and u > 0) or (w < -vmax and u < 0):
-                        u = 0.0             # speed limit in torque mode
+                        u = 0.0  # speed limit in torque mode
                         self.limited = True
                 else:
                     if mode == CSP or mode == _HOLD:
@@ -291,7 +297,7 @@ class MotorModel:
                         vref = (ff + kp * err + (self.velocity_offset if mode == CSP else 0)) / k
                     elif mode == CSV:
                         vref = (self.target_velocity + self.velocity_offset) / k
-                    else:                   # _STOP: ramp the reference to zero
+                    else:  # _STOP: ramp the reference to zero
                         d = self._stop_decel
                         v0 = self._stop_v
                         if d is None:
@@ -301,7 +307,7 @@ class MotorModel:
                         else:
                             self._stop_v = min(0.0, v0 + d * h)
                         vref = self._stop_v
-                        if d is not None:   # torque feed-forward of the ramp: no overshoot at its end
+                        if d is not None:  # torque feed-forward of the ramp: no overshoot at its end
                             toff += (self._stop_v - v0) / h * J
                         if vref == 0.0 and abs(w) <= standstill:
                             self._stop_done = True
