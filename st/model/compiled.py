@@ -35,7 +35,7 @@ _MARSHAL = 2
 # An object's state in the payload instead of its own (`substitute`), or None to keep the object.
 Substitute = Callable[[Any], dict[str, Any] | None]
 # pickle writes a NEWOBJ for this function (as for any object it pickles by its state)
-_NEWOBJ: Callable[..., Any] = copyreg.__newobj__
+_NEWOBJ: Callable[..., Any] = copyreg.__newobj__  # type: ignore[attr-defined]  # not in typeshed
 
 
 class FormatError(ValueError):
