@@ -6,6 +6,10 @@ source file in assertions binds the name once: `run = partial(helpers.run, name=
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import threading
+import time
 from collections.abc import Iterable
 
 import pytest
@@ -73,3 +77,63 @@ def assert_diagnostics(
     allowed = set(allow)
     extra = [g for g in unmatched if g[0] not in allowed]
     assert not missing and not extra, f"missing {missing}, unexpected {extra}; all reported: {got}"
+
+
+class StRun:
+    """`st run ARGS` started as a user starts it, its stderr read line by line as it comes, so a
+    test waits for what the PLC says (`wait_for("running in real time")`) instead of sleeping a
+    guess at how long start-up takes on a loaded machine."""
+
+    def __init__(self, *args: str, cwd: str | None = None):
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "st.cli", "run", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=cwd,
+        )
+        self.err_lines: list[str] = []
+        self.out_lines: list[str] = []
+        self._readers = [
+            threading.Thread(target=self._read, args=(self.proc.stderr, self.err_lines), daemon=True),
+            threading.Thread(target=self._read, args=(self.proc.stdout, self.out_lines), daemon=True),
+        ]
+        for t in self._readers:
+            t.start()
+
+    @staticmethod
+    def _read(stream, into: list) -> None:
+        for line in stream:
+            into.append(line)
+
+    @property
+    def stderr(self) -> str:
+        return "".join(self.err_lines)
+
+    def wait_for(self, text: str, timeout: float = 60.0) -> None:
+        """Until `text` appears on stderr; fails if the process ends or the time runs out first."""
+        deadline = time.monotonic() + timeout
+        while text not in self.stderr:
+            if self.proc.poll() is not None:
+                for t in self._readers:
+                    t.join(5)
+                if text in self.stderr:
+                    return
+                raise AssertionError(f"st run ended (exit {self.proc.returncode}) before {text!r}:\n{self.stderr}")
+            if time.monotonic() > deadline:
+                raise AssertionError(f"no {text!r} from st run within {timeout} s:\n{self.stderr}")
+            time.sleep(0.02)
+
+    def send_signal(self, sig: int) -> None:
+        self.proc.send_signal(sig)
+
+    def communicate(self, timeout: float = 60.0) -> tuple[str, str]:
+        """Wait for the end: (stdout, stderr)."""
+        self.proc.wait(timeout)
+        for t in self._readers:
+            t.join(10)
+        return "".join(self.out_lines), self.stderr
+
+    @property
+    def returncode(self) -> int | None:
+        return self.proc.returncode

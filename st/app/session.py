@@ -141,6 +141,10 @@ def run_plc(compiled, o: RunOptions) -> int:
                 granted = rt_setup.apply(o.rt_priority, o.cpu)
                 if not o.quiet:
                     err("real time: " + ", ".join(f"{k} {v}" for k, v in granted.items()))
+            if not o.quiet:
+                err(f"running in real time: {len(plc.tasks)} task(s), base tick {plc.tick / 1e6:g} ms; Ctrl-C stops")
+                if watcher is not None:
+                    err(f"watching {len(o.files)} file(s): an edit is compiled and swapped in at a scan boundary")
             code = _run_real(plc, o, stop, status, watcher)
     finally:
         if status is not None:
