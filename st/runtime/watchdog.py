@@ -1,7 +1,7 @@
 """The task watchdog: ends a job that runs too long (an endless loop) or that a stop must end.
 
 Every loop of generated code tests one global flag per iteration (`if _wd_armed: _wd_check()`,
-put there by compiler/codegen/guards.py), which costs a few nanoseconds while the flag is down.
+the LoopGuard that compiler/lower/loops.py puts first in every ST loop), which costs a few nanoseconds while the flag is down.
 A single daemon thread polls every 5 ms and raises the flag of a namespace whose running job
 passed its deadline; the loop then calls `_wd_check`, which raises the WATCHDOG fault at the
 loop's ST line. `abort()` raises the flag at once (a forced stop: a second Ctrl-C). The same
