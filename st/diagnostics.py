@@ -161,8 +161,9 @@ class Code(str, Enum):
     WRITE_TO_INPUT = (
         "E048",
         (
-            "A VAR_INPUT is written inside its own POU: IEC 61131-3 makes inputs read-only there (the codesys and "
-            "twincat dialects allow it). Copy it into a local variable first."
+            "A VAR_INPUT is written inside its own POU under the iec dialect: IEC 61131-3 makes inputs read-only "
+            "there (MatIEC, CODESYS and TwinCAT allow it, and so do the openplc, codesys and twincat dialects and "
+            "the default). Copy it into a local variable first."
         ),
     )
     CALL_WITHOUT_VALUE = (

@@ -1859,7 +1859,9 @@ END_PROGRAM
     assert "conf.st:2:11: error[E044]: __SYSTEM.IQueryInterface is not part of the iec dialect" in errors(src, "iec")
 
 
-@pytest.mark.parametrize("dialect, ok", [("codesys", True), ("twincat", True), ("iec", False), (None, False)])
+@pytest.mark.parametrize(
+    "dialect, ok", [("codesys", True), ("twincat", True), ("openplc", True), (None, True), ("iec", False)]
+)
 def test_writing_an_own_input_is_a_dialect_switch(dialect, ok):
     src = """
 FUNCTION Clamp : INT VAR_INPUT v : INT; END_VAR

@@ -1,7 +1,9 @@
 """Dialect presets: named sets of switches, never forks of the grammar.
 
     openplc   what MatIEC (OpenPLC v3) accepts: TIME_TO_<int> counts seconds, F_TRIG pulses on the
-              first scan; no object-oriented ST and no vendor extensions
+              first scan; a POU may assign its own inputs (MatIEC forbids only writing a block's
+              outputs from outside, FOR variables and constants); no object-oriented ST and no
+              vendor extensions
     iec       IEC 61131-3 3rd edition, strict: object-oriented ST, REF_TO/REF()/NULL; no vendor
               extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
               __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of programs)
@@ -10,8 +12,8 @@
               expected (CODESYS's non-strict enumerations)
     twincat   as codesys (TwinCAT 3 is CODESYS-based)
 
-Without a preset everything is accepted and only --time-unit / --f-trig-first-scan apply (the
-behaviour before presets existed). A preset is chosen with `--dialect NAME` (API: dialect=…)
+Without a preset everything any preset accepts is accepted (a POU may assign its own inputs, as
+under openplc, codesys and twincat) and only --time-unit / --f-trig-first-scan apply. A preset is chosen with `--dialect NAME` (API: dialect=…)
 or with a pragma `{dialect 'NAME'}` in a source file; an explicit flag wins.
 """
 
@@ -39,7 +41,9 @@ class Dialect:
 
 
 PRESETS = {
-    "openplc": Dialect("openplc", time_unit="s", f_trig_first_scan=True, oop=False, vendor_extensions=False),
+    "openplc": Dialect(
+        "openplc", time_unit="s", f_trig_first_scan=True, oop=False, vendor_extensions=False, writable_inputs=True
+    ),
     "iec": Dialect("iec", vendor_extensions=False),
     "codesys": Dialect("codesys", attribute_pragmas=True, writable_inputs=True, enum_as_int=True),
     "twincat": Dialect("twincat", attribute_pragmas=True, writable_inputs=True, enum_as_int=True),

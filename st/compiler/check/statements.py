@@ -335,7 +335,7 @@ class Statements(Part):
                 and not isinstance(T.unalias(sym.type), (T.POUType,))
                 and isinstance(e, A.Name)
                 and not T.is_reference(sym.type)
-                and not (self.ctx.dialect and self.ctx.dialect.writable_inputs)
+                and not (self.ctx.dialect is None or self.ctx.dialect.writable_inputs)
             ):
                 self.err(
                     "E048",
