@@ -191,6 +191,15 @@ class Code(str, Enum):
             "rename the method)."
         ),
     )
+    LOSSY_CONVERSION = (
+        "W008",
+        (
+            "An implicit conversion between numbers and bit strings may lose data (DINT into INT, WORD into "
+            "INT, INT into UINT, LREAL into REAL): the codesys and twincat dialects and the default make it, "
+            "as CODESYS and TwinCAT do with a warning; the value is wrapped to the target type (or rounded, "
+            "for REAL). The iec and openplc dialects refuse it (E027). Convert explicitly to say it is meant."
+        ),
+    )
 
 
 class Severity(str, Enum):

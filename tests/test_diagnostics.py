@@ -7,7 +7,7 @@ import pytest
 from st.api import compile_text
 from st.diagnostics import CompileError
 
-from helpers import compile_error
+from helpers import compile_error, diagnostics
 
 
 def diags(text: str, name: str = "t.st"):
@@ -65,13 +65,21 @@ def test_missing_end_at_end_of_file():
     assert "END_PROGRAM" in e.errors[0].message
 
 
-def test_narrowing_needs_explicit_conversion():
-    e = diags(
-        "PROGRAM p\nVAR i : INT; d : DINT; r : REAL; l : LREAL; END_VAR\ni := d;\nr := l;\ni := r;\n"
-        "d := i; l := r;\nEND_PROGRAM\n"
-    )
+NARROWING = (
+    "PROGRAM p\nVAR i : INT; d : DINT; r : REAL; l : LREAL; END_VAR\ni := d;\nr := l;\ni := r;\n"
+    "d := i; l := r;\nEND_PROGRAM\n"
+)
+
+
+def test_narrowing_needs_explicit_conversion_in_iec():
+    e = compile_error(NARROWING, "iec")
     assert codes(e) == [("E027", 3, 6), ("E027", 4, 6), ("E027", 5, 6)]
     assert e.errors[0].hint == "convert explicitly with DINT_TO_INT(...)"
+
+
+def test_narrowing_between_numbers_is_a_warning_by_default_but_a_real_never_becomes_an_integer():
+    assert codes(diags(NARROWING)) == [("E027", 5, 6)]
+    assert [(c, line) for c, line, _ in diagnostics(NARROWING)] == [("W008", 3), ("W008", 4), ("E027", 5)]
 
 
 def test_literal_out_of_range():

@@ -3,7 +3,12 @@
 
 from __future__ import annotations
 
+import struct
+
 import pytest
+
+from st import PLC
+from st.api import compile_text
 
 from helpers import errors, run
 
@@ -33,3 +38,110 @@ def test_a_block_may_write_its_own_input_and_keeps_it_until_a_call_sets_it(diale
 
 def test_iec_keeps_inputs_read_only_inside_their_block():
     assert "t.st:5:1: error[E048]: 'n' is an input of Cnt and cannot be written here" in errors(WRITES_OWN_INPUT, "iec")
+
+
+BITS_AND_NUMBERS = """
+PROGRAM main
+VAR
+  b : BYTE := 200; w : WORD := 16#FFFF; dw : DWORD := 16#FFFFFFFF; n : INT := -2;
+  i : INT; u : UINT; d : DINT; l : LINT; r : REAL; lr : LREAL; w2 : WORD; x : BOOL; m : INT;
+END_VAR
+i := b;                 (* 200: every BYTE fits an INT *)
+u := w;                 (* 65535 *)
+d := w;
+l := dw;                (* 4294967295 *)
+r := w;                 (* 65535.0: exact in a REAL *)
+lr := dw;
+w2 := n;                (* the bit pattern of -2: 16#FFFE *)
+d := n + b;             (* INT + BYTE is an INT: 198 *)
+l := n * w;             (* INT * WORD: a DINT, -131070 *)
+x := b > n;
+m := b MOD 7;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_bit_strings_and_numbers_convert_implicitly_where_the_value_is_kept(dialect):
+    plc = run(BITS_AND_NUMBERS, 1, dialect)
+    got = {k: plc[f"main.{k}"] for k in ("i", "u", "d", "l", "r", "lr", "w2", "x", "m")}
+    assert got == {
+        "i": 200,
+        "u": 65535,
+        "d": 198,
+        "l": -131070,
+        "r": 65535.0,
+        "lr": 4294967295.0,
+        "w2": 0xFFFE,
+        "x": True,
+        "m": 4,
+    }
+    assert isinstance(got["r"], float) and isinstance(got["lr"], float)
+
+
+@pytest.mark.parametrize("dialect", ["iec", "openplc"])
+def test_iec_and_matiec_convert_bit_strings_and_numbers_only_explicitly_and_say_so(dialect):
+    text = errors(BITS_AND_NUMBERS, dialect)
+    assert (
+        "t.st:7:6: error[E027]: BYTE is a bit string and INT a number: IEC 61131-3 converts between them "
+        "only explicitly (the codesys and twincat dialects do it implicitly)"
+    ) in text
+    assert "hint: convert explicitly with BYTE_TO_INT(...)" in text
+    assert (
+        "t.st:13:7: error[E027]: INT is a number and WORD a bit string: IEC 61131-3 converts between them "
+        "only explicitly"
+    ) in text
+    assert "t.st:14:6: error[E014]: operator + cannot combine INT and BYTE" in text
+
+
+LOSSY = """
+PROGRAM main
+VAR
+  w : WORD := 65535; d : DINT := 70000; n : INT := -1; lr : LREAL := 1.1; big : LINT := 16#1_0000_0005;
+  i : INT; b : BYTE; u : UINT; r : REAL; r2 : REAL; k : DINT;
+END_VAR
+i := w;
+b := d;
+u := n;
+r := lr;
+r2 := d;
+k := big;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_conversions_that_may_lose_data_are_warnings_and_wrap_as_codesys_does(dialect):
+    result = compile_text(LOSSY, "t.st", dialect=dialect, use_cache=False)
+    assert [(d.code, d.span.line, d.message) for d in result.diagnostics if d.span.file == "t.st"] == [
+        ("W008", 7, "implicit conversion from WORD to INT may lose data (the value is wrapped to INT)"),
+        ("W008", 8, "implicit conversion from DINT to BYTE may lose data (the value is wrapped to BYTE)"),
+        ("W008", 9, "implicit conversion from INT to UINT may lose data (the value is wrapped to UINT)"),
+        ("W008", 10, "implicit conversion from LREAL to REAL may lose precision"),
+        ("W008", 11, "implicit conversion from DINT to REAL may lose precision"),
+        ("W008", 12, "implicit conversion from LINT to DINT may lose data (the value is wrapped to DINT)"),
+    ]
+    plc = PLC(result)
+    plc.scan()
+    got = {k: plc[f"main.{k}"] for k in ("i", "b", "u", "r", "r2", "k")}
+    assert got == {
+        "i": -1,
+        "b": 70000 % 256,
+        "u": 65535,
+        "r": struct.unpack("f", struct.pack("f", 1.1))[0],
+        "r2": 70000.0,
+        "k": 5,
+    }
+
+
+@pytest.mark.parametrize("dialect", ["iec", "openplc"])
+def test_iec_and_matiec_refuse_conversions_that_may_lose_data(dialect):
+    text = errors(LOSSY, dialect)
+    assert "t.st:7:6: error[E027]: implicit conversion from WORD to INT may lose data" in text
+    assert "t.st:12:6: error[E027]: implicit conversion from LINT to DINT may lose data" in text
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "iec", "openplc"])
+def test_a_real_never_becomes_an_integer_implicitly(dialect):
+    src = "PROGRAM main\nVAR r : REAL; k : DINT; END_VAR\nk := r;\nEND_PROGRAM\n"
+    assert "t.st:3:6: error[E027]: implicit conversion from REAL to DINT may lose data" in errors(src, dialect)

@@ -9,7 +9,8 @@
               __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of programs)
     codesys   the 3rd edition plus CODESYS's extensions; {attribute '…'} pragmas accepted silently;
               a POU may assign its own inputs; enumeration values read as integers where one is
-              expected (CODESYS's non-strict enumerations)
+              expected (CODESYS's non-strict enumerations); bit strings and numbers convert
+              implicitly where the value is kept (BYTE into INT or REAL, INT into WORD)
     twincat   as codesys (TwinCAT 3 is CODESYS-based)
 
 Without a preset everything any preset accepts is accepted (a POU may assign its own inputs, as
@@ -38,6 +39,7 @@ class Dialect:
     attribute_pragmas: bool = False  # {attribute '…'} without a warning
     writable_inputs: bool = False  # a POU may assign its own VAR_INPUT (a local copy); else E018
     enum_as_int: bool = False  # an enumeration value is usable as its integer (not {attribute 'strict'})
+    bits_as_numbers: bool = False  # bit strings and numbers convert implicitly where the value is kept
 
 
 PRESETS = {
@@ -45,8 +47,8 @@ PRESETS = {
         "openplc", time_unit="s", f_trig_first_scan=True, oop=False, vendor_extensions=False, writable_inputs=True
     ),
     "iec": Dialect("iec", vendor_extensions=False),
-    "codesys": Dialect("codesys", attribute_pragmas=True, writable_inputs=True, enum_as_int=True),
-    "twincat": Dialect("twincat", attribute_pragmas=True, writable_inputs=True, enum_as_int=True),
+    "codesys": Dialect("codesys", attribute_pragmas=True, writable_inputs=True, enum_as_int=True, bits_as_numbers=True),
+    "twincat": Dialect("twincat", attribute_pragmas=True, writable_inputs=True, enum_as_int=True, bits_as_numbers=True),
 }
 
 _PRAGMA = re.compile(r"\{\s*dialect\s+'([A-Za-z]+)'\s*\}", re.I)

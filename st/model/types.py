@@ -473,6 +473,59 @@ def widens_to(src: Type, dst: Type) -> bool:
 _RANK = ["SINT", "USINT", "INT", "UINT", "DINT", "UDINT", "LINT", "ULINT", "REAL", "LREAL"]
 
 
+def _holds_bits(bits: int, d: ElemType) -> bool:
+    """Does number type `d` hold every value of an unsigned bit string of `bits` bits?"""
+    if d.is_real:
+        return bits <= (16 if d.bits == 32 else 32)  # exactly, within the mantissa
+    return d.is_int and (d.bits > bits if d.signed else d.bits >= bits)
+
+
+def bits_numbers_convert(src: Type, dst: Type) -> bool:
+    """CODESYS's and TwinCAT's implicit conversions between bit strings and numbers that keep the
+    value (IEC 61131-3 converts between ANY_BIT and ANY_NUM only explicitly): a bit string into a
+    number that holds all its values (BYTE into INT, UINT or REAL; WORD into DINT or REAL; DWORD into
+    LINT or LREAL), an integer into a bit string at least as wide (INT into WORD: its bit pattern)."""
+    s, d = base_of(src), base_of(dst)
+    if not (isinstance(s, ElemType) and isinstance(d, ElemType)) or s.is_bool or d.is_bool:
+        return False
+    if s.is_bit and d.is_num:
+        return _holds_bits(s.bits, d)
+    return s.is_int and d.is_bit and s.bits <= d.bits
+
+
+def lossy_number_conversion(src: Type, dst: Type) -> bool:
+    """An implicit conversion CODESYS and TwinCAT make with a warning ("possible loss of
+    information", "possible change of sign"): between integers and bit strings of any sizes, and
+    from those or a REAL into a REAL type. Never from a REAL into an integer."""
+    s, d = base_of(src), base_of(dst)
+    if not (isinstance(s, ElemType) and isinstance(d, ElemType)) or s.is_bool or d.is_bool:
+        return False
+    if d.is_int or d.is_bit:
+        return s.is_int or s.is_bit
+    return d.is_real and (s.is_int or s.is_bit or s.is_real)
+
+
+def bits_numbers_common(a: Type, b: Type) -> Type | None:
+    """The type of arithmetic or a comparison between a bit string and a number under those rules:
+    the number's type if it holds the bit string's values, else the smallest integer type that
+    holds both; None when no type does."""
+    a, b = base_of(a), base_of(b)
+    if not (isinstance(a, ElemType) and isinstance(b, ElemType)):
+        return None
+    bit, num = (a, b) if a.is_bit and b.is_num else (b, a) if b.is_bit and a.is_num else (None, None)
+    if bit is None or num is None or bit.is_bool:
+        return None
+    if bits_numbers_convert(bit, num):
+        return num
+    if num.is_real:
+        return LREAL if bit.bits <= 32 else None
+    for name in _RANK[:8]:
+        t = ELEMENTARY[name]
+        if isinstance(t, ElemType) and _holds_bits(bit.bits, t) and widens_to(num, t):
+            return t
+    return None
+
+
 def common_type(a: Type, b: Type) -> Type | None:
     """The smallest type both operands widen to, or None."""
     a, b = base_of(a), base_of(b)

@@ -79,6 +79,11 @@ class CheckContext:
         d = self.dialect
         return d is None or (d.oop if kind == "oop" else d.vendor_extensions)
 
+    def bits_as_numbers(self) -> bool:
+        """May bit strings and numbers convert implicitly where the value is kept (codesys, twincat,
+        and the default, which accepts what any preset accepts)?"""
+        return self.dialect is None or self.dialect.bits_as_numbers
+
     def enum_as_int(self, t) -> bool:
         """May this enumeration's values be read as integers (codesys/twincat, not 'strict')?"""
         return (

@@ -296,7 +296,7 @@ class Expressions(Part):
             if op in ("AND_THEN", "OR_ELSE"):
                 return self._bad_operands(e, lt, rt)
             if (a.is_intlike or a is T.LIT_INT) and (b.is_intlike or b is T.LIT_INT):
-                c = T.common_type(a, b)
+                c = T.common_type(a, b) or self._bits_and_numbers(a, b)
                 if c is None:
                     return self._bad_operands(e, lt, rt)
                 return c if not isinstance(c, T.LiteralType) else T.default_type_for_literal(c)
@@ -318,7 +318,7 @@ class Expressions(Part):
                 and all(x is _NULL or isinstance(x, T.POUType) and x.pou_kind != "FUNCTION" for x in (a, b))
             ):
                 return T.BOOL  # the same instance (or NULL) behind both?
-            c = T.common_type(a, b)
+            c = T.common_type(a, b) or self._bits_and_numbers(a, b)
             if c is None or isinstance(c, (T.ArrayType, T.StructType, T.POUType)):
                 return self._bad_operands(e, lt, rt)
             return T.BOOL
@@ -335,10 +335,13 @@ class Expressions(Part):
             if a.is_bit and b.is_bit or a.is_bit and b is T.LIT_INT or b.is_bit and a is T.LIT_INT:
                 # IEC has no arithmetic on bit strings, but every dialect allows it
                 return T.common_type(a, b)
+            c = self._bits_and_numbers(a, b)
+            if c is not None:
+                return c
             return self._bad_operands(e, lt, rt)
         if op == "MOD":
             if (a.is_intlike or a is T.LIT_INT) and (b.is_intlike or b is T.LIT_INT):
-                c = T.common_type(a, b)
+                c = T.common_type(a, b) or self._bits_and_numbers(a, b)
                 if c is not None:
                     return c
             return self._bad_operands(e, lt, rt)
@@ -351,6 +354,10 @@ class Expressions(Part):
                 return T.REAL if cast(T.ElemType, a).bits <= 16 else T.LREAL
             return self._bad_operands(e, lt, rt)
         raise AssertionError(op)
+
+    def _bits_and_numbers(self, a: T.Type, b: T.Type) -> T.Type | None:
+        """A bit string with a number (INT + BYTE) where the dialect converts between them."""
+        return T.bits_numbers_common(a, b) if self.ctx.bits_as_numbers() else None
 
     def _time_arith(self, op, a, b):
         ka, kb = a.kind, b.kind

@@ -259,6 +259,18 @@ class Statements(Part):
             return True
         if T.widens_to(s, d):
             return True
+        if self.ctx.bits_as_numbers() and T.bits_numbers_convert(s, d):
+            return True  # CODESYS, TwinCAT: BYTE into INT or REAL, INT into WORD (the value is kept)
+        if self.ctx.bits_as_numbers() and T.lossy_number_conversion(s, d):
+            self.warn(
+                "W008",
+                span,
+                f"implicit conversion from {src} to {dst} may lose data (the value is wrapped to {dst})"
+                if not d.is_real
+                else f"implicit conversion from {src} to {dst} may lose precision",
+                f"convert explicitly with {s.name}_TO_{d.name}(...) to say it is meant",
+            )
+            return True
         if (
             self.ctx.enum_as_int(s)
             and (d.is_intlike or d.is_real)
@@ -295,12 +307,18 @@ class Statements(Part):
             )
         ):
             conv = f"{s.name}_TO_{d.name}"
-            self.err(
-                "E027",
-                span,
-                f"implicit conversion from {src} to {dst} may lose data",
-                f"convert explicitly with {conv}(...)",
-            )
+            if s.kind != d.kind and "bit" in (s.kind, d.kind) and T.bits_numbers_convert(s, d):
+                # nothing would be lost: the rule is the type family
+                why = (
+                    f"{src} is a bit string and {dst} a number: IEC 61131-3 converts between them only "
+                    f"explicitly (the codesys and twincat dialects do it implicitly)"
+                    if s.kind == "bit"
+                    else f"{src} is a number and {dst} a bit string: IEC 61131-3 converts between them only "
+                    f"explicitly (the codesys and twincat dialects do it implicitly)"
+                )
+            else:
+                why = f"implicit conversion from {src} to {dst} may lose data"
+            self.err("E027", span, why, f"convert explicitly with {conv}(...)")
             return False
         self.err("E013", span, f"type mismatch: cannot {what} {src} to {dst}")
         return False
