@@ -145,3 +145,34 @@ def test_iec_and_matiec_refuse_conversions_that_may_lose_data(dialect):
 def test_a_real_never_becomes_an_integer_implicitly(dialect):
     src = "PROGRAM main\nVAR r : REAL; k : DINT; END_VAR\nk := r;\nEND_PROGRAM\n"
     assert "t.st:3:6: error[E027]: implicit conversion from REAL to DINT may lose data" in errors(src, dialect)
+
+
+ZERO_ONE = """
+PROGRAM main
+VAR RST : BOOL := 0; on : BOOL := 1; a, b, c, d : INT := 7; t : TON; x, y, z : BOOL; END_VAR
+b := 9;
+c := SEL(0, a, b);
+d := SEL(1, a, b);
+IF 1 THEN a := 5; END_IF;
+WHILE 0 DO a := 1; END_WHILE;
+x := 1;
+y := RST OR 0;
+z := 1 AND on;
+t(IN := 1, PT := T#1s);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "iec", "openplc", "codesys", "twincat"])
+def test_zero_and_one_are_bool_literals_where_a_bool_is_expected(dialect):
+    plc = run(ZERO_ONE, 1, dialect)
+    got = {k: plc[f"main.{k}"] for k in ("RST", "on", "a", "c", "d", "x", "y", "z")}
+    assert got == {"RST": False, "on": True, "a": 5, "c": 7, "d": 9, "x": True, "y": False, "z": True}
+    assert all(type(v) is bool for k, v in got.items() if k in ("RST", "on", "x", "y", "z"))
+    assert plc["main.t.IN"] is True
+
+
+def test_other_integers_are_still_not_bool():
+    assert "t.st:1:41: error[E013]: type mismatch: cannot assign integer literal to BOOL" in errors(
+        "PROGRAM main VAR x : BOOL; END_VAR x := 2; END_PROGRAM"
+    )

@@ -254,7 +254,7 @@ def test_runtime_faults_and_endless_loops_fail_the_test_at_their_line():
         ("TEST 'x' MOCK_FUNCTION ABS RETURNS 1; END_TEST", "E020", "'ABS' is a standard function"),
         ("TEST 'x' VAR i : INT; END_VAR MOCK i; END_TEST", "E013", "MOCK needs a function block or program instance"),
         ("TEST 'x' ASSERT_EQ(1); END_TEST", "E017", "ASSERT_EQ takes 2 or 3 arguments, not 1"),
-        ("TEST 'x' ASSERT_TRUE(1); END_TEST", "E013", "ASSERT_TRUE needs a BOOL"),
+        ("TEST 'x' ASSERT_TRUE(2); END_TEST", "E013", "ASSERT_TRUE needs a BOOL"),
         ("TEST 'x' ASSERT_EQ(1, 'a'); END_TEST", "E014", ""),
         ("TEST 'x' ASSERT_EQ(1, 1, 5); END_TEST", "E013", "the message of ASSERT_EQ must be a STRING"),
         ("TEST 'x' ADVANCE_TIME('soon'); END_TEST", "E013", "ADVANCE_TIME needs a TIME"),

@@ -96,6 +96,11 @@ class Expressions(Part):
 
     def _literal(self, e: A.Literal, expected):
         k = e.kind
+        if k == "int" and not e.type_name and e.value in (0, 1) and expected is not None:
+            if T.base_of(expected).is_bool:
+                # IEC 61131-3: 0 and 1 are BOOL literals too (RST : BOOL := 0; SEL(0, a, b); IF 1 THEN)
+                e.kind, e.value = "bool", bool(e.value)
+                return T.BOOL
         if e.type_name:
             tn = e.type_name
             if k in ("time", "date", "tod", "dt"):
