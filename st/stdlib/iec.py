@@ -18,6 +18,7 @@ from . import functions
 
 FBS_PATH = Path(__file__).with_name("standard_fbs.st")
 FUNCTIONS_PATH = Path(__file__).with_name("standard_functions.st")
+OPENPLC_FBS_PATH = Path(__file__).with_name("openplc_fbs.st")  # PID, RAMP, RTC, SEMA...: OpenPLC's extra blocks
 NS_PER_MS = 1_000_000
 
 
@@ -227,6 +228,7 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
     lib = Library("iec61131", version=f"1-{int(f_trig_first_scan)}-{time_unit}")
     lib.sources.append((str(FBS_PATH), standard_fbs_source(f_trig_first_scan)))
     lib.sources.append((str(FUNCTIONS_PATH), FUNCTIONS_PATH.read_text()))
+    lib.sources.append((str(OPENPLC_FBS_PATH), OPENPLC_FBS_PATH.read_text()))
     lib.helpers.update(functions.NAMESPACE)
     add = lib.add
     # numeric
