@@ -176,3 +176,22 @@ def test_other_integers_are_still_not_bool():
     assert "t.st:1:41: error[E013]: type mismatch: cannot assign integer literal to BOOL" in errors(
         "PROGRAM main VAR x : BOOL; END_VAR x := 2; END_PROGRAM"
     )
+
+
+@pytest.mark.parametrize("name", ["PID", "RAMP", "TON", "HYSTERESIS"])
+def test_a_library_block_nothing_else_in_the_library_uses_may_be_replaced_by_a_function(name):
+    src = (
+        f"FUNCTION {name} : REAL\nVAR_INPUT x : REAL; END_VAR\n{name} := x * 2.0;\nEND_FUNCTION\n"
+        f"PROGRAM main\nVAR y : REAL; END_VAR\ny := {name}(2.5);\nEND_PROGRAM\n"
+    )
+    result = compile_text(src, "t.st", use_cache=False)
+    assert [(d.code, d.span.line) for d in result.diagnostics if d.span.file == "t.st"] == [("W004", 1)]
+    plc = PLC(result)
+    plc.scan()
+    assert plc["main.y"] == 5.0
+
+
+@pytest.mark.parametrize("name", ["R_TRIG", "INTEGRAL"])
+def test_a_library_block_the_library_itself_uses_keeps_its_kind(name):
+    src = f"FUNCTION {name} : REAL\nVAR_INPUT x : REAL; END_VAR\n{name} := x;\nEND_FUNCTION\n"
+    assert f"t.st:1:10: error[E011]: '{name}' is a function block of the standard library" in errors(src)

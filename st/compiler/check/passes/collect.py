@@ -3,6 +3,8 @@ units, by name, before anything is resolved (so declarations may come in any ord
 
 from __future__ import annotations
 
+import re
+
 from ....model import types as T
 from ....source import Span
 from ... import ast as A
@@ -33,7 +35,13 @@ def _collect(ctx: CheckContext, u: A.Unit) -> None:
             key = item.name.lower()
             if key in ctx.project.pous or key in ctx.pending_types:
                 old = ctx.project.pous.get(key)
-                if old is not None and old.library and not ctx.lib_of(item.span) and old.pou_kind != item.kind:
+                if (
+                    old is not None
+                    and old.library
+                    and not ctx.lib_of(item.span)
+                    and old.pou_kind != item.kind
+                    and _used_by_library(ctx, old)
+                ):
                     # the library's own code uses it as what it is: another kind cannot stand in for it
                     kinds = {
                         "FUNCTION": "function",
@@ -70,6 +78,29 @@ def _collect(ctx: CheckContext, u: A.Unit) -> None:
             ctx.global_blocks.append(("", item))
         elif isinstance(item, A.TestBlock):
             ctx.project.test_blocks.append(item)
+
+
+_END = re.compile(r"^\s*END_(FUNCTION_BLOCK|FUNCTION|PROGRAM|INTERFACE|CLASS)\b", re.I | re.M)
+
+
+def _used_by_library(ctx: CheckContext, pou: T.POUType) -> bool:
+    """Does library code other than `pou`'s own declaration name it? Then a user POU of another
+    kind cannot stand in for it (the standard library's F_TRIG uses R_TRIG, PID uses INTEGRAL);
+    a library POU nothing else uses may be replaced by anything."""
+    name = re.compile(rf"\b{re.escape(pou.name)}\b", re.I)
+    own = pou.decl.span if pou.decl is not None else None
+    for lib in ctx.libraries:
+        for path, text in lib.sources:
+            if own is not None and path == own.file:
+                start = sum(len(line) + 1 for line in text.split("\n")[: own.line - 1])
+                end = _END.search(text, start)
+                text = text[:start] + text[end.end() if end else len(text) :]
+            if name.search(_COMMENTS.sub("", text)):
+                return True
+    return False
+
+
+_COMMENTS = re.compile(r"\(\*.*?\*\)|//[^\n]*", re.S)
 
 
 def _oop_features(ctx: CheckContext, item) -> None:
