@@ -200,6 +200,13 @@ class Code(str, Enum):
             "for REAL). The iec and openplc dialects refuse it (E027). Convert explicitly to say it is meant."
         ),
     )
+    EMBEDDED_CODE = (
+        "W009",
+        (
+            "An embedded C block {{ ... }} (OpenPLC's python_eval and LogMessage blocks carry them) is read and "
+            "skipped: st does not run C. Write what it does in ST to have it run."
+        ),
+    )
 
 
 class Severity(str, Enum):

@@ -195,3 +195,63 @@ def test_a_library_block_nothing_else_in_the_library_uses_may_be_replaced_by_a_f
 def test_a_library_block_the_library_itself_uses_keeps_its_kind(name):
     src = f"FUNCTION {name} : REAL\nVAR_INPUT x : REAL; END_VAR\n{name} := x;\nEND_FUNCTION\n"
     assert f"t.st:1:10: error[E011]: '{name}' is a function block of the standard library" in errors(src)
+
+
+OPENPLC_COMMENT = """(* MatIEC: (* is plain text inside a comment *)
+PROGRAM main
+VAR x : INT; END_VAR
+x := x + 1; (* done *)
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "openplc"])
+def test_a_comment_ends_at_its_first_close_as_matiec_reads_it(dialect):
+    assert run(OPENPLC_COMMENT, 3, dialect)["main.x"] == 3
+
+
+@pytest.mark.parametrize("dialect", ["iec", "codesys", "twincat"])
+def test_comments_nest_in_iec_codesys_and_twincat(dialect):
+    assert "t.st:1:1: error[E002]: unterminated comment '(*' (comments nest" in errors(OPENPLC_COMMENT, dialect)
+
+
+NESTED = """PROGRAM main
+VAR x : INT; END_VAR
+(* outer (* inner *) still outer *)
+x := 2;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "iec", "codesys"])
+def test_nested_comments_by_default_and_in_iec_and_codesys(dialect):
+    assert run(NESTED, 1, dialect)["main.x"] == 2
+
+
+def test_under_openplc_an_inner_close_ends_the_comment_and_the_error_says_so():
+    text = errors(NESTED, "openplc")
+    assert (
+        "t.st:3:34: error[E002]: '*)' without a matching '(*' (comments do not nest here: an inner '*)' "
+        "ends the whole comment)"
+    ) in text
+
+
+EMBEDDED_C = """PROGRAM main
+VAR x : INT; END_VAR
+{{
+  if (x > 0) { printf("%d", x); }
+}}
+x := x + 1;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "openplc", "iec", "codesys"])
+def test_embedded_c_blocks_are_skipped_with_a_located_warning(dialect):
+    result = compile_text(EMBEDDED_C, "t.st", dialect=dialect, use_cache=False)
+    assert [(d.code, d.span.line, d.span.col, d.message) for d in result.diagnostics if d.span.file == "t.st"] == [
+        ("W009", 3, 1, "embedded C code {{ ... }} is skipped: st does not run it")
+    ]
+    plc = PLC(result)
+    plc.scan(2)
+    assert plc["main.x"] == 2

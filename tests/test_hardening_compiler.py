@@ -126,7 +126,7 @@ def test_a_parser_failure_is_an_internal_error_diagnostic_not_an_exception(monke
 
     parser, _ = driver._get_parser()
 
-    def broken(src):
+    def broken(src, *options):
         raise KeyError("boom")
 
     monkeypatch.setattr(parser, "parse", broken)

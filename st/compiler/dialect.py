@@ -40,11 +40,18 @@ class Dialect:
     writable_inputs: bool = False  # a POU may assign its own VAR_INPUT (a local copy); else E018
     enum_as_int: bool = False  # an enumeration value is usable as its integer (not {attribute 'strict'})
     bits_as_numbers: bool = False  # bit strings and numbers convert implicitly where the value is kept
+    nested_comments: bool = True  # (* (* *) *) nests (IEC 3rd edition, CODESYS); MatIEC ends at the first *)
 
 
 PRESETS = {
     "openplc": Dialect(
-        "openplc", time_unit="s", f_trig_first_scan=True, oop=False, vendor_extensions=False, writable_inputs=True
+        "openplc",
+        time_unit="s",
+        f_trig_first_scan=True,
+        oop=False,
+        vendor_extensions=False,
+        writable_inputs=True,
+        nested_comments=False,
     ),
     "iec": Dialect("iec", vendor_extensions=False),
     "codesys": Dialect("codesys", attribute_pragmas=True, writable_inputs=True, enum_as_int=True, bits_as_numbers=True),

@@ -43,14 +43,14 @@ def _get_parser():
     return _parser, _builder
 
 
-def parse_source(src: SourceFile, sink: DiagnosticSink) -> A.Unit | None:
+def parse_source(src: SourceFile, sink: DiagnosticSink, nested_comments: bool | None = True) -> A.Unit | None:
     """Parse one file; every problem becomes a diagnostic of that file (never an exception)."""
     with _parser_lock:
         parser, builder = _get_parser()
         builder.path = src.path
         builder.errors = []
         try:
-            unit, diags = parser.parse(src)
+            unit, diags = parser.parse(src, nested_comments)
         except RecursionError:
             sink.error(
                 "E041",
@@ -202,8 +202,9 @@ def _parse_all(
         u = parse_source(src, sink)
         if u is not None:
             units.append(u)
+    nested = options.dialect.nested_comments if options.dialect is not None else None
     for s in sources:
-        u = parse_source(s, sink)
+        u = parse_source(s, sink, nested)
         if u is not None:
             units.append(u)
     # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat

@@ -1,9 +1,11 @@
 """Remove comments and pragmas before lexing.
 
-ST comments nest (``(* (* *) *)``), which a regular lexer cannot follow, and
+ST comments nest in CODESYS and TwinCAT (``(* (* *) *)``), which a regular lexer
+cannot follow; in MatIEC (OpenPLC) they do not: ``(* a (* b *)`` is one comment.
 OpenPLC's ``(*DBG:...*)`` lines can be megabytes long. This pass blanks every
-comment and pragma with spaces (keeping newlines), so line and column numbers
-of everything that remains are unchanged, and records the pragmas it removed.
+comment, pragma and embedded C block (``{{ ... }}``, OpenPLC's) with spaces
+(keeping newlines), so line and column numbers of everything that remains are
+unchanged, and records the pragmas and C blocks it removed.
 """
 
 from __future__ import annotations
@@ -27,6 +29,11 @@ class Pragma:
         m = _NAME.match(self.text)
         return m.group(1).lower() if m else ""
 
+    @property
+    def embedded_code(self) -> bool:
+        """An embedded C block `{{ ... }}` (OpenPLC): code for MatIEC's C output, not a pragma."""
+        return self.text.startswith("{{")
+
 
 @dataclass(frozen=True, slots=True)
 class CommentError:
@@ -38,8 +45,21 @@ def _blank(text: str) -> str:
     return _BLANK.sub(" ", text)
 
 
-def strip_comments(text: str) -> tuple[str, list[Pragma], list[CommentError]]:
-    """Return (text with comments blanked, pragmas, errors)."""
+def strip_comments(text: str, nested: bool | None = True) -> tuple[str, list[Pragma], list[CommentError]]:
+    """Return (text with comments blanked, pragmas, errors). `nested`: do `(* *)` comments nest
+    (CODESYS, TwinCAT) or end at the first `*)` (MatIEC); None: nest, unless that leaves a comment
+    unclosed and reading them MatIEC's way leaves none (a file written for OpenPLC)."""
+    if nested is None:
+        found = _strip(text, True)
+        if found[2] and any("unterminated comment '(*'" in e.message for e in found[2]):
+            flat = _strip(text, False)
+            if not flat[2]:
+                return flat
+        return found
+    return _strip(text, nested)
+
+
+def _strip(text: str, nested: bool) -> tuple[str, list[Pragma], list[CommentError]]:
     if "(*" not in text and "//" not in text and "/*" not in text and "{" not in text:
         return text, [], []
     out: list[str] = []
@@ -81,6 +101,13 @@ def strip_comments(text: str) -> tuple[str, list[Pragma], list[CommentError]]:
                 end = n
             else:
                 end = close + 2
+        elif tok == "(*" and not nested:
+            close = text.find("*)", start + 2)
+            if close < 0:
+                errors.append(CommentError(start, "unterminated comment '(*'"))
+                end = n
+            else:
+                end = close + 2
         elif tok == "(*":
             depth = 1
             i = start + 2
@@ -104,6 +131,14 @@ def strip_comments(text: str) -> tuple[str, list[Pragma], list[CommentError]]:
                 end = n
             else:
                 end = i
+        elif tok == "{" and text.startswith("{{", start):
+            close = text.find("}}", start + 2)
+            if close < 0:
+                errors.append(CommentError(start, "unterminated embedded code block '{{' (it ends with '}}')"))
+                end = n
+            else:
+                end = close + 2
+                pragmas.append(Pragma(start, text[start:end]))
         elif tok == "{":
             close = text.find("}", start + 1)
             if close < 0:
@@ -113,7 +148,13 @@ def strip_comments(text: str) -> tuple[str, list[Pragma], list[CommentError]]:
                 end = close + 1
                 pragmas.append(Pragma(start, text[start:end]))
         else:  # a stray '*)'
-            errors.append(CommentError(start, "'*)' without a matching '(*'"))
+            errors.append(
+                CommentError(
+                    start,
+                    "'*)' without a matching '(*'"
+                    + ("" if nested else " (comments do not nest here: an inner '*)' ends the whole comment)"),
+                )
+            )
             end = start + 2
         out.append(_blank(text[start:end]))
         pos = end

@@ -148,14 +148,25 @@ class StParser:
                 del errors[mark:]  # what the trial reduced is not the program
 
     # ------------------------------------------------------------------ parse
-    def parse(self, src: SourceFile):
-        """Returns (result or None, diagnostics)."""
-        text, pragmas, comment_errors = strip_comments(src.text)
+    def parse(self, src: SourceFile, nested_comments: bool | None = True):
+        """Returns (result or None, diagnostics). `nested_comments`: see `strip_comments`."""
+        text, pragmas, comment_errors = strip_comments(src.text, nested_comments)
         diags: list[Diagnostic] = []
         for ce in comment_errors:
             diags.append(Diagnostic("E002", Severity.ERROR, src.span_at(ce.offset), ce.message))
         seen_pragmas = set()
         for p in pragmas:
+            if p.embedded_code:
+                diags.append(
+                    Diagnostic(
+                        "W009",
+                        Severity.WARNING,
+                        src.span_at(p.offset),
+                        "embedded C code {{ ... }} is skipped: st does not run it",
+                        hint="OpenPLC compiles it into its C output; write what it does in ST to have it run here",
+                    )
+                )
+                continue
             if p.text not in seen_pragmas:
                 seen_pragmas.add(p.text)
                 diags.append(
