@@ -8,7 +8,7 @@ from typing import cast
 from ...model import types as T
 from .. import ast as A
 from ..library import FuncSig
-from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies, method_of, same_type, take_address
+from .common import _SECTIONS_PARAM, Binding, CallTarget, Scope, _satisfies, method_of, same_type, take_address
 from .part import Part
 from .tests import TEST_CALLS
 
@@ -321,7 +321,7 @@ class Calls(Part):
         c.target = CallTarget("function", pou=pou, bind=bind)
         return pou.return_type
 
-    def _bind_args(self, c: A.Call, pou: T.POUType, scope: Scope, is_fb: bool):
+    def _bind_args(self, c: A.Call, pou: T.POUType, scope: Scope, is_fb: bool) -> Binding:
         """Match arguments to parameters: {lower param: Arg} plus EN/ENO."""
         params = pou.params()
         pos_params = params

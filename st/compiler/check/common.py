@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import re
-from typing import Any
+from typing import Any, TypedDict
 
 from ...model import types as T
 from ...model.addresses import AddressError, parse_address
@@ -29,6 +29,14 @@ def image_problem(addr: str):
     return None
 
 
+class Binding(TypedDict):
+    """A call's arguments matched to the callee's parameters."""
+
+    params: dict[str, A.Arg]  # lower-case parameter name → argument
+    en: A.Arg | None
+    eno: A.Arg | None
+
+
 class CallTarget:
     """What a call resolved to (kept on `Call.target` for code generation).
 
@@ -37,7 +45,8 @@ class CallTarget:
 
     kind: str  # fb, function, method, native, action, bound, new, delete, ref, isvalidref, sizeof, queryitf, test
     pou: T.POUType  # fb, function, method
-    bind: dict[str, A.Arg]  # fb, function, method: lower-case parameter name → argument
+    bind: Binding  # fb, function, method
+    nonvirtual: T.POUType | None  # fb, method, after lowering: the body to run non-virtually (SUPER^)
     obj: A.Expr | None  # method: the instance, None for this one
     name: str  # action
     inst: A.Expr  # action of another instance
