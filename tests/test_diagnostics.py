@@ -218,3 +218,11 @@ def test_limits_give_diagnostics_not_crashes():
 def test_set_reset_with_an_undeclared_operand_is_one_error_not_a_crash():
     e = diags("PROGRAM p\nVAR x : BOOL; END_VAR\nnope S= TRUE;\nx R= gone;\nEND_PROGRAM\n")
     assert codes(e) == [("E010", 3, 1), ("E010", 4, 6)]
+
+
+def test_transition_condition_with_an_undeclared_name_is_one_error_not_a_crash():
+    src = (
+        "PROGRAM p\nVAR x : BOOL; END_VAR\nINITIAL_STEP s0: END_STEP\n"
+        "TRANSITION FROM s0 TO s1 := nope; END_TRANSITION\nSTEP s1: END_STEP\nEND_PROGRAM\n"
+    )
+    assert codes(diags(src)) == [("E010", 4, 29)]
