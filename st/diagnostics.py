@@ -25,7 +25,7 @@ class Code(str, Enum):
         return member
 
     __str__ = str.__str__
-    __format__ = str.__format__
+    __format__ = str.__format__  # type: ignore[assignment]  # f"{code}" is the code, as for a str
     __hash__ = str.__hash__
 
     UNREADABLE_FILE = "E000", ("A source file could not be read.")

@@ -9,7 +9,8 @@ from .diagnostics import Code
 def explain(code: str) -> str | None:
     """The explanation of a code (any case), or None for an unknown one."""
     try:
-        return Code(code.upper()).explanation
+        # Code(value) looks a member up (Enum's metaclass), it does not call Code.__new__
+        return Code(code.upper()).explanation  # type: ignore[call-arg]
     except ValueError:
         return None
 

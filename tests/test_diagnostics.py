@@ -223,3 +223,16 @@ def test_limits_give_diagnostics_not_crashes():
     loops = "".join("FOR i := 1 TO 1 DO\n" for _ in range(25)) + "x := x + 1;\n" + "END_FOR;\n" * 25
     deep = diags("PROGRAM p\nVAR x : INT; i : INT; END_VAR\n" + loops + "END_PROGRAM\n")
     assert [d.code for d in deep.errors] == ["E041"]
+
+
+def test_set_reset_with_an_undeclared_operand_is_one_error_not_a_crash():
+    e = diags("PROGRAM p\nVAR x : BOOL; END_VAR\nnope S= TRUE;\nx R= gone;\nEND_PROGRAM\n")
+    assert codes(e) == [("E010", 3, 1), ("E010", 4, 6)]
+
+
+def test_transition_condition_with_an_undeclared_name_is_one_error_not_a_crash():
+    src = (
+        "PROGRAM p\nVAR x : BOOL; END_VAR\nINITIAL_STEP s0: END_STEP\n"
+        "TRANSITION FROM s0 TO s1 := nope; END_TRANSITION\nSTEP s1: END_STEP\nEND_PROGRAM\n"
+    )
+    assert codes(diags(src)) == [("E010", 4, 29)]

@@ -49,58 +49,58 @@ class Direct(Expr):
 
 @dataclass(slots=True, eq=False)
 class Field(Expr):
-    base: Expr = None
-    name: str = ""
-    name_span: Span = None
+    base: Expr
+    name: str
+    name_span: Span
     sym: Any = field(default=None, repr=False)
 
 
 @dataclass(slots=True, eq=False)
 class Bit(Expr):
-    base: Expr = None
+    base: Expr
     index: int = 0
     size: str = "X"  # X (bit), B, W, D, L for partial access x.%B1
 
 
 @dataclass(slots=True, eq=False)
 class Index(Expr):
-    base: Expr = None
-    indices: list = None
+    base: Expr
+    indices: list[Expr]
 
 
 @dataclass(slots=True, eq=False)
 class Deref(Expr):
-    base: Expr = None
+    base: Expr
 
 
 @dataclass(slots=True, eq=False)
 class Arg:
     span: Span
-    name: str = ""  # "" for a positional argument
-    value: Expr = None
+    name: str  # "" for a positional argument
+    value: Expr
     output: bool = False  # name => variable
     negated: bool = False  # NOT name => variable
 
 
 @dataclass(slots=True, eq=False)
 class Call(Expr):
-    callee: Expr = None
-    args: list = None
+    callee: Expr
+    args: list[Arg]
     # filled by the checker: what is being called
     target: Any = field(default=None, repr=False)
 
 
 @dataclass(slots=True, eq=False)
 class Unary(Expr):
-    op: str = ""  # "-", "+", "NOT"
-    operand: Expr = None
+    op: str  # "-", "+", "NOT"
+    operand: Expr
 
 
 @dataclass(slots=True, eq=False)
 class Binary(Expr):
-    op: str = ""  # + - * / MOD ** = <> < > <= >= AND OR XOR AND_THEN OR_ELSE
-    left: Expr = None
-    right: Expr = None
+    op: str  # + - * / MOD ** = <> < > <= >= AND OR XOR AND_THEN OR_ELSE
+    left: Expr
+    right: Expr
 
 
 # --------------------------------------------------------------------------- initializers
@@ -156,72 +156,74 @@ class Stmt:
 
 @dataclass(slots=True, eq=False)
 class Assign(Stmt):
-    target: Expr = None
-    value: Expr = None
+    target: Expr
+    value: Expr
     kind: str = ":="  # ":=", "S=", "R=", "?=", "REF="
-    attempt: tuple = None  # for "?=": (kind name, source is a reference, destination is a reference)
+    attempt: tuple[str, bool, bool] | None = (
+        None  # for "?=": (kind name, source is a reference, destination is a reference)
+    )
 
 
 @dataclass(slots=True, eq=False)
 class CallStmt(Stmt):
-    call: Call = None
+    call: Call
 
 
 @dataclass(slots=True, eq=False)
 class Mock(Stmt):
     """MOCK inst; (unit tests): the instance's body is skipped from now on, calls are counted."""
 
-    target: Expr = None
+    target: Expr
 
 
 @dataclass(slots=True, eq=False)
 class MockFunction(Stmt):
     """MOCK_FUNCTION f RETURNS v; (unit tests)."""
 
-    name: str = ""
-    value: Expr = None
+    name: str
+    value: Expr
     pou: Any = field(default=None, repr=False)  # filled by the checker
 
 
 @dataclass(slots=True, eq=False)
 class If(Stmt):
-    branches: list = None  # [(cond, [stmt])]
-    orelse: list = None  # [stmt] or None
+    branches: list[tuple[Expr, list[Stmt]]]
+    orelse: list[Stmt] | None = None
 
 
 @dataclass(slots=True, eq=False)
 class CaseBranch:
     span: Span
-    labels: list  # [(lo Expr, hi Expr | None)]
-    body: list
+    labels: list[tuple[Expr, Expr | None]]
+    body: list[Stmt]
 
 
 @dataclass(slots=True, eq=False)
 class Case(Stmt):
-    selector: Expr = None
-    branches: list = None
-    orelse: list = None
+    selector: Expr
+    branches: list[CaseBranch]
+    orelse: list[Stmt] | None = None
 
 
 @dataclass(slots=True, eq=False)
 class For(Stmt):
-    var: Expr = None
-    start: Expr = None
-    end: Expr = None
-    step: Expr | None = None
-    body: list = None
+    var: Expr
+    start: Expr
+    end: Expr
+    step: Expr | None
+    body: list[Stmt]
 
 
 @dataclass(slots=True, eq=False)
 class While(Stmt):
-    cond: Expr = None
-    body: list = None
+    cond: Expr
+    body: list[Stmt]
 
 
 @dataclass(slots=True, eq=False)
 class Repeat(Stmt):
-    body: list = None
-    cond: Expr = None
+    body: list[Stmt]
+    cond: Expr
 
 
 @dataclass(slots=True, eq=False)
@@ -234,13 +236,13 @@ class CountedFor(Stmt):
     (1 without BY), or None when only known at run time.
     """
 
-    var: Expr = None
-    start: Expr = None
-    end: Expr = None
-    step: Expr | None = None
-    step_value: int | None = 1
-    form: str = "range"
-    body: list = None
+    var: Expr
+    start: Expr
+    end: Expr
+    step: Expr | None
+    step_value: int | None
+    form: str
+    body: list[Stmt]
 
 
 @dataclass(slots=True, eq=False)
@@ -280,7 +282,9 @@ class TypeSpec:
 @dataclass(slots=True, eq=False)
 class NamedType(TypeSpec):
     name: str = ""
-    ctor_args: list = None  # `FB(a := 1)`: FB_init arguments, moved to the declaration's CtorInit
+    ctor_args: list[tuple[str, Span, Expr]] | None = (
+        None  # `FB(a := 1)`: FB_init arguments, moved to the declaration's CtorInit
+    )
 
 
 @dataclass(slots=True, eq=False)
@@ -291,21 +295,21 @@ class StringType(TypeSpec):
 
 @dataclass(slots=True, eq=False)
 class ArrayType(TypeSpec):
-    ranges: list = None  # [(lo Expr, hi Expr)] or [None] for [*]
-    element: TypeSpec = None
+    ranges: list[tuple[Expr, Expr] | None]  # [None] for [*]
+    element: TypeSpec
 
 
 @dataclass(slots=True, eq=False)
 class RefType(TypeSpec):
-    target: TypeSpec = None
+    target: TypeSpec
     kind: str = "REF_TO"  # REF_TO, POINTER, REFERENCE
 
 
 @dataclass(slots=True, eq=False)
 class SubrangeType(TypeSpec):
-    base: str = ""
-    lo: Expr = None
-    hi: Expr = None
+    base: str
+    lo: Expr
+    hi: Expr
 
 
 @dataclass(slots=True, eq=False)
@@ -317,14 +321,14 @@ class EnumValue:
 
 @dataclass(slots=True, eq=False)
 class EnumType(TypeSpec):
-    values: list = None  # [EnumValue]
+    values: list[EnumValue]
     base: str = ""  # "" → INT
     default: str = ""
 
 
 @dataclass(slots=True, eq=False)
 class StructType(TypeSpec):
-    members: list = None  # [VarDecl]
+    members: list[VarDecl]
     extends: Any = None  # NamedType of the base structure (CODESYS `TYPE B EXTENDS A : STRUCT`)
 
 
@@ -339,7 +343,7 @@ class VarDecl:
     init: Any = None  # Expr, ArrayInit, StructInit or None
     location: str = ""  # "%IX0.0"
     edge: str = ""  # R_EDGE / F_EDGE
-    path: list = None  # VAR_CONFIG: instance path [names]
+    path: list[str] | None = None  # VAR_CONFIG: instance path [names]
 
 
 @dataclass(slots=True, eq=False)

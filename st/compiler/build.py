@@ -81,7 +81,8 @@ class AstBuilder(Transformer):
     # ---------------------------------------------------------------- helpers
     def sp(self, x) -> Span:
         if isinstance(x, Token):
-            return Span(self.path, x.line, x.column, x.end_line, x.end_column)
+            # the lexer gives every token its position, and the parser's repaired ";" copies one
+            return Span(self.path, x.line, x.column, x.end_line, x.end_column)  # type: ignore[arg-type]
         span = getattr(x, "span", None)
         if span is not None:
             return span

@@ -12,6 +12,7 @@ import os
 import sys
 import threading
 from pathlib import Path
+from types import CodeType
 
 from ..diagnostics import CompileError, Diagnostic, DiagnosticSink, Severity
 from ..model.compiled import CompiledProgram
@@ -121,9 +122,9 @@ def _compile_sources(
     sink = DiagnosticSink()
     units, lib_paths = _parse_all(sources, lib_sources, options, sink)
     checker = Checker(sink, libraries, options)
-    modules = []
-    test_modules = []
-    pysrc = {}
+    modules: list[tuple[str, CodeType]] = []
+    test_modules: list[tuple[str, CodeType]] = []
+    pysrc: dict[str, str] = {}
     project = Project()
     gen = None
     try:

@@ -26,6 +26,7 @@ import tempfile
 import time
 from pathlib import Path
 from statistics import mean, pstdev
+from typing import Any
 
 from .report import Report
 
@@ -84,7 +85,7 @@ def segment_toml(n: int, cycle: str = "1ms") -> str:
 
 
 # ---------------------------------------------------------------- cyclictest
-def percentile_from_histogram(hist: dict, total: int, q: float, overflow_max: int) -> float:
+def percentile_from_histogram(hist: dict, total: int, q: float, overflow_max: float) -> float:
     """The q-quantile (µs) of a cyclictest histogram {µs: count}; overflows sit at the max."""
     need = q * total
     seen = 0
@@ -188,7 +189,9 @@ def run_st(program: Path, seconds: float, prio: int, cycle: str | None = None, e
             cmd += ["--ethercat", str(Path(ethercat).resolve())]
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=d, env=env)
-        err, rt, cpu0, t0 = [], "", None, None
+        err: list[str] = []
+        rt, cpu0, t0 = "", None, None
+        assert proc.stderr is not None  # stderr=PIPE
         for line in proc.stderr:  # the line printed just before the first scan
             err.append(line)
             if line.startswith("real time:"):
@@ -202,7 +205,7 @@ def run_st(program: Path, seconds: float, prio: int, cycle: str | None = None, e
             raise RuntimeError(f"st run exited with {proc.returncode}: {''.join(err).strip()[-600:]}")
         data = json.loads(stats.read_text())
     total = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
-    cpu = (total - cpu0) / (t1 - t0) if cpu0 is not None and t1 > t0 else total / seconds
+    cpu = (total - cpu0) / (t1 - t0) if cpu0 is not None and t0 is not None and t1 > t0 else total / seconds
     t = data["tasks"][0]
     lat = t["latency_us"]
     ecat = data.get("io", {}).get("ethercat", {})
@@ -292,7 +295,7 @@ def run(
     rep = Report("latency", out_dir, "Wake-up latency and CPU usage with 1–10 axes (thesis 6.1/6.2, Tables 6.2–6.4)")
     d = Path(out_dir)
 
-    results = {}  # n → {"st": [dict], "ct": [dict], "ct_error": str}
+    results: dict[int, dict[str, Any]] = {}  # n → {"st": [dict], "ct": [dict], "ct_error": str}
     for n in axes:
         prog = d / f"axes_{n}.st"
         prog.write_text(axes_program(n))

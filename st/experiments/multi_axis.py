@@ -73,7 +73,7 @@ def run(out_dir, quick: bool = False, seed: int = 1) -> Report:
             ["t_s", "offset_deg_at_drives", "offset_deg_plc_view"],
             rows,
         )
-    table = []
+    table: list[tuple] = []
     for d in delays:
         plain, comp = runs[("delay", d, False)][-1][1], runs[("delay", d, True)][-1][1]
         table.append((f"{d:g}", SPEED * 360.0 * d / 1000.0, plain, comp))

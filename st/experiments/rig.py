@@ -38,7 +38,9 @@ class Rig:
         self.plc = PLC(_COMPILED[path])
         configure_axes(self.plc, str(thesis_file(axes_file)))
         self.driver = EtherCATDriver(self.plc, from_dict(segment, str(thesis_file(program))), backend="sim")
-        self.segment = self.driver.segment
+        emulated = self.driver.segment
+        assert emulated is not None  # the sim backend's
+        self.segment = emulated
         self.instance = instance
 
     def __getitem__(self, var: str):

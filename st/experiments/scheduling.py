@@ -68,7 +68,7 @@ class _TracedStats(TaskStats):
     def __init__(self, name: str, period_ns: int, k: int, log: bool):
         super().__init__(name, period_ns, k=k)
         self.u = bytearray()
-        self.log = [] if log else None
+        self.log: list | None = [] if log else None
 
     def record(self, release, start, end):
         super().record(release, start, end)
@@ -101,7 +101,7 @@ class RunResult:
     tasks: list  # [TaskResult] in TASKS order
 
 
-def windows(u: bytes, k: int = K) -> list:
+def windows(u: bytes | bytearray, k: int = K) -> list:
     """U over every window of k consecutive jobs (eq. 3.4 evaluated after each job from the k-th)."""
     if len(u) < k:
         return [sum(u) / len(u)] if u else [1.0]
@@ -136,6 +136,7 @@ def simulate(
     out = []
     for t in plc.tasks:
         s = t.stats
+        assert isinstance(s, _TracedStats)  # every task's, installed above
         w = windows(s.u, k)
         out.append(
             TaskResult(
@@ -232,7 +233,7 @@ All four are non-preemptive (a job runs to completion); under `frame`, `priority
 release that finds the task's previous job not yet started replaces it (*skipped*).
 """)
     headers = ["policy"] + [f"{t} ({p} ms)" for t, p in zip(TASKS, PERIODS_MS)] + ["thesis (Table 6.5)"]
-    rows = [["ideal (no overload)"] + ideal + ["–"]]
+    rows: list[list] = [["ideal (no overload)"] + ideal + ["–"]]
     for p in POLICIES:
         rows.append(
             [LABEL[p]]
@@ -387,7 +388,7 @@ def _plot_executions(rep: Report, avg: dict, ideal: list, runs: int) -> None:
     if fig is None:
         return
     for i, (ax, name) in enumerate(zip(axes[0], TASKS)):
-        x = 0
+        x: float = 0
         ticks, labels = [], []
         for p in POLICIES:
             a = avg[p][i]

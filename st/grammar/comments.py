@@ -112,16 +112,16 @@ def _strip(text: str, nested: bool) -> tuple[str, list[Pragma], list[CommentErro
             depth = 1
             i = start + 2
             while depth:
-                o = text.find("(*", i)
-                c = text.find("*)", i)
-                if c < 0:
+                opening = text.find("(*", i)
+                closing = text.find("*)", i)
+                if closing < 0:
                     break
-                if 0 <= o < c:
+                if 0 <= opening < closing:
                     depth += 1
-                    i = o + 2
+                    i = opening + 2
                 else:
                     depth -= 1
-                    i = c + 2
+                    i = closing + 2
             if depth:
                 errors.append(
                     CommentError(

@@ -134,8 +134,9 @@ class StParser:
         """Would inserting ';' before this token let the parse go on?"""
         if ip is None or tok.type == "$END":
             return False
-        errors = getattr(self.callbacks, "errors", None)  # the builder's, if it keeps any
-        mark = len(errors) if isinstance(errors, list) else None
+        found = getattr(self.callbacks, "errors", None)  # the builder's, if it keeps any
+        errors = found if isinstance(found, list) else None
+        mark = len(errors) if errors is not None else 0
         try:
             trial = ip.copy()
             trial.feed_token(Token("SEMICOLON", ";"))
@@ -144,7 +145,7 @@ class StParser:
         except (UnexpectedInput, RecursionError):  # RecursionError: copying a very deep partial tree
             return False
         finally:
-            if mark is not None:
+            if errors is not None:
                 del errors[mark:]  # what the trial reduced is not the program
 
     # ------------------------------------------------------------------ parse
@@ -181,7 +182,9 @@ class StParser:
 
         def on_error(e: UnexpectedInput) -> bool:
             if isinstance(e, UnexpectedCharacters):
-                ch = text[e.pos_in_stream] if e.pos_in_stream < len(text) else "?"
+                pos = e.pos_in_stream
+                assert pos is not None  # the lexer's error: it knows where it stopped
+                ch = text[pos] if pos < len(text) else "?"
                 diags.append(
                     Diagnostic("E001", Severity.ERROR, Span(src.path, e.line, e.column), f"unexpected character {ch!r}")
                 )

@@ -39,13 +39,13 @@ class CoverageData:
             return
         index = {p: i for i, p in enumerate(self.points)}
         for p, h in zip(other.points, other.hits):
-            i = index.get(p)
-            if i is None:
-                index[p] = i = len(self.points)
+            k = index.get(p)
+            if k is None:
+                index[p] = k = len(self.points)
                 self.points.append(p)
                 self.hits.append(0)
             if h:
-                self.hits[i] = 1
+                self.hits[k] = 1
 
     def to_json(self) -> dict:
         return {"points": [[p.file, p.line, p.kind, p.label, p.target] for p in self.points], "hits": list(self.hits)}

@@ -830,6 +830,7 @@ class Worker:
 
     def _recv(self, timeout: float):
         """The next message, or None after `timeout` seconds; EOFError if the worker died."""
+        assert self.proc is not None and self.proc.stdout is not None  # started, stdout=PIPE
         fd = self.proc.stdout.fileno()
         if not select.select([fd], [], [], max(0.0, timeout))[0]:
             return None
@@ -841,8 +842,10 @@ class Worker:
             self._replace()
         if self.proc is None:
             self._start()
+        proc = self.proc
+        assert proc is not None  # _start made it
         try:
-            _write(self.proc.stdin, (source, name, self.scans, self.watchdog))
+            _write(proc.stdin, (source, name, self.scans, self.watchdog))
         except OSError:
             pass  # died: seen as EOF below
         deadline = time.monotonic() + self.timeout
@@ -851,7 +854,7 @@ class Worker:
             try:
                 msg = self._recv(deadline - time.monotonic())
             except (EOFError, OSError):
-                code = self.proc.wait(5)
+                code = proc.wait(5)
                 self._replace()
                 return Outcome("crash", f"worker died in {phase} (exit {code})", "")
             if msg is None:
@@ -876,6 +879,7 @@ class Worker:
                 self.proc.wait(5)
             finally:
                 for f in (self.proc.stdin, self.proc.stdout):
+                    assert f is not None  # both are pipes
                     try:
                         f.close()
                     except OSError:

@@ -52,7 +52,7 @@ def _measuring(config) -> bool:
 
 def _ini_sources(config) -> list:
     base = Path(config.inipath).parent if config.inipath else Path(config.rootpath)
-    out = []
+    out: list[str] = []
     for pattern in config.getini("st_sources"):
         matches = sorted(base.glob(pattern))
         if not matches and not any(c in pattern for c in "*?["):
@@ -161,7 +161,7 @@ def plc(request):
 
     config = request.config
 
-    def make(*paths, source: str = None, cycle=None, **compile_kw):
+    def make(*paths, source: str | None = None, cycle=None, **compile_kw):
         if (source is None) == (not paths):
             raise TypeError("plc(): give file paths or source=..., not both")
         measure = _measuring(config)

@@ -130,11 +130,13 @@ class TestSuite:
         report = None
         try:
             ns = build_namespace(self.compiled, ctx.install)
-            ctx.watchdog.start(self.timeout_ns)
+            watchdog = ctx.watchdog
+            assert watchdog is not None  # ctx.install made it
+            watchdog.start(self.timeout_ns)
             try:
                 types.FunctionType(self._code[case.pyname], ns, case.pyname)()
             finally:
-                ctx.watchdog.stop()
+                watchdog.stop()
         except TestFailed as f:
             report = f.report
         except Exception as exc:  # noqa: BLE001 - a fault of ST code, reported at its ST line

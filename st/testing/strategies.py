@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import re
 import struct
+from typing import Literal, cast
 
 import hypothesis.strategies as st
 
@@ -83,6 +84,7 @@ def _check_bounds(tname: str, lo, hi, min_value, max_value, fmt=str):
 
 def _integers(t: T.Type, min_value=None, max_value=None):
     ut = T.unalias(t)
+    assert isinstance(ut, (T.ElemType, T.SubrangeType))  # an integer type (its callers')
     for opt, v in (("min_value", min_value), ("max_value", max_value)):
         if v is not None and (isinstance(v, bool) or not isinstance(v, int)):
             raise ValueError(f"{opt} must be an integer for {ut.name}, got {v!r}")
@@ -126,7 +128,7 @@ def _floats(t: T.ElemType, min_value=None, max_value=None, *, allow_nan=False, a
         b if max_value is not None else None,
         allow_nan=allow_nan,
         allow_infinity=allow_infinity,
-        width=t.bits,
+        width=cast(Literal[32, 64], t.bits),  # REAL or LREAL
     )
     # the extremes and zero on purpose: where conversions and overflow checks break, and hypothesis
     # versions differ in how often they reach them
@@ -141,7 +143,7 @@ def _fmt_ns(v) -> str:
 def _durations(t: T.ElemType, min_value=None, max_value=None):
     """TIME/LTIME: bounds as the PLC API takes durations ('10ms', 'T#1s', 2.5 s, timedelta, int ns)."""
     conv = [None if v is None else parse_duration_arg(v) for v in (min_value, max_value)]
-    a, b = _check_bounds(t.name, t.lo, t.hi, *conv, fmt=_fmt_ns)
+    a, b = _check_bounds(t.name, t.lo, t.hi, conv[0], conv[1], fmt=_fmt_ns)
     return st.integers(a, b)
 
 
@@ -156,7 +158,7 @@ def _datetimes(t: T.ElemType, min_value=None, max_value=None):
         lo, hi = -(-t.lo // _DAY) * _DAY, t.hi // _DAY * _DAY
     else:
         lo, hi = t.lo, t.hi
-    a, b = _check_bounds(t.name, lo, hi, *conv, fmt=_fmt_ns)
+    a, b = _check_bounds(t.name, lo, hi, conv[0], conv[1], fmt=_fmt_ns)
     if t.kind != "date":
         return st.integers(a, b)
     first, last = -(-a // _DAY), b // _DAY  # whole days only: a DATE is a midnight
@@ -165,9 +167,12 @@ def _datetimes(t: T.ElemType, min_value=None, max_value=None):
     return st.integers(first, last).map(lambda d: d * _DAY)
 
 
+_SURROGATES: tuple[Literal["Cs"]] = ("Cs",)  # the surrogate category: lone surrogates are no text
+
+
 def _alphabet(wide: bool):
     if wide:
-        return st.characters(min_codepoint=0, max_codepoint=_WIDE_MAX, exclude_categories=("Cs",))
+        return st.characters(min_codepoint=0, max_codepoint=_WIDE_MAX, exclude_categories=_SURROGATES)
     return st.characters(min_codepoint=0, max_codepoint=0xFF)
 
 

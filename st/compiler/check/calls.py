@@ -8,7 +8,7 @@ from typing import cast
 from ...model import types as T
 from .. import ast as A
 from ..library import FuncSig
-from .common import _SECTIONS_PARAM, CallTarget, Scope, _satisfies, method_of, same_type, take_address
+from .common import _SECTIONS_PARAM, Binding, CallTarget, Scope, _satisfies, method_of, same_type, take_address
 from .part import Part
 from .tests import TEST_CALLS
 
@@ -321,13 +321,14 @@ class Calls(Part):
         c.target = CallTarget("function", pou=pou, bind=bind)
         return pou.return_type
 
-    def _bind_args(self, c: A.Call, pou: T.POUType, scope: Scope, is_fb: bool):
+    def _bind_args(self, c: A.Call, pou: T.POUType, scope: Scope, is_fb: bool) -> Binding:
         """Match arguments to parameters: {lower param: Arg} plus EN/ENO."""
         params = pou.params()
         pos_params = params
         bind: dict = {}
         extras: dict = {}
         npos = 0
+        p: T.VarSym | None
         for a in c.args:
             key = a.name.lower()
             if not a.name:
@@ -461,11 +462,11 @@ class Calls(Part):
                         return None
             pos = [a for a in args if not a.name]
             for p in sig.params:
-                a = named.get(p.name.lower())
-                if a is None and pos:
-                    a = pos.pop(0)
-                if a is not None:
-                    ordered.append(a)
+                arg = named.get(p.name.lower())
+                if arg is None and pos:
+                    arg = pos.pop(0)
+                if arg is not None:
+                    ordered.append(arg)
             if sig.extensible:
                 extra = sorted(
                     ((int(k[2:]), a) for k, a in named.items() if re.fullmatch(r"in\d+", k) and k not in names),
@@ -477,8 +478,8 @@ class Calls(Part):
         n = len(args)
         nmin = sig.min_args or len(sig.params)
         if n < nmin or (not sig.extensible and n > len(sig.params)):
-            want = f"at least {nmin}" if sig.extensible else str(len(sig.params))
-            self.err("E017", c.span, f"{sig.name} takes {want} argument(s), not {n}")
+            count = f"at least {nmin}" if sig.extensible else str(len(sig.params))
+            self.err("E017", c.span, f"{sig.name} takes {count} argument(s), not {n}")
             for a in args:
                 self.exprs.expr(a.value, scope)
             return None
@@ -557,6 +558,7 @@ class Calls(Part):
             for a in args:
                 a.value.ty = eb
             arg_types = [eb] * len(arg_types)
+        rt: T.Type | None
         if getattr(sig, "result_from_context", False) and isinstance(eb, T.ElemType) and eb.is_int:
             rt = eb  # TRUNC: ANY_REAL → the integer type the context wants
         elif callable(res):

@@ -4,6 +4,7 @@ is resolved when first met, so declarations may come in any order."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import cast
 
 from ...model import types as T
@@ -81,7 +82,7 @@ class Declarations(Part):
         base = T.INT
         if spec.base:
             b = T.ELEMENTARY.get(spec.base.upper())
-            if b is None or not b.is_intlike:
+            if not isinstance(b, T.ElemType) or not b.is_intlike:  # (only an ElemType is int-like)
                 self.err("E012", spec.span, f"an enumeration's base type must be an integer type, not '{spec.base}'")
             else:
                 base = b
@@ -376,7 +377,8 @@ class Declarations(Part):
                 f"{'an' if kind[0] in 'AEIOU' else 'a'} {kind}",
             )
             return None
-        chain, b = {pou.name.lower()}, base
+        chain = {pou.name.lower()}
+        b: T.POUType | None = base
         while b is not None:
             if b.name.lower() in chain:
                 self.err("E046", d.span, f"{pou.name} extends itself through '{b.name}'")
@@ -583,6 +585,7 @@ class Declarations(Part):
                 self.err("E022", init.span, f"{count} initial values for an array of {bt.size} elements")
             return
         if isinstance(init, A.StructInit):
+            fields: Mapping[str, T.Member | T.VarSym]
             if isinstance(bt, T.StructType):
                 fields, what = bt.members, "field"
             elif isinstance(bt, T.POUType) and bt.pou_kind != "FUNCTION":

@@ -75,15 +75,15 @@ class Expressions(Part):
             e.const = m[1]
             return et
         if isinstance(e, A.Direct):
-            m = _DIRECT.fullmatch(e.address.upper())
-            if not m or m.group(3) == "*":
+            match = _DIRECT.fullmatch(e.address.upper())
+            if not match or match.group(3) == "*":
                 self.err("E004", e.span, f"malformed address '{e.address}'")
                 return T.BOOL
             problem = image_problem(e.address)
             if problem:
                 self.err("E004", e.span, problem)
-                return _DIRECT_TYPES[m.group(2)]
-            t = _DIRECT_TYPES[m.group(2)]
+                return _DIRECT_TYPES[match.group(2)]
+            t = _DIRECT_TYPES[match.group(2)]
             e.address = canonical(e.address)  # %q0.1 and %QX0.1 are one variable
             self.p.direct_vars[e.address] = ("_d_" + e.address[1:].replace(".", "_"), t)
             e.const = None
@@ -199,6 +199,7 @@ class Expressions(Part):
             return STEP
         if sym is THIS:
             e.sym = THIS
+            assert scope.fb is not None  # lookup gives THIS inside a block only
             return T.RefType(scope.fb)
         if isinstance(sym, T.PropSym):
             e.sym = sym
@@ -413,9 +414,10 @@ class Expressions(Part):
     def _field(self, e: A.Field, scope: Scope):
         if isinstance(e.base, A.Name) and self.lookup(e.base.name.lower(), scope) is None:
             et = self.decls.resolve_named_type(e.base.name.lower(), e.base.span)
-            if isinstance(T.unalias(et) if et is not None else None, T.EnumType):
+            named = T.unalias(et) if et is not None else None
+            if isinstance(named, T.EnumType):
                 # Color.Red: CODESYS's qualified enumeration value
-                et = cast(T.EnumType, T.unalias(et))
+                et = named
                 m = et.members.get(e.name.lower())
                 if m is None:
                     self.err("E010", e.name_span, f"'{e.name}' is not a value of {et.name}")
@@ -437,12 +439,12 @@ class Expressions(Part):
             self.err("E023", e.name_span, f"a step has only the flags .X and .T, not .{e.name}")
             return None
         if isinstance(b, T.StructType):
-            m = b.members.get(key)
-            if m is None:
+            member = b.members.get(key)
+            if member is None:
                 self.err("E023", e.name_span, f"'{bt}' has no field '{e.name}'")
                 return None
-            e.sym = m
-            return m.type
+            e.sym = member
+            return member.type
         if isinstance(b, T.POUType) and b.pou_kind != "FUNCTION":
             self.decls.resolve_interface(b)
             v = b.vars.get(key)

@@ -104,7 +104,8 @@ class Statements(Part):
             tt = self.lvalue(s.target, scope)
             if s.kind in ("S=", "R="):
                 vt = self.exprs.expr(s.value, scope, T.BOOL)
-                if not T.base_of(tt).is_bool or not T.base_of(vt).is_bool:
+                # a None type was reported already (an undeclared name, ...)
+                if (tt is not None and not T.base_of(tt).is_bool) or (vt is not None and not T.base_of(vt).is_bool):
                     self.err("E013", s.span, f"'{s.kind}' needs BOOL operands")
                 return
             vt = self.exprs.expr(s.value, scope, tt)

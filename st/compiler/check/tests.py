@@ -115,10 +115,11 @@ class TestStatements(Part):
         elif key == "advance_time":
             t = self.exprs.expr(values[0], scope, T.TIME)
             ok = t is not None
-            if ok and not (T.base_of(t).is_time or T.base_of(t).is_intlike or isinstance(T.base_of(t), T.LiteralType)):
-                self.err("E013", values[0].span, f"ADVANCE_TIME needs a TIME or a number of nanoseconds, not {t}")
-                ok = False
-            info.types = [t]
+            if t is not None:  # (info is kept only when ok)
+                if not (T.base_of(t).is_time or T.base_of(t).is_intlike or isinstance(T.base_of(t), T.LiteralType)):
+                    self.err("E013", values[0].span, f"ADVANCE_TIME needs a TIME or a number of nanoseconds, not {t}")
+                    ok = False
+                info.types = [t]
         else:  # mock_verify_called / mock_verify_call_count
             ok = self._check_verify(key, name, values, scope, info)
         if ok:

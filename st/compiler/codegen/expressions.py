@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import ast as py
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from ...model import types as T
 from .. import ast as A
@@ -24,13 +24,14 @@ class InitGen:
         ut = T.unalias(t)
         if init is None and isinstance(t, T.AliasType):
             # the alias's own initializer, else its target's
-            a = t
+            a: T.Type = t
             while isinstance(a, T.AliasType):
                 if a.init is not None:
                     return self.initial(a.target, a.init)
                 a = a.target
         if isinstance(ut, T.ArrayType):
             return self.array(ut, init)
+        obj: py.expr
         if isinstance(ut, T.StructType):
             obj = _call(ut.pyname)
             if isinstance(init, A.StructInit):
@@ -47,7 +48,8 @@ class InitGen:
                 obj = self._with_fields(obj, init, lambda n: _member_of_pou(ut, n))
             block = self.mod.blocks.get(ut)
             if block is not None and block.constructor is not None:  # FB_init runs once the values are set
-                keys, values = [], []
+                keys: list[py.expr | None] = []
+                values: list[py.expr] = []
                 if ctor is not None:
                     inputs = block.constructor.inputs
                     for name, _sp, val in ctor.args:
@@ -61,7 +63,7 @@ class InitGen:
 
     def _with_fields(self, obj: py.expr, init: A.StructInit, lookup) -> py.expr:
         # _init_fields(obj, (('name', value), ...)) returns obj
-        pairs = []
+        pairs: list[py.expr] = []
         for name, _sp, val in init.fields:
             m = lookup(name)
             if m is None:
@@ -120,7 +122,7 @@ class ExprGen:
         self.cached: set = set()  # VarSyms held in Python locals
         self.boxed: set = set()  # VarSyms held in one-element lists (passed by reference)
         self.through: set = set()  # in-outs used through the caller's reference (their box)
-        self.self_name = "self"
+        self.self_name: str | None = "self"  # None: a FUNCTION's code (no instance)
         self.globals_written: set = set()
         self.loop_vars: list = []
         self.written_locals: set = set()
@@ -131,6 +133,11 @@ class ExprGen:
         g = cls(mod, None)
         g.self_name = "_NO_SELF"
         return g.coerce(g.expr(e), e, t)
+
+    def this(self) -> py.Name:
+        """The instance the code runs on (THIS, SUPER^, an action or method of this instance)."""
+        assert self.self_name is not None  # the checker allows those only where there is an instance
+        return _name(self.self_name)
 
     def new_tmp(self) -> str:
         self.mod.tmp += 1
@@ -144,7 +151,7 @@ class ExprGen:
             return py.Subscript(_name(sym.pyname), _const(0), py.Load())
         if sym in self.cached or self.self_name is None:
             return _name(sym.pyname)
-        return _attr(_name(self.self_name), sym.pyname)
+        return _attr(self.this(), sym.pyname)
 
     def var_store(self, sym: T.VarSym) -> py.expr:
         if sym.is_global or sym.section == "VAR_EXTERNAL":
@@ -156,7 +163,7 @@ class ExprGen:
         if sym in self.cached or self.self_name is None:
             self.written_locals.add(sym)
             return _name(sym.pyname, py.Store())
-        return _attr(_name(self.self_name), sym.pyname, py.Store())
+        return _attr(self.this(), sym.pyname, py.Store())
 
     # ------------------------------------------------------------------ conversions
     def coerce(self, node: py.expr, e, dst: T.Type | None) -> py.expr:
@@ -169,7 +176,7 @@ class ExprGen:
         if isinstance(node, py.Constant) and node.value is not None and not isinstance(node.value, str):
             v = node.value
             if d.is_real:
-                v = float(v)
+                v = float(cast(float, v))  # a number: not None, not a string
                 return _const(f32(v) if d is T.REAL else v)
             if d.is_intlike and isinstance(v, (int, bool)) and not isinstance(v, bool):
                 return _const(_wrap_value(v, d))
@@ -178,13 +185,13 @@ class ExprGen:
         if d.is_real:
             if s is not None and (s.is_intlike or s is T.LIT_INT):
                 node = _call("_float", node)
-                if d is T.REAL and not (s.is_intlike and s.bits <= 16):
+                if d is T.REAL and not (isinstance(s, T.ElemType) and s.is_intlike and s.bits <= 16):
                     node = _call("_f32", node)
                 return node
             if d is T.REAL and not self.is_f32(e):
                 return _call("_f32", node)
             return node
-        if d.is_intlike:
+        if isinstance(d, T.ElemType) and d.is_intlike:  # (base_of: only an ElemType is int-like)
             sub = T.unalias(dst)
             if isinstance(sub, T.SubrangeType):
                 return _call("_subrange", node, _const(sub.lo), _const(sub.hi))
@@ -331,10 +338,10 @@ class ExprGen:
         if getattr(sym, "kind", "") == "null":
             return _const(None)
         if getattr(sym, "kind", "") == "this":
-            return _call("_ObjRef", _name(self.self_name))
+            return _call("_ObjRef", self.this())
         raise Unsupported(e.span, f"cannot use '{e.name}' here")
 
-    def x_Direct(self, e: A.Direct) -> py.expr:
+    def x_Direct(self, e: A.Direct) -> py.Name:
         found = self.mod.p.direct_vars.get(e.address)  # the checker made the address canonical
         if found is None:
             raise Unsupported(e.span, f"unknown address {e.address}")
@@ -347,8 +354,8 @@ class ExprGen:
         if bt is STEP:
             idx = e.base.const
             if e.name.upper() == "X":
-                return py.Subscript(_attr(_name(self.self_name), "_sfc_x"), _const(idx), py.Load())
-            return _call(_attr(_attr(_name(self.self_name), "_sfc"), "elapsed"), _const(idx))
+                return py.Subscript(_attr(self.this(), "_sfc_x"), _const(idx), py.Load())
+            return _call(_attr(_attr(self.this(), "_sfc"), "elapsed"), _const(idx))
         base = self.expr(e.base)
         if isinstance(bt, T.ElemType) and bt.is_intlike:
             return self._bit_read(base, int(e.name), bt)
@@ -361,8 +368,8 @@ class ExprGen:
         """A property's accessor on its instance (`args`: SET's value); non-virtual: the base's."""
         acc = e.accessor
         if e.nonvirtual:
-            return _call(_attr(_name(acc.owner_fb.pyname), acc.pyname), _name(self.self_name), *args)
-        obj = _name(self.self_name) if e.obj is None else self.expr(e.obj)
+            return _call(_attr(_name(acc.owner_fb.pyname), acc.pyname), self.this(), *args)
+        obj = self.this() if e.obj is None else self.expr(e.obj)
         return _call(_attr(obj, acc.pyname), *args)
 
     def _bit_read(self, base: py.expr, n: int, t) -> py.expr:
@@ -388,10 +395,13 @@ class ExprGen:
         """An array passed to an ARRAY[*] parameter carries its bounds along."""
         if not T.is_conformant(param_type) or T.is_conformant(arg_type):
             return value
-        return _call("_conf", value, _const(tuple(T.unalias(arg_type).dims)))
+        at = T.unalias(arg_type)
+        assert isinstance(at, T.ArrayType)  # the checker passes only arrays to ARRAY[*]
+        return _call("_conf", value, _const(tuple(at.dims)))
 
     def index_of(self, e: A.Index) -> py.expr:
         at = T.unalias(e.base.ty)
+        assert isinstance(at, T.ArrayType)  # the checker indexes arrays only
         dims = at.dims
         if T.is_conformant(at):
             return _call("_cix", self.expr(e.base), *[self.expr(i) for i in e.indices])
@@ -423,6 +433,7 @@ class ExprGen:
                 if st != 1:
                     term = py.BinOp(term, py.Mult(), _const(st))
             flat = term if flat is None else py.BinOp(flat, py.Add(), term)
+        assert flat is not None  # an index has one term per dimension, at least one
         return flat
 
     def _index_safe(self, i, lo, hi) -> bool:
@@ -435,7 +446,7 @@ class ExprGen:
 
     def x_Deref(self, e: A.Deref) -> py.expr:
         if isinstance(e.base, A.Name) and getattr(e.base.sym, "kind", "") in ("this", "super"):
-            return _name(self.self_name)  # THIS^ (and SUPER^): the instance itself
+            return self.this()  # THIS^ (and SUPER^): the instance itself
         return _call(_attr(self.expr(e.base), "get"))
 
     def x_Unary(self, e: A.Unary) -> py.expr:
@@ -444,7 +455,7 @@ class ExprGen:
         if e.op == "NOT":
             if t is not None and t.is_bool:
                 return py.UnaryOp(py.Not(), v)
-            if t is not None and t.is_intlike and not t.signed:
+            if isinstance(t, T.ElemType) and t.is_intlike and not t.signed:
                 return py.BinOp(py.UnaryOp(py.Invert(), v), py.BitAnd(), _const(t.hi))
             return py.UnaryOp(py.Invert(), v)
         if e.op == "-":
@@ -465,8 +476,8 @@ class ExprGen:
         if op == "OR_ELSE":
             return py.BoolOp(py.Or(), [l, r])
         if op in ("AND", "OR", "XOR"):
-            pyop = {"AND": py.BitAnd(), "OR": py.BitOr(), "XOR": py.BitXor()}[op]
-            return py.BinOp(l, pyop, r)
+            bitop = {"AND": py.BitAnd(), "OR": py.BitOr(), "XOR": py.BitXor()}[op]
+            return py.BinOp(l, bitop, r)
         if res is not None and res.kind == "tod" and op in ("+", "-"):
             return py.BinOp(py.BinOp(l, py.Add() if op == "+" else py.Sub(), r), py.Mod(), _const(DAY_NS))
         if res is not None and res.is_time and op in ("*", "/") and lt is not None and lt.is_time:
@@ -492,8 +503,8 @@ class ExprGen:
             if res is not None and (res.is_real or res is T.LIT_REAL):
                 return _call("_fdiv", l, r)
             if (
-                lt is not None
-                and rt is not None
+                isinstance(lt, T.ElemType)
+                and isinstance(rt, T.ElemType)
                 and lt.is_intlike
                 and rt.is_intlike
                 and not lt.signed
@@ -503,8 +514,8 @@ class ExprGen:
             return _call("_idiv", l, r)
         if op == "MOD":
             if (
-                lt is not None
-                and rt is not None
+                isinstance(lt, T.ElemType)
+                and isinstance(rt, T.ElemType)
                 and lt.is_intlike
                 and rt.is_intlike
                 and not lt.signed
@@ -561,10 +572,8 @@ class ExprGen:
         """inst.M(...): a Python method call on the instance, so a derived block's override runs;
         SUPER^.M(...): the base block's method on this instance (not virtual)."""
         if tgt.nonvirtual is not None:
-            return self.function_call(
-                e, tgt, fn=_attr(_name(tgt.nonvirtual.pyname), tgt.pou.pyname), first=_name(self.self_name)
-            )
-        obj = _name(self.self_name) if tgt.obj is None else self.expr(tgt.obj)
+            return self.function_call(e, tgt, fn=_attr(_name(tgt.nonvirtual.pyname), tgt.pou.pyname), first=self.this())
+        obj = self.this() if tgt.obj is None else self.expr(tgt.obj)
         return self.function_call(e, tgt, fn=_attr(obj, tgt.pou.pyname))
 
     def native_call(self, e: A.Call, tgt) -> py.expr:
@@ -628,7 +637,7 @@ class ExprGen:
                     args.append(_const(None))
                 else:
                     args.append(self.ref_to(a.value, negated=a.negated))
-        node = _call(fn if fn is not None else pou.pyname, *args)
+        node: py.expr = _call(fn if fn is not None else pou.pyname, *args)
         en = tgt.bind.get("en")
         if en is not None:
             rt = pou.return_type
@@ -653,7 +662,7 @@ class ExprGen:
                 return _call("_ItemRef", _name(sym.pyname), _const(0), _const(_wrap_spec(t)))
             if sym in self.cached or self.self_name is None:
                 raise Unsupported(e.span, f"internal: '{sym.name}' is held in a local but passed by reference")
-            return _call("_AttrRef", _name(self.self_name), _const(sym.pyname), _const(_wrap_spec(t)))
+            return _call("_AttrRef", self.this(), _const(sym.pyname), _const(_wrap_spec(t)))
         if isinstance(e, A.Field) and isinstance(e.sym, T.VarSym) and T.is_reference(e.sym.type):
             return _attr(self.expr(e.base), e.sym.pyname)  # the reference inst.r holds
         if isinstance(e, A.Field):

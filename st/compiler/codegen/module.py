@@ -62,6 +62,7 @@ class ModuleGen:
             d = pou.decl
             if d is None or pou.pou_kind == "INTERFACE":
                 continue
+            node: py.stmt | list[py.stmt]
             try:
                 if pou.pou_kind == "FUNCTION":
                     node = FuncGen(self, pou).function()
@@ -102,8 +103,8 @@ class ModuleGen:
         modules = []
         for path, body in by_file_list:
             m = py.Module(body=body, type_ignores=[])
-            for node in body:
-                _set_lines(node, getattr(node, "lineno", None) or 1)
+            for stmt in body:
+                _set_lines(stmt, getattr(stmt, "lineno", None) or 1)
             modules.append((path, m))
         return modules
 
@@ -112,7 +113,8 @@ class ModuleGen:
         line = im.span.line if im.span else 1
         g_in = StmtGen(self, None)
         g_in.self_name = None
-        ins, outs = [], []
+        ins: list[py.stmt] = []
+        outs: list[py.stmt] = []
         for p, value, is_out in im.args:
             if not is_out:
                 v = g_in.coerce(g_in.expr(value), value, p.type)
@@ -135,7 +137,7 @@ class ModuleGen:
 
     def struct_class(self, st: T.StructType) -> py.ClassDef:
         init = InitGen(self)
-        body = []
+        body: list[py.stmt] = []
         for m in st.members.values():
             body.append(
                 _set_lines(

@@ -18,6 +18,8 @@ if TYPE_CHECKING:
 
 
 class FuncGen(StmtGen):
+    pou: T.POUType
+
     def __init__(self, mod: ModuleGen, pou: T.POUType):
         super().__init__(mod, pou)
         self.self_name = None
@@ -45,9 +47,9 @@ class FuncGen(StmtGen):
         }
         self.boxed |= through
         self.through = through
-        params = []
-        prologue = []
-        epilogue = []
+        params: list[str] = []
+        prologue: list[py.stmt] = []
+        epilogue: list[py.stmt] = []
 
         def box(v, value):
             return py.Assign([_name(v.pyname, py.Store())], py.List([value], py.Load()) if v in self.boxed else value)
@@ -141,10 +143,13 @@ def mangle_result(pou: T.POUType) -> str:
 
 
 class BodyGen(StmtGen):
+    pou: T.POUType
+
     def __init__(self, mod: ModuleGen, pou: T.POUType):
         super().__init__(mod, pou)
 
-    def klass(self) -> py.ClassDef:
+    def klass(self) -> py.ClassDef | list[py.stmt]:
+        """The block's class; with an SFC, the SFC's description first, then the class."""
         pou = self.pou
         block = self.mod.blocks[pou]
         d = pou.decl
@@ -153,7 +158,7 @@ class BodyGen(StmtGen):
         slots = [v.pyname for v in block.variables]
         edges = [v for v in pou.vars.values() if v.edge]
         slots += ["_e_" + v.pyname for v in edges]
-        init_body = []
+        init_body: list[py.stmt] = []
         for v in block.variables:
             init_body.append(
                 _set_lines(
@@ -262,7 +267,7 @@ class BodyGen(StmtGen):
                 return _const(a)
             return _call(_attr(_name("a"), "get"), _const(a.name.lower()), init.initial(a.type, a.init))
 
-        body = [
+        body: list[py.stmt] = [
             py.Expr(
                 _call(_attr(_name(c.method.owner_fb.pyname), c.method.pyname), _name("self"), *[arg(a) for a in c.args])
             )
@@ -339,6 +344,7 @@ class BodyGen(StmtGen):
         for t in sfc.transitions:
             g = BodyGen(self.mod, self.pou)
             g.cached = set()
+            body: list[py.stmt]
             if t.cond is not None:
                 body = [py.Return(g.expr(t.cond))]
             else:

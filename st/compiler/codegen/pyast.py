@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast as py
 import struct
+from typing import TypeVar
 
 from ...model import types as T
 
@@ -46,13 +47,16 @@ def _store(node: py.expr) -> py.expr:
     raise TypeError(node)
 
 
-def _set_lines(node: py.AST, line: int) -> py.AST:
+_N = TypeVar("_N", bound=py.AST)
+
+
+def _set_lines(node: _N, line: int) -> _N:
     """Give a node and its children without a position the ST line `line`.
 
     Children that already have a line (inner statements, placed earlier) are
     not descended into, so placing a whole body costs one pass.
     """
-    stack = [node]
+    stack: list[py.AST] = [node]
     pop, push = stack.pop, stack.append
     while stack:
         n = pop()
@@ -60,8 +64,9 @@ def _set_lines(node: py.AST, line: int) -> py.AST:
             if getattr(n, "lineno", None) is not None and n is not node:
                 continue
             if getattr(n, "lineno", None) is None:
-                n.lineno = n.end_lineno = line
-                n.col_offset = n.end_col_offset = 0
+                # a node that lists "lineno" in its _attributes has all four positions
+                n.lineno = n.end_lineno = line  # type: ignore[attr-defined]
+                n.col_offset = n.end_col_offset = 0  # type: ignore[attr-defined]
         for f in n._fields:
             v = getattr(n, f, None)
             if isinstance(v, list):

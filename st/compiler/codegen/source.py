@@ -16,7 +16,7 @@ def python_text(module: py.Module) -> str:
     return _MarkedUnparser().visit(module)
 
 
-class _MarkedUnparser(py._Unparser):
+class _MarkedUnparser(py._Unparser):  # type: ignore[name-defined]  # private, so not in the stdlib's stubs
     def __init__(self):
         super().__init__()
         self._mark = None  # the line of the statement about to start an output line

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import ast as py
+from collections.abc import Callable, Sequence
+from typing import cast
 
 from ...model import types as T
 from .. import ast as A
@@ -13,6 +15,9 @@ from .pyast import Unsupported, _attr, _call, _const, _name, _set_lines
 
 
 class StmtGen(ExprGen):
+    # test statements (kind "test") occur in TEST blocks only (E033), printed by codegen/tests.py's TestGen
+    test_call: Callable[[CallTarget], list[py.stmt]]
+
     @property
     def covered(self) -> bool:
         """Coverage probes go into user POUs only (not the library, not the tests themselves)."""
@@ -20,7 +25,7 @@ class StmtGen(ExprGen):
         return self.mod.coverage and pou is not None and not pou.library and pou.pou_kind != "TEST"
 
     def stmts(self, body: list) -> list:
-        out = []
+        out: list[py.stmt] = []
         covered = self.covered
         for s in body:
             try:
@@ -29,7 +34,8 @@ class StmtGen(ExprGen):
                 raise
             except Exception as exc:
                 if not hasattr(exc, "st_span"):
-                    exc.st_span = s.span  # where the internal error happened, for the report
+                    # where the internal error happened, for the report (read with getattr)
+                    exc.st_span = s.span  # type: ignore[attr-defined]
                 raise
             if covered and r and not isinstance(s, A.LoopGuard):
                 r.insert(0, self.mod.probe(s.span.file, s.span.line, "line"))
@@ -54,7 +60,7 @@ class StmtGen(ExprGen):
         b = self.stmts(body)
         return b or [py.Pass()]
 
-    def loop_body(self, body: list, before: list = ()) -> list:
+    def loop_body(self, body: list, before: Sequence[py.stmt] = ()) -> list:
         """A loop's Python body: its guard first, then what the printer needs each round
         (`before`), then the statements."""
         if body and isinstance(body[0], A.LoopGuard):
@@ -88,6 +94,7 @@ class StmtGen(ExprGen):
             ref = _const(None) if isinstance(v, A.Name) and getattr(v.sym, "kind", "") == "null" else self.ref_to(v)
             if isinstance(tgt, A.Field):
                 return [py.Assign([_attr(self.expr(tgt.base), tgt.sym.pyname, py.Store())], ref)]
+            assert isinstance(tgt, A.Name)  # the checker allows REF= to a name or a field only
             return [py.Assign([self.var_store(tgt.sym)], ref)]
         if isinstance(tgt, A.AccessorCall):
             # a property: its SET with the value (S=/R= only when the condition holds)
@@ -100,6 +107,7 @@ class StmtGen(ExprGen):
         if s.kind in ("S=", "R="):
             return [py.If(self.expr(s.value), self.assign(tgt, _const(s.kind == "S="), None), [])]
         if s.kind == "?=":
+            assert s.attempt is not None  # the checker sets it on every ?=
             kind, src_ref, dest_ref = s.attempt
             return self.assign(
                 tgt, _call("_attempt", self.expr(s.value), _const(kind), _const(src_ref), _const(dest_ref)), None
@@ -168,6 +176,7 @@ class StmtGen(ExprGen):
             if tgt.size != "X":
                 width = {"B": 8, "W": 16, "D": 32, "L": 64}[tgt.size]
                 bt = T.base_of(tgt.base.ty)
+                assert isinstance(bt, T.ElemType)  # the checker allows partial access to ANY_BIT/ANY_INT only
                 new = _call(
                     "_setbits",
                     self.expr(tgt.base),
@@ -189,6 +198,7 @@ class StmtGen(ExprGen):
 
     def _bit_write(self, base_e, n: int, value: py.expr) -> list:
         bt = T.base_of(base_e.ty)
+        assert isinstance(bt, T.ElemType)  # the checker allows bit access to ANY_BIT/ANY_INT only
         new = _call("_setbit", self.expr(base_e), _const(n), value, _const(bt.bits), _const(bt.signed))
         return self.assign(base_e, new, None)
 
@@ -200,7 +210,7 @@ class StmtGen(ExprGen):
         if tgt.kind == "fb":
             return self.fb_call(c, tgt)
         if tgt.kind == "action":
-            inst = self.expr(tgt.inst) if getattr(tgt, "inst", None) is not None else _name(self.self_name)
+            inst = self.expr(tgt.inst) if getattr(tgt, "inst", None) is not None else self.this()
             return [py.Expr(_call(_attr(inst, "_act_" + tgt.name)))]
         if tgt.kind in ("function", "method"):
             en, eno = tgt.bind.get("en"), tgt.bind.get("eno")
@@ -224,7 +234,7 @@ class StmtGen(ExprGen):
     def fb_call(self, c: A.Call, tgt) -> list:
         fb: T.POUType = tgt.pou
         bind = tgt.bind["params"]
-        out = []
+        out: list[py.stmt] = []
         inst = self.expr(c.callee)
         if not isinstance(inst, py.Name):
             tmp = self.new_tmp()
@@ -315,7 +325,7 @@ class StmtGen(ExprGen):
                 else:
                     hv = hi.const if hi.const is not None else (hi.value if isinstance(hi, A.Literal) else None)
                     ranges.append((lv, hv))
-            tests = []
+            tests: list[py.expr] = []
             if len(singles) == 1:
                 tests.append(py.Compare(sel, [py.Eq()], [_const(singles[0])]))
             elif singles:
@@ -352,9 +362,11 @@ class StmtGen(ExprGen):
         start = self.coerce(self.expr(s.start), s.start, var.ty)
         end = self.expr(s.end)
         step_c = s.step_value
-        out = []
+        out: list[py.stmt] = []
         if s.form == "while":
             return self._for_while(s, start, end, step_c)
+        step: py.expr
+        stop: py.expr
         if step_c is None:
             stp = self.new_tmp()
             out.append(py.Assign([_name(stp, py.Store())], self.expr(s.step)))
@@ -365,31 +377,26 @@ class StmtGen(ExprGen):
             stop = (
                 py.BinOp(end, py.Add(), _const(1 if step_c > 0 else -1))
                 if not isinstance(end, py.Constant)
-                else _const(end.value + (1 if step_c > 0 else -1))
+                else _const(cast(int, end.value) + (1 if step_c > 0 else -1))  # a FOR's limit is an integer
             )
         rng = _call("_range", start, stop, step) if step_c != 1 else _call("_range", start, stop)
         # the loop variable, or a Python local that mirrors it
-        direct = (
-            isinstance(var, A.Name)
-            and isinstance(var.sym, T.VarSym)
-            and (var.sym in self.cached or self.self_name is None)
-            and not var.sym.is_global
-        )
-        if direct:
-            loopvar = var.sym.pyname
-            self.written_locals.add(var.sym)
-            pre = []
+        sym = var.sym if isinstance(var, A.Name) and isinstance(var.sym, T.VarSym) else None
+        direct = sym is not None and (sym in self.cached or self.self_name is None) and not sym.is_global
+        pre: list[py.stmt] = []
+        if sym is not None and direct:
+            loopvar = sym.pyname
+            self.written_locals.add(sym)
             body = self.loop_body(s.body) or [py.Pass()]
         else:
             loopvar = self.new_tmp()
-            pre = []
             body = self.loop_body(s.body, self.assign(var, _name(loopvar), None))
         # before: loopvar = start - step (so that 'else' can add step: the IEC final value)
         init = py.Assign([_name(loopvar, py.Store())], py.BinOp(start, py.Sub(), step))
-        final = py.BinOp(_name(loopvar), py.Add(), step)
+        final: py.expr = py.BinOp(_name(loopvar), py.Add(), step)
         if vt.is_intlike:
             final = wrap(final, vt)
-        orelse = [py.Assign([_name(loopvar, py.Store())], final)]
+        orelse: list[py.stmt] = [py.Assign([_name(loopvar, py.Store())], final)]
         if not direct:
             orelse += self.assign(var, _name(loopvar), None)
         return out + pre + [init, py.For(_name(loopvar, py.Store()), rng, body, orelse)]
@@ -401,6 +408,8 @@ class StmtGen(ExprGen):
         out = self.assign(var, start, None)
         endt = self.new_tmp()
         out.append(py.Assign([_name(endt, py.Store())], end))
+        step: py.expr
+        test: py.expr
         if step_c is None:
             stp = self.new_tmp()
             out.append(py.Assign([_name(stp, py.Store())], self.expr(s.step)))

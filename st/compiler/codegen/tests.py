@@ -31,7 +31,7 @@ class TestGen(StmtGen):
         super().__init__(mod, test.pou)
         self.test = test
         self.self_name = None
-        self.result_name = None
+        self.result_name = ""  # a test has no result: RETURN returns nothing
 
     def function(self) -> py.FunctionDef:
         t = self.test
@@ -41,7 +41,7 @@ class TestGen(StmtGen):
             v for v in t.pou.vars.values() if (v in by_ref or v.address_taken) and not T.unalias(v.type).is_aggregate
         }
         init = InitGen(self.mod)
-        main = []
+        main: list[py.stmt] = []
         for v in t.pou.vars.values():
             val = init.initial(v.type, v.init)
             node = py.Assign([_name(v.pyname, py.Store())], py.List([val], py.Load()) if v in self.boxed else val)
@@ -71,6 +71,8 @@ class TestGen(StmtGen):
         if op == "mock_verify_call_count":
             return [py.Expr(_call("_t_verify", idx, self._mock_target(tgt.operands[0], vals[0]), vals[1]))]
         a, b = self.new_tmp(), self.new_tmp()
+        test: py.expr
+        store: list[py.stmt]
         if op in ("assert_true", "assert_false"):
             test = _name(a) if op == "assert_true" else py.UnaryOp(py.Not(), _name(a))
             store = [py.Assign([_name(a, py.Store())], vals[0])]

@@ -32,7 +32,7 @@ def count_fors(body: list) -> None:
 
 
 def counted(s: A.For) -> A.CountedFor:
-    step_value = 1
+    step_value: int | None = 1
     if s.step is not None:
         c = s.step.const if s.step.const is not None else (s.step.value if isinstance(s.step, A.Literal) else None)
         step_value = c if isinstance(c, int) else None

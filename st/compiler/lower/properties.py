@@ -7,6 +7,8 @@ calls the base block's accessor on this instance, not the most derived one.
 
 from __future__ import annotations
 
+from typing import TypeGuard
+
 from ...model import types as T
 from .. import ast as A
 from .walk import is_super, rewrite_exprs, rewrite_outside_bodies, walk_stmts
@@ -29,7 +31,7 @@ def _read(e):
     return _call(e, e.sym.get) if _is_property(e) else e
 
 
-def _is_property(e) -> bool:
+def _is_property(e: A.Expr) -> TypeGuard[A.Name | A.Field]:
     return isinstance(e, (A.Name, A.Field)) and isinstance(e.sym, T.PropSym)
 
 

@@ -41,8 +41,8 @@ def inner_bodies(s) -> Iterator[list]:
         if s.orelse:
             yield s.orelse
     elif isinstance(s, A.Case):
-        for b in s.branches:
-            yield b.body
+        for br in s.branches:
+            yield br.body
         if s.orelse:
             yield s.orelse
     elif isinstance(s, (A.For, A.CountedFor, A.While, A.Repeat)):

@@ -37,8 +37,8 @@ class SdoServer:
         self.od = od
         self.mbx_size = mbx_size
         self.counter = 0
-        self._up = None  # segmented upload in progress: [data, pos, toggle, index, sub]
-        self._down = None  # segmented download: [buffer, size, toggle, index, sub, complete]
+        self._up: list | None = None  # segmented upload in progress: [data, pos, toggle, index, sub]
+        self._down: list | None = None  # segmented download: [buffer, size, toggle, index, sub, complete]
 
     def _out(self, payload: bytes) -> bytes:
         self.counter = self.counter % 7 + 1

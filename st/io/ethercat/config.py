@@ -164,8 +164,9 @@ def from_dict(doc: dict, path: str = "<segment>") -> SegmentConfig:
 def build_devices(cfg: SegmentConfig) -> list:
     """The emulated devices of a configuration (the `sim` backend and `st ethercat serve`)."""
     from .devices import CiA402Drive, DigitalIO
+    from .devices.base import Device
 
-    out = []
+    out: list[Device] = []
     for sc in cfg.slaves:
         kw = {}
         if sc.vendor_id is not None:

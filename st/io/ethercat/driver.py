@@ -15,13 +15,18 @@ that fell out of OP are brought back; the axes wait for MC_Reset as the standard
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 from ...runtime.iodriver import IODriverBase
 from ...runtime.process_image import parse_address
 from ...runtime.scheduler import Task
 from ...stdlib.plcopen import registry
 from ...stdlib.plcopen.errors import E
 from .config import SegmentConfig, build_segment
-from .master import FrameMaster, MasterError
+from .master import FrameMaster, Master, MasterError
+
+if TYPE_CHECKING:
+    from .segment import Segment
 
 # CiA 402 statusword → state (mask, value), in the order they are tested
 _SW_STATES = (
@@ -185,7 +190,7 @@ class EtherCATDriver(IODriverBase):
         self.plc = plc
         self.cfg = config
         self.backend = backend
-        self.segment = None
+        self.segment: Segment | None = None
         self.task = None
         self.links: list = []
         self.io_in: list = []  # (slave, entry index, table, index, kind)
@@ -206,7 +211,7 @@ class EtherCATDriver(IODriverBase):
             if capture:
                 self.segment.open_capture(capture)
             self._setup_t = 0.0
-            self.master = FrameMaster(
+            self.master: Master = FrameMaster(
                 self._sim_transport, pause=self._sim_pause, now_ns=lambda: int(round(self._now() * 1e9))
             )
         elif backend == "soem":
@@ -224,6 +229,7 @@ class EtherCATDriver(IODriverBase):
         return self.plc.clock.now() / 1e9 + self._setup_t
 
     def _sim_transport(self, frame: bytes):
+        assert self.segment is not None  # the sim backend's
         return self.segment.exchange(frame, self._now())
 
     def _sim_pause(self, s: float) -> None:
@@ -342,7 +348,7 @@ class EtherCATDriver(IODriverBase):
         for link in self.links:
             outs[link.slave] = link.pack()
         if self.io_out:
-            per = {}
+            per: dict[int, list] = {}
             for i, pos, table, idx, _size in self.io_out:
                 lay = m.slaves[i].rx_layout
                 vals = per.get(i)
@@ -399,7 +405,7 @@ class EtherCATDriver(IODriverBase):
             pass
 
     def stats(self) -> dict:
-        out = dict(self.counters)
+        out: dict[str, Any] = dict(self.counters)
         out["expected_wkc"] = self.master.expected_wkc
         out["slaves"] = [f"{s.name}:{s.state}" for s in self.master.slaves]
         out["drives"] = {f"axis{l.axis_no}": l.state for l in self.links}

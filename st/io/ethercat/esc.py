@@ -68,6 +68,8 @@ _SM_STATUS_MBX_FULL = 0x08
 
 
 class SlaveController:
+    forwarding_delay: float  # s per pass of a frame (its port-to-port delay): set by the segment it is in
+
     def __init__(self, device, mbx_size: int = 128, clock_base_ns: int = 0, alias: int = 0):
         self.device = device
         self.mem = bytearray(0x10000)
@@ -117,12 +119,13 @@ class SlaveController:
         self.clock_base_ns = clock_base_ns
         self.t_dev = 0.0  # how far the device's physics has been advanced (s)
         self.rx_latch_ns = 0
-        self.last_commit = None  # segment time of the last output commit (SM watchdog)
+        self.last_commit: float | None = None  # segment time of the last output commit (SM watchdog)
         self.has_downstream = False
         self.set_links(False)
-        self.pending_outputs = None  # (apply_at, bytes) when DC SYNC0 defers outputs
+        self.pending_outputs: tuple[float, bytes] | None = None  # (apply_at, bytes) when DC SYNC0 defers outputs
         self.stats = {"frames": 0, "commits": 0}
-        self._sm_cache = self._fmmu_cache = None
+        self._sm_cache: list | None = None
+        self._fmmu_cache: list | None = None
         self._plans: dict = {}  # (read, write, address, length) → a logical datagram's plan
         self._grid = False  # SYNC0 pulse grid cache (False: to be computed)
         self._wd_limit = self._watchdog_limit()
@@ -375,7 +378,7 @@ class SlaveController:
             self._register_effects(ado, end, t)
             if end <= 0x1000:
                 return True
-        commit = None
+        commit: tuple | None = None
         for k, start, stop, ctl in self._sms():
             if end <= start or ado >= stop or not ctl & 0x04:  # read by the master: writes are plain RAM
                 continue

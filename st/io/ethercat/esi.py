@@ -211,9 +211,10 @@ def parse_esi(data, path: str = "<esi>") -> list:
         raise EsiError(f"not an ESI file: the root element is <{root.tag}>, not <EtherCATInfo>", path)
 
     vendor = root.find("Vendor")
-    if vendor is None or vendor.find("Id") is None:
+    vendor_id_el = vendor.find("Id") if vendor is not None else None
+    if vendor is None or vendor_id_el is None:
         raise EsiError("no Vendor/Id", path)
-    vendor_id = _num(vendor.find("Id").text, path, "Vendor/Id")
+    vendor_id = _num(vendor_id_el.text, path, "Vendor/Id")
     vendor_name = _text(vendor.find("Name"))
 
     devices = []

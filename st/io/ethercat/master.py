@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import struct
 import time
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -69,16 +70,20 @@ class SlaveInfo:
         )
 
 
-class Master:
+class Master(ABC):
     """What every backend offers."""
 
     slaves: list
     expected_wkc: int = 0
     dc_time: int = 0
 
+    @abstractmethod
     def open(self) -> None: ...
+    @abstractmethod
     def close(self) -> None: ...
+    @abstractmethod
     def scan(self) -> list: ...
+    @abstractmethod
     def configure(
         self,
         pdo_assign: dict | None = None,
@@ -86,13 +91,21 @@ class Master:
         dc_shift_ns: int = 0,
         preop_hook: Callable | None = None,
     ) -> None: ...
+    @abstractmethod
     def set_state(self, state: str, timeout: float = 2.0) -> str: ...
+    @abstractmethod
     def exchange(self) -> int: ...
+    @abstractmethod
     def sdo_read(self, slave: int, index: int, sub: int, complete: bool = False) -> bytes: ...
+    @abstractmethod
     def sdo_write(self, slave: int, index: int, sub: int, data: bytes, complete: bool = False) -> None: ...
+    @abstractmethod
     def write_outputs(self, slave: int, data: bytes) -> None: ...
+    @abstractmethod
     def read_inputs(self, slave: int) -> bytes: ...
+    @abstractmethod
     def poll_emergencies(self, slave: int) -> list: ...
+    @abstractmethod
     def states(self) -> list: ...
 
 
@@ -495,7 +508,7 @@ def _dtype(bits: int, index: int, sub: int) -> str:
     return {1: "BOOL", 8: "USINT", 16: "UINT", 32: "UDINT", 64: "ULINT"}.get(bits, "OCTETS")
 
 
-def _sii_end(image: bytes) -> int | None:
+def _sii_end(image: bytes | bytearray) -> int | None:
     """The byte length of the SII image once the category chain's end marker has been read."""
     pos = 0x80
     while pos + 2 <= len(image):

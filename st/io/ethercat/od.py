@@ -9,8 +9,9 @@ little endian as on the wire.
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import cast
 
 # CoE data types: name → (struct format or None, bit length, CoE data type index)
 DTYPES = {
@@ -77,7 +78,8 @@ class Entry:
         v = self.value if value is None else value
         fmt = DTYPES[self.dtype][0]
         if fmt is None:
-            b = v.encode("latin-1") if isinstance(v, str) else bytes(v)
+            # a string or octets (bytes, or a list of byte values)
+            b = v.encode("latin-1") if isinstance(v, str) else bytes(cast(Iterable[int], v))
             return b[: self.size].ljust(self.size, b"\0") if self.size else b
         if self.dtype == "BOOL":
             return struct.pack(fmt, 1 if v else 0)

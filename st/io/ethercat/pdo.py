@@ -90,6 +90,7 @@ class PdoLayout:
         for v, e in zip(values, self.data_entries):
             fmt = DTYPES[e.dtype][0]
             if e.dtype in ("REAL", "LREAL"):
+                assert fmt is not None  # a REAL's struct format
                 raw = int.from_bytes(struct.pack(fmt, float(v)), "little")
             else:
                 raw = int(v) & ((1 << e.bits) - 1)
@@ -104,7 +105,9 @@ class PdoLayout:
         for e in self.data_entries:
             raw = (acc >> e.offset) & ((1 << e.bits) - 1)
             if e.dtype in ("REAL", "LREAL"):
-                out.append(struct.unpack(DTYPES[e.dtype][0], raw.to_bytes(e.bits // 8, "little"))[0])
+                fmt = DTYPES[e.dtype][0]
+                assert fmt is not None  # a REAL's struct format
+                out.append(struct.unpack(fmt, raw.to_bytes(e.bits // 8, "little"))[0])
             elif e.dtype in ("SINT", "INT", "DINT", "LINT") and raw >> (e.bits - 1):
                 out.append(raw - (1 << e.bits))
             elif e.dtype == "BOOL":

@@ -40,7 +40,7 @@ class Segment:
         for sl in self.slaves:
             sl.forwarding_delay = forwarding_delay
         self.t = 0.0
-        self.capture = None
+        self.capture: wire.PcapWriter | None = None
         self._drop = 0
         self._cut = None  # index of the last reachable slave, or None
         self.frames = 0

@@ -11,6 +11,7 @@ addresses and the CoE details from here.
 from __future__ import annotations
 
 import struct
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 CAT_STRINGS, CAT_GENERAL, CAT_FMMU, CAT_SM, CAT_TXPDO, CAT_RXPDO, CAT_DC, CAT_END = 10, 30, 40, 41, 50, 51, 60, 0xFFFF
@@ -34,6 +35,12 @@ class SmConfig:
     control: int
     enable: int
     kind: int  # 1 mailbox out (master → slave), 2 mailbox in, 3 process data out, 4 process data in
+
+
+def _sm_config(data: bytes, k: int) -> SmConfig:
+    """The SyncManager category's k-th byte: start, length, control, (status), enable, type."""
+    start, length, control = struct.unpack_from("<HHB", data, k)
+    return SmConfig(start, length, control, data[k + 6], data[k + 7])
 
 
 def crc8(data: bytes) -> int:
@@ -60,8 +67,8 @@ def build(
     alias: int = 0,
     coe_details: int = COE_SDO | COE_SDO_INFO | COE_PDO_ASSIGN | COE_PDO_CONFIG | COE_COMPLETE_ACCESS,
     size_bytes: int = 2048,
-    rx_pdos: list = (),
-    tx_pdos: list = (),
+    rx_pdos: Sequence = (),
+    tx_pdos: Sequence = (),
 ) -> bytes:
     """rx_pdos/tx_pdos: [(pdo index, SyncManager, [(index, sub, bits, CoE type code)])] for the PDO
     categories (a master without CoE sizes the process data from them)."""
@@ -154,10 +161,7 @@ def parse(image: bytes) -> SiiInfo:
         elif kind == CAT_FMMU:
             info.fmmus = tuple(b for b in data if b not in (0xFF,))
         elif kind == CAT_SM:
-            info.sms = tuple(
-                SmConfig(*struct.unpack_from("<HHB", data, k), data[k + 6], data[k + 7])
-                for k in range(0, len(data) - 7, 8)
-            )
+            info.sms = tuple(_sm_config(data, k) for k in range(0, len(data) - 7, 8))
         elif kind in (CAT_TXPDO, CAT_RXPDO) and len(data) >= 8:
             index, n, sm = struct.unpack_from("<HBB", data, 0)
             entries = [struct.unpack_from("<HBBBB", data, 8 + 8 * k) for k in range(n) if 16 + 8 * k <= len(data)]

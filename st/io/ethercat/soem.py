@@ -42,7 +42,7 @@ class SoemMaster(Master):
         self.expected_wkc = 0
         self.dc_time = 0
         self.lost = 0
-        self._assign = {}
+        self._assign: dict = {}
 
     def open(self) -> None:
         try:

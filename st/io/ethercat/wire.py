@@ -105,7 +105,7 @@ def encode_frame(dgs, src: bytes = MASTER_MAC, dst: bytes = BROADCAST, pad: bool
 
 
 def decode_datagrams(body, length: int) -> list:
-    dgs = []
+    dgs: list[Datagram] = []
     pos = 0
     while True:
         if pos + 12 > length:

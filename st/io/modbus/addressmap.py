@@ -33,6 +33,7 @@ import re
 import struct
 import tomllib
 from dataclasses import dataclass
+from typing import NoReturn
 
 from .exchange import COILS, DISCRETE, HOLDING, INPUT, TABLE_NAMES, N
 
@@ -237,7 +238,7 @@ def _entry(path, lines, item: dict, plc) -> MapEntry:
     var = item.get("path")
     ln, col = _locate(lines, f'"{var}"') if isinstance(var, str) else _locate(lines, "[[")
 
-    def fail(msg, hint=""):
+    def fail(msg: str, hint: str = "") -> NoReturn:
         raise MapError(f"{path}:{ln}:{col}: error: {msg}" + (f"\n  = hint: {hint}" if hint else ""))
 
     if not isinstance(var, str):
@@ -277,10 +278,10 @@ def _entry(path, lines, item: dict, plc) -> MapEntry:
     access = str(item.get("access", "readwrite")).lower()
     if access not in ("read", "readwrite"):
         fail(f"access must be read or readwrite, not {access!r}")
-    e = MapEntry(var, table, address, enc, access == "readwrite" and table in (COILS, HOLDING), ln)
-    if e.end > N:
-        fail(f"'{var}' needs {e.count} registers from {address}: past 65535")
-    return e
+    entry = MapEntry(var, table, address, enc, access == "readwrite" and table in (COILS, HOLDING), ln)
+    if entry.end > N:
+        fail(f"'{var}' needs {entry.count} registers from {address}: past 65535")
+    return entry
 
 
 def _check_overlaps(path: str, entries: list) -> None:

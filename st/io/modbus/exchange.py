@@ -38,10 +38,11 @@ class Exchange:
 
     def __init__(self, name: str | None = None, create: bool = False):
         self.shm = shared_memory.SharedMemory(name=name, create=create, size=SIZE if create else 0)
-        if create:
-            self.shm.buf[:SIZE] = bytes(SIZE)
-        self.name = self.shm.name
         buf = self.shm.buf
+        assert buf is not None  # None only once closed
+        if create:
+            buf[:SIZE] = bytes(SIZE)
+        self.name = self.shm.name
         self.seq = buf[0:8].cast("Q")
         self.ctl = buf[8:24].cast("I")  # head, tail, port, state
         self.bits = {COILS: buf[_OFF[COILS] : _OFF[COILS] + N], DISCRETE: buf[_OFF[DISCRETE] : _OFF[DISCRETE] + N]}

@@ -156,6 +156,7 @@ class Handler:
             if not 1 <= count <= MAX_BITS_WRITE or nbytes != (count + 7) // 8 or n != 6 + nbytes:
                 raise _Exc(ILLEGAL_VALUE)
             req = self.decoder.decode(pdu)
+            assert isinstance(req, B.WriteMultipleCoilsRequest)  # the lengths were checked above
             self._write(COILS, address, [1 if b else 0 for b in list(req.bits)[:count]])
             return bytes((fc,)) + B.WriteMultipleCoilsResponse(address=address, count=count).encode()
         if fc == 16:
@@ -165,6 +166,7 @@ class Handler:
             if not 1 <= count <= MAX_REGS_WRITE or nbytes != 2 * count or n != 6 + nbytes:
                 raise _Exc(ILLEGAL_VALUE)
             req = self.decoder.decode(pdu)
+            assert isinstance(req, R.WriteMultipleRegistersRequest)  # the lengths were checked above
             self._write(HOLDING, address, list(req.registers))
             return bytes((fc,)) + R.WriteMultipleRegistersResponse(address=address, count=count).encode()
         if fc == 23:
@@ -179,6 +181,7 @@ class Handler:
             ):
                 raise _Exc(ILLEGAL_VALUE)
             req = self.decoder.decode(pdu)
+            assert isinstance(req, R.ReadWriteMultipleRegistersRequest)  # the lengths were checked above
             written = list(req.write_registers)
             self._check(HOLDING, raddr, rcount, write=False)
             self._write(HOLDING, waddr, written)  # the write happens before the read
@@ -321,7 +324,7 @@ class Connection(asyncio.Protocol):
     def __init__(self, server: Server):
         self.server = server
         self.buf = bytearray()
-        self.transport = None
+        self.transport: asyncio.Transport | None = None  # set by connection_made, before any data
         self.peer = self.host = "?"
         server.accepted += 1
         self.seq = server.accepted
@@ -358,23 +361,26 @@ class Connection(asyncio.Protocol):
 
     def pause_writing(self) -> None:  # the client does not read its replies: stop reading it
         self.write_paused = True
+        assert self.transport is not None
         self.transport.pause_reading()
 
     def resume_writing(self) -> None:
         self.write_paused = False
+        assert self.transport is not None
         if not self.rate_paused:
             self.transport.resume_reading()
         self.process()
 
     def _resume_rate(self) -> None:
         self.rate_paused = False
+        assert self.transport is not None
         if not self.write_paused and not self.transport.is_closing():
             self.transport.resume_reading()
             self.process()
 
     def process(self) -> None:
         buf = self.buf
-        out = []
+        out: list[bytes] = []
         while len(buf) >= 7 and not self.write_paused and not self.rate_paused:
             tid, pid, length = struct.unpack_from(">HHH", buf)
             if pid != 0 or not 2 <= length <= 254:
@@ -407,6 +413,7 @@ class Connection(asyncio.Protocol):
         self._flush(out)
 
     def _flush(self, out: list) -> None:
+        assert self.transport is not None
         if out and not self.transport.is_closing():
             self.transport.write(b"".join(out))
             self.server.served += len(out)
@@ -422,6 +429,7 @@ class Connection(asyncio.Protocol):
             self.tokens -= 1
             return True
         self.rate_paused = True
+        assert self.transport is not None
         self.transport.pause_reading()
         asyncio.get_running_loop().call_later((1 - self.tokens) / rate, self._resume_rate)
         return False
@@ -434,7 +442,8 @@ def serve(cfg: ServerConfig, shm_name: str, parent_pid: int) -> None:
     logging.basicConfig(level=os.environ.get("ST_MODBUS_LOG", "WARNING"), format="st modbus: %(levelname)s %(message)s")
     ex = Exchange(shm_name)
     try:
-        resource_tracker.unregister(ex.shm._name, "shared_memory")  # the PLC owns and unlinks it
+        # the PLC owns and unlinks it; the tracker knows it by its private "/name"
+        resource_tracker.unregister(ex.shm._name, "shared_memory")  # type: ignore[attr-defined]
     except Exception:  # noqa: BLE001 - best effort
         pass
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C goes to the PLC, which stops us
@@ -448,7 +457,12 @@ async def _main(cfg: ServerConfig, ex: Exchange, parent_pid: int) -> None:
     server = Server(cfg, ex)
     loop = asyncio.get_running_loop()
     stop = loop.create_future()
-    loop.add_signal_handler(signal.SIGTERM, lambda: stop.done() or stop.set_result(None))
+
+    def on_sigterm() -> None:
+        if not stop.done():
+            stop.set_result(None)
+
+    loop.add_signal_handler(signal.SIGTERM, on_sigterm)
     try:
         srv = await loop.create_server(lambda: Connection(server), cfg.host, cfg.port, reuse_address=True, backlog=1024)
     except OSError as e:

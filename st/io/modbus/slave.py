@@ -65,7 +65,7 @@ def parse_ranges(text: str) -> dict:
 
 
 def _merge(ranges) -> list:
-    out = []
+    out: list[tuple[int, int]] = []
     for lo, hi in sorted(ranges):
         if out and lo <= out[-1][1]:
             out[-1] = (out[-1][0], max(out[-1][1], hi))
@@ -115,7 +115,7 @@ class ModbusSlave(IODriverBase):
             identity={**DEFAULT_IDENTITY, **(identity or {})},
         )
         self.ex: Exchange | None = None
-        self.proc = None
+        self.proc: subprocess.Popen[bytes] | None = None
         self.writes_applied = 0
         self._bits: list = []
         self._words: list = []
@@ -124,25 +124,26 @@ class ModbusSlave(IODriverBase):
 
     # ------------------------------------------------------------------ life cycle
     def start(self, timeout: float = 10.0) -> ModbusSlave:
-        self.ex = Exchange(create=True)
+        ex = self.ex = Exchange(create=True)
         self.rebind()
         self._set_ranges()
         # a fresh interpreter (not fork: the PLC's heap and real-time settings stay here; not
         # multiprocessing's spawn: it would re-run the user's main module)
         log = open(self.log_path, "ab") if self.log_path else None
         try:
-            self.proc = subprocess.Popen(
+            proc = self.proc = subprocess.Popen(
                 [sys.executable, "-m", "st.io.modbus"], stdin=subprocess.PIPE, stderr=log, start_new_session=True
             )
         finally:
             if log is not None:
                 log.close()
-        self.proc.stdin.write(pickle.dumps((self.cfg, self.ex.name, os.getpid())))
-        self.proc.stdin.close()
+        assert proc.stdin is not None  # stdin=PIPE
+        proc.stdin.write(pickle.dumps((self.cfg, ex.name, os.getpid())))
+        proc.stdin.close()
         deadline = time.monotonic() + timeout
-        while self.ex.state == 0 and self.proc.poll() is None and time.monotonic() < deadline:
+        while ex.state == 0 and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.01)
-        if self.ex.state != 1:
+        if ex.state != 1:
             self.stop()
             raise OSError(
                 f"the Modbus server could not listen on {self.cfg.host}:{self.cfg.port}"

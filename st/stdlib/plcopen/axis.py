@@ -94,7 +94,7 @@ class Command:
     status: str = QUEUED
     error_id: int = 0
     in_velocity: bool = False
-    profile: object = None
+    profile: Profile | RuckigProfile | None = None
     steps: int = 0  # kernel cycles run
     total_steps: int = 0  # cycles the profile needs
     target: float = 0.0
@@ -398,12 +398,13 @@ class Axis:
                 self._start_homing_search(cmd)
             else:
                 cmd.profile = Profile(self.set_pos, 0.0)
+        assert cmd.profile is not None  # every kind plans one (homing: its search ramp)
         cmd.total_steps = self._steps(cmd.profile.duration)
         self.active = cmd if k != "stop" else None
         if k == "stop":
             self.stop_cmd = cmd
 
-    def _plan_position(self, target, vmax, acc, dec, jerk, end_v):
+    def _plan_position(self, target, vmax, acc, dec, jerk, end_v) -> Profile | RuckigProfile:
         if jerk > 0:
             return RuckigProfile(
                 self.set_pos,
@@ -418,7 +419,7 @@ class Axis:
             )
         return position_profile(self.set_pos, self.set_vel, target, vmax, acc, dec, end_v)
 
-    def _plan_velocity(self, v, acc, dec, jerk):
+    def _plan_velocity(self, v, acc, dec, jerk) -> Profile | RuckigProfile:
         if jerk > 0:
             return RuckigProfile(self.set_pos, self.set_vel, self.set_acc, target_v=v, acc=acc, dec=dec, jerk=jerk)
         return velocity_profile(self.set_pos, self.set_vel, v, acc, dec)
@@ -447,6 +448,7 @@ class Axis:
         p = cmd.params
         cmd.steps += 1
         prev_act = self.act_pos
+        assert cmd.profile is not None  # the search ramp, then the braking one
         self.set_pos, self.set_vel, self.set_acc = cmd.profile.sample(cmd.steps * self.cycle)
         self._follow()
         if p["_phase"] == "search":
@@ -532,6 +534,7 @@ class Axis:
             cmd.steps += 1
             t = cmd.steps * dt
             finished = cmd.steps >= cmd.total_steps
+            assert cmd.profile is not None  # an active command has its plan
             p, v, a = cmd.profile.sample(t)  # past its end a velocity profile holds the speed
             if finished and cmd.kind in ("move_abs", "move_rel"):
                 p = cmd.target  # exactly, without the closed form's rounding

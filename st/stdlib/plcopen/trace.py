@@ -8,8 +8,12 @@ position, velocity and acceleration over time (matplotlib).
 from __future__ import annotations
 
 import csv
+from typing import TYPE_CHECKING
 
 from . import registry
+
+if TYPE_CHECKING:
+    from .axis import Axis
 
 MAX_SAMPLES = 2_000_000
 
@@ -18,7 +22,7 @@ class AxisTrace:
     def __init__(self, plc, path: str):
         self.plc = plc
         self.path = path
-        self._axis = None
+        self._axis: Axis | None = None
         self.rows: list = []  # (t, set_pos, set_vel, set_acc, act_pos, act_vel, state)
 
     @property
@@ -33,6 +37,7 @@ class AxisTrace:
 
     def sample(self) -> None:
         ax = self._axis
+        assert ax is not None  # sampled once `axis` has found it (MotionRegistry.after_job)
         if len(self.rows) < MAX_SAMPLES:
             self.rows.append(
                 (self.plc.time / 1e9, ax.set_pos, ax.set_vel, ax.set_acc, ax.act_pos, ax.act_vel, ax.state)

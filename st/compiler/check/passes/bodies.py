@@ -124,7 +124,7 @@ def _check_sfc(sem: Semantics, pou: T.POUType, scope: Scope) -> None:
             prio = c if isinstance(c, int) else 0
         if t.cond is not None:
             ct = sem.exprs.expr(t.cond, scope, T.BOOL)
-            if not T.base_of(ct).is_bool:
+            if ct is not None and not T.base_of(ct).is_bool:  # None: reported already
                 ctx.err("E015", t.cond.span, f"a transition condition must be BOOL, not {ct}")
             cond = t.cond
         else:

@@ -17,10 +17,12 @@ def check_oop_rules(ctx: CheckContext) -> None:
         base = fb.base
         if base is not None:
             for k, bp in base.properties.items():
-                mine = fb.properties[k]
-                if mine is not bp and mine.owner is fb and str(mine.type) != str(bp.type):
+                my_prop = fb.properties[k]
+                if my_prop is not bp and my_prop.owner is fb and str(my_prop.type) != str(bp.type):
                     ctx.err(
-                        "E047", mine.span, f"property {mine.name} overrides {base.name}.{bp.name} with another type"
+                        "E047",
+                        my_prop.span,
+                        f"property {my_prop.name} overrides {base.name}.{bp.name} with another type",
                     )
             for k, bm in base.methods.items():
                 mine = fb.methods[k]
@@ -97,13 +99,13 @@ def _check_implements(ctx: CheckContext, fb: T.POUType) -> None:
     abstract = "ABSTRACT" in d.modifiers
     for itf in fb.interfaces:
         for k, ip in itf.properties.items():
-            mine = fb.properties.get(k)
+            my_prop = fb.properties.get(k)
             if (
-                mine is None
-                or str(mine.type) != str(ip.type)
-                or (not ip.bare and ((ip.get and not mine.get) or (ip.set and not mine.set)))
+                my_prop is None
+                or str(my_prop.type) != str(ip.type)
+                or (not ip.bare and ((ip.get and not my_prop.get) or (ip.set and not my_prop.set)))
             ):
-                if mine is None and abstract:
+                if my_prop is None and abstract:
                     continue
                 ctx.err(
                     "E047",

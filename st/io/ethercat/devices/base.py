@@ -55,7 +55,8 @@ class Device:
         # SyncManager communication types: 0/1 mailbox out/in, 2/3 process data out/in
         self.od.add_record(0x1C00, "Sync manager type", [(f"SM{k}", "USINT", k + 1) for k in range(4)], "ro")
         self.emergencies: list = []  # (error code, error register, 5 bytes) waiting for the mailbox
-        self._rx = self._tx = None
+        self._rx: PdoLayout | None = None
+        self._tx: PdoLayout | None = None
 
     # ------------------------------------------------------------------ process data
     @property

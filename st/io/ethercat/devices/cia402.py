@@ -157,13 +157,13 @@ class CiA402Drive(Device):
         self._fe_time = 0.0
         self._prev_bit7 = False
         self._reset_edge = False
-        self._enable_req_t = None
+        self._enable_req_t: float | None = None
         self._fra_steps = 0
         self._in_step = False
-        self._last_t32 = None  # last 0x607A seen while following (CSP)
+        self._last_t32: int | None = None  # last 0x607A seen while following (CSP)
         self._target = 0  # the unwrapped CSP target (increments)
-        self._last_outputs_t = None
-        self._cycle = None  # measured interval between on_outputs() calls
+        self._last_outputs_t: float | None = None
+        self._cycle: float | None = None  # measured interval between on_outputs() calls
         self._ip_written = False
         self._build_od(CIA402_RX if rx_mapping is None else rx_mapping, CIA402_TX if tx_mapping is None else tx_mapping)
         self._publish()

@@ -115,7 +115,7 @@ class MotorModel:
         self._ip_period = 0.0
         self._ip_elapsed = 0.0
         self._stop_v = 0.0  # ramp velocity during a stop, rad/s
-        self._stop_decel = None  # rad/s² or None = at the current limit
+        self._stop_decel: float | None = None  # rad/s² or None = at the current limit
         self._stop_done = False
         self._resume_mode = CSP
         self.limited = False  # a torque or speed limit was active during the last step()
