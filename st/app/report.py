@@ -41,6 +41,8 @@ def report(plc: PLC, o: RunOptions) -> None:
         for d in plc.io:
             if d.name == "ethercat":
                 c = d.stats()
+                if c is None:
+                    continue
                 err(
                     f"  ethercat: {c['frames']} frames, {c['lost_frames']} lost, {c['wkc_errors']} working-counter "
                     f"errors, {c['outages']} outage(s)"

@@ -8,16 +8,17 @@ import time
 
 from ..api import compile_paths
 from ..diagnostics import CompileError
+from ..runtime.build import Build
 from ..runtime.online_change import OnlineChangeRefused
 from ..runtime.plc import PLC
 from .options import RunOptions
 from .output import err
 
 
-def source_mtimes(files) -> dict:
+def source_mtimes(files) -> dict[str, int | None]:
     """Modification times of the source files; an edit made while the PLC starts is not missed when
     these are taken before compiling."""
-    out = {}
+    out: dict[str, int | None] = {}
     for f in files:
         try:
             out[f] = os.stat(f).st_mtime_ns
@@ -36,7 +37,7 @@ class Watcher:
         self.o = o
         self.mtimes = o.compiled_mtimes if o.compiled_mtimes is not None else source_mtimes(o.files)
         self.last_poll = 0.0
-        self.result = None
+        self.result: Build | None = None  # a change built by the background thread, swapped in by poll()
         self.busy = False
 
     def poll(self) -> None:

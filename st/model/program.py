@@ -29,7 +29,7 @@ class InstanceModel:
     task: str  # task name ("" = runs every base tick)
     resource: str = ""
     # connections [(param, syntax: Expr (None in the artefact), is_output)]
-    args: list[tuple[str, Any, bool]] = field(default_factory=list)
+    args: list[tuple[Any, Any, bool]] = field(default_factory=list)  # (parameter VarSym, connection, is output)
     span: Any = None
 
 
