@@ -23,7 +23,8 @@ def libraries(options: CompileOptions | None = None) -> list:
     """The libraries of a compilation: the standard library (its time unit and F_TRIG behaviour
     are the options') and PLCopen motion."""
     options = options or CompileOptions()
-    return [default_library(options.f_trig_first_scan, options.time_unit), plcopen_library()]
+    matiec = options.dialect is not None and options.dialect.name == "openplc"
+    return [default_library(options.f_trig_first_scan, options.time_unit, matiec), plcopen_library()]
 
 
 def _refused(e: CompileError, raise_on_error: bool) -> CompiledProgram:

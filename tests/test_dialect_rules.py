@@ -10,7 +10,7 @@ import pytest
 from st import PLC
 from st.api import compile_text
 
-from helpers import errors, run
+from helpers import errors, fault, run
 
 WRITES_OWN_INPUT = """
 FUNCTION_BLOCK Cnt
@@ -255,3 +255,31 @@ def test_embedded_c_blocks_are_skipped_with_a_located_warning(dialect):
     plc = PLC(result)
     plc.scan(2)
     assert plc["main.x"] == 2
+
+
+MUX_OUT_OF_RANGE = """PROGRAM main
+VAR k : INT := 5; i : INT := 9; r : REAL := 1.5; s : STRING := 'x'; b : BOOL := TRUE; ok : INT; END_VAR
+i := MUX(k, 1, 2, 3);
+r := MUX(k, 2.5, 3.5);
+s := MUX(k, 'a', 'b');
+b := MUX(k, TRUE, TRUE);
+ok := MUX(1, 10, 20, 30);
+END_PROGRAM
+"""
+
+
+def test_a_mux_selector_out_of_range_gives_the_default_value_under_openplc_as_matiec():
+    plc = run(MUX_OUT_OF_RANGE, 1, "openplc")
+    assert {k: plc[f"main.{k}"] for k in ("i", "r", "s", "b", "ok")} == {
+        "i": 0,
+        "r": 0.0,
+        "s": "",
+        "b": False,
+        "ok": 20,
+    }
+
+
+@pytest.mark.parametrize("dialect", [None, "iec", "codesys"])
+def test_a_mux_selector_out_of_range_is_an_index_fault_elsewhere(dialect):
+    _, f = fault(MUX_OUT_OF_RANGE, dialect)
+    assert (f.kind, f.line, f.message) == ("INDEX", 3, "MUX selector 5 is outside 0..2")

@@ -119,6 +119,13 @@ def _std_mux(k, *args):
     raise PLCFault(f"MUX selector {k} is outside 0..{len(args) - 1}", "INDEX")
 
 
+def _std_mux_or_default(k, *args):
+    """MUX as MatIEC computes it: a selector out of range gives the last argument, the result
+    type's default value (the compiler passes it)."""
+    *inputs, default = args
+    return inputs[k] if 0 <= k < len(inputs) else default
+
+
 def _std_sel(g, a, b):
     return b if g else a
 

@@ -223,9 +223,11 @@ def _ref_emit(ctx, args, types, rt):
     return ctx.ref_to(ctx._current_ref_arg)
 
 
-def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> Library:
-    """The IEC standard library. `time_unit`: what TIME_TO_<int> counts (ms, or s as MatIEC)."""
-    lib = Library("iec61131", version=f"1-{int(f_trig_first_scan)}-{time_unit}")
+def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", matiec_errors: bool = False) -> Library:
+    """The IEC standard library. `time_unit`: what TIME_TO_<int> counts (ms, or s as MatIEC).
+    `matiec_errors`: where IEC calls a case an error and leaves the reaction open, do what MatIEC
+    does (a MUX selector out of range gives the type's default value) instead of a PLC fault."""
+    lib = Library("iec61131", version=f"1-{int(f_trig_first_scan)}-{time_unit}-{int(matiec_errors)}")
     lib.sources.append((str(FBS_PATH), standard_fbs_source(f_trig_first_scan)))
     lib.sources.append((str(FUNCTIONS_PATH), FUNCTIONS_PATH.read_text()))
     lib.sources.append((str(OPENPLC_FBS_PATH), OPENPLC_FBS_PATH.read_text()))
@@ -322,7 +324,8 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms") -> 
             [_p("K", "ANY_INT"), _p("IN0", "ANY", "T"), _p("IN1", "ANY", "T")],
             "T",
             extensible=True,
-            helper="_std_mux",
+            helper="_std_mux" if not matiec_errors else "_std_mux_or_default",
+            extra=None if not matiec_errors else _mux_default,
             min_args=2,
         )
     )
@@ -612,8 +615,17 @@ def _section(text: str, name: str) -> str:
 NAMESPACE_EXTRA = {"_ord": ord, "_chr": chr}
 
 
+def _mux_default(arg_types, result_type):
+    """MatIEC's MUX out of range: the result type's default value, passed after the inputs."""
+    b = T.base_of(result_type) if result_type is not None else None
+    if isinstance(b, T.StringType):
+        return [""]
+    default = getattr(b, "default", None)
+    return [default if isinstance(default, (bool, int, float, str)) else 0]
+
+
 @lru_cache(maxsize=8)
-def default_library(f_trig_first_scan: bool = False, time_unit: str = "ms") -> Library:
-    lib = build_library(f_trig_first_scan=f_trig_first_scan, time_unit=time_unit)
+def default_library(f_trig_first_scan: bool = False, time_unit: str = "ms", matiec_errors: bool = False) -> Library:
+    lib = build_library(f_trig_first_scan=f_trig_first_scan, time_unit=time_unit, matiec_errors=matiec_errors)
     lib.helpers.update(NAMESPACE_EXTRA)
     return lib
