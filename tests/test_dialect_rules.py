@@ -283,3 +283,37 @@ def test_a_mux_selector_out_of_range_gives_the_default_value_under_openplc_as_ma
 def test_a_mux_selector_out_of_range_is_an_index_fault_elsewhere(dialect):
     _, f = fault(MUX_OUT_OF_RANGE, dialect)
     assert (f.kind, f.line, f.message) == ("INDEX", 3, "MUX selector 5 is outside 0..2")
+
+
+EDGE_NAMES = """FUNCTION_BLOCK F
+VAR_INPUT clk : BOOL R_EDGE; END_VAR
+VAR_OUTPUT q : BOOL; END_VAR
+q := clk;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR r_edge, F_Edge : BOOL; f : F; n : INT; END_VAR
+r_edge := NOT r_edge;
+F_Edge := r_edge;
+f(clk := r_edge);
+IF f.q THEN n := n + 1; END_IF;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_r_edge_and_f_edge_are_names_in_codesys_and_twincat_and_still_edge_qualifiers(dialect):
+    plc = run(EDGE_NAMES, 4, dialect)
+    assert (plc["main.r_edge"], plc["main.F_Edge"], plc["main.n"]) == (False, False, 2)  # rising edges: scans 1, 3
+
+
+@pytest.mark.parametrize("dialect", ["iec", "openplc"])
+def test_r_edge_and_f_edge_are_keywords_in_iec_and_matiec(dialect):
+    assert "t.st:7:5: error[E001]: 'r_edge' is a reserved keyword and cannot be a name" in errors(EDGE_NAMES, dialect)
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys"])
+def test_time_function_is_the_plc_clock(dialect):
+    plc = run(
+        "PROGRAM main\nVAR t : TIME; END_VAR\nt := TIME();\nEND_PROGRAM\n", 3, dialect
+    )  # a lone PROGRAM: a 10 ms task
+    assert plc["main.t"] == 20_000_000  # the third scan is released at 20 ms

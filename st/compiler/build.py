@@ -45,6 +45,8 @@ _OPNAME = {"&": "AND"}
 # Words that may never be declared as a name (contextual lexing would otherwise let 'THEN' be an
 # identifier where no keyword is expected). Soft keywords (ON, STEP, BY, ...) and type names (DT is
 # a common name for a time step) are not here: the grammar tells them apart by context.
+# CODESYS and TwinCAT let a program name a variable R_EDGE or F_EDGE (IEC and MatIEC do not)
+EDGE_NAMES = frozenset({"R_EDGE", "F_EDGE"})
 RESERVED = frozenset(
     """
 TYPE END_TYPE STRUCT END_STRUCT ARRAY OF STRING WSTRING REF_TO POINTER REFERENCE TO END_VAR CONSTANT RETAIN
@@ -77,6 +79,8 @@ class AstBuilder(Transformer):
         super().__init__(visit_tokens=False)
         self.path = path
         self.errors: list[BuildError] = []
+        # keywords the chosen dialect lets a program use as names (CODESYS: R_EDGE, F_EDGE)
+        self.names_allowed: frozenset[str] = frozenset()
 
     # ---------------------------------------------------------------- helpers
     def sp(self, x) -> Span:
@@ -132,7 +136,12 @@ class AstBuilder(Transformer):
         return c[0]
 
     def _not_reserved(self, tok):
-        if isinstance(tok, Token) and tok.type == "IDENT" and tok.upper() in RESERVED:
+        if (
+            isinstance(tok, Token)
+            and tok.type == "IDENT"
+            and tok.upper() in RESERVED
+            and tok.upper() not in self.names_allowed
+        ):
             self.errors.append(BuildError(self.sp(tok), f"'{tok}' is a reserved keyword and cannot be a name", "E001"))
         return tok
 

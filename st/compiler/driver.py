@@ -21,7 +21,7 @@ from ..source import SourceFile, Span
 from . import ast as A
 from . import cache
 from .artefact import artefact, libraries_only
-from .build import AstBuilder
+from .build import EDGE_NAMES, AstBuilder
 from .check import Checker
 from .codegen import ModuleGen
 from .codegen.source import python_text
@@ -44,12 +44,17 @@ def _get_parser():
     return _parser, _builder
 
 
-def parse_source(src: SourceFile, sink: DiagnosticSink, nested_comments: bool | None = True) -> A.Unit | None:
-    """Parse one file; every problem becomes a diagnostic of that file (never an exception)."""
+def parse_source(
+    src: SourceFile, sink: DiagnosticSink, nested_comments: bool | None = True, edge_names: bool = False
+) -> A.Unit | None:
+    """Parse one file; every problem becomes a diagnostic of that file (never an exception).
+    `nested_comments`: see grammar.comments.strip_comments; `edge_names`: R_EDGE and F_EDGE may
+    be names (CODESYS, TwinCAT, the default)."""
     with _parser_lock:
         parser, builder = _get_parser()
         builder.path = src.path
         builder.errors = []
+        builder.names_allowed = EDGE_NAMES if edge_names else frozenset()
         try:
             unit, diags = parser.parse(src, nested_comments)
         except RecursionError:
@@ -204,8 +209,9 @@ def _parse_all(
         if u is not None:
             units.append(u)
     nested = options.dialect.nested_comments if options.dialect is not None else None
+    edge_names = options.dialect is None or options.dialect.vendor_extensions
     for s in sources:
-        u = parse_source(s, sink, nested)
+        u = parse_source(s, sink, nested, edge_names)
         if u is not None:
             units.append(u)
     # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat

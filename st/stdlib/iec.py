@@ -418,6 +418,8 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", mat
     add(_trunc_sig("TRUNC", None))
     # the PLC clock, for the standard timers
     add(FuncSig("__PLC_TIME", [], "TIME", emit=_now_emit))
+    # CODESYS and TwinCAT: TIME() is the time since the PLC started (here: the PLC clock, latched per scan)
+    add(FuncSig("TIME", [], "TIME", emit=_now_emit))
     lib.conversion = lambda name: _conversion(name, time_unit)
     return lib
 
