@@ -32,7 +32,7 @@ import sys
 import time
 import traceback
 import xml.etree.ElementTree as ET
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 
@@ -44,7 +44,12 @@ class Source:
     st: tuple[str, ...] = ()  # globs of ST text files
     xml: tuple[str, ...] = ()  # globs of PLCopen XML projects
     project: tuple[str, ...] = ()  # globs of project files st does not read yet
-    exclude: tuple[str, ...] = ()  # path fragments left out (generated C, syntax-error tests)
+    exclude: tuple[str, ...] = ()  # path fragments left out
+    # units compiled together, as the source's own build does: (glob of directories, glob of files in
+    # each); the files of a unit are not checked alone
+    together: tuple[tuple[str, str], ...] = ()
+    alone: tuple[str, ...] = ()  # path fragments of files checked alone even inside a unit
+    pairs: bool = False  # test_X.st is compiled with X.st beside it (STruC++'s validation suite)
 
 
 SOURCES = (
@@ -65,10 +70,26 @@ SOURCES = (
     ),
     Source("OSCAT as OpenPLC generates it", "openplc", "wonka929-OSCAT_OpenPLC", st=("**/*.st",), xml=("**/plc.xml",)),
     Source(
-        "MatIEC lib and Annex F (OpenPLC's fork)", "openplc", "thiagoralves-matiec", st=("lib/*.txt", "AnnexF/*.txt")
+        "MatIEC lib and Annex F (OpenPLC's fork)",
+        "openplc",
+        "thiagoralves-matiec",
+        st=("lib/*.txt", "AnnexF/*.txt"),
+        # MatIEC reads its library as one text (ieclib.txt includes the rest) and the Annex F examples
+        # use each other's blocks; the {#include} wrappers themselves are left out, and the
+        # declarations of MatIEC's built-in functions (not ST: `IN 1 .. : REAL`) are checked alone
+        exclude=("lib/ieclib.txt", "lib/standard_FB.txt"),
+        alone=("lib/standard_functions.txt",),
+        together=(("lib", "*.txt"), ("AnnexF", "*_st.txt")),
     ),
     Source("Beremiz projects", "openplc", "beremiz-beremiz", xml=("**/plc.xml",)),
-    Source("STruC++ validation programs", "codesys", "Autonomy-Logic-STruCpp", st=("**/*.st",)),
+    Source(
+        "STruC++ validation programs",
+        "codesys",
+        "Autonomy-Logic-STruCpp",
+        st=("**/*.st",),
+        together=(("libs/sources/*", "**/*.st"), ("tests/fixtures/smart-traffic-light", "**/*.st")),
+        pairs=True,
+    ),
     Source("TwinCAT: TcUnit", "twincat", "tcunit-TcUnit", project=("**/*.TcPOU", "**/*.TcDUT", "**/*.TcGVL")),
 )
 
@@ -88,7 +109,8 @@ class FileResult:
     source: str
     path: str  # relative to CORPORA
     kind: str  # st | xml | skipped-xml | project | duplicate
-    note: str = ""
+    note: str = ""  # the ST file compiled (its first file), or why it is not
+    paths: list[str] = field(default_factory=list)  # every file compiled (a unit has several)
     outcomes: dict[str, Outcome] = field(default_factory=dict)  # "default" / dialect name → outcome
 
 
@@ -351,18 +373,18 @@ def _alarm(signum, frame):
     raise _Timeout
 
 
-def check_file(path: str, dialect: str | None, timeout: int) -> Outcome:
-    """One file compiled alone (no cache) and its outcome."""
+def check_file(paths: list[str], dialect: str | None, timeout: int) -> Outcome:
+    """One file (or unit) compiled alone, without the cache, and its outcome."""
     from st.api import compile_paths
 
     signal.signal(signal.SIGALRM, _alarm)
     signal.alarm(timeout)
     try:
-        result = compile_paths([path], raise_on_error=False, use_cache=False, dialect=dialect)
+        result = compile_paths(paths, raise_on_error=False, use_cache=False, dialect=dialect)
     except _Timeout:
-        return Outcome("internal", "timeout", f"no answer within {timeout} s", path)
+        return Outcome("internal", "timeout", f"no answer within {timeout} s", paths[0])
     except RecursionError:
-        return Outcome("internal", "RecursionError", "RecursionError", path)
+        return Outcome("internal", "RecursionError", "RecursionError", paths[0])
     except Exception as e:  # an exception out of the compiler is an internal error
         tb = traceback.extract_tb(e.__traceback__)[-1]
         where = f"{Path(tb.filename).name}:{tb.lineno}"
@@ -385,9 +407,9 @@ def check_file(path: str, dialect: str | None, timeout: int) -> Outcome:
     return Outcome(status, first.code, normalise(first.message), where, first.message, listed)
 
 
-def _check_job(job: tuple[str, list[str | None], int]) -> dict[str, dict]:
-    path, dialects, timeout = job
-    return {d or "default": asdict(check_file(path, d, timeout)) for d in dialects}
+def _check_job(job: tuple[list[str], list[str | None], int]) -> dict[str, dict]:
+    paths, dialects, timeout = job
+    return {d or "default": asdict(check_file(paths, d, timeout)) for d in dialects}
 
 
 # ---------------------------------------------------------------- the sweep
@@ -405,18 +427,42 @@ def collect(corpora: Path, out: Path, only: str | None) -> list[FileResult]:
             print(f"warning: {root} missing, source '{src.name}' skipped", file=sys.stderr)
             continue
 
-        def matches(globs, root=root, src=src):
-            found = sorted({p for g in globs for p in root.glob(g) if p.is_file()})
-            return [p for p in found if not any(x in str(p) for x in src.exclude)]
+        def excluded(p: Path, src=src) -> bool:
+            return any(x in str(p) for x in src.exclude)
 
-        for p in matches(src.st):
-            rel = str(p.relative_to(corpora))
-            digest = hashlib.sha1(p.read_bytes()).hexdigest()
+        def matches(globs, root=root):
+            return [p for p in sorted({p for g in globs for p in root.glob(g) if p.is_file()}) if not excluded(p)]
+
+        units: list[list[Path]] = []
+        grouped: set[Path] = set()
+        for dirs, pattern in src.together:
+            for d in sorted(q for q in root.glob(dirs) if q.is_dir()):
+                unit = [
+                    p
+                    for p in sorted(d.glob(pattern))
+                    if p.is_file() and not excluded(p) and not any(x in str(p) for x in src.alone)
+                ]
+                if unit:
+                    units.append(unit)
+                    grouped.update(unit)
+        singles = [p for p in matches(src.st) if p not in grouped]
+        if src.pairs:
+            paired = {p.with_name(p.name[5:]) for p in singles if p.name.startswith("test_")}
+            for p in singles:
+                if p in paired:
+                    continue
+                base = p.with_name(p.name[5:])
+                units.append([base, p] if p.name.startswith("test_") and base.is_file() else [p])
+        else:
+            units += [[p] for p in singles]
+        for unit in units:
+            rel = str(unit[0].relative_to(corpora)) + (f" (+{len(unit) - 1} files)" if len(unit) > 1 else "")
+            digest = hashlib.sha1(b"".join(p.read_bytes() for p in unit)).hexdigest()
             if digest in seen:
                 files.append(FileResult(src.name, rel, "duplicate", f"same text as {seen[digest]}"))
                 continue
             seen[digest] = rel
-            files.append(FileResult(src.name, rel, "st", str(p)))
+            files.append(FileResult(src.name, rel, "st", str(unit[0]), [str(p) for p in unit]))
         for p in matches(src.xml):
             rel = str(p.relative_to(corpora))
             try:
@@ -435,7 +481,7 @@ def collect(corpora: Path, out: Path, only: str | None) -> list[FileResult]:
             target = out / "extracted" / (rel + ".st")
             target.parent.mkdir(parents=True, exist_ok=True)
             target.write_text(text)
-            files.append(FileResult(src.name, rel, "xml", str(target)))
+            files.append(FileResult(src.name, rel, "xml", str(target), [str(target)]))
         for p in matches(src.project):
             files.append(FileResult(src.name, str(p.relative_to(corpora)), "project", "project format not read yet"))
     return files
@@ -444,7 +490,7 @@ def collect(corpora: Path, out: Path, only: str | None) -> list[FileResult]:
 def run(files: list[FileResult], timeout: int, jobs: int) -> None:
     dialect_of = {s.name: s.dialect for s in SOURCES}
     todo = [f for f in files if f.kind in ("st", "xml")]
-    work = [(f.note, [None, dialect_of[f.source]], timeout) for f in todo]
+    work = [(f.paths, [None, dialect_of[f.source]], timeout) for f in todo]
     started = time.monotonic()
     if jobs <= 1:
         answers = map(_check_job, work)
@@ -466,7 +512,16 @@ def _progress(i: int, n: int, started: float) -> None:
 # ---------------------------------------------------------------- the report
 
 
-def report(files: list[FileResult], top: int) -> str:
+def _shown(where: str, corpora: Path, out: Path) -> str:
+    """file:line relative to the corpora (ST extracted from XML: the XML's path, "as ST")."""
+    extracted = str(out / "extracted") + "/"
+    if where.startswith(extracted):
+        path, _, line = where[len(extracted) :].rpartition(":")
+        return f"{path.removesuffix('.st')} (as ST):{line}"
+    return where.removeprefix(str(corpora) + "/")
+
+
+def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
     lines = ["# st on real-world ST code", ""]
     lines += [
         "Each file compiled alone; *default* is no dialect, *preset* the one that fits the source.",
@@ -518,8 +573,7 @@ def report(files: list[FileResult], top: int) -> str:
             if key == "default":
                 r[1] += 1
             if not r[2]:
-                shown = f.path + (" (as ST)" if f.kind == "xml" else "")
-                r[2] = f"{shown}:{o.where.rsplit(':', 1)[-1]}"
+                r[2] = _shown(o.where, corpora, out)
     ranked = sorted(reasons.items(), key=lambda kv: (-max(kv[1][0], kv[1][1]), kv[0]))
     for i, ((code, msg), (n_preset, n_default, example)) in enumerate(ranked[:top], 1):
         msg = msg.replace("|", "\\|")[:140]
@@ -532,7 +586,7 @@ def report(files: list[FileResult], top: int) -> str:
         for code, msg, where in o.others if o else ():
             r = every[(code, msg)]
             r[0] += 1
-            r[1] = r[1] or f"{f.path}{' (as ST)' if f.kind == 'xml' else ''}:{where.rsplit(':', 1)[-1]}"
+            r[1] = r[1] or _shown(where, corpora, out)
     for i, ((code, msg), (n, example)) in enumerate(sorted(every.items(), key=lambda kv: (-kv[1][0], kv[0]))[:top], 1):
         shown = msg.replace("|", "\\|")[:140]
         lines.append(f"| {i} | {code} | {shown} | {n} | `{example}` |")
@@ -555,11 +609,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=1, help="worker processes")
     ap.add_argument("--top", type=int, default=30, help="refusal reasons listed")
     ap.add_argument("--only", help="only the sources whose name contains this")
+    ap.add_argument("--preset", help="this preset for every source instead of its own (to look behind a rule)")
     args = ap.parse_args(argv)
+    if args.preset:
+        global SOURCES
+        SOURCES = tuple(replace(s, dialect=args.preset) for s in SOURCES)
     args.out.mkdir(parents=True, exist_ok=True)
     files = collect(args.corpora.resolve(), args.out, args.only)
     run(files, args.timeout, args.jobs)
-    text = report(files, args.top)
+    text = report(files, args.top, args.corpora.resolve(), args.out)
     (args.out / "conformance.md").write_text(text)
     (args.out / "results.json").write_text(json.dumps([asdict(f) for f in files], indent=1))
     print(text)
