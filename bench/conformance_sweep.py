@@ -240,8 +240,14 @@ def _variables(section) -> list[str]:
         typ = next(c for c in var if _local(c.tag) == "type")
         init = next((c for c in var if _local(c.tag) == "initialValue"), None)
         address = var.get("address")
-        line = var.get("name") + (f" AT {address}" if address else "") + " : " + _type(typ)
+        typename = _type(typ)
+        line = var.get("name") + (f" AT {address}" if address else "") + " : " + typename
         value = _value(init) if init is not None else ""
+        if value and typename.split("[")[0] in ("STRING", "WSTRING") and value[0] not in "'\"":
+            quote = "'" if typename.startswith("STRING") else '"'
+            value = quote + value + quote  # the editor keeps a string's text unquoted
+        elif value and typename.startswith("STRING") and value[0] == '"':
+            value = "'" + value + "'"  # as the OpenPLC Editor writes it: the quotes are the text
         out.append(f"    {line}{' := ' + value if value else ''};")
     return out
 
@@ -415,7 +421,7 @@ def _check_job(job: tuple[list[str], list[str | None], int]) -> dict[str, dict]:
 # ---------------------------------------------------------------- the sweep
 
 
-def collect(corpora: Path, out: Path, only: str | None) -> list[FileResult]:
+def collect(corpora: Path, out: Path, only: str | None, projects: bool = False) -> list[FileResult]:
     """Every file of every source, its outcomes still to fill (ST from XML written under `out`)."""
     files: list[FileResult] = []
     seen: dict[str, str] = {}
@@ -482,7 +488,11 @@ def collect(corpora: Path, out: Path, only: str | None) -> list[FileResult]:
             target.parent.mkdir(parents=True, exist_ok=True)
             target.write_text(text)
             files.append(FileResult(src.name, rel, "xml", str(target), [str(target)]))
-        for p in matches(src.project):
+        found = matches(src.project)
+        if projects and found:
+            rel = str(found[0].relative_to(corpora)) + f" (+{len(found) - 1} files)"
+            files.append(FileResult(src.name, rel, "st", str(found[0]), [str(p) for p in found]))
+        for p in found:
             files.append(FileResult(src.name, str(p.relative_to(corpora)), "project", "project format not read yet"))
     return files
 
@@ -524,11 +534,12 @@ def _shown(where: str, corpora: Path, out: Path) -> str:
 def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
     lines = ["# st on real-world ST code", ""]
     lines += [
-        "Each file compiled alone; *default* is no dialect, *preset* the one that fits the source.",
+        "Each unit (a file, or the files its own build compiles together) compiled alone; *default* is no",
+        "dialect, *preset* the one that fits the source. Outcomes count units.",
         "",
-        "| source | preset | files | clean (default) | clean (preset) | refused (preset) | internal | "
+        "| source | preset | files | units | clean (default) | clean (preset) | refused (preset) | internal | "
         "XML skipped | duplicates | not read (project format) |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     by_source = collections.defaultdict(list)
     for f in files:
@@ -540,6 +551,7 @@ def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
             continue
         checked = [f for f in group if f.outcomes]
         row = collections.Counter(
+            paths=sum(len(f.paths) for f in checked),
             files=len(checked),
             clean_default=sum(f.outcomes["default"].status == "clean" for f in checked),
             clean=sum(f.outcomes[src.dialect].status == "clean" for f in checked),
@@ -551,12 +563,12 @@ def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
         )
         totals.update(row)
         lines.append(
-            f"| {src.name} | {src.dialect} | {row['files']} | {row['clean_default']} | {row['clean']} | "
+            f"| {src.name} | {src.dialect} | {row['paths']} | {row['files']} | {row['clean_default']} | {row['clean']} | "
             f"{row['refused']} | {row['internal']} | {row['skipped']} | {row['dup']} | {row['project']} |"
         )
     t = totals
     lines.append(
-        f"| **all** | | {t['files']} | {t['clean_default']} | {t['clean']} | {t['refused']} | {t['internal']} | "
+        f"| **all** | | {t['paths']} | {t['files']} | {t['clean_default']} | {t['clean']} | {t['refused']} | {t['internal']} | "
         f"{t['skipped']} | {t['dup']} | {t['project']} |"
     )
     lines += ["", f"## Top {top} refusal reasons (first error of each refused file)", ""]
@@ -609,13 +621,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=1, help="worker processes")
     ap.add_argument("--top", type=int, default=30, help="refusal reasons listed")
     ap.add_argument("--only", help="only the sources whose name contains this")
+    ap.add_argument(
+        "--projects",
+        action="store_true",
+        help="also compile project files (.TcPOU/.TcDUT/.TcGVL), each source's as one unit, once st reads them",
+    )
     ap.add_argument("--preset", help="this preset for every source instead of its own (to look behind a rule)")
     args = ap.parse_args(argv)
     if args.preset:
         global SOURCES
         SOURCES = tuple(replace(s, dialect=args.preset) for s in SOURCES)
     args.out.mkdir(parents=True, exist_ok=True)
-    files = collect(args.corpora.resolve(), args.out, args.only)
+    files = collect(args.corpora.resolve(), args.out, args.only, args.projects)
     run(files, args.timeout, args.jobs)
     text = report(files, args.top, args.corpora.resolve(), args.out)
     (args.out / "conformance.md").write_text(text)
