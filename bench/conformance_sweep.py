@@ -114,6 +114,79 @@ class FileResult:
     outcomes: dict[str, Outcome] = field(default_factory=dict)  # "default" / dialect name → outcome
 
 
+# The judgement of docs/conformance.md, reason by reason: (code, start of the normalised message,
+# fragment of the unit's path or of the error's file:line, verdict, why). Verdicts: "a" wrongly refused
+# (the compiler the code was written for accepts it), "b" rightly refused (invalid as written, a
+# missing vendor library, another language), "?" not decided yet. First match wins; a reason that
+# matches none is "unjudged" and shows in the report until someone judges it.
+JUDGED = [
+    ("E048", "", "", "a", "own VAR_INPUT written (rule 1)"),
+    ("E001", "unexpected character '}'", "", "a", "{{ }} C block (rule 1)"),
+    ("E013", "type mismatch: cannot assign integer literal to BOOL", "", "a", "0/1 as BOOL (rule 2)"),
+    ("E013", "type mismatch: cannot pass integer literal to BOOL", "symbextest", "b", "user SEL : BOOL"),
+    ("E013", "type mismatch: cannot pass integer literal to BOOL", "", "a", "0/1 as BOOL (rule 2)"),
+    ("E002", "", "", "a", "comments do not nest (rule 1)"),
+    ("E001", "syntax error: unexpected end of file", "OSCAT", "a", "comments do not nest (rule 1)"),
+    ("E001", "syntax error: unexpected '…'", "_il.txt", "b", "IL"),
+    ("E001", "syntax error: unexpected '…'", "AnnexF", "b", "Annex F draft: %B6"),
+    ("E001", "syntax error: unexpected '…'", "PLCPython", "b", "prose in the body"),
+    ("E012", "unknown type '…'", "PT_Motor_PID", "a", "OpenPLC's PID (rule 3)"),
+    ("E020", "", "PT_Motor_PID", "a", "OpenPLC's PID (rule 3)"),
+    ("E023", "'INT' is not", "PT_Motor_PID", "a", "OpenPLC's PID (rule 3)"),
+    ("E012", "unknown type '…'", "AnnexF", "b", "cascade of Annex F typos"),
+    ("E020", "", "AnnexF", "b", "cascade of Annex F typos"),
+    ("E023", "'INT' is not", "AnnexF", "b", "cascade of Annex F typos"),
+    ("E012", "unknown type '…'", "FT_AVG", "b", "OSCAT's DELAY missing (file alone)"),
+    ("E020", "", "FT_AVG", "b", "OSCAT's DELAY missing"),
+    ("E023", "'INT' is not", "FT_AVG", "b", "OSCAT's DELAY missing"),
+    ("E012", "unknown type '…'", "strings", "b", "cascade of 'it''s'"),
+    ("E020", "", "strings", "b", "cascade"),
+    ("E023", "'INT' is not", "strings", "b", "cascade"),
+    ("E023", "'…' is not a structure", "smart-traffic", "?", "variable named as its type"),
+    ("E029", "", "smart-traffic", "?", "variable named as its type"),
+    ("E023", "'…' is not a structure", "fb_", "a", "THIS.x without ^ (IEC ed. 3; new)"),
+    ("E010", "undeclared function or function block '…'", "Estun", "b", "vendor C functions"),
+    ("E010", "undeclared function or function block '…'", "time_types", "b", "TIME_TO_US: STruC++ only"),
+    ("E010", "undeclared function or function block 'TIME'", "", "a", "TIME() (rule 4)"),
+    ("E013", "'%…' is N bit(s) wide", "", "?", "%ML as DWORD"),
+    ("E017", "… takes N argument(s), not N", "String Functions", "b", "MatIEC did not build it"),
+    ("E017", "… takes one argument", "", "a", "__NEW(T, n) (new, CODESYS)"),
+    ("E023", "'…' is not an array", "", "a", "POINTER indexing (rule 4)"),
+    ("E010", "undeclared identifier", "softmotion", "a", "user type over st's PLCopen (new)"),
+    ("E011", "", "softmotion", "a", "user type over st's PLCopen (new)"),
+    ("E027", "implicit conversion from UINT to USINT", "", "b", "MatIEC: no implicit narrowing"),
+    ("E027", "implicit conversion from BYTE to INT", "", "a", "BYTE into INT (rules 4, 7)"),
+    ("E014", "", "", "a", "ANY_BIT arithmetic (rule 4)"),
+    ("E001", "'…' is a reserved keyword", "", "a", "R_EDGE as a name (rule 4)"),
+    ("E013", "type mismatch: cannot assign BOOL to INT", "symbextest", "b", "user SEL : BOOL"),
+    ("E013", "type mismatch: cannot pass INT to BOOL", "symbextest", "b", "user SEL : BOOL"),
+    ("E001", "syntax error: unexpected 'END_VAR'", "delay_st", "b", "Annex F typo"),
+    ("E001", "syntax error: unexpected 'VAR_OUTPUT'", "delay_st", "b", "Annex F typo"),
+    ("E001", "syntax error: unexpected ']'", "diffeq", "b", "Annex F ARRAY[1..]"),
+    ("E001", "syntax error: unexpected '1'", "standard_functions", "b", "MatIEC-internal declarations"),
+    ("E012", "ARRAY[*]", "", "b", "ARRAY[*] only in VAR_IN_OUT (CODESYS)"),
+    ("E013", "type mismatch: cannot pass ARRAY", "", "b", "cascade of ARRAY[*]"),
+    ("E004", "%…: only bit addresses", "", "?", "%IW0.0 (MatIEC reads it)"),
+    ("E004", "%… is outside the process image", "", "a", "%ML1024+ special functions (new)"),
+    ("E001", "syntax error: unexpected ''s working''", "", "b", "'' is not an escape ($')"),
+]
+
+
+def verdict(code: str, message: str, where: str) -> tuple[str, str]:
+    for c, m, fragment, v, why in JUDGED:
+        if c == code and message.startswith(m) and fragment in where:
+            return v, why
+    return "unjudged", ""
+
+
+def judged(f: FileResult, key: str) -> str:
+    """A refused unit: "wrong" if every reason is judged wrongly refused, "right" if one is judged
+    rightly refused (it stays refused whatever else is fixed), otherwise "open"."""
+    o = f.outcomes[key]
+    kinds = {verdict(c, m, f"{f.path} {w}")[0] for c, m, w in o.others}
+    return "right" if "b" in kinds else "wrong" if kinds == {"a"} else "open"
+
+
 # ---------------------------------------------------------------- normalising messages
 
 _QUOTED = re.compile(r"'([^']*)'|\"([^\"]*)\"|`([^`]*)`")
@@ -537,9 +610,9 @@ def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
         "Each unit (a file, or the files its own build compiles together) compiled alone; *default* is no",
         "dialect, *preset* the one that fits the source. Outcomes count units.",
         "",
-        "| source | preset | files | units | clean (default) | clean (preset) | refused (preset) | internal | "
-        "XML skipped | duplicates | not read (project format) |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| source | preset | files | units | clean (default) | clean (preset) | refused (preset): rightly / "
+        "wrongly / open | internal | XML skipped | duplicates | not read (project format) |",
+        "|---|---|---:|---:|---:|---:|---|---:|---:|---:|---:|",
     ]
     by_source = collections.defaultdict(list)
     for f in files:
@@ -556,6 +629,9 @@ def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
             clean_default=sum(f.outcomes["default"].status == "clean" for f in checked),
             clean=sum(f.outcomes[src.dialect].status == "clean" for f in checked),
             refused=sum(f.outcomes[src.dialect].status == "refused" for f in checked),
+            **collections.Counter(
+                judged(f, src.dialect) for f in checked if f.outcomes[src.dialect].status == "refused"
+            ),
             internal=sum(any(o.status == "internal" for o in f.outcomes.values()) for f in checked),
             skipped=sum(f.kind == "skipped-xml" for f in group),
             dup=sum(f.kind == "duplicate" for f in group),
@@ -564,11 +640,12 @@ def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
         totals.update(row)
         lines.append(
             f"| {src.name} | {src.dialect} | {row['paths']} | {row['files']} | {row['clean_default']} | {row['clean']} | "
-            f"{row['refused']} | {row['internal']} | {row['skipped']} | {row['dup']} | {row['project']} |"
+            f"{row['refused']}: {row['right']} / {row['wrong']} / {row['open']} | {row['internal']} | {row['skipped']} | {row['dup']} | {row['project']} |"
         )
     t = totals
     lines.append(
-        f"| **all** | | {t['paths']} | {t['files']} | {t['clean_default']} | {t['clean']} | {t['refused']} | {t['internal']} | "
+        f"| **all** | | {t['paths']} | {t['files']} | {t['clean_default']} | {t['clean']} | "
+        f"{t['refused']}: {t['right']} / {t['wrong']} / {t['open']} | {t['internal']} | "
         f"{t['skipped']} | {t['dup']} | {t['project']} |"
     )
     lines += ["", f"## Top {top} refusal reasons (first error of each refused file)", ""]
@@ -591,17 +668,20 @@ def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
         msg = msg.replace("|", "\\|")[:140]
         lines.append(f"| {i} | {code} | {msg} | {n_preset} | {n_default} | `{example}` |")
     lines += ["", "## Every reason (all errors of each refused file, a reason counted once per file)", ""]
-    lines += ["| # | code | message | files (preset) | example |", "|---:|---|---|---:|---|"]
-    every: dict[tuple[str, str], list] = collections.defaultdict(lambda: [0, ""])
+    lines += ["| # | code | message | files (preset) | judged | example |", "|---:|---|---|---:|---|---|"]
+    every: dict[tuple[str, str], list] = collections.defaultdict(lambda: [0, "", collections.Counter()])
     for f in files:
         o = f.outcomes.get(dialect_of[f.source])
         for code, msg, where in o.others if o else ():
             r = every[(code, msg)]
             r[0] += 1
             r[1] = r[1] or _shown(where, corpora, out)
-    for i, ((code, msg), (n, example)) in enumerate(sorted(every.items(), key=lambda kv: (-kv[1][0], kv[0]))[:top], 1):
+            r[2][verdict(code, msg, f"{f.path} {where}")] += 1
+    ranked_all = sorted(every.items(), key=lambda kv: (-kv[1][0], kv[0]))
+    for i, ((code, msg), (n, example, verdicts)) in enumerate(ranked_all[:top], 1):
         shown = msg.replace("|", "\\|")[:140]
-        lines.append(f"| {i} | {code} | {shown} | {n} | `{example}` |")
+        judgement = "; ".join(f"{v} {k}: {why}" if why else f"{v} {k}" for (v, why), k in verdicts.most_common())
+        lines.append(f"| {i} | {code} | {shown} | {n} | {judgement} | `{example}` |")
     internal = [(f, k, o) for f in files for k, o in f.outcomes.items() if o.status == "internal"]
     lines += ["", f"## Internal errors ({len(internal)})", ""]
     for f, k, o in internal:
