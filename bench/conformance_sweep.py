@@ -102,6 +102,7 @@ class Outcome:
     where: str = ""  # file:line of the first error
     raw: str = ""  # the message as given
     others: list[list[str]] = field(default_factory=list)  # every error's [code, message, file:line], one per reason
+    run: str = ""  # --scans: "ok", "fault: …", "not started: …" or "internal: …" (a clean unit run on virtual time)
 
 
 @dataclass
@@ -452,8 +453,29 @@ def _alarm(signum, frame):
     raise _Timeout
 
 
-def check_file(paths: list[str], dialect: str | None, timeout: int) -> Outcome:
-    """One file (or unit) compiled alone, without the cache, and its outcome."""
+def run_scans(result, scans: int) -> str:
+    """A clean unit's program run for `scans` scans of 10 ms: ok, a PLC fault, or an internal error."""
+    from st import PLC, PLCFaultError, PLCStartError
+
+    try:
+        plc = PLC(result, "10ms")
+        for _ in range(scans):
+            plc.scan()
+    except PLCFaultError as e:
+        return f"fault: {e}"
+    except PLCStartError as e:
+        return f"not started: {e}"
+    except _Timeout:
+        raise
+    except Exception as e:  # anything else out of the runtime is an internal error
+        tb = traceback.extract_tb(e.__traceback__)[-1]
+        return f"internal: {type(e).__name__}: {e} at {Path(tb.filename).name}:{tb.lineno}"
+    return "ok"
+
+
+def check_file(paths: list[str], dialect: str | None, timeout: int, scans: int = 0) -> Outcome:
+    """One file (or unit) compiled alone, without the cache, and its outcome (and, with `scans`, what
+    running a clean one does)."""
     from st.api import compile_paths
 
     signal.signal(signal.SIGALRM, _alarm)
@@ -472,7 +494,15 @@ def check_file(paths: list[str], dialect: str | None, timeout: int) -> Outcome:
         signal.alarm(0)
     errors = [d for d in result.diagnostics if d.is_error]
     if not errors:
-        return Outcome("clean")
+        if not scans:
+            return Outcome("clean")
+        signal.alarm(timeout)
+        try:
+            return Outcome("clean", run=run_scans(result, scans))
+        except _Timeout:
+            return Outcome("clean", run=f"internal: no answer within {timeout} s")
+        finally:
+            signal.alarm(0)
     first = errors[0]
     internal = first.code == "E099" or any(d.code == "E099" for d in errors)
     if internal:
@@ -486,9 +516,9 @@ def check_file(paths: list[str], dialect: str | None, timeout: int) -> Outcome:
     return Outcome(status, first.code, normalise(first.message), where, first.message, listed)
 
 
-def _check_job(job: tuple[list[str], list[str | None], int]) -> dict[str, dict]:
-    paths, dialects, timeout = job
-    return {d or "default": asdict(check_file(paths, d, timeout)) for d in dialects}
+def _check_job(job: tuple[list[str], list[str | None], int, int]) -> dict[str, dict]:
+    paths, dialects, timeout, scans = job
+    return {d or "default": asdict(check_file(paths, d, timeout, scans if d else 0)) for d in dialects}
 
 
 # ---------------------------------------------------------------- the sweep
@@ -570,10 +600,10 @@ def collect(corpora: Path, out: Path, only: str | None, projects: bool = False) 
     return files
 
 
-def run(files: list[FileResult], timeout: int, jobs: int) -> None:
+def run(files: list[FileResult], timeout: int, jobs: int, scans: int = 0) -> None:
     dialect_of = {s.name: s.dialect for s in SOURCES}
     todo = [f for f in files if f.kind in ("st", "xml")]
-    work = [(f.paths, [None, dialect_of[f.source]], timeout) for f in todo]
+    work = [(f.paths, [None, dialect_of[f.source]], timeout, scans) for f in todo]
     started = time.monotonic()
     if jobs <= 1:
         answers = map(_check_job, work)
@@ -686,6 +716,11 @@ def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
     lines += ["", f"## Internal errors ({len(internal)})", ""]
     for f, k, o in internal:
         lines.append(f"- `{f.path}` ({k}): {o.code} {o.raw or o.message} at {o.where}")
+    runs = [(f, o.run) for f in files for k, o in f.outcomes.items() if o.run]
+    if runs:
+        counted = collections.Counter(r.split(":", 1)[0] for _, r in runs)
+        lines += ["", f"## Clean units run ({', '.join(f'{n} {k}' for k, n in counted.most_common())})", ""]
+        lines += [f"- `{f.path}`: {r.replace(str(corpora) + '/', '')}" for f, r in runs if r != "ok"]
     skipped = collections.Counter(f.note for f in files if f.kind == "skipped-xml")
     if skipped:
         lines += ["", "## PLCopen XML not turned into ST by this sweep", ""]
@@ -701,6 +736,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=1, help="worker processes")
     ap.add_argument("--top", type=int, default=30, help="refusal reasons listed")
     ap.add_argument("--only", help="only the sources whose name contains this")
+    ap.add_argument("--scans", type=int, default=0, help="also run each clean unit (its preset) for this many scans")
     ap.add_argument(
         "--projects",
         action="store_true",
@@ -713,7 +749,7 @@ def main(argv: list[str] | None = None) -> int:
         SOURCES = tuple(replace(s, dialect=args.preset) for s in SOURCES)
     args.out.mkdir(parents=True, exist_ok=True)
     files = collect(args.corpora.resolve(), args.out, args.only, args.projects)
-    run(files, args.timeout, args.jobs)
+    run(files, args.timeout, args.jobs, args.scans)
     text = report(files, args.top, args.corpora.resolve(), args.out)
     (args.out / "conformance.md").write_text(text)
     (args.out / "results.json").write_text(json.dumps([asdict(f) for f in files], indent=1))
