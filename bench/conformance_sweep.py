@@ -68,6 +68,14 @@ SOURCES = (
         st=("**/*.st",),
         xml=("**/plc.xml",),
     ),
+    Source("OpenPLC user project: CybICS", "openplc", "mniedermaier-CybICS", st=("**/*.st",), xml=("**/plc.xml",)),
+    Source(
+        "OpenPLC user project: OpenPLC_Tutorials (LD, as generated ST)",
+        "openplc",
+        "virajdesai0309-OpenPLC_Tutorials",
+        st=("**/*.st",),
+        xml=("**/plc.xml",),
+    ),
     Source("OSCAT as OpenPLC generates it", "openplc", "wonka929-OSCAT_OpenPLC", st=("**/*.st",), xml=("**/plc.xml",)),
     Source(
         "MatIEC lib and Annex F (OpenPLC's fork)",
