@@ -317,3 +317,48 @@ def test_time_function_is_the_plc_clock(dialect):
         "PROGRAM main\nVAR t : TIME; END_VAR\nt := TIME();\nEND_PROGRAM\n", 3, dialect
     )  # a lone PROGRAM: a 10 ms task
     assert plc["main.t"] == 20_000_000  # the third scan is released at 20 ms
+
+
+THIS_DOT = """FUNCTION_BLOCK F
+VAR x : INT; END_VAR
+METHOD Bump : INT
+THIS.x := THIS.x + 1;
+Bump := THIS^.x;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR f : F; n : INT; END_VAR
+n := f.Bump();
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "iec"])
+def test_this_dot_member_as_iec_writes_it(dialect):
+    plc = run(THIS_DOT, 3, dialect)
+    assert (plc["main.f.x"], plc["main.n"]) == (3, 3)
+
+
+def test_codesys_wants_this_dereferenced_and_says_how():
+    text = errors(THIS_DOT, "codesys")
+    assert (
+        "t.st:4:1: error[E023]: 'REF_TO F' is not a structure or function block instance, it has no field 'x'" in text
+    )
+    assert "hint: dereference it first: THIS^.x" in text
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys"])
+def test_a_bit_string_negated_wraps_as_an_unsigned_number(dialect):
+    src = "PROGRAM main\nVAR b : BYTE := 3; c : BYTE; END_VAR\nc := -b;\nEND_PROGRAM\n"
+    result = compile_text(src, "t.st", dialect=dialect, use_cache=False)
+    assert [(d.code, d.message) for d in result.diagnostics if d.span.file == "t.st"] == [
+        ("W005", "negating an unsigned BYTE wraps around")
+    ]
+    plc = PLC(result)
+    plc.scan()
+    assert plc["main.c"] == 253
+
+
+def test_iec_does_not_negate_a_bit_string():
+    src = "PROGRAM main\nVAR b : BYTE := 3; c : BYTE; END_VAR\nc := -b;\nEND_PROGRAM\n"
+    assert "t.st:3:6: error[E014]: operator - cannot be applied to BYTE" in errors(src, "iec")

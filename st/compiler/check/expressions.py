@@ -408,6 +408,10 @@ class Expressions(Part):
                 if e.op == "-" and b.is_int and not cast(T.ElemType, b).signed:
                     self.warn("W005", e.span, f"negating an unsigned {t} wraps around")
                 return t
+            if e.op == "-" and b.is_bit and not b.is_bool and self.ctx.bits_as_numbers():
+                # CODESYS, TwinCAT: a bit string negated as an unsigned number
+                self.warn("W005", e.span, f"negating an unsigned {t} wraps around")
+                return t
         self.err("E014", e.span, f"operator {e.op} cannot be applied to {t}")
         return t
 
@@ -425,6 +429,14 @@ class Expressions(Part):
                 e.const = m[1]
                 e.sym = et
                 return et
+        if (
+            isinstance(e.base, A.Name)
+            and e.base.name.upper() == "THIS"
+            and self.lookup("this", scope) is THIS
+            and (self.ctx.dialect is None or self.ctx.dialect.name == "iec")
+        ):
+            # IEC 61131-3 3rd edition writes THIS.x (THIS as a reference); CODESYS writes THIS^.x
+            e.base = A.Deref(e.base.span, e.base)
         bt = self.expr(e.base, scope)
         if bt is None:
             return None
@@ -474,7 +486,14 @@ class Expressions(Part):
             return v.type
         if isinstance(b, T.ElemType) and b.is_intlike and e.name.isdigit():
             return T.BOOL
-        self.err("E023", e.span, f"'{bt}' is not a structure or function block instance, it has no field '{e.name}'")
+        self.err(
+            "E023",
+            e.span,
+            f"'{bt}' is not a structure or function block instance, it has no field '{e.name}'",
+            f"dereference it first: {e.base.name}^.{e.name}"
+            if isinstance(b, T.RefType) and isinstance(e.base, A.Name)
+            else "",
+        )
         return None
 
     def _index(self, e: A.Index, scope: Scope):
