@@ -362,3 +362,40 @@ def test_a_bit_string_negated_wraps_as_an_unsigned_number(dialect):
 def test_iec_does_not_negate_a_bit_string():
     src = "PROGRAM main\nVAR b : BYTE := 3; c : BYTE; END_VAR\nc := -b;\nEND_PROGRAM\n"
     assert "t.st:3:6: error[E014]: operator - cannot be applied to BYTE" in errors(src, "iec")
+
+
+STRING_NAMES = """PROGRAM main
+VAR s : STRING := 'hello world'; a, b, c, d, e, f, g : STRING; n, k : INT; END_VAR
+n := LEN(STR := s);
+a := LEFT(STR := s, SIZE := 5);
+b := RIGHT(STR := s, SIZE := 5);
+c := MID(STR := s, LEN := 3, POS := 2);
+d := CONCAT(STR1 := a, STR2 := b);
+k := FIND(STR1 := s, STR2 := 'world');
+e := DELETE(STR := s, LEN := 6, POS := 1);
+f := INSERT(STR1 := a, STR2 := '!', POS := 5);
+g := REPLACE(STR1 := s, STR2 := 'W', L := 1, P := 7);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_twincat_names_of_the_string_functions_parameters(dialect):
+    plc = run(STRING_NAMES, 1, dialect)
+    got = {k: plc[f"main.{k}"] for k in ("n", "a", "b", "c", "d", "k", "e", "f", "g")}
+    assert got == {
+        "n": 11,
+        "a": "hello",
+        "b": "world",
+        "c": "ell",
+        "d": "helloworld",
+        "k": 7,
+        "e": "world",
+        "f": "hello!",
+        "g": "hello World",
+    }
+
+
+@pytest.mark.parametrize("dialect", ["iec", "openplc"])
+def test_iec_names_only_in_iec_and_matiec(dialect):
+    assert "t.st:3:10: error[E016]: LEN has no parameter 'STR' (parameters: IN)" in errors(STRING_NAMES, dialect)

@@ -19,7 +19,7 @@ from ..model.compiled import CompiledProgram
 from ..model.program import Project
 from ..source import SourceFile, Span
 from . import ast as A
-from . import cache
+from . import cache, twincat
 from .artefact import artefact, libraries_only
 from .build import EDGE_NAMES, AstBuilder
 from .check import Checker
@@ -244,20 +244,32 @@ def _attach_test_texts(project: Project, sources: dict) -> None:
             info.text = src.text_of(info.span)
 
 
+def _read_text(p: str) -> str:
+    try:
+        raw = Path(p).read_bytes()
+    except OSError as e:
+        raise CompileError(
+            [Diagnostic("E000", Severity.ERROR, Span(str(p), 0, 0), f"cannot read file: {e.strerror}")], {}
+        ) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    return text.replace("\r\n", "\n").replace("\r", "\n")
+
+
 def load_files(paths: list[str]) -> list[SourceFile]:
+    """The sources: .st files as they are; TwinCAT's .TcPOU/.TcDUT/.TcGVL/.TcIO as their ST laid out
+    at the XML's lines (diagnostics point into the TwinCAT file); a .plcproj as the files it compiles."""
     out = []
     for p in paths:
-        try:
-            raw = Path(p).read_bytes()
-        except OSError as e:
-            raise CompileError(
-                [Diagnostic("E000", Severity.ERROR, Span(str(p), 0, 0), f"cannot read file: {e.strerror}")], {}
-            ) from None
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError:
-            text = raw.decode("latin-1")
-        if text.startswith("\ufeff"):
-            text = text[1:]
-        out.append(SourceFile(str(p), text.replace("\r\n", "\n").replace("\r", "\n")))
+        if str(p).lower().endswith(twincat.PROJECT_SUFFIX):
+            out += load_files(twincat.project_files(str(p), _read_text(str(p))))
+            continue
+        text = _read_text(str(p))
+        if twincat.is_twincat(str(p)):
+            text = twincat.twincat_source(text)
+        out.append(SourceFile(str(p), text))
     return out

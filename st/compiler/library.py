@@ -38,6 +38,7 @@ class FuncSig:
     emit: Callable | None = None
     min_args: int = 0
     doc: str = ""
+    aliases: dict = field(default_factory=dict)  # another name of a parameter (lower) → its name (lower)
 
 
 @dataclass

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 from ..source import SourceFile
 from .dialect import Dialect, pragma_preset, preset, strict_types
+from .twincat import is_twincat
 
 
 @dataclass(frozen=True)
@@ -37,9 +38,12 @@ class CompileOptions:
     ) -> CompileOptions:
         """The options of a compile of `sources`. The preset is `dialect` (an unknown name is a
         ValueError) or else the one a `{dialect '…'}` pragma names (an unknown one is a CompileError,
-        E045); a preset decides the time unit and the F_TRIG behaviour."""
+        E045), or else twincat when every source is a TwinCAT file; a preset decides the time unit and
+        the F_TRIG behaviour."""
         sources = list(sources)
         chosen = preset(dialect) if dialect is not None else pragma_preset(sources)
+        if chosen is None and sources and all(is_twincat(s.path) for s in sources):
+            chosen = preset("twincat")
         if chosen is not None:
             time_unit, f_trig_first_scan = chosen.time_unit, chosen.f_trig_first_scan
         return cls(

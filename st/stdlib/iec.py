@@ -376,6 +376,19 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", mat
         )
     )
     add(FuncSig("FIND", [_p("IN1", "ANY_STRING"), _p("IN2", "ANY_STRING")], "INT", helper="_std_find"))
+    # TwinCAT's (Tc2_Standard's) names of the string functions' parameters, beside IEC's
+    for name, aliases in (
+        ("LEN", {"str": "in"}),
+        ("LEFT", {"str": "in", "size": "l"}),
+        ("RIGHT", {"str": "in", "size": "l"}),
+        ("MID", {"str": "in", "len": "l", "pos": "p"}),
+        ("CONCAT", {"str1": "in1", "str2": "in2"}),
+        ("INSERT", {"str1": "in1", "str2": "in2", "pos": "p"}),
+        ("DELETE", {"str": "in", "len": "l", "pos": "p"}),
+        ("REPLACE", {"str1": "in1", "str2": "in2"}),
+        ("FIND", {"str1": "in1", "str2": "in2"}),
+    ):
+        lib.functions[name].aliases = aliases
     # time and date
     for name, a, b, r, op in (
         ("ADD_TIME", "TIME", "TIME", "TIME", "+"),

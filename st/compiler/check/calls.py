@@ -428,6 +428,8 @@ class Calls(Part):
     def _native_call(self, c: A.Call, sig: FuncSig, scope: Scope, expected=None):
         args = []
         en = eno = None
+        # TwinCAT's parameter names (LEN(STR := s)) where the dialect has vendor extensions
+        aliases = sig.aliases if self.ctx.feature_quiet("vendor") else {}
         named = {}
         for a in c.args:
             if a.name.lower() == "en":
@@ -440,7 +442,7 @@ class Calls(Part):
                 self.err("E016", a.span, f"{sig.name} has no output '{a.name}'")
                 continue
             if a.name:
-                named[a.name.lower()] = a
+                named[aliases.get(a.name.lower(), a.name.lower())] = a
             args.append(a)
         # named arguments in declaration order
         if named:
@@ -448,7 +450,7 @@ class Calls(Part):
             names = [p.name.lower() for p in sig.params]
             for a in args:
                 if a.name:
-                    key = a.name.lower()
+                    key = aliases.get(a.name.lower(), a.name.lower())
                     if key not in names:
                         m = re.fullmatch(r"in(\d+)", key)
                         if sig.extensible and m:

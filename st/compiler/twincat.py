@@ -1,0 +1,137 @@
+"""TwinCAT 3 project files as ST sources: .TcPOU, .TcDUT, .TcGVL, .TcIO and the .plcproj that
+lists them.
+
+A TwinCAT file is XML whose CDATA sections hold the ST: a POU's declaration and body, each
+method's, property accessor's and action's. `twincat_source` turns one file into ST text that
+has every CDATA character at the same line and column as in the XML, everything else blanked,
+and the keywords TwinCAT leaves implicit (END_FUNCTION_BLOCK, END_METHOD, GET … END_GET,
+ACTION … END_ACTION, …) written on lines of the file that hold only XML. So the file is compiled
+as it is and every diagnostic names the .TcPOU itself, at the line and column of the code.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import PureWindowsPath
+
+SUFFIXES = (".tcpou", ".tcdut", ".tcgvl", ".tcio")
+PROJECT_SUFFIX = ".plcproj"
+
+_TOKEN = re.compile(
+    r"<!\[CDATA\[(.*?)\]\]>|<(/?)([A-Za-z_][\w.]*)((?:[^>\"']|\"[^\"]*\"|'[^']*')*?)(/?)>|<\?.*?\?>|<!--.*?-->", re.S
+)
+_NAME_ATTR = re.compile(r"\bName\s*=\s*\"([^\"]*)\"")
+_KIND = re.compile(
+    r"^\s*(?:\{[^}]*\}\s*|\(\*.*?\*\)\s*|//[^\n]*\n\s*)*"
+    r"(FUNCTION_BLOCK|FUNCTION|PROGRAM|INTERFACE)\b",
+    re.I | re.S,
+)
+_CONTAINERS = {"Method": "METHOD", "Property": "PROPERTY", "Get": "GET", "Set": "SET", "Action": "ACTION"}
+
+
+def is_twincat(path: str) -> bool:
+    return path.lower().endswith(SUFFIXES)
+
+
+def project_files(project_path: str, xml: str) -> list[str]:
+    """The ST files a .plcproj compiles (its `<Compile Include="…"/>` items), as paths."""
+    base = os.path.dirname(project_path)
+    out = []
+    for m in re.finditer(r"<Compile\s+Include\s*=\s*\"([^\"]+)\"", xml):
+        rel = PureWindowsPath(m.group(1)).as_posix()
+        if rel.lower().endswith(SUFFIXES):
+            out.append(os.path.join(base, rel))
+    return out
+
+
+class _Layout:
+    """The output: the XML's lines, blank, with code and keywords placed at columns."""
+
+    def __init__(self, xml: str):
+        self.starts = [0]
+        for i, c in enumerate(xml):
+            if c == "\n":
+                self.starts.append(i + 1)
+        self.pieces: list[list[tuple[int, str]]] = [[] for _ in self.starts]
+
+    def where(self, offset: int) -> tuple[int, int]:
+        lo, hi = 0, len(self.starts) - 1
+        while lo < hi:
+            mid = (lo + hi + 1) // 2
+            if self.starts[mid] <= offset:
+                lo = mid
+            else:
+                hi = mid - 1
+        return lo, offset - self.starts[lo]
+
+    def code(self, offset: int, text: str) -> None:
+        """CDATA text starting at `offset` of the XML, kept at its lines and columns."""
+        line, col = self.where(offset)
+        for k, part in enumerate(text.split("\n")):
+            if part:
+                self.pieces[line + k].append((col if k == 0 else 0, part))
+
+    def keyword(self, offset: int, text: str) -> None:
+        line, col = self.where(offset)
+        self.pieces[line].append((col, text))
+
+    def text(self) -> str:
+        lines = []
+        for pieces in self.pieces:
+            out = ""
+            for col, part in sorted(pieces, key=lambda p: p[0]):
+                if col < len(out) + (1 if out else 0):
+                    col = len(out) + (1 if out else 0)  # a keyword pushed right of what precedes it
+                out += " " * (col - len(out)) + part
+            lines.append(out)
+        return "\n".join(lines)
+
+
+def twincat_source(xml: str) -> str:
+    """The ST of one TwinCAT file, laid out at the XML's lines and columns (see the module doc)."""
+    out = _Layout(xml)
+    stack: list[str] = []
+    pou_end = ""  # END_FUNCTION_BLOCK etc. of the file's POU, until it is written
+    itf = False
+    for m in _TOKEN.finditer(xml):
+        cdata, closing, tag, attrs, selfclosing = m.groups()
+        if cdata is not None:
+            out.code(m.start(1), cdata)
+            if stack and stack[-1] == "Declaration" and len(stack) >= 2 and stack[-2] in ("POU", "Itf"):
+                kind = _KIND.match(cdata)
+                if kind is not None:
+                    pou_end = "END_" + kind.group(1).upper()
+                    itf = kind.group(1).upper() == "INTERFACE"
+            continue
+        if tag is None:
+            continue  # <?xml ?>, comments
+        if not closing:
+            if tag in ("Method", "Property", "Action") and len(stack) >= 1 and stack[-1] in ("POU", "Itf"):
+                if pou_end and not itf:  # members follow the block's END_, as CODESYS writes them in text
+                    out.keyword(m.start(), pou_end)
+                    pou_end = ""
+            if tag in ("Get", "Set"):
+                out.keyword(m.start(), _CONTAINERS[tag])
+            elif tag == "Action":
+                name = _NAME_ATTR.search(attrs or "")
+                out.keyword(m.start(), f"ACTION {name.group(1) if name else ''} :")
+            if not selfclosing:
+                stack.append(tag)
+            continue
+        # a closing tag
+        while stack and stack[-1] != tag:
+            stack.pop()
+        if not stack:
+            continue
+        stack.pop()
+        parent = stack[-1] if stack else ""
+        if tag == "Implementation" and parent == "POU" and pou_end and not itf:
+            out.keyword(m.start(), pou_end)
+            pou_end = ""
+        elif tag in ("Method", "Property", "Get", "Set", "Action"):
+            out.keyword(m.start(), "END_" + _CONTAINERS[tag])
+        elif tag in ("POU", "Itf") and pou_end:
+            out.keyword(m.start(), pou_end)
+            pou_end = ""
+    return out.text()
