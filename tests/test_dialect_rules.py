@@ -399,3 +399,22 @@ def test_twincat_names_of_the_string_functions_parameters(dialect):
 @pytest.mark.parametrize("dialect", ["iec", "openplc"])
 def test_iec_names_only_in_iec_and_matiec(dialect):
     assert "t.st:3:10: error[E016]: LEN has no parameter 'STR' (parameters: IN)" in errors(STRING_NAMES, dialect)
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_a_property_declaration_may_end_in_a_semicolon_as_twincat_writes_it(dialect):
+    src = (
+        "FUNCTION_BLOCK F\nVAR x : INT := 4; END_VAR\nEND_FUNCTION_BLOCK\nPROPERTY P : INT;\nGET P := x; END_GET\n"
+        "END_PROPERTY\nPROGRAM main\nVAR f : F; n : INT; END_VAR\nn := f.P;\nEND_PROGRAM\n"
+    )
+    assert run(src, 1, dialect)["main.n"] == 4
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_ref_assign_zero_unbinds_a_reference_as_codesys_does(dialect):
+    src = (
+        "PROGRAM main\nVAR p : REFERENCE TO INT; x : INT := 5; ok1, ok2 : BOOL; END_VAR\n"
+        "p REF= x;\nok1 := __ISVALIDREF(p);\np REF= 0;\nok2 := __ISVALIDREF(p);\nEND_PROGRAM\n"
+    )
+    plc = run(src, 1, dialect)
+    assert (plc["main.ok1"], plc["main.ok2"]) == (True, False)

@@ -394,6 +394,8 @@ class AstBuilder(Transformer):
         self._not_reserved(name)
         prop = A.Property(self.sp(name), str(name), mods, c[i + 1])
         for acc in c[i + 2 : -1]:
+            if isinstance(acc, Token):  # TwinCAT writes PROPERTY P : T; with a ';'
+                continue
             kind, span, parts = acc
             m = A.Method(span, str(name), mods)
             for p in parts:

@@ -34,6 +34,8 @@ class Statements(Part):
         tgt.ty = sym.type
         want = cast(T.RefType, T.unalias(sym.type)).target
         v = s.value
+        if isinstance(v, A.Literal) and v.kind == "int" and v.value == 0 and not v.type_name:
+            s.value = v = A.Name(v.span, "NULL")  # CODESYS: r REF= 0 unbinds, as REF= NULL
         if isinstance(v, A.Name) and v.name.upper() == "NULL":
             self.exprs.expr(v, scope)
             return
