@@ -154,3 +154,21 @@ def test_diagnostics_point_into_the_tcpou_at_the_line_and_column_of_the_code(tmp
     result = compile_paths([str(_project(tmp_path, broken))], use_cache=False, raise_on_error=False)
     errors = [(Path(d.span.file).name, d.span.line, d.span.col, d.message) for d in result.diagnostics if d.is_error]
     assert errors == [("FB_Counter.TcPOU", 13, 24, "undeclared identifier 'nStepp'")]
+
+
+def test_a_named_global_variable_list_is_reached_by_its_name(tmp_path):
+    qualified = COUNTER_POU.replace("nCount := nCount + nStep;", "nCount := nCount + GVL_Main.nStep;").replace(
+        "nCount := nTo;", "nCount := nTo; GVL_Main.nStep := 1;"
+    )
+    compiled = compile_paths([str(_project(tmp_path, qualified))], use_cache=False)
+    assert [d.code for d in compiled.diagnostics if d.is_error] == []
+    plc = PLC(compiled)
+    plc.scan(4)  # 3, 6, 9 → Reset to 1 (step 1 from now on), Twice: 2; then 2 + 1
+    assert (plc["MAIN.fbCounter.nCount"], plc["nStep"]) == (3, 1)
+
+
+def test_a_name_a_global_list_does_not_have_is_a_located_error(tmp_path):
+    typo = COUNTER_POU.replace("nCount := nCount + nStep;", "nCount := nCount + GVL_Main.nStap;")
+    result = compile_paths([str(_project(tmp_path, typo))], use_cache=False, raise_on_error=False)
+    errors = [(Path(d.span.file).name, d.span.line, d.span.col, d.message) for d in result.diagnostics if d.is_error]
+    assert errors == [("FB_Counter.TcPOU", 13, 33, "'nStap' is not a variable of GVL_Main")]

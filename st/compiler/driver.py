@@ -215,7 +215,7 @@ def _parse_all(
         if u is not None:
             units.append(u)
     # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat
-    known = {"dialect"}
+    known = {"dialect", "gvl"}
     if options.dialect is not None and options.dialect.attribute_pragmas:
         known.add("attribute")
     sink.items = [d for d in sink.items if not (d.code == "W001" and d.datum("pragma") in known)]

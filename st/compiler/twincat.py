@@ -111,6 +111,10 @@ def twincat_source(xml: str) -> str:
                 if pou_end and not itf:  # members follow the block's END_, as CODESYS writes them in text
                     out.keyword(m.start(), pou_end)
                     pou_end = ""
+            if tag == "GVL":  # the list's name: GVL_Main.x reaches its variables (compiler/check)
+                name = _NAME_ATTR.search(attrs or "")
+                if name:
+                    out.keyword(m.start(), "{gvl '" + name.group(1) + "'}")
             if tag in ("Get", "Set"):
                 out.keyword(m.start(), _CONTAINERS[tag])
             elif tag == "Action":

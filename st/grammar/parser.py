@@ -258,6 +258,6 @@ class StParser:
                 Diagnostic(getattr(orig, "code", "E003"), Severity.ERROR, span, getattr(orig, "message", str(orig)))
             )
             return None, diags
-        if any(d.is_error for d in diags):
-            return result, diags
+        if result is not None and hasattr(result, "pragmas"):
+            result.pragmas = [p for p in pragmas if not p.embedded_code]
         return result, diags

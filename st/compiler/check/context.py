@@ -42,6 +42,10 @@ class CheckContext:
     configs: list[A.Configuration] = field(default_factory=list)
     """CONFIGURATION declarations collected, checked after the bodies."""
     global_blocks: list[tuple[str, A.VarBlock]] = field(default_factory=list)
+    gvl_of_block: dict[int, str] = field(default_factory=dict)
+    """A VAR_GLOBAL block of a named global variable list (TwinCAT's .TcGVL): id(block) → the list's name."""
+    gvls: dict[str, dict[str, T.VarSym]] = field(default_factory=dict)
+    """Named global variable lists: lower list name → lower variable name → symbol (`GVL_Main.x`)."""
     """VAR_GLOBAL blocks: (scope prefix, block); the prefix is '' or a configuration/resource path."""
 
     # ---------------------------------------------------------------- reporting

@@ -417,6 +417,16 @@ class Expressions(Part):
 
     def _field(self, e: A.Field, scope: Scope):
         if isinstance(e.base, A.Name) and self.lookup(e.base.name.lower(), scope) is None:
+            gvl = self.ctx.gvls.get(e.base.name.lower())
+            if gvl is not None:
+                # GVL_Main.x: a variable of a named global variable list (TwinCAT)
+                sym = gvl.get(e.name.lower())
+                if sym is None:
+                    self.err("E010", e.name_span, f"'{e.name}' is not a variable of {e.base.name}")
+                    return None
+                sym.used = True
+                e.sym = sym
+                return sym.type
             et = self.decls.resolve_named_type(e.base.name.lower(), e.base.span)
             named = T.unalias(et) if et is not None else None
             if isinstance(named, T.EnumType):

@@ -3,6 +3,7 @@
 Runs after the checks, before code generation (compiler/codegen). Each lowering is one module
 and rewrites the bodies in place (the checked project is built for one compilation):
 
+- qualified.py: `GVL_Main.x` (a named global variable list's variable) → the global's name;
 - properties.py: property reads and writes → `AccessorCall` (GET, or SET as a target);
 - loops.py: FOR → `CountedFor` (its form decided), a `LoopGuard` first in every loop;
 - inheritance.py: each block's flattened member set and what its instances are (`Block`),
@@ -15,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ...model.program import Project
-from . import inheritance, loops, properties
+from . import inheritance, loops, properties, qualified
 from .walk import bodies
 
 
@@ -35,11 +36,13 @@ class LoweredProgram:
 def lower(project: Project, options: LowerOptions | None = None) -> LoweredProgram:
     options = options or LowerOptions()
     for body in bodies(project):
+        qualified.global_names(body)
         properties.accessor_calls(body)
         inheritance.super_calls(body)
         loops.count_fors(body)
         if options.loop_guards:
             loops.guard_loops(body)
+    qualified.global_names_outside_bodies(project)
     properties.accessor_calls_outside_bodies(project)
     inheritance.super_calls_outside_bodies(project)
     return LoweredProgram(project, inheritance.blocks(project))

@@ -76,8 +76,23 @@ def _collect(ctx: CheckContext, u: A.Unit) -> None:
                 ctx.err("E003", item.span, f"{item.kind} is not allowed outside a POU")
                 continue
             ctx.global_blocks.append(("", item))
+            gvl = _gvl_name(u)
+            if gvl:
+                ctx.gvl_of_block[id(item)] = gvl
         elif isinstance(item, A.TestBlock):
             ctx.project.test_blocks.append(item)
+
+
+_GVL = re.compile(r"\{\s*gvl\s+'([A-Za-z_][A-Za-z0-9_]*)'\s*\}", re.I)
+
+
+def _gvl_name(u: A.Unit) -> str:
+    """The name of the global variable list a file is (`{gvl 'GVL_Main'}`, from a .TcGVL), or ''."""
+    for p in u.pragmas:
+        m = _GVL.fullmatch(p.text)
+        if m:
+            return m.group(1)
+    return ""
 
 
 _END = re.compile(r"^\s*END_(FUNCTION_BLOCK|FUNCTION|PROGRAM|INTERFACE|CLASS)\b", re.I | re.M)

@@ -43,6 +43,9 @@ def declare_globals(sem: Semantics) -> None:
             declared[uniq] = sym
             ctx.project.globals[sym.pyname] = sym
             ctx.project.global_names.setdefault(key, []).append(sym)
+            gvl = ctx.gvl_of_block.get(id(block))
+            if gvl:
+                ctx.gvls.setdefault(gvl.lower(), {})[key] = sym
     # global initializers may name other globals: check them once all are declared
     for decl, t in ctx.deferred_inits:
         sem.decls.check_initializer(decl.init, t, None)

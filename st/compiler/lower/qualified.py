@@ -1,0 +1,24 @@
+"""Qualified names that only name a variable: `GVL_Main.x` (a named global variable list's
+variable, TwinCAT) is the global `x` itself; code generation prints a plain name."""
+
+from __future__ import annotations
+
+from .. import ast as A
+from .walk import rewrite_exprs, rewrite_outside_bodies
+
+
+def global_names(body: list) -> None:
+    rewrite_exprs(body, _plain)
+
+
+def global_names_outside_bodies(project) -> None:
+    rewrite_outside_bodies(project, _plain)
+
+
+def _plain(e):
+    sym = getattr(e, "sym", None)
+    if isinstance(e, A.Field) and getattr(sym, "is_global", False) and isinstance(e.base, A.Name):
+        out = A.Name(e.span, sym.name, sym)
+        out.ty = e.ty
+        return out
+    return e
