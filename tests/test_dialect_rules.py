@@ -418,3 +418,25 @@ def test_ref_assign_zero_unbinds_a_reference_as_codesys_does(dialect):
     )
     plc = run(src, 1, dialect)
     assert (plc["main.ok1"], plc["main.ok2"]) == (True, False)
+
+
+UNNAMED_LOCATED = """PROGRAM main
+VAR
+  AT %IX0.1 : BOOL;
+  AT %QW2 : INT := 7;
+  speed AT %MW3 : INT := 40;
+  x : BOOL; w, s : INT;
+END_VAR
+x := NOT %IX0.1;
+w := %QW2 + 1;
+%QW2 := w;
+s := %MW3 + speed;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "iec", "openplc", "codesys"])
+def test_a_direct_address_is_the_variable_declared_at_it_named_or_not(dialect):
+    plc = run(UNNAMED_LOCATED, 2, dialect)
+    # scan 1: w = 7 + 1, %QW2 := 8; scan 2: w = 9, %QW2 := 9
+    assert (plc["main.x"], plc["main.w"], plc["%QW2"], plc["main.s"]) == (True, 9, 9, 80)

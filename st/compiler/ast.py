@@ -45,6 +45,7 @@ class Name(Expr):
 @dataclass(slots=True, eq=False)
 class Direct(Expr):
     address: str = ""  # "%IX0.0"
+    sym: Any = field(default=None, repr=False)  # the variable declared AT this address, if any (checker)
 
 
 @dataclass(slots=True, eq=False)

@@ -255,6 +255,16 @@ class AstBuilder(Transformer):
     def var_decl(self, c):
         return self._var_decl(c)
 
+    def anonymous_located_decl(self, c):
+        """`AT %IX1.1 : BOOL;` (IEC): a variable reached only by its address. Its name joins two
+        words with '__', which no ST identifier may contain, so it names nothing else."""
+        loc = c[0]
+        at = Token("IDENT", "AT__" + loc[1].lstrip("%").replace(".", "_"))
+        first = next((t for t in c if isinstance(t, Token)), None)
+        if first is not None:
+            at = Token.new_borrow_pos("IDENT", str(at), first)
+        return self._var_decl([[at]] + list(c))
+
     def config_decl(self, c):
         path = c[0]
         d = self._var_decl([[path[-1]]] + list(c[1:]))

@@ -85,10 +85,24 @@ class Expressions(Part):
                 return _DIRECT_TYPES[match.group(2)]
             t = _DIRECT_TYPES[match.group(2)]
             e.address = canonical(e.address)  # %q0.1 and %QX0.1 are one variable
+            located = self._located_at(e.address, scope)
+            if located is not None:
+                # the variable declared AT this address (named or not) is what %QW2 reads and writes
+                located.used = True
+                e.sym = located
+                return located.type
             self.p.direct_vars[e.address] = ("_d_" + e.address[1:].replace(".", "_"), t)
             e.const = None
             return t
         raise AssertionError(e)
+
+    def _located_at(self, address: str, scope: Scope) -> T.VarSym | None:
+        """The variable of this POU, or else the global, declared AT `address` (canonical)."""
+        for sym in list(scope.vars.values()) + list(self.p.globals.values()):
+            loc = getattr(sym, "location", "")
+            if loc and "*" not in loc and canonical(loc) == address:
+                return sym
+        return None
 
     def _property_read(self, e, lvalue: bool) -> None:
         if isinstance(e.sym, T.PropSym) and not lvalue and e.sym.get is None:
