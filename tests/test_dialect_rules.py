@@ -440,3 +440,13 @@ def test_a_direct_address_is_the_variable_declared_at_it_named_or_not(dialect):
     plc = run(UNNAMED_LOCATED, 2, dialect)
     # scan 1: w = 7 + 1, %QW2 := 8; scan 2: w = 9, %QW2 := 9
     assert (plc["main.x"], plc["main.w"], plc["%QW2"], plc["main.s"]) == (True, 9, 9, 80)
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "iec"])
+def test_a_constant_of_the_pou_may_be_used_in_a_section_above_its_own(dialect):
+    src = (
+        "PROGRAM main\nVAR a : ARRAY[1..N] OF INT; s : STRING[LEN_S]; END_VAR\n"
+        "VAR CONSTANT N : INT := 3; LEN_S : INT := 2 * N; END_VAR\na[N] := 1;\ns := 'abcdef';\nEND_PROGRAM\n"
+    )
+    plc = run(src, 1, dialect)
+    assert (plc["main.a"], plc["main.s"]) == ([0, 0, 1], "abcdef")

@@ -38,7 +38,8 @@ class Constants(Part):
             mems = self.p.enum_members.get(key)
             if mems and len({m[2] for m in mems}) == 1:
                 return mems[0][2]
-            return self._raw_global_constant(key)
+            local = self._raw_local_constant(key, scope)
+            return local if local is not None else self._raw_global_constant(key)
         if isinstance(e, A.Unary):
             v = self.value(e.operand, scope)
             if v is None or isinstance(v, str):
@@ -80,6 +81,25 @@ class Constants(Part):
             except (ZeroDivisionError, OverflowError):
                 return None
             return None
+        return None
+
+    def _raw_local_constant(self, key: str, scope: Scope | None):
+        """A VAR CONSTANT of the POU being declared whose section comes later (CODESYS lets
+        `ARRAY[1..N]` use an N declared below it)."""
+        decl = scope.pou.decl if scope is not None and scope.pou is not None else None
+        blocks = getattr(decl, "var_blocks", None) or []
+        if key in self.ctx.raw_const_busy:
+            return None
+        for b in blocks:
+            if "CONSTANT" not in b.qualifiers:
+                continue
+            for d in b.decls:
+                if any(n.lower() == key for n, _ in d.names) and isinstance(d.init, A.Expr):
+                    self.ctx.raw_const_busy.add(key)
+                    try:
+                        return self.value(d.init, scope)
+                    finally:
+                        self.ctx.raw_const_busy.discard(key)
         return None
 
     def _raw_global_constant(self, key: str):
