@@ -450,3 +450,101 @@ def test_a_constant_of_the_pou_may_be_used_in_a_section_above_its_own(dialect):
     )
     plc = run(src, 1, dialect)
     assert (plc["main.a"], plc["main.s"]) == ([0, 0, 1], "abcdef")
+
+
+CHAINED = """PROGRAM main
+VAR a : INT; b : SINT; d : INT := 300; r1, r2 : REAL; arr : ARRAY[0..3] OF INT; END_VAR
+a := b := d;
+r1 := r2 := d + 9;
+IF TRUE THEN arr[1] := arr[2] := 7; END_IF
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_chained_assignment_gives_each_target_the_value_of_the_one_to_its_right(dialect):
+    plc = run(CHAINED, 1, dialect)
+    # b := 300 wraps to the SINT 44, and a gets b's value (CODESYS: the assignment's value is its target's)
+    assert (plc["main.b"], plc["main.a"], plc["main.r1"], plc["main.r2"]) == (44, 44, 309.0, 309.0)
+    assert plc["main.arr"] == [0, 7, 7, 0]
+
+
+@pytest.mark.parametrize("dialect", ["iec", "openplc"])
+def test_chained_assignment_is_a_vendor_extension(dialect):
+    assert f"t.st:4:1: error[E044]: chained assignment (a := b := c) is not part of the {dialect} dialect" in errors(
+        CHAINED.replace("a := b := d;", "a := d;"), dialect
+    )
+
+
+def test_chained_assignment_checks_each_step_with_the_target_to_its_right():
+    src = "PROGRAM main\nVAR i : INT; r : REAL; END_VAR\ni := r := i;\nEND_PROGRAM\n"
+    assert "t.st:3:6: error[E027]: implicit conversion from REAL to INT" in errors(src, "codesys")
+
+
+FB_INIT_ARGS = """
+INTERFACE I_Get
+METHOD Get : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK FB_A IMPLEMENTS I_Get
+VAR v, w : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; n : INT; m : INT; END_VAR
+v := n; w := m;
+END_METHOD
+METHOD Get : INT
+Get := v;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FB_S
+VAR o : REFERENCE TO FB_A; seen : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; other : REFERENCE TO FB_A; END_VAR
+o REF= other;
+seen := other.v;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR
+  k : INT := 4; arr : ARRAY[0..2] OF INT := [1, 2, 3];
+  a : FB_A(5, 6); fs : FB_S(other := a);
+  p : POINTER TO INT := ADR(k); q : REF_TO INT := REF(arr[2]); itf : I_Get := a;
+  rr : REFERENCE TO INT := k;
+  x, y, z, w : INT;
+END_VAR
+a.v := a.v + 1;
+x := fs.o.v;
+y := p^ + q^;
+z := itf.Get();
+k := 40;
+w := rr + fs.seen;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_initial_values_that_name_other_variables_of_the_instance(dialect):
+    plc = run(FB_INIT_ARGS, 1, dialect)
+    # a : FB_A(5, 6) gives FB_init n = 5, m = 6; fs's FB_init saw a.v = 5 and keeps a reference to a
+    assert (plc["main.a.v"], plc["main.a.w"], plc["main.fs.seen"]) == (6, 6, 5)
+    # x follows a through the reference; p and q point at k and arr[2]; itf is a; rr is k (40 by then)
+    assert (plc["main.x"], plc["main.y"], plc["main.z"], plc["main.w"]) == (6, 7, 6, 45)
+
+
+def test_initial_values_naming_variables_are_checked():
+    src = FB_INIT_ARGS.replace(
+        "  x, y, z, w : INT;",
+        "  x, y, z, w : INT; i2 : I_Get := b; b : FB_A(1, 2); bad : POINTER TO INT := ADR(arr[k]);\n"
+        "  r2 : REFERENCE TO INT := a; c : FB_A(1, 2, 3); d : FB_A(n := 1, 2);",
+    )
+    out = errors(src, "codesys")
+    assert "t.st:30:35: error[E029]: 'b' is declared below; initial values are set in declaration order" in out
+    assert "t.st:30:86: error[E029]: an index in an initial value must be a constant; 'k' is a variable" in out
+    assert "t.st:31:28: error[E013]: a REFERENCE TO INT needs a INT variable, not FB_A" in out
+    assert "t.st:31:46: error[E017]: FB_init of FB_A takes 2 argument(s) here, not 3" in out
+    assert "t.st:31:67: error[E017]: a positional argument cannot follow named ones" in out
+
+
+def test_a_function_s_initial_value_cannot_name_a_variable():
+    src = "FUNCTION f : INT\nVAR k : INT; p : POINTER TO INT := ADR(k); END_VAR\nf := 1;\nEND_FUNCTION\n"
+    assert "t.st:2:40: error[E029]: an initial value must be a constant; 'k' is a variable" in errors(src, "codesys")

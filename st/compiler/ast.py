@@ -160,6 +160,7 @@ class Assign(Stmt):
     target: Expr
     value: Expr
     kind: str = ":="  # ":=", "S=", "R=", "?=", "REF="
+    chained: bool = False  # the leftmost of `a := b := c` (a vendor extension), for the dialect check
     attempt: tuple[str, bool, bool] | None = (
         None  # for "?=": (kind name, source is a reference, destination is a reference)
     )

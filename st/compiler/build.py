@@ -6,6 +6,8 @@ what makes parsing large libraries fast.
 
 from __future__ import annotations
 
+import copy
+
 from lark import Token, Transformer
 
 from ..model.literals import (
@@ -68,6 +70,19 @@ class BuildError(Exception):
         self.span = span
         self.message = message
         self.code = code
+
+
+class _Chain(list):
+    """Several statements from one piece of text (a chained assignment), spliced into the
+    statement list around it by `_flat`."""
+
+
+def _flat(items):
+    for x in items:
+        if isinstance(x, _Chain):
+            yield from x
+        else:
+            yield x
 
 
 class AstBuilder(Transformer):
@@ -192,6 +207,9 @@ class AstBuilder(Transformer):
     def ctor_type(self, c):
         return A.NamedType(self.sp(c[0]), str(c[0]), [(n, sp, v) for n, sp, v in c[1:]])
 
+    def ctor_positional(self, c):
+        return ("", c[0].span, c[0])  # the checker names it: the n-th input of FB_init
+
     def string_type(self, c):
         kw = str(c[0]).upper()
         return A.StringType(self.sp(c[0]), kw == "WSTRING", c[1] if len(c) > 1 else None)
@@ -303,7 +321,7 @@ class AstBuilder(Transformer):
         self._not_reserved(name)
         pou = A.POU(self.sp(name), kind, str(name))
         pou.end_span = self.sp(end)
-        for p in parts:
+        for p in _flat(parts):
             if isinstance(p, A.VarBlock):
                 pou.var_blocks.append(p)
             elif isinstance(p, A.Step):
@@ -366,7 +384,7 @@ class AstBuilder(Transformer):
         m = A.Method(self.sp(name), str(name), mods)
         if rest and isinstance(rest[0], A.TypeSpec):
             m.return_type, rest = rest[0], rest[1:]
-        for p in rest:
+        for p in _flat(rest):
             if isinstance(p, A.VarBlock):
                 m.var_blocks.append(p)
             elif isinstance(p, A.Stmt):
@@ -408,7 +426,7 @@ class AstBuilder(Transformer):
                 continue
             kind, span, parts = acc
             m = A.Method(span, str(name), mods)
-            for p in parts:
+            for p in _flat(parts):
                 if isinstance(p, A.VarBlock):
                     m.var_blocks.append(p)
                 elif isinstance(p, A.Stmt):
@@ -485,10 +503,10 @@ class AstBuilder(Transformer):
         return ("cond", c[0])
 
     def transition_body(self, c):
-        return ("body", [s for s in c if isinstance(s, A.Stmt)])
+        return ("body", self._stmts(c))
 
     def action_decl(self, c):
-        return A.ActionDecl(self.sp(c[1]), str(c[1]), [s for s in c[2:-1] if isinstance(s, A.Stmt)])
+        return A.ActionDecl(self.sp(c[1]), str(c[1]), self._stmts(c[2:-1]))
 
     # ---------------------------------------------------------------- configuration
     def configuration_decl(self, c):
@@ -558,12 +576,24 @@ class AstBuilder(Transformer):
             kind,
             name,
             [p for p in parts if isinstance(p, A.VarBlock)],
-            [p for p in parts if isinstance(p, A.Stmt)],
+            self._stmts(parts),
         )
 
     # ---------------------------------------------------------------- statements
     def assignment(self, c):
         return A.Assign(c[0].span, c[0], c[2], ":=")
+
+    def chained_assignment(self, c):
+        """`a := b := c;` (CODESYS): the rightmost assignment first, each target then given the
+        one to its right, so `c` is evaluated once and `a` gets `b`'s value."""
+        targets = c[0:-1:2]
+        out = _Chain()
+        value = c[-1]
+        for t in reversed(targets):
+            out.append(A.Assign(t.span, t, value, ":="))
+            value = copy.deepcopy(t)
+        out[-1].chained = True
+        return out
 
     def set_assignment(self, c):
         return A.Assign(c[0].span, c[0], c[2], "S=")
@@ -591,7 +621,7 @@ class AstBuilder(Transformer):
 
     @staticmethod
     def _stmts(items):
-        return [s for s in items if isinstance(s, A.Stmt)]
+        return [s for s in _flat(items) if isinstance(s, A.Stmt)]
 
     def if_stmt(self, c):
         branches = [(c[1], self._stmts(c[3:]))]
@@ -612,7 +642,7 @@ class AstBuilder(Transformer):
     def case_stmt(self, c):
         branches = []
         orelse = None
-        for x in c[3:]:
+        for x in _flat(c[3:]):
             if isinstance(x, tuple) and x[0] == "labels":
                 branches.append(A.CaseBranch(x[1][0][0].span, x[1], []))
             elif isinstance(x, tuple) and x[0] == "else":

@@ -11,7 +11,17 @@ from ...model import types as T
 from ...source import Span
 from .. import ast as A
 from ..names import mangle, qualified
-from .common import _DIRECT, _DIRECT_TYPES, CONSTRUCTION, Scope, _names_in, image_problem, signature
+from .common import (
+    _DIRECT,
+    _DIRECT_TYPES,
+    CONSTRUCTION,
+    Scope,
+    _names_in,
+    image_problem,
+    same_type,
+    signature,
+    take_address,
+)
 from .part import Part
 
 MAX_ARRAY_ELEMENTS = 50_000_000
@@ -203,8 +213,22 @@ class Declarations(Part):
             self.err("E017", init.span, f"{bt.name} has no FB_init method to take these arguments")
             return
         inputs = {p.name.lower(): p for p in mt.params() if p.section == "VAR_INPUT"}
+        own = [p.name for p in inputs.values() if p.name.lower() not in ("binitretains", "bincopycode")]
         seen = set()
-        for name, sp, val in init.args:
+        named = False
+        for i, (name, sp, val) in enumerate(init.args):
+            named = named or bool(name)
+            if not name:  # positional: the inputs FB_init declares after bInitRetains, bInCopyCode
+                if named:
+                    self.err("E017", sp, "a positional argument cannot follow named ones")
+                    continue
+                if i >= len(own):
+                    self.err(
+                        "E017", sp, f"FB_init of {bt.name} takes {len(own)} argument(s) here, not {len(init.args)}"
+                    )
+                    continue
+                name = own[i]
+                init.args[i] = (name, sp, val)
             p = inputs.get(name.lower())
             if p is None or name.lower() in ("binitretains", "bincopycode"):
                 self.err("E017", sp, f"FB_init of {bt.name} has no input '{name}' to set here")
@@ -215,6 +239,56 @@ class Declarations(Part):
             self.check_initializer(val, p.type, scope)
         if init.inner is not None:
             self.check_initializer(init.inner, t, scope)
+
+    def _bound_initializer(self, init: A.Expr, t: T.Type, bt: T.Type, scope: Scope | None) -> bool:
+        """An initial value that names another variable of the instance (or a global) rather than
+        a value (CODESYS): `p : POINTER TO INT := ADR(x)`, `r : REF_TO INT := REF(x)`, an interface
+        variable `itf : I_X := inst`, a REFERENCE TO input of FB_init `fs : FB_S(other := a)`.
+        Only in a function block or program, where the variable outlives the initial value; the
+        instance or interface must be declared above (initial values are set in declaration order).
+        Returns False when `init` is not such a value (the constant rule applies)."""
+        if scope is None or scope.pou is None or scope.pou.pou_kind not in ("FUNCTION_BLOCK", "PROGRAM"):
+            return False
+        is_ref = T.is_reference(t)
+        is_itf = isinstance(bt, T.POUType) and bt.pou_kind == "INTERFACE"
+        target: A.Expr = init
+        if isinstance(init, A.Call) and isinstance(init.callee, A.Name) and len(init.args) == 1:
+            if init.callee.name.upper() not in ("REF", "ADR") or init.args[0].name:
+                return False
+            target = init.args[0].value
+        elif not (is_ref or is_itf):
+            return False
+        root = target
+        while isinstance(root, (A.Field, A.Index)):
+            root = root.base
+        if not isinstance(root, A.Name):
+            return False
+        sym = self.exprs.lookup(root.name.lower(), scope)
+        if sym is None and _declared_in(scope.pou, root.name):
+            self.err(
+                "E029",
+                root.span,
+                f"'{root.name}' is declared below; initial values are set in declaration order",
+                f"declare '{root.name}' above the variable it initialises",
+            )
+            return True
+        if not isinstance(sym, T.VarSym) or sym.section in ("VAR_TEMP", "VAR_IN_OUT") or sym.constant:
+            return False
+        if target is init and is_ref:  # bound like REF=: the variable itself, of the referenced type
+            self.feature("vendor", init.span, "a REFERENCE TO initialised with a variable")
+            vt = self.exprs.expr(init, scope)
+            want = cast(T.RefType, T.unalias(t)).target
+            if vt is not None and want is not None and not same_type(vt, want) and not T.extends(vt, want):
+                self.err("E013", init.span, f"a REFERENCE TO {want} needs a {want} variable, not {vt}")
+        else:
+            vt = self.exprs.expr(init, scope, t)
+            if vt is not None:
+                self.stmts.assignable(init, vt, t, init.span)
+        take_address(target)
+        for n in _names_in([target]):  # indices must still be constants
+            if n is not root and isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
+                self.err("E029", n.span, f"an index in an initial value must be a constant; '{n.name}' is a variable")
+        return True
 
     # ================================================================ interfaces
     def resolve_interface(self, pou: T.POUType) -> None:
@@ -606,6 +680,8 @@ class Declarations(Part):
                 # CODESYS-style: a single value initializes... no; IEC needs [..]
                 self.err("E013", init.span, f"an array needs an initializer in brackets, e.g. [{init.text}]")
                 return
+            if self._bound_initializer(init, t, bt, scope):
+                return
             st = self.exprs.expr(init, scope or Scope(None, {}), t)
             for n in _names_in([init]):
                 if isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
@@ -617,3 +693,10 @@ class Declarations(Part):
                     )
                     return
             self.stmts.assignable(init, st, t, init.span)
+
+
+def _declared_in(pou: T.POUType, name: str) -> bool:
+    """Is `name` declared anywhere in the POU's own declaration (above or below)?"""
+    key = name.lower()
+    d = pou.decl
+    return d is not None and any(n.lower() == key for vb in d.var_blocks for vd in vb.decls for n, _ in vd.names)

@@ -102,6 +102,8 @@ class Statements(Part):
             return self._ref_assign(s, scope)
         if isinstance(s, A.Assign) and s.kind == "?=":
             return self._attempt_assign(s, scope)
+        if isinstance(s, A.Assign) and s.chained:
+            self.feature("vendor", s.span, "chained assignment (a := b := c)")
         if isinstance(s, A.Assign):
             tt = self.lvalue(s.target, scope)
             if s.kind in ("S=", "R="):

@@ -17,8 +17,9 @@ from .pyast import DAY_NS, Unsupported, _attr, _call, _const, _name, default_val
 class InitGen:
     """Initial values: for declarations (constant initializers and defaults)."""
 
-    def __init__(self, mod: ModuleGen):
+    def __init__(self, mod: ModuleGen, pou: T.POUType | None = None):
         self.mod = mod
+        self.pou = pou  # a block's or program's constructor: initial values may name its variables
 
     def initial(self, t: T.Type, init) -> py.expr:
         ut = T.unalias(t)
@@ -38,6 +39,8 @@ class InitGen:
                 return self._with_fields(obj, init, lambda n: ut.members.get(n.lower()))
             return obj
         if isinstance(ut, T.POUType) and ut.pou_kind == "INTERFACE":
+            if init is not None and self.pou is not None and _names_a_variable(init):
+                return self._bound(init, t)  # itf : I_X := inst
             return _const(None)  # an interface variable: no instance yet (NULL)
         if isinstance(ut, T.POUType):
             ctor = init if isinstance(init, A.CtorInit) else None
@@ -59,7 +62,17 @@ class InitGen:
             return obj
         if init is None:
             return _const(default_value(t))
+        if self.pou is not None and _names_a_variable(init):
+            return self._bound(init, t)
         return ExprGen.constant_expr(self.mod, init, t)
+
+    def _bound(self, init, t: T.Type) -> py.expr:
+        """An initial value that is another variable of the instance: a reference to it, its
+        address, or (an interface, a block's input) its value; see the checker's _bound_initializer."""
+        g = ExprGen(self.mod, self.pou)
+        if T.is_reference(t) and not isinstance(init, A.Call):
+            return g.ref_to(init)
+        return g.coerce(g.expr(init), init, t)
 
     def _with_fields(self, obj: py.expr, init: A.StructInit, lookup) -> py.expr:
         # _init_fields(obj, (('name', value), ...)) returns obj
@@ -107,6 +120,19 @@ class InitGen:
         if rest:
             return py.BinOp(lst, py.Add(), py.BinOp(py.List([_const(d)], py.Load()), py.Mult(), _const(rest)))
         return lst
+
+
+def _names_a_variable(e) -> bool:
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, A.Name) and isinstance(x.sym, T.VarSym) and not (x.sym.global_ref or x.sym).constant:
+            return True
+        if isinstance(x, A.Expr):
+            stack.extend(v for k in type(x).__slots__ if isinstance(v := getattr(x, k, None), A.Expr))
+            if isinstance(x, A.Call):
+                stack.extend(a.value for a in x.args)
+    return False
 
 
 def _member_of_pou(pou: T.POUType, name: str):

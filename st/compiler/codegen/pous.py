@@ -153,7 +153,7 @@ class BodyGen(StmtGen):
         pou = self.pou
         block = self.mod.blocks[pou]
         d = pou.decl
-        init = InitGen(self.mod)
+        init = InitGen(self.mod, pou)
         sfc = self.mod.p.sfc.get(pou.name.lower())
         slots = [v.pyname for v in block.variables]
         edges = [v for v in pou.vars.values() if v.edge]
