@@ -548,3 +548,75 @@ def test_initial_values_naming_variables_are_checked():
 def test_a_function_s_initial_value_cannot_name_a_variable():
     src = "FUNCTION f : INT\nVAR k : INT; p : POINTER TO INT := ADR(k); END_VAR\nf := 1;\nEND_FUNCTION\n"
     assert "t.st:2:40: error[E029]: an initial value must be a constant; 'k' is a variable" in errors(src, "codesys")
+
+
+POINTERS = """PROGRAM main
+VAR arr : ARRAY[1..5] OF INT := [1, 2, 3, 4, 5]; p, pEnd : POINTER TO INT; pb : POINTER TO BYTE;
+  sum, n : DINT; dw : DWORD; words : ARRAY[0..1] OF WORD := [16#1122, 16#3344]; b0, b3 : BYTE; END_VAR
+p := ADR(arr);
+pEnd := ADR(arr[5]);
+WHILE p <= pEnd DO
+  sum := sum + p^;
+  p^ := p^ * 10;
+  p := p + SIZEOF(p^);
+END_WHILE
+n := pEnd - ADR(arr);
+p := ADR(arr[2]);
+p[1] := -7;
+pb := ADR(dw);
+pb^ := 16#AA; pb[3] := 16#BB;
+pb := ADR(words);
+b0 := pb^;
+pb := pb + 3;
+b3 := pb^;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_pointer_arithmetic_and_indexing_within_one_array(dialect):
+    plc = run(POINTERS, 1, dialect)
+    # the loop walks arr by SIZEOF(INT) bytes up to its last element; pEnd - ADR(arr) is 4 INTs
+    assert (plc["main.sum"], plc["main.n"]) == (15, 8)
+    # p[1] with p at arr[2] is arr[3]
+    assert plc["main.arr"] == [10, 20, -7, 40, 50]
+    assert (plc["main.p"], plc["main.pEnd"]) == ("REF(main.arr[2])", "REF(main.arr[5])")
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys"])
+def test_a_pointer_to_byte_reads_and_writes_the_bytes_of_another_type(dialect):
+    plc = run(POINTERS, 1, dialect)
+    # little-endian, as on the PLCs: byte 0 and byte 3 of the DWORD written, of the WORDs read
+    assert plc["main.dw"] == 0xBB0000AA
+    assert (plc["main.b0"], plc["main.b3"]) == (0x22, 0x33)
+    assert plc["main.pb"] == "REF(main.words[0]) + 3 byte(s)"
+
+
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        ("p := ADR(arr[5]); p := p + 2 * SIZEOF(INT);", "a pointer moved to element 6 of an array of 5"),
+        ("p := ADR(arr[1]); p := p - 2;", "a pointer moved to element -1 of an array of 5"),
+        ("p := ADR(arr[1]); p := p + 1;", "a pointer to 2-byte elements moved by 1 byte(s), not a whole element"),
+        (
+            "p := ADR(k); p := p + 2;",
+            "a pointer to a single variable moved by 2 byte(s): st moves pointers within one array",
+        ),
+        ("p := ADR(arr[5]); k := p[1];", "p[1] is past the end of an array of 5"),
+        ("pb := ADR(k); pb := pb + 2; b := pb^;", "a pointer read past the 2 byte(s) of the variable it points into"),
+        ("k := p[0];", "indexing a NULL pointer"),
+    ],
+)
+def test_a_pointer_leaving_its_array_or_variable_is_a_located_fault(body, message):
+    src = (
+        "PROGRAM main\nVAR arr : ARRAY[1..5] OF INT; p : POINTER TO INT; pb : POINTER TO BYTE; k : INT; b : BYTE;"
+        f" END_VAR\n{body}\nEND_PROGRAM\n"
+    )
+    _plc, f = fault(src, "codesys")
+    assert (f.message, f.line) == (message, 3)
+
+
+def test_pointer_arithmetic_is_a_vendor_extension():
+    src = "PROGRAM main\nVAR p : POINTER TO INT; k : INT; END_VAR\np := ADR(k);\np := p + 2;\nEND_PROGRAM\n"
+    out = errors(src, "iec")
+    assert "t.st:4:6: error[E044]: pointer arithmetic is not part of the iec dialect" in out

@@ -339,14 +339,32 @@ class AstBuilder(Transformer):
         return pou
 
     def function_decl(self, c):
-        name = c[1]
-        rest = c[2:-1]
+        mods, i = self._modifiers(c, 1)
+        name = c[i]
+        rest = c[i + 1 : -1]
         ret = None
         if rest and isinstance(rest[0], A.TypeSpec):
             ret, rest = rest[0], rest[1:]
         pou = self._pou("FUNCTION", c[0], name, rest, c[-1])
         pou.return_type = ret
+        self._top_level_access(pou, mods)
         return pou
+
+    @staticmethod
+    def _modifiers(c, i):
+        """The ("mod", X) items from c[i] on, and the index after them."""
+        mods = []
+        while isinstance(c[i], tuple) and c[i][0] == "mod":
+            mods.append(c[i][1])
+            i += 1
+        return mods, i
+
+    def _top_level_access(self, pou, mods):
+        """FUNCTION/PROGRAM/INTERFACE PUBLIC or INTERNAL (CODESYS, TwinCAT): read; with no
+        namespaces (one project, its libraries) both mean visible everywhere."""
+        for m in mods:
+            if m not in ("PUBLIC", "INTERNAL"):
+                self.errors.append(BuildError(pou.span, f"{m} is not allowed on a {pou.kind}", "E001"))
 
     def fb_decl(self, c):
         mods = []
@@ -396,12 +414,16 @@ class AstBuilder(Transformer):
         return Token.new_borrow_pos("IDENT", ".".join(str(x) for x in c), c[0])
 
     def interface_decl(self, c):
-        name = c[1]
+        mods, i = self._modifiers(c, 1)
+        name = c[i]
         self._not_reserved(name)
         itf = A.Interface(self.sp(name), str(name))
         itf.end_span = self.sp(c[-1])
+        for m in mods:
+            if m not in ("PUBLIC", "INTERNAL"):
+                self.errors.append(BuildError(itf.span, f"{m} is not allowed on an INTERFACE", "E001"))
         after_extends = False
-        for x in c[2:-1]:
+        for x in c[i + 1 : -1]:
             if isinstance(x, A.Method):
                 itf.methods.append(x)
             elif isinstance(x, A.Property):
@@ -425,7 +447,10 @@ class AstBuilder(Transformer):
             if isinstance(acc, Token):  # TwinCAT writes PROPERTY P : T; with a ';'
                 continue
             kind, span, parts = acc
-            m = A.Method(span, str(name), mods)
+            own = [p[1] for p in parts if isinstance(p, tuple) and p[0] == "mod"]
+            # GET PRIVATE / SET PROTECTED: the accessor's own access replaces the property's
+            access = {"PUBLIC", "PRIVATE", "PROTECTED", "INTERNAL"}
+            m = A.Method(span, str(name), [x for x in mods if not (own and x in access)] + own)
             for p in _flat(parts):
                 if isinstance(p, A.VarBlock):
                     m.var_blocks.append(p)
@@ -455,7 +480,10 @@ class AstBuilder(Transformer):
         return pou
 
     def program_decl(self, c):
-        return self._pou("PROGRAM", c[0], c[1], c[2:-1], c[-1])
+        mods, i = self._modifiers(c, 1)
+        pou = self._pou("PROGRAM", c[0], c[i], c[i + 1 : -1], c[-1])
+        self._top_level_access(pou, mods)
+        return pou
 
     def pou_modifier(self, c):
         return ("mod", str(c[0]).upper())

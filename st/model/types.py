@@ -577,3 +577,72 @@ def default_type_for_literal(t: Type, value: Any = None) -> Type:
     if t is LIT_REAL:
         return LREAL
     return t
+
+
+def size_of(t: Type) -> tuple[int, int]:
+    """(bytes, alignment) of a value of type t, laid out as a C compiler does on a 64-bit target."""
+    u = unalias(t)
+    if isinstance(u, SubrangeType):
+        u = u.base
+    if isinstance(u, EnumType):
+        u = u.base if getattr(u, "base", None) is not None else INT
+    if isinstance(u, StringType):
+        n = (u.length + 1) * (2 if u.wide else 1)
+        return n, 2 if u.wide else 1
+    if isinstance(u, ArrayType):
+        es, ea = size_of(u.element)
+        return es * u.size, ea
+    if isinstance(u, (RefType, POUType)) and not (isinstance(u, POUType) and u.pou_kind != "INTERFACE"):
+        return 8, 8
+    if isinstance(u, (StructType, POUType)):
+        members = (
+            [m.type for m in u.members.values()]
+            if isinstance(u, StructType)
+            else [v.type for v in u.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP")]
+        )
+        off, align = 0, 1
+        for mt in members:
+            ms, ma = size_of(mt)
+            off = (off + ma - 1) // ma * ma + ms
+            align = max(align, ma)
+        return max(1, (off + align - 1) // align * align), align
+    bits = getattr(u, "bits", 0) or 8
+    if u is BOOL:
+        bits = 8
+    if getattr(u, "kind", "") in ("time", "date", "tod", "dt"):
+        bits = 64 if getattr(u, "long", False) else 32
+    n = max(1, bits // 8)
+    return n, n
+
+
+# struct formats of the values a POINTER TO may view as bytes (little-endian, as the PLCs st imitates)
+_BYTE_FORMATS = {
+    "BOOL": "?",
+    "SINT": "b",
+    "USINT": "B",
+    "BYTE": "B",
+    "INT": "h",
+    "UINT": "H",
+    "WORD": "H",
+    "DINT": "i",
+    "UDINT": "I",
+    "DWORD": "I",
+    "LINT": "q",
+    "ULINT": "Q",
+    "LWORD": "Q",
+    "REAL": "f",
+    "LREAL": "d",
+}
+
+
+def byte_format(t: Type) -> str | None:
+    """The struct format of a value whose bytes a pointer of another type may read and write
+    (an elementary number, bit string or BOOL, or an array of one), else None."""
+    u = unalias(t)
+    if isinstance(u, ArrayType):
+        u = unalias(u.element)
+    if isinstance(u, SubrangeType):
+        u = u.base
+    if isinstance(u, EnumType):
+        u = u.base
+    return _BYTE_FORMATS.get(getattr(u, "name", "")) if isinstance(u, ElemType) else None

@@ -11,6 +11,7 @@ from typing import Any
 
 from ..model.compiled import CompiledProgram
 from .helpers import BASE_NAMESPACE, make_f32
+from .pointers import POINTER_HELPERS
 from .sfc import SfcDesc, SfcState
 
 
@@ -19,6 +20,7 @@ def build_namespace(
 ) -> dict[str, Any]:
     """`install(ns)` adds what must exist before module code runs (watchdog, test helpers)."""
     ns: dict[str, Any] = dict(BASE_NAMESPACE)
+    ns.update(POINTER_HELPERS)
     ns.update(compiled.helpers)
     ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True, "_f32": make_f32()})
     ns["_ns"] = ns

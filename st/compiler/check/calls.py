@@ -232,7 +232,7 @@ class Calls(Part):
             t = self.exprs.expr(arg, scope)
         if t is None:
             return T.LIT_INT
-        size, _align = _size_of(t)
+        size, _align = T.size_of(t)
         c.target = CallTarget("sizeof", value=size)
         c.const = size
         return T.LIT_INT
@@ -586,42 +586,6 @@ class Calls(Part):
             self.stmts.lvalue(eno.value, scope)
         c.target = CallTarget("native", sig=sig, args=args, arg_types=arg_types, en=en, eno=eno)
         return rt
-
-
-def _size_of(t: T.Type):
-    """(bytes, alignment) of a value of type t, laid out as a C compiler does on a 64-bit target."""
-    u = T.unalias(t)
-    if isinstance(u, T.SubrangeType):
-        u = u.base
-    if isinstance(u, T.EnumType):
-        u = u.base if getattr(u, "base", None) is not None else T.INT
-    if isinstance(u, T.StringType):
-        n = (u.length + 1) * (2 if u.wide else 1)
-        return n, 2 if u.wide else 1
-    if isinstance(u, T.ArrayType):
-        es, ea = _size_of(u.element)
-        return es * u.size, ea
-    if isinstance(u, (T.RefType, T.POUType)) and not (isinstance(u, T.POUType) and u.pou_kind != "INTERFACE"):
-        return 8, 8
-    if isinstance(u, (T.StructType, T.POUType)):
-        members = (
-            [m.type for m in u.members.values()]
-            if isinstance(u, T.StructType)
-            else [v.type for v in u.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP")]
-        )
-        off, align = 0, 1
-        for mt in members:
-            ms, ma = _size_of(mt)
-            off = (off + ma - 1) // ma * ma + ms
-            align = max(align, ma)
-        return max(1, (off + align - 1) // align * align), align
-    bits = getattr(u, "bits", 0) or 8
-    if u is T.BOOL:
-        bits = 8
-    if getattr(u, "kind", "") in ("time", "date", "tod", "dt"):
-        bits = 64 if getattr(u, "long", False) else 32
-    n = max(1, bits // 8)
-    return n, n
 
 
 def _fits_conformant(arg, param) -> bool:

@@ -7,7 +7,7 @@ from typing import cast
 from ...model import types as T
 from ...model.addresses import canonical
 from .. import ast as A
-from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, SUPER, THIS, Scope, image_problem
+from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, SUPER, THIS, Scope, image_problem, same_type
 from .context import CheckContext
 from .part import Part
 
@@ -35,7 +35,7 @@ class Expressions(Part):
         if isinstance(e, A.Call):
             return self.calls.call(e, scope, expected=expected)
         if isinstance(e, A.Field):
-            t = self._field(e, scope)
+            t = self._field(e, scope, lvalue)
             self._property_read(e, lvalue)
             return t
         if isinstance(e, A.Index):
@@ -298,6 +298,8 @@ class Expressions(Part):
             lt = self.expr(e.left, scope, rt)
         if lt is None or rt is None:
             return T.BOOL if op in _CMP else (lt or rt)
+        if op in ("+", "-", "<", ">", "<=", ">=") and (_is_pointer(lt) or _is_pointer(rt)):
+            return self._pointer_arithmetic(e, lt, rt)
         # CODESYS (non-strict enumerations): an enumeration value next to a number is its integer
         la, rb = T.base_of(lt), T.base_of(rt)
         if self.ctx.enum_as_int(la) and not isinstance(rb, T.EnumType) and (rb.is_num or rb is T.LIT_INT):
@@ -429,7 +431,7 @@ class Expressions(Part):
         self.err("E014", e.span, f"operator {e.op} cannot be applied to {t}")
         return t
 
-    def _field(self, e: A.Field, scope: Scope):
+    def _field(self, e: A.Field, scope: Scope, lvalue: bool = False):
         if isinstance(e.base, A.Name) and self.lookup(e.base.name.lower(), scope) is None:
             gvl = self.ctx.gvls.get(e.base.name.lower())
             if gvl is not None:
@@ -487,7 +489,7 @@ class Expressions(Part):
             if v is None and key in b.properties:
                 e.sym = b.properties[key]
                 ps = e.sym
-                acc = ps.get or ps.set
+                acc = (ps.set if lvalue else ps.get) or ps.get or ps.set  # GET and SET may differ in access
                 if acc is not None and acc.decl is not None:
                     self.calls.check_access(acc.decl.modifiers, ps.owner, f"property {ps.name}", scope, e.name_span)
                 return e.sym.type
@@ -520,6 +522,26 @@ class Expressions(Part):
         )
         return None
 
+    def _pointer_arithmetic(self, e: A.Binary, lt: T.Type, rt: T.Type):
+        """CODESYS/TwinCAT: POINTER + n and POINTER - n move by n bytes, POINTER - POINTER is the
+        distance in bytes, and pointers compare by address (st: within one array)."""
+        self.ctx.feature("vendor", e.span, "pointer arithmetic")
+        a, b = T.base_of(lt), T.base_of(rt)
+        num = lambda t: t.is_intlike or t is T.LIT_INT  # noqa: E731
+        if e.op in ("+", "-") and _is_pointer(lt) and num(b):
+            return lt
+        if e.op == "+" and num(a) and _is_pointer(rt):
+            return rt
+        ul, ur = T.unalias(lt), T.unalias(rt)
+        if (
+            e.op != "+"
+            and isinstance(ul, T.RefType)
+            and isinstance(ur, T.RefType)
+            and (same_type(ul.target, ur.target) or T.byte_format(ul.target) == T.byte_format(ur.target) is not None)
+        ):  # p - ADR(arr): into the same elements
+            return T.DINT if e.op == "-" else T.BOOL
+        return self._bad_operands(e, lt, rt)
+
     def _index(self, e: A.Index, scope: Scope):
         bt = self.expr(e.base, scope)
         for i in e.indices:
@@ -534,6 +556,9 @@ class Expressions(Part):
         if isinstance(b, T.StringType):
             self.err("E023", e.span, "strings cannot be indexed; use MID()")
             return None
+        if _is_pointer(b) and len(e.indices) == 1:  # p[i] = (p + i * SIZEOF(p^))^ (CODESYS)
+            self.ctx.feature("vendor", e.span, "indexing a POINTER")
+            return cast(T.RefType, b).target
         if not isinstance(b, T.ArrayType):
             self.err("E023", e.span, f"'{bt}' is not an array")
             return None
@@ -566,3 +591,8 @@ def _null_at(e) -> A.Name:
     n.sym = _NULL
     n.ty = _NULL
     return n
+
+
+def _is_pointer(t) -> bool:
+    u = T.unalias(t) if t is not None else None
+    return isinstance(u, T.RefType) and u.ref_kind == "POINTER"

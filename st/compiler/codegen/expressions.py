@@ -199,6 +199,15 @@ class ExprGen:
         src = getattr(e, "ty", None) if e is not None else None
         d = T.base_of(dst)
         s = T.base_of(src) if src is not None else None
+        if isinstance(d, T.RefType) and isinstance(s, T.RefType) and d.ref_kind == "POINTER":
+            sf, df = T.byte_format(s.target), T.byte_format(d.target)
+            if sf is None or df is None:
+                return node
+            if isinstance(T.unalias(s.target), T.ArrayType) and not isinstance(T.unalias(d.target), T.ArrayType):
+                node = _call("_ptr_elems", node)  # ADR(arr) as a POINTER TO its element: the first one
+            if sf != df:  # ADR(dw) as a POINTER TO BYTE: its bytes
+                node = _call("_ptr_bytes", node, _const(sf), _const(df))
+            return node
         if isinstance(node, py.Constant) and node.value is not None and not isinstance(node.value, str):
             v = node.value
             if d.is_real:
@@ -413,8 +422,12 @@ class ExprGen:
         return py.Subscript(self.array_of(e), self.index_of(e), py.Load())
 
     def array_of(self, e: A.Index) -> py.expr:
-        """The list an index goes into: an ARRAY[*] parameter's is the caller's list."""
+        """The list an index goes into: an ARRAY[*] parameter's is the caller's list, a POINTER's
+        the elements from where it points on (p[i])."""
         base = self.expr(e.base)
+        pt = T.unalias(e.base.ty)
+        if isinstance(pt, T.RefType):
+            return _call("_PtrView", base, _const(T.size_of(pt.target)[0]))
         return _attr(base, "data") if T.is_conformant(e.base.ty) else base
 
     def conformant_arg(self, value: py.expr, arg_type, param_type) -> py.expr:
@@ -427,6 +440,8 @@ class ExprGen:
 
     def index_of(self, e: A.Index) -> py.expr:
         at = T.unalias(e.base.ty)
+        if isinstance(at, T.RefType):
+            return self.expr(e.indices[0])
         assert isinstance(at, T.ArrayType)  # the checker indexes arrays only
         dims = at.dims
         if T.is_conformant(at):
@@ -494,6 +509,20 @@ class ExprGen:
         rt = T.base_of(e.right.ty) if e.right.ty is not None else None
         res = T.base_of(e.ty) if e.ty is not None else None
         l, r = self.expr(e.left), self.expr(e.right)
+        pl, pr = (T.unalias(x.ty) if x.ty is not None else None for x in (e.left, e.right))
+        if isinstance(pl, T.RefType) or isinstance(pr, T.RefType):
+            if op in ("+", "-") and not (isinstance(pl, T.RefType) and isinstance(pr, T.RefType)):
+                p, n = (l, r) if isinstance(pl, T.RefType) else (r, l)
+                size = T.size_of(cast(T.RefType, pl if isinstance(pl, T.RefType) else pr).target)[0]
+                return _call("_ptr_add", p, n if op == "+" else py.UnaryOp(py.USub(), n), _const(size))
+            if op not in ("=", "<>"):  # p - q, p < q: by the distance in bytes
+                ptr = cast(T.RefType, pl if _is_pointer(pl) else pr)
+                size = T.size_of(ptr.target)[0]
+                l, r = self.coerce(l, e.left, ptr), self.coerce(r, e.right, ptr)  # ADR(arr): its first element
+                d = _call("_ptr_diff", l, r, _const(size))
+                if op == "-":
+                    return d
+                l, r = d, _const(0)
         if op in ("=", "<>", "<", ">", "<=", ">="):
             pyop = {"=": py.Eq(), "<>": py.NotEq(), "<": py.Lt(), ">": py.Gt(), "<=": py.LtE(), ">=": py.GtE()}[op]
             return py.Compare(l, [pyop], [r])
@@ -743,3 +772,7 @@ def wrap(node: py.expr, d) -> py.expr:
         h = 1 << (d.bits - 1)
         return py.BinOp(py.BinOp(py.BinOp(node, py.Add(), _const(h)), py.BitAnd(), _const(mask)), py.Sub(), _const(h))
     return py.BinOp(node, py.BitAnd(), _const(mask))
+
+
+def _is_pointer(t) -> bool:
+    return isinstance(t, T.RefType) and t.ref_kind == "POINTER"
