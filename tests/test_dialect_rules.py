@@ -620,3 +620,118 @@ def test_pointer_arithmetic_is_a_vendor_extension():
     src = "PROGRAM main\nVAR p : POINTER TO INT; k : INT; END_VAR\np := ADR(k);\np := p + 2;\nEND_PROGRAM\n"
     out = errors(src, "iec")
     assert "t.st:4:6: error[E044]: pointer arithmetic is not part of the iec dialect" in out
+
+
+ACCESS = """TYPE INTERNAL E_X : (a, b); END_TYPE
+FUNCTION_BLOCK PUBLIC FB_P
+VAR _v : INT; END_VAR
+PROPERTY PUBLIC P : INT
+GET PRIVATE
+P := _v;
+END_GET
+SET
+_v := P * 2;
+END_SET
+END_PROPERTY
+METHOD PUBLIC Twice : INT
+Twice := THIS^.P;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION INTERNAL F_Y : INT
+F_Y := 1;
+END_FUNCTION
+INTERFACE PUBLIC I_X
+END_INTERFACE
+PROGRAM PUBLIC main
+VAR p : FB_P; n : INT; e : E_X := E_X.b; END_VAR
+p.P := 3;
+n := p.Twice() + F_Y();
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_access_specifiers_on_top_level_pous_types_and_accessors(dialect):
+    plc = run(ACCESS, 1, dialect)
+    assert (plc["main.n"], plc["main.p._v"]) == (7, 6)
+
+
+def test_an_accessor_s_own_access_is_checked_for_that_accessor():
+    out = errors(ACCESS.replace("n := p.Twice()", "n := p.P"), "codesys")
+    # the SET is public (p.P := 3 is fine), the GET private
+    assert out.count("error[") == 1
+    assert "t.st:24:8: error[E043]: property P of FB_P is PRIVATE: only FB_P itself may use it" in out
+
+
+def test_a_function_cannot_be_abstract():
+    out = errors("FUNCTION ABSTRACT F : INT\nF := 1;\nEND_FUNCTION\n", "codesys")
+    assert "t.st:1:19: error[E001]: ABSTRACT is not allowed on a FUNCTION" in out
+
+
+UNIONS = """TYPE U_Val :
+UNION
+  dw : DWORD;
+  w : ARRAY[0..1] OF WORD;
+  b : ARRAY[0..3] OF BYTE;
+  r : REAL;
+  s : STRING(3);
+  x : BOOL;
+END_UNION
+END_TYPE
+TYPE ST_Msg : STRUCT id : INT; v : U_Val; END_STRUCT END_TYPE
+PROGRAM main
+VAR u, u2 : U_Val; m : ST_Msg; lo, hi : WORD; b0 : BYTE; d, d2, d3 : DWORD; n : DINT; s : STRING; END_VAR
+u.dw := 16#12345678;
+lo := u.w[0]; hi := u.w[1]; b0 := u.b[0];
+u2 := u;
+u.r := 1.0;
+d := u.dw; d2 := u2.dw;
+u.b[3] := 16#41; u.b[2] := 0;
+m.v := u;
+m.v.w[0] := 16#4443;
+d3 := m.v.dw;
+s := m.v.s;
+n := SIZEOF(U_Val);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_a_union_s_members_share_their_bytes(dialect):
+    plc = run(UNIONS, 1, dialect)
+    # little-endian, as on the PLCs: the DWORD's low WORD first, its low byte first
+    assert (plc["main.lo"], plc["main.hi"], plc["main.b0"]) == (0x5678, 0x1234, 0x78)
+    # 1.0 as a REAL is 16#3F800000; u2 is a copy taken before
+    assert (plc["main.d"], plc["main.d2"]) == (0x3F800000, 0x12345678)
+    # bytes 43 44 00 41: the STRING(3) ends at the NUL
+    assert (plc["main.d3"], plc["main.s"], plc["main.n"]) == (0x41004443, "CD", 4)
+    assert plc["main.m.v"] == {
+        "dw": 0x41004443,
+        "w": [0x4443, 0x4100],
+        "b": [0x43, 0x44, 0, 0x41],
+        "r": 8.0166654586792,  # the REAL whose bits are 16#41004443
+        "s": "CD",
+        "x": True,
+    }
+
+
+def test_a_union_member_must_have_bytes_and_no_initial_value():
+    src = (
+        "TYPE ST_A : STRUCT a : INT; END_STRUCT END_TYPE\nTYPE U : UNION\n  s : ST_A;\n  t : TIME;\n  i : INT := 3;\n"
+        "END_UNION END_TYPE\nPROGRAM main\nVAR u : U; END_VAR\nu.i := 1;\nEND_PROGRAM\n"
+    )
+    out = errors(src, "codesys")
+    assert (
+        "t.st:3:7: error[E012]: a UNION member must be a number, a bit string, BOOL, an array of one or a STRING, not ST_A"
+        in out
+    )
+    assert (
+        "t.st:4:7: error[E012]: a UNION member must be a number, a bit string, BOOL, an array of one or a STRING, not TIME"
+        in out
+    )
+    assert "t.st:5:14: error[E013]: a UNION member cannot have an initial value (they share their bytes)" in out
+
+
+def test_a_union_is_a_vendor_extension():
+    src = "TYPE U : UNION a : INT; b : WORD; END_UNION END_TYPE\nPROGRAM main\nVAR u : U; END_VAR\nu.a := 1;\nEND_PROGRAM\n"
+    assert "t.st:1:10: error[E044]: UNION is not part of the iec dialect" in errors(src, "iec")

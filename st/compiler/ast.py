@@ -332,6 +332,7 @@ class EnumType(TypeSpec):
 class StructType(TypeSpec):
     members: list[VarDecl]
     extends: Any = None  # NamedType of the base structure (CODESYS `TYPE B EXTENDS A : STRUCT`)
+    union: bool = False  # UNION … END_UNION: the members share their bytes (CODESYS, TwinCAT)
 
 
 # --------------------------------------------------------------------------- declarations

@@ -194,6 +194,9 @@ class AstBuilder(Transformer):
     def struct_type(self, c):
         return (A.StructType(self.sp(c[0]), [x for x in c if isinstance(x, A.VarDecl)]), None)
 
+    def union_type(self, c):
+        return (A.StructType(self.sp(c[0]), [x for x in c if isinstance(x, A.VarDecl)], union=True), None)
+
     def enum_value(self, c):
         self._not_reserved(c[0])
         return A.EnumValue(self.sp(c[0]), str(c[0]), c[1] if len(c) > 1 else None)

@@ -62,7 +62,7 @@ class Type:
 
     @property
     def is_aggregate(self) -> bool:
-        return self.kind in ("array", "struct", "fb")
+        return self.kind in ("array", "struct", "union", "fb")
 
 
 @dataclass(eq=False)
@@ -600,6 +600,10 @@ def size_of(t: Type) -> tuple[int, int]:
             if isinstance(u, StructType)
             else [v.type for v in u.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP")]
         )
+        if isinstance(u, StructType) and u.kind == "union":  # the members share their bytes
+            sizes = [size_of(mt) for mt in members] or [(1, 1)]
+            align = max(a for _, a in sizes)
+            return (max(s for s, _ in sizes) + align - 1) // align * align, align
         off, align = 0, 1
         for mt in members:
             ms, ma = size_of(mt)

@@ -150,6 +150,95 @@ class _Struct:
         return new
 
 
+class _Union(_Struct):
+    """Base of generated UNION classes: the members are views of one bytearray (little-endian)."""
+
+    __slots__ = ("_b",)
+    _size = 0
+
+    def __init__(self) -> None:
+        self._b = bytearray(self._size)
+
+    def _copy(self) -> Any:
+        new = object.__new__(type(self))
+        new._b = bytearray(self._b)
+        return new
+
+
+class _UnionArray:
+    """An array member of a UNION: its elements read and written in the union's bytes."""
+
+    __slots__ = ("b", "fmt", "n")
+
+    def __init__(self, b: bytearray, fmt: str, n: int):
+        self.b, self.fmt, self.n = b, fmt, n
+
+    def __len__(self) -> int:
+        return self.n
+
+    def _all(self) -> list[Any]:
+        return list(struct.unpack_from(f"<{self.n}{self.fmt}", self.b))
+
+    def __iter__(self) -> Any:
+        return iter(self._all())
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return self._all()[i]
+        if not 0 <= i < self.n:
+            raise IndexError(i)
+        return struct.unpack_from("<" + self.fmt, self.b, i * struct.calcsize(self.fmt))[0]
+
+    def __setitem__(self, i: Any, v: Any) -> None:
+        if isinstance(i, slice):
+            vals = self._all()
+            vals[i] = v
+            if len(vals) != self.n:
+                raise IndexError("an array member of a UNION keeps its length")
+            struct.pack_into(f"<{self.n}{self.fmt}", self.b, 0, *vals)
+            return
+        if not 0 <= i < self.n:
+            raise IndexError(i)
+        struct.pack_into("<" + self.fmt, self.b, i * struct.calcsize(self.fmt), v)
+
+
+def _union_member(pyname: str, fmt: str, n: int) -> property:
+    if fmt == "s":  # STRING(n): n characters and a NUL
+
+        def get_s(self: _Union) -> str:
+            return bytes(self._b[:n]).split(b"\0", 1)[0].decode("latin-1")
+
+        def set_s(self: _Union, v: str) -> None:
+            data = v.encode("latin-1", "replace")[:n]
+            self._b[: n + 1] = data + bytes(n + 1 - len(data))
+
+        return property(get_s, set_s)
+    if n:
+
+        def get_a(self: _Union) -> _UnionArray:
+            return _UnionArray(self._b, fmt, n)
+
+        def set_a(self: _Union, v: Any) -> None:
+            struct.pack_into(f"<{n}{fmt}", self._b, 0, *v)
+
+        return property(get_a, set_a)
+
+    def get(self: _Union) -> Any:
+        return struct.unpack_from("<" + fmt, self._b)[0]
+
+    def set_(self: _Union, v: Any) -> None:
+        struct.pack_into("<" + fmt, self._b, 0, v)
+
+    return property(get, set_)
+
+
+def _union_class(name: str, size: int, members: tuple[tuple[str, str, int], ...]) -> type:
+    ns: dict[str, Any] = {"__slots__": (), "_size": size, "_members": tuple(m[0] for m in members)}
+    for pyname, fmt, n in members:
+        ns[pyname] = _union_member(pyname, fmt, n)
+    return type("_st_" + name, (_Union,), ns)
+
+
 class _FB:
     """Base of generated FUNCTION_BLOCK and PROGRAM classes."""
 
@@ -185,6 +274,9 @@ def _assign(dst: Any, src: Any) -> None:
                 _assign(d, s)
         else:
             dst[:] = src
+        return
+    if isinstance(dst, _Union):
+        dst._b[:] = src._b
         return
     for s in dst.__slots__:
         sv = getattr(src, s)
@@ -381,6 +473,7 @@ BASE_NAMESPACE: dict[str, Any] = {
     "_cix": _cix,
     "_attempt": _attempt,
     "_ItemRef": _ItemRef,
+    "_union_class": _union_class,
     "_NegRef": _NegRef,
     "_float": float,
     "_int": int,

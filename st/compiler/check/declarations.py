@@ -46,6 +46,19 @@ class Declarations(Part):
         self.p.types[key] = t
         return t
 
+    def _union_member(self, d: A.VarDecl, t: T.Type) -> None:
+        """A UNION member is bytes another member also is: a number, bit string or BOOL, an array
+        of one, or a STRING; and it has no initial value of its own."""
+        u = T.unalias(t)
+        if T.byte_format(t) is None and not (isinstance(u, T.StringType) and not u.wide):
+            self.err(
+                "E012",
+                d.type.span,
+                f"a UNION member must be a number, a bit string, BOOL, an array of one or a STRING, not {t}",
+            )
+        if d.init is not None:
+            self.err("E013", d.init.span, "a UNION member cannot have an initial value (they share their bytes)")
+
     def _type_from_decl(self, td: A.TypeDecl) -> T.Type:
         spec = td.spec
         if isinstance(spec, A.EnumType):
@@ -55,7 +68,7 @@ class Declarations(Part):
                 self.err("E013", td.init.span, "an enumeration's default must be one of its values")
             return self._enum(td.name, spec)
         if isinstance(spec, A.StructType):
-            st = T.StructType(td.name, pyname="_st_" + mangle(td.name))
+            st = T.StructType(td.name, pyname="_st_" + mangle(td.name), kind="union" if spec.union else "struct")
             self.p.types[td.name.lower()] = st  # allow references to itself through REF_TO
             if spec.extends is not None:  # the base's fields come first, as declared there
                 self.feature("vendor", spec.extends.span, "STRUCT EXTENDS")
@@ -71,8 +84,12 @@ class Declarations(Part):
                         self.err("E011", sp, f"field '{n}' is declared twice in {td.name}")
                         continue
                     st.members[n.lower()] = T.Member(n, mt, d.init, sp, mangle(n))
-                    if d.init is not None:
+                    if spec.union:
+                        self._union_member(d, mt)
+                    elif d.init is not None:
                         self.check_initializer(d.init, mt, None)
+            if spec.union:
+                self.feature("vendor", spec.span, "UNION")
             st.resolved = True
             return st
         if isinstance(spec, A.SubrangeType):

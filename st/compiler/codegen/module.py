@@ -8,7 +8,7 @@ from ...model import types as T
 from ..lower import LoweredProgram
 from .expressions import InitGen
 from .pous import BodyGen, FuncGen
-from .pyast import Unsupported, _args, _attr, _const, _name, _set_lines, default_value
+from .pyast import Unsupported, _args, _attr, _call, _const, _name, _set_lines, default_value
 from .statements import StmtGen, _Typed
 from .tests import TestGen
 
@@ -135,7 +135,9 @@ class ModuleGen:
                 fns.append(_set_lines(fn, line))
         return fns
 
-    def struct_class(self, st: T.StructType) -> py.ClassDef:
+    def struct_class(self, st: T.StructType) -> py.stmt:
+        if st.kind == "union":
+            return self.union_class(st)
         init = InitGen(self)
         body: list[py.stmt] = []
         for m in st.members.values():
@@ -152,3 +154,18 @@ class ModuleGen:
         line = next(iter(st.members.values())).span.line if st.members else 1
         cls = py.ClassDef(st.pyname, [_name("_Struct")], [], [slots, fn], [])
         return _set_lines(cls, line)
+
+    def union_class(self, st: T.StructType) -> py.stmt:
+        """A UNION: one bytearray, each member a property reading and writing it (runtime.helpers)."""
+        members = []
+        for m in st.members.values():
+            u = T.unalias(m.type)
+            if isinstance(u, T.StringType):
+                members.append((m.pyname, "s", u.length))
+            else:
+                fmt = T.byte_format(m.type) or "B"  # the checker allows only members with a format
+                members.append((m.pyname, fmt, u.size if isinstance(u, T.ArrayType) else 0))
+        size = T.size_of(st)[0]
+        line = next(iter(st.members.values())).span.line if st.members else 1
+        call = _call("_union_class", _const(st.name), _const(size), _const(tuple(members)))
+        return _set_lines(py.Assign([_name(st.pyname, py.Store())], call), line)
