@@ -735,3 +735,14 @@ def test_a_union_member_must_have_bytes_and_no_initial_value():
 def test_a_union_is_a_vendor_extension():
     src = "TYPE U : UNION a : INT; b : WORD; END_UNION END_TYPE\nPROGRAM main\nVAR u : U; END_VAR\nu.a := 1;\nEND_PROGRAM\n"
     assert "t.st:1:10: error[E044]: UNION is not part of the iec dialect" in errors(src, "iec")
+
+
+@pytest.mark.parametrize("dialect", [None, "iec", "openplc", "codesys", "twincat"])
+def test_an_instance_s_eno_is_readable_after_its_call(dialect):
+    src = (
+        "FUNCTION_BLOCK FB_A\nVAR_INPUT x : INT; END_VAR\nIF x > 5 THEN ENO := FALSE; END_IF\nEND_FUNCTION_BLOCK\n"
+        "PROGRAM main\nVAR a : FB_A; big, small : BOOL; END_VAR\na(x := 7);\nbig := a.ENO;\na(x := 3);\n"
+        "small := a.ENO;\nEND_PROGRAM\n"
+    )
+    plc = run(src, 1, dialect)
+    assert (plc["main.big"], plc["main.small"]) == (False, True)
