@@ -746,3 +746,13 @@ def test_an_instance_s_eno_is_readable_after_its_call(dialect):
     )
     plc = run(src, 1, dialect)
     assert (plc["main.big"], plc["main.small"]) == (False, True)
+
+
+def test_a_call_skipped_by_en_leaves_the_instance_s_eno_false():
+    src = (
+        "FUNCTION_BLOCK FB_A\nVAR_INPUT x : INT; END_VAR\nIF x > 5 THEN ENO := FALSE; END_IF\nEND_FUNCTION_BLOCK\n"
+        "PROGRAM main\nVAR a : ARRAY[0..1] OF FB_A; i : INT := 1; ran, skipped : BOOL; END_VAR\n"
+        "a[i](x := 3);\nran := a[i].ENO;\na[i](EN := FALSE, x := 3);\nskipped := a[i].ENO;\nEND_PROGRAM\n"
+    )
+    plc = run(src, 1)
+    assert (plc["main.ran"], plc["main.skipped"]) == (True, False)

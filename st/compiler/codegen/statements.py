@@ -136,8 +136,9 @@ class StmtGen(ExprGen):
             return [py.Expr(_call("_assign", self.expr(tgt), self.expr(v)))]
         return self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
 
-    def _en_wrap(self, en, eno, body: list, eno_bound: bool = False) -> list:
-        """EN := FALSE skips the call and gives ENO FALSE; else ENO is TRUE (or what the callee set)."""
+    def _en_wrap(self, en, eno, body: list, eno_bound: bool = False, own_eno: py.expr | None = None) -> list:
+        """EN := FALSE skips the call and gives ENO FALSE; else ENO is TRUE (or what the callee set).
+        `own_eno`: the instance's own ENO (inst.ENO), FALSE too when the call is skipped."""
         if en is None:
             out = body
             if eno is not None and not eno_bound:
@@ -145,6 +146,8 @@ class StmtGen(ExprGen):
             return out
         yes = body + (self.assign(eno.value, _const(True), None) if eno is not None and not eno_bound else [])
         no = self.assign(eno.value, _const(False), None) if eno is not None else []
+        if own_eno is not None:
+            no.append(py.Assign([own_eno], _const(False)))
         return [py.If(self.expr(en.value), yes, no or [py.Pass()])]
 
     def _en_call_assign(self, s, v):
@@ -267,6 +270,9 @@ class StmtGen(ExprGen):
                 out.append(
                     py.Assign([_attr(inst, p.pyname, py.Store())], self.coerce(self.expr(a.value), a.value, p.type))
                 )
+        own = fb.vars.get("eno")
+        if own is not None:  # IEC: a call that runs starts with ENO TRUE; the body may clear it
+            out.append(py.Assign([_attr(inst, own.pyname, py.Store())], _const(True)))
         if tgt.nonvirtual is not None:  # SUPER^(): the base block's body on this instance
             out.append(py.Expr(_call(_attr(_name(tgt.nonvirtual.pyname), "_body"), inst)))
         else:
@@ -283,7 +289,8 @@ class StmtGen(ExprGen):
                 out.append(py.Expr(_call("_assign", self.expr(a.value), val)))
             else:
                 out.extend(self.assign(a.value, self.coerce(val, _Typed(p.type), a.value.ty), None))
-        return self._en_wrap(tgt.bind.get("en"), tgt.bind.get("eno"), out, "eno" in bind)
+        own_eno = _attr(self.expr(c.callee), own.pyname, py.Store()) if own is not None else None
+        return self._en_wrap(tgt.bind.get("en"), tgt.bind.get("eno"), out, "eno" in bind, own_eno)
 
     def s_If(self, s: A.If) -> list:
         # arms first, in source order (coverage probes are numbered in that order)
