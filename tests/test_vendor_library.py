@@ -164,7 +164,8 @@ VAR
   s : MyLib.FB_Suite;
   m : Tc2_System.T_MaxString;
   c : MyLib.E := MyLib.E.Green;
-  k : __SYSTEM.TYPE_CLASS := IBaseLibrary.TypeClass.TYPE_LREAL;
+  k : IBaseLibrary.TypeClass := IBaseLibrary.TypeClass.TYPE_LREAL;
+  z : __SYSTEM.TYPE_CLASS := __SYSTEM.TYPE_CLASS.TYPE_BITCONST;
   r : DINT;
 END_VAR
 s();
@@ -178,7 +179,7 @@ END_PROGRAM
 def test_library_qualified_names_in_types_extends_calls_and_enum_values(dialect):
     plc = run(QUALIFIED, 4, dialect)
     assert (plc["main.s.n"], plc["main.m"], plc["main.r"]) == (2, "x", 5)
-    assert (plc["main.c"], plc["main.k"]) == ("Green", "TYPE_LREAL")
+    assert (plc["main.c"], plc["main.k"], plc["main.z"]) == ("Green", "TYPE_LREAL", "TYPE_BITCONST")
 
 
 def test_an_unknown_library_is_a_located_error():
@@ -312,3 +313,18 @@ def test_a_tcunit_style_suite_extends_a_library_block_and_reports_through_the_lo
 def test_compile_text_reports_the_library_as_loaded_for_twincat():
     prog = compile_text(TESTLIB + SUITE, "t.st", dialect="twincat", use_cache=False)
     assert "fb_mathtest" in prog.project.pous
+
+
+def test_st_run_prints_new_log_messages_once(capsys):
+    from st.app.session import _LogPrinter
+
+    plc = run(
+        program("n := n + 1; IF n = 2 THEN ADSLOGSTR(ADSLOG_MSGTYPE_WARN, 'at %s', 'two'); END_IF;", "n : INT;"),
+        1,
+        "twincat",
+    )
+    show = _LogPrinter(plc)
+    plc.scan(2)
+    show()
+    show()
+    assert capsys.readouterr().err == "[10 ms] warning: at two\n"
