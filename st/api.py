@@ -17,14 +17,19 @@ from .runtime import plc as runtime_plc
 from .source import SourceFile
 from .stdlib.iec import default_library
 from .stdlib.plcopen import library as plcopen_library
+from .stdlib.vendor import library as vendor_library
 
 
 def libraries(options: CompileOptions | None = None) -> list:
     """The libraries of a compilation: the standard library (its time unit and F_TRIG behaviour
-    are the options') and PLCopen motion."""
+    are the options'), PLCopen motion, and the vendor compatibility library under codesys, twincat
+    and the default (not under iec and openplc, whose programs know none of its names)."""
     options = options or CompileOptions()
     matiec = options.dialect is not None and options.dialect.name == "openplc"
-    return [default_library(options.f_trig_first_scan, options.time_unit, matiec), plcopen_library()]
+    libs = [default_library(options.f_trig_first_scan, options.time_unit, matiec), plcopen_library()]
+    if options.dialect is None or options.dialect.name in ("codesys", "twincat"):
+        libs.append(vendor_library())
+    return libs
 
 
 def _refused(e: CompileError, raise_on_error: bool) -> CompiledProgram:

@@ -97,7 +97,7 @@ def test_the_artefact_holds_no_compiler_object():
     assert p.vars["t"].init == InitialValue(2_000_000_000)
     assert p.vars["speed"].init is None
     assert compiled.project.configs[0].var_config[0][2] == InitialValue(100)
-    assert [lib.name for lib in compiled.project.libraries] == ["iec61131", "plcopen"]
+    assert [lib.name for lib in compiled.project.libraries] == ["iec61131", "plcopen", "vendor"]
     assert [t.name for t in compiled.project.tests] == ["counts"]
 
 

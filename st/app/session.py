@@ -163,7 +163,21 @@ def run_plc(compiled, o: RunOptions) -> int:
     return code
 
 
+class _LogPrinter:
+    """Prints the PLC's new log messages (ADSLOGSTR, …) as `[12.5 ms] error: text` on stderr."""
+
+    def __init__(self, plc: PLC):
+        self.plc, self.seen = plc, 0
+
+    def __call__(self) -> None:
+        log = self.plc.log
+        for m in log.since(self.seen):
+            err(f"[{m.time / 1e6:g} ms] {m.kind}: {m.text}")
+        self.seen = log.total
+
+
 def _run_virtual(plc: PLC, o: RunOptions, stop) -> int:
+    show = _LogPrinter(plc)
     try:
         if o.scans is None and o.duration is None:
             err("--virtual needs --scans or --duration")
@@ -172,7 +186,9 @@ def _run_virtual(plc: PLC, o: RunOptions, stop) -> int:
         while plc.time < end and not stop.is_set():
             try:
                 plc.advance(min(end - plc.time, 1_000_000_000))
+                show()
             except PLCFaultError as e:
+                show()
                 err(str(e.fault))
                 if o.on_fault == "restart" and not stop.is_set() and _restart(plc):
                     continue
@@ -190,7 +206,13 @@ def _run_real(plc: PLC, o: RunOptions, stop, status, watcher) -> int:
         t = plc.time + o.scans * plc.tick
         end_time = t if end_time is None else min(end_time, t)
 
+    show = _LogPrinter(plc)
+
     def on_idle(p):
+        if plc.log.total != show.seen:
+            if status is not None:
+                status.clear()
+            show()
         if status is not None:
             status.update()
         if watcher is not None:

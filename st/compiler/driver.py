@@ -215,10 +215,12 @@ def _parse_all(
         if u is not None:
             units.append(u)
     # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat
-    known = {"dialect", "gvl"}
+    known = {"dialect", "gvl", "namespace"}
     if options.dialect is not None and options.dialect.attribute_pragmas:
         known.add("attribute")
-    sink.items = [d for d in sink.items if not (d.code == "W001" and d.datum("pragma") in known)]
+    sink.items = [
+        d for d in sink.items if not (d.code == "W001" and (d.datum("pragma") in known or d.span.file in lib_paths))
+    ]
     return units, lib_paths
 
 
@@ -266,7 +268,9 @@ def load_files(paths: list[str]) -> list[SourceFile]:
     out = []
     for p in paths:
         if str(p).lower().endswith(twincat.PROJECT_SUFFIX):
-            out += load_files(twincat.project_files(str(p), _read_text(str(p))))
+            xml = _read_text(str(p))
+            out += load_files(twincat.project_files(str(p), xml))
+            out.append(SourceFile(str(p), twincat.project_namespaces(xml)))  # only pragmas
             continue
         text = _read_text(str(p))
         if twincat.is_twincat(str(p)):

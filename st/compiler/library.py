@@ -49,6 +49,7 @@ class Library:
     helpers: dict = field(default_factory=dict)  # python name → object (module namespace)
     conversion: Callable | None = None  # name → FuncSig | None (X_TO_Y family)
     version: str = "1"
+    namespaces: tuple[str, ...] = ()  # the names code may qualify this library's names with (Tc2_Standard.TON)
 
     def add(self, sig: FuncSig) -> None:
         self.functions[sig.name.upper()] = sig

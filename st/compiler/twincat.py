@@ -31,7 +31,16 @@ _CONTAINERS = {"Method": "METHOD", "Property": "PROPERTY", "Get": "GET", "Set": 
 
 
 def is_twincat(path: str) -> bool:
-    return path.lower().endswith(SUFFIXES)
+    return path.lower().endswith(SUFFIXES + (PROJECT_SUFFIX,))
+
+
+def project_namespaces(xml: str) -> str:
+    """The project's own namespaces as pragmas (`{namespace 'TcUnit'}`): its Name, Title and
+    DefaultNamespace, which its code may qualify its own names with (`TcUnit.FB_TestSuite`)."""
+    names = dict.fromkeys(
+        m.group(1) for m in re.finditer(r"<(?:Name|Title|DefaultNamespace)>\s*([A-Za-z_]\w*)\s*</", xml)
+    )
+    return "".join("{namespace '" + n + "'}\n" for n in names)
 
 
 def project_files(project_path: str, xml: str) -> list[str]:

@@ -187,4 +187,9 @@ def globals_(plc: PLC) -> dict[str, Any]:
         return f"{fb.name + '.' if fb is not None else ''}{g.owner.name}.{g.name}"
 
     ref = refnames.namer(plc)
-    return {name(g): to_json(plc.ns[g.pyname], g.type, ref) for g in plc.project.globals.values()}
+    lib_files = {path for lib in plc.project.libraries for path, _ in lib.sources}
+
+    def own(g: Any) -> bool:  # a library's globals (ADSLOG_MSGTYPE_…, its VAR_STATs) are not the program's
+        return getattr(g.span, "file", None) not in lib_files
+
+    return {name(g): to_json(plc.ns[g.pyname], g.type, ref) for g in plc.project.globals.values() if own(g)}

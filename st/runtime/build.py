@@ -120,6 +120,12 @@ def install(plc: PLC, b: Build, first: bool = False) -> None:
     plc.config, plc.instances, plc.tasks = b.config, b.instances, b.tasks
     plc.tick, plc.policy = b.tick, b.policy
     plc.bindings, plc._binding_of = b.bindings, b.binding_of
+    # one message log per PLC: what the build itself logged (FB_init, initial values) joins it
+    own = b.ns.get("_plc_log")
+    if own is not None and own is not plc.log:
+        for m in own.entries:
+            plc.log.add(m.time, m.mask, m.text)
+    b.ns["_plc_log"] = plc.log
     # drivers that live in the namespace (the motion kernel) follow it; the old ones hand over
     old_drivers = {type(d): d for d in plc.io if d.per_namespace}
     plc.io = [d for d in plc.io if not d.per_namespace]

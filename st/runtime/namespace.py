@@ -11,6 +11,7 @@ from typing import Any
 
 from ..model.compiled import CompiledProgram
 from .helpers import BASE_NAMESPACE, make_f32
+from .messages import MessageLog
 from .pointers import POINTER_HELPERS
 from .sfc import SfcDesc, SfcState
 
@@ -23,6 +24,7 @@ def build_namespace(
     ns.update(POINTER_HELPERS)
     ns.update(compiled.helpers)
     ns.update({"_SfcDesc": SfcDesc, "_SfcState": SfcState, "_now": 0, "_st_namespace": True, "_f32": make_f32()})
+    ns["_plc_log"] = MessageLog()  # the PLC's own replaces it when the program is installed
     ns["_ns"] = ns
     if compiled.coverage_hits is not None:
         ns["_cov"] = compiled.coverage_hits

@@ -20,6 +20,7 @@ from .clock import VirtualClock
 from .faults import FaultInfo
 from .iodriver import IODriver
 from .lifecycle import RUN
+from .messages import MessageLog
 from .process_image import Binding, ProcessImage, parse_address
 from .retain import RetainStore
 from .retained import commit_retained, restore_retained
@@ -91,6 +92,7 @@ class PLC:
         self.clock: Any = VirtualClock()
         self._stats: dict[str, TaskStats] = {}
         self.io: list[IODriver] = []  # see iodriver.py
+        self.log = MessageLog()  # the program's messages (ADSLOGSTR, …), kept across online changes
         # (path, id(container), key) → (container, key, value, binding)
         self._forced: dict[tuple[str, int, Any], tuple[Any, Any, Any, Binding | None]] = {}
         self._force_spec: dict[str, Any] = {}  # path → the value asked for (re-applied after a reload)

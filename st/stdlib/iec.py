@@ -227,7 +227,11 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", mat
     """The IEC standard library. `time_unit`: what TIME_TO_<int> counts (ms, or s as MatIEC).
     `matiec_errors`: where IEC calls a case an error and leaves the reaction open, do what MatIEC
     does (a MUX selector out of range gives the type's default value) instead of a PLC fault."""
-    lib = Library("iec61131", version=f"1-{int(f_trig_first_scan)}-{time_unit}-{int(matiec_errors)}")
+    lib = Library(
+        "iec61131",
+        version=f"1-{int(f_trig_first_scan)}-{time_unit}-{int(matiec_errors)}",
+        namespaces=("Standard", "Tc2_Standard"),
+    )
     lib.sources.append((str(FBS_PATH), standard_fbs_source(f_trig_first_scan)))
     lib.sources.append((str(FUNCTIONS_PATH), FUNCTIONS_PATH.read_text()))
     lib.sources.append((str(OPENPLC_FBS_PATH), OPENPLC_FBS_PATH.read_text()))

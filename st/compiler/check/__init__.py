@@ -24,6 +24,7 @@ from .passes.collect import collect
 from .passes.configuration import check_configurations
 from .passes.cycles import check_cycles
 from .passes.globals import declare_globals
+from .passes.namespaces import resolve_namespaces
 from .passes.oop import check_oop_rules
 from .passes.tests import check_tests
 from .passes.types import resolve_types
@@ -51,6 +52,7 @@ class Checker:
             strict_enums=self.strict_enums,
         )
         sem = Semantics(ctx)
+        resolve_namespaces(ctx, units)
         collect(ctx, units)
         resolve_types(sem)
         check_oop_rules(ctx)

@@ -592,3 +592,6 @@ def _fits_conformant(arg, param) -> bool:
     """An array for an ARRAY[*] parameter: as many dimensions, the same element type."""
     a, p = T.unalias(arg), cast(T.ArrayType, T.unalias(param))
     return isinstance(a, T.ArrayType) and len(a.dims) == len(p.dims) and same_type(a.element, p.element)
+
+
+size_of = T.size_of  # (bytes, alignment) of a type, as SIZEOF counts: for libraries (MEMCPY's layouts)

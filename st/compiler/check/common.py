@@ -163,6 +163,8 @@ def _satisfies(t: T.Type, constraint: str) -> bool:
     b = T.base_of(t)
     if constraint == "ANY":
         return True
+    if constraint == "ANY_POINTER":  # a POINTER, REF_TO or ADR(...) (the vendor memory functions)
+        return isinstance(T.unalias(t), T.RefType)
     if isinstance(b, T.LiteralType):
         if constraint in ("ANY_NUM", "ANY_MAGNITUDE", "ANY_ELEMENTARY"):
             return True

@@ -13,7 +13,11 @@ class Constants(Part):
     def value(self, e, scope: Scope | None):
         """Evaluate a constant expression (literals, CONSTANT variables, enum values), or None."""
         if isinstance(e, A.Field):
-            return e.const if isinstance(e.sym, T.EnumType) else None
+            if isinstance(e.sym, T.EnumType):
+                return e.const
+            if isinstance(e.base, A.Name) and (scope is None or e.base.name.lower() not in scope.vars):
+                return self._raw_global_constant(e.name.lower(), e.base.name.lower())  # GVL_Param.N
+            return None
         if isinstance(e, A.Literal):
             return e.value
         if isinstance(e, A.EnumLit):
@@ -102,8 +106,9 @@ class Constants(Part):
                         self.ctx.raw_const_busy.discard(key)
         return None
 
-    def _raw_global_constant(self, key: str):
-        """A VAR_GLOBAL CONSTANT not declared yet (types and POU interfaces are resolved first)."""
+    def _raw_global_constant(self, key: str, gvl: str = ""):
+        """A VAR_GLOBAL CONSTANT not declared yet (types and POU interfaces are resolved first);
+        `gvl`: of that named list only (GVL_Param.N)."""
         if key in self.ctx.raw_const_busy:
             return None
         blocks = list(self.ctx.global_blocks)
@@ -113,6 +118,8 @@ class Constants(Part):
                 blocks += [("", b) for b in r.var_blocks]
         for _, b in blocks:
             if "CONSTANT" not in b.qualifiers:
+                continue
+            if gvl and self.ctx.gvl_of_block.get(id(b), "").rstrip("!").lower() != gvl:
                 continue
             for d in b.decls:
                 if any(n.lower() == key for n, _ in d.names) and isinstance(d.init, A.Expr):

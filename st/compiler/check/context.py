@@ -47,6 +47,10 @@ class CheckContext:
     gvls: dict[str, dict[str, T.VarSym]] = field(default_factory=dict)
     """Named global variable lists: lower list name → lower variable name → symbol (`GVL_Main.x`)."""
     """VAR_GLOBAL blocks: (scope prefix, block); the prefix is '' or a configuration/resource path."""
+    qualified_only: set[int] = field(default_factory=set)
+    """Globals of a {attribute 'qualified_only'} list (ids of their symbols): reachable only as GVL.x."""
+    namespaces: dict[str, str] = field(default_factory=dict)
+    """Library and project namespaces, lower name → name: `Tc2_Standard.TON` is TON (passes/namespaces.py)."""
 
     # ---------------------------------------------------------------- reporting
     def err(self, code: str, span: Span, msg: str, hint: str = "") -> None:

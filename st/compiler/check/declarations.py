@@ -23,6 +23,7 @@ from .common import (
     take_address,
 )
 from .part import Part
+from .passes.namespaces import unknown_namespace
 
 MAX_ARRAY_ELEMENTS = 50_000_000
 
@@ -160,7 +161,9 @@ class Declarations(Part):
                     self.err("E012", spec.span, f"'{spec.name}' is a FUNCTION, not a type")
                     return T.INT
                 return pou
-            self.err("E012", spec.span, f"unknown type '{spec.name}'")
+            self.err(
+                "E012", spec.span, unknown_namespace(spec.name, self.ctx.namespaces) or f"unknown type '{spec.name}'"
+            )
             return T.INT
         if isinstance(spec, A.StringType):
             n = 80
@@ -370,7 +373,8 @@ class Declarations(Part):
         itf = self.p.pous.get(name.lower())
         if itf is None or itf.pou_kind != "INTERFACE":
             what = "not declared" if itf is None else f"a {itf.pou_kind.replace('_', ' ')}, not an INTERFACE"
-            self.err("E012" if itf is not None else "E010", span, f"{who}: '{name}' is {what}")
+            msg = unknown_namespace(name, self.ctx.namespaces) if itf is None else ""
+            self.err("E012" if itf is not None else "E010", span, f"{who}: {msg or repr(name) + ' is ' + what}")
             return None
         self.resolve_interface(itf)
         return itf
@@ -457,7 +461,8 @@ class Declarations(Part):
         d = pou.decl
         base = self.p.pous.get(d.extends.lower())
         if base is None:
-            self.err("E010", d.span, f"{pou.name} extends '{d.extends}', which is not declared")
+            msg = unknown_namespace(d.extends, self.ctx.namespaces)
+            self.err("E010", d.span, msg or f"{pou.name} extends '{d.extends}', which is not declared")
             return None
         if base.pou_kind != "FUNCTION_BLOCK":
             kind = base.pou_kind.replace("_", " ")

@@ -196,7 +196,7 @@ class Expressions(Part):
         if key == "super" and scope.fb is not None and scope.fb.base is not None and self.ctx.feature_quiet("oop"):
             return SUPER
         gs = self.p.global_names.get(key)
-        if gs:
+        if gs and id(gs[0]) not in self.ctx.qualified_only:
             return gs[0]
         return None
 
@@ -274,6 +274,17 @@ class Expressions(Part):
                 else "a function block that EXTENDS another (or one of its methods)"
             )
             self.err("E010", e.span, f"{e.name.upper()} exists only inside {where}")
+            return None
+        gs = self.p.global_names.get(key)
+        if gs and id(gs[0]) in self.ctx.qualified_only:
+            low = next(n for n, vs in self.ctx.gvls.items() if vs.get(key) is gs[0])
+            gvl = next(v.rstrip("!") for v in self.ctx.gvl_of_block.values() if v.rstrip("!").lower() == low)
+            self.err(
+                "E010",
+                e.span,
+                f"'{e.name}' belongs to {gvl}, a {{attribute 'qualified_only'}} list",
+                f"write it qualified: {gvl}.{e.name}",
+            )
             return None
         self.err("E010", e.span, f"undeclared identifier '{e.name}'", self._suggest(key, scope))
         return None

@@ -22,7 +22,9 @@ def _collect(ctx: CheckContext, u: A.Unit) -> None:
         if isinstance(item, A.TypeBlock):
             for td in item.types:
                 key = td.name.lower()
-                if key in ctx.pending_types or key in ctx.project.pous:
+                if _replaces_library(ctx, key, td.span):
+                    pass  # a user type of a library type's name (T_MaxString) is the one used
+                elif key in ctx.pending_types or key in ctx.project.pous:
                     _dup(ctx, td.name, td.span)
                     continue
                 if key in T.ELEMENTARY:
@@ -33,7 +35,9 @@ def _collect(ctx: CheckContext, u: A.Unit) -> None:
         elif isinstance(item, (A.POU, A.Interface)):
             _oop_features(ctx, item)
             key = item.name.lower()
-            if key in ctx.project.pous or key in ctx.pending_types:
+            if key in ctx.pending_types and _replaces_library(ctx, key, item.span):
+                pass
+            elif key in ctx.project.pous or key in ctx.pending_types:
                 old = ctx.project.pous.get(key)
                 if (
                     old is not None
@@ -79,10 +83,13 @@ def _collect(ctx: CheckContext, u: A.Unit) -> None:
             gvl = _gvl_name(u)
             if gvl:
                 ctx.gvl_of_block[id(item)] = gvl
+                if any(_QUALIFIED_ONLY.fullmatch(p.text) for p in u.pragmas):
+                    ctx.gvl_of_block[id(item)] = gvl + "!"  # its variables only as GVL.x
         elif isinstance(item, A.TestBlock):
             ctx.project.test_blocks.append(item)
 
 
+_QUALIFIED_ONLY = re.compile(r"\{\s*attribute\s+'qualified_only'\s*\}", re.I)
 _GVL = re.compile(r"\{\s*gvl\s+'([A-Za-z_][A-Za-z0-9_]*)'\s*\}", re.I)
 
 
@@ -95,10 +102,24 @@ def _gvl_name(u: A.Unit) -> str:
     return ""
 
 
+def _replaces_library(ctx: CheckContext, key: str, span: Span) -> bool:
+    """A user declaration of a library TYPE's name takes its place (the library's is dropped),
+    unless library code uses that type; then it is a duplicate."""
+    old = ctx.pending_types.get(key)
+    if old is None or not old[1] or ctx.lib_of(span):
+        return False
+    td = old[0]
+    probe = T.POUType(td.name, "TYPE", decl=None, library="lib")
+    if _used_by_library(ctx, probe, td.span):
+        return False
+    del ctx.pending_types[key]
+    return True
+
+
 _END = re.compile(r"^\s*END_(FUNCTION_BLOCK|FUNCTION|PROGRAM|INTERFACE|CLASS)\b", re.I | re.M)
 
 
-def _used_by_library(ctx: CheckContext, pou: T.POUType) -> bool:
+def _used_by_library(ctx: CheckContext, pou: T.POUType, own_type: Span | None = None) -> bool:
     """Does library code other than `pou`'s own declaration name it? Then a user POU of another
     kind cannot stand in for it (the standard library's F_TRIG uses R_TRIG, PID uses INTEGRAL);
     a library POU nothing else uses may be replaced by anything."""
@@ -106,6 +127,9 @@ def _used_by_library(ctx: CheckContext, pou: T.POUType) -> bool:
     own = pou.decl.span if pou.decl is not None else None
     for lib in ctx.libraries:
         for path, text in lib.sources:
+            if own_type is not None and path == own_type.file:  # a TYPE: all but its own line
+                lines = text.split("\n")
+                text = "\n".join(lines[: own_type.line - 1] + lines[own_type.line :])
             if own is not None and path == own.file:
                 start = sum(len(line) + 1 for line in text.split("\n")[: own.line - 1])
                 end = _END.search(text, start)

@@ -33,6 +33,10 @@ def declare_globals(sem: Semantics) -> None:
             sym.pyname = "_g_" + qualified(*scope, sym.name)
             uniq = sym.pyname.lower()
             other = declared.get(uniq)
+            if other is not None and ctx.lib_of(other.span) and not ctx.lib_of(sym.span):
+                # a user global of a library constant's name (ADSLOG_MSGTYPE_ERROR) is the one used
+                ctx.project.global_names[key].remove(other)
+                other = None
             if other is not None:
                 ctx.err(
                     "E011",
@@ -45,6 +49,9 @@ def declare_globals(sem: Semantics) -> None:
             ctx.project.global_names.setdefault(key, []).append(sym)
             gvl = ctx.gvl_of_block.get(id(block))
             if gvl:
+                if gvl.endswith("!"):  # {attribute 'qualified_only'}
+                    gvl = gvl[:-1]
+                    ctx.qualified_only.add(id(sym))
                 ctx.gvls.setdefault(gvl.lower(), {})[key] = sym
     # global initializers may name other globals: check them once all are declared
     for decl, t in ctx.deferred_inits:

@@ -1,0 +1,330 @@
+"""The vendor compatibility library (st/stdlib/vendor), library-qualified names and
+{attribute 'qualified_only'} variable lists (issue 18, point 5)."""
+
+from __future__ import annotations
+
+import pytest
+
+from st.api import compile_text
+
+from helpers import errors, fault, program, run
+
+VENDOR = [None, "codesys", "twincat"]  # the presets that load the compatibility library
+
+
+def value(expr: str, ty: str, dialect: str | None = "twincat", decls: str = "", scans: int = 1):
+    plc = run(program(f"r := {expr};", f"r : {ty};\n{decls}"), scans, dialect)
+    return plc["main.r"]
+
+
+@pytest.mark.parametrize(
+    ("expr", "expected"),
+    [
+        ("F_LTrim('  ab ')", "ab "),
+        ("F_RTrim('  ab ')", "  ab"),
+        ("F_RTrim(F_LTrim(' <x> '))", "<x>"),
+        ("F_LTrim('')", ""),
+        ("F_ToUCase('aBc-1ä')", "ABC-1ä"),
+        ("F_ToLCase('AbC-1')", "abc-1"),
+        ("DWORD_TO_HEXSTR(16#1A, 4, FALSE)", "001A"),
+        ("DWORD_TO_HEXSTR(43981, 1, TRUE)", "abcd"),
+        ("DWORD_TO_HEXSTR(0, 0, FALSE)", ""),
+        ("DWORD_TO_HEXSTR(0, 1, FALSE)", "0"),
+        ("BYTE_TO_HEXSTR(255, 0, FALSE)", "FF"),
+        ("WORD_TO_HEXSTR(16#BEEF, 6, TRUE)", "00beef"),
+        ("LWORD_TO_HEXSTR(16#123456789A, 2, FALSE)", "123456789A"),
+        ("DWORD_TO_DECSTR(1234, 6)", "001234"),
+        ("BYTE_TO_BINSTR(5, 8)", "00000101"),
+        ("WORD_TO_OCTSTR(8, 0)", "10"),
+    ],
+)
+def test_string_functions(expr, expected):
+    assert value(expr, "T_MaxString") == expected
+
+
+def test_t_maxstring_holds_255_characters_and_wlen_counts_a_wstring():
+    plc = run(
+        program(
+            "FOR i := 1 TO 30 DO s := CONCAT(s, '0123456789'); END_FOR; n := WLEN(w);",
+            's : T_MaxString; i, n : INT; w : WSTRING := "abc";',
+        ),
+        1,
+        "twincat",
+    )
+    assert len(plc["main.s"]) == 255
+    assert plc["main.n"] == 3
+
+
+def test_memcpy_copies_a_structure_and_memset_memcmp_work_on_arrays():
+    src = program(
+        """
+        a.x := 7; a.b[1] := 9;
+        n1 := MEMCPY(ADR(b), ADR(a), SIZEOF(a));
+        MEMSET(ADR(u), 0, SIZEOF(u));
+        MEMSET(ADR(v), 16#FF, 2 * SIZEOF(v[1]));
+        c1 := MEMCMP(ADR(w), ADR(u), SIZEOF(u));
+        MEMCPY(destAddr := ADR(u), srcAddr := ADR(w), n := 4);
+        c2 := MEMCMP(ADR(w), ADR(u), 4);
+        c3 := MEMCMP(ADR(w), ADR(u), SIZEOF(w));
+        """,
+        "a, b : S; u, w : ARRAY[1..4] OF INT := [1, 2, 3, 4]; v : ARRAY[0..2] OF USINT := [1, 1, 1];"
+        " n1 : UDINT; c1, c2, c3 : DINT;",
+        "TYPE S : STRUCT x : INT; b : ARRAY[0..2] OF BYTE; END_STRUCT END_TYPE",
+    )
+    plc = run(src, 1, "twincat")
+    assert (plc["main.b.x"], plc["main.b.b"], plc["main.n1"]) == (7, [0, 9, 0], 4 + 2)  # INT + 3 BYTEs, aligned
+    assert plc["main.v"] == [255, 255, 1]
+    assert (plc["main.c1"], plc["main.c2"], plc["main.c3"]) == (1, 0, 1)
+    assert plc["main.u"] == [1, 2, 0, 0]
+
+
+def test_memcpy_between_different_types_is_a_clear_fault():
+    _, f = fault(program("MEMCPY(ADR(d), ADR(i), 2);", "d : DINT; i : INT;"), "twincat")
+    assert (f.kind, f.line) == ("MEMORY", 6)
+    assert f.message == "MEMCPY between variables of different types is not supported by st"
+
+
+def test_memcpy_beyond_the_variable_is_a_fault():
+    _, f = fault(program("MEMCPY(ADR(a), ADR(b), 8);", "a, b : DINT;"), "twincat")
+    assert f.message == "MEMCPY of 8 bytes beyond a variable of 4 bytes"
+
+
+def test_adslog_functions_write_formatted_messages_to_the_plc_log():
+    src = program(
+        """
+        IF NOT done THEN
+          r := ADSLOGSTR(ADSLOG_MSGTYPE_HINT, 'hello %s!', 'world');
+          r := ADSLOGDINT(ADSLOG_MSGTYPE_ERROR OR ADSLOG_MSGTYPE_LOG, 'n = %d', -42);
+          r := Tc2_System.ADSLOGLREAL(ADSLOG_MSGTYPE_WARN, '%f V; 100%%', 2.5);
+          done := TRUE;
+        END_IF;
+        """,
+        "r : DINT; done : BOOL;",
+    )
+    plc = run(src, 3, "twincat")
+    assert [(m.time, m.kind, m.mask, m.text) for m in plc.log.entries] == [
+        (0, "hint", 1, "hello world!"),
+        (0, "error", 0x14, "n = -42"),
+        (0, "warning", 2, "2.500000 V; 100%"),
+    ]
+    assert plc.log.since(2)[0].text == "2.500000 V; 100%"
+
+
+def test_drand_is_deterministic_per_seed_and_in_range():
+    src = program(
+        "d(Seed := 7); e(Seed := 7); f(Seed := 8); a := d.Num; b := e.Num; c := f.Num;",
+        "d, e, f : DRAND; a, b, c : LREAL;",
+    )
+    plc = run(src, 5, "twincat")
+    assert plc["main.a"] == plc["main.b"] != plc["main.c"]
+    assert 0.0 <= plc["main.a"] < 1.0
+
+
+def test_getcpucounter_counts_100ns_ticks_of_the_plc_clock():
+    src = program(
+        "c(); lo := c.cpuCntLoDW; hi := c.cpuCntHiDW; t := F_GetSystemTime();",
+        "c : GETCPUCOUNTER; lo, hi : UDINT; t : ULINT;",
+    )
+    plc = run(src, 4, "twincat")  # the 4th scan runs at 30 ms
+    assert (plc["main.lo"], plc["main.hi"], plc["main.t"]) == (300000, 0, 300000)
+
+
+def test_task_index_and_system_info():
+    src = program(
+        "g(); i := g.index; n := TwinCAT_SystemInfoVarList._TaskInfo[g.index].CycleCount;"
+        " f := TwinCAT_SystemInfoVarList._TaskInfo[1].FirstCycle;",
+        "g : GETCURTASKINDEX; i : BYTE; n : UDINT; f : BOOL;",
+    )
+    plc = run(src, 3, "twincat")
+    assert (plc["main.i"], plc["main.n"], plc["main.f"]) == (1, 3, False)
+
+
+# ------------------------------------------------------------------ qualified names
+
+
+QUALIFIED = """
+{namespace 'MyLib'}
+TYPE E : (Red, Green); END_TYPE
+FUNCTION_BLOCK FB_Base
+VAR_OUTPUT n : INT; END_VAR
+METHOD Count : INT
+n := n + 1;
+Count := n;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FB_Suite EXTENDS MyLib.FB_Base
+VAR t : Tc2_Standard.TON; END_VAR
+t(IN := TRUE, PT := T#20MS);
+IF t.Q THEN
+  Count();
+END_IF;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR
+  s : MyLib.FB_Suite;
+  m : Tc2_System.T_MaxString;
+  c : MyLib.E := MyLib.E.Green;
+  k : IBaseLibrary.TypeClass := IBaseLibrary.TypeClass.TYPE_LREAL;
+  z : __SYSTEM.TYPE_CLASS := __SYSTEM.TYPE_CLASS.TYPE_BITCONST;
+  r : DINT;
+END_VAR
+s();
+m := Tc2_Utilities.F_LTrim('  x');
+r := Standard.MAX(1, 5);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_library_qualified_names_in_types_extends_calls_and_enum_values(dialect):
+    plc = run(QUALIFIED, 4, dialect)
+    assert (plc["main.s.n"], plc["main.m"], plc["main.r"]) == (2, "x", 5)
+    assert (plc["main.c"], plc["main.k"], plc["main.z"]) == ("Green", "TYPE_LREAL", "TYPE_BITCONST")
+
+
+def test_an_unknown_library_is_a_located_error():
+    src = "PROGRAM main\nVAR\n  t : Tc3_Nothing.TON;\nEND_VAR\nEND_PROGRAM\n"
+    assert (
+        "t.st:3:7: error[E012]: 'Tc3_Nothing.TON': no library 'Tc3_Nothing' is available (namespaces here: "
+        "__SYSTEM, IBaseLibrary, Standard, Tc2_Standard, Tc2_System, Tc2_Utilities, Util)"
+    ) in errors(src, "twincat")
+
+
+def test_extends_an_unknown_library_is_a_located_error():
+    src = "FUNCTION_BLOCK B EXTENDS Foo.A\nEND_FUNCTION_BLOCK\n"
+    assert "t.st:1:16: error[E010]: 'Foo.A': no library 'Foo' is available" in errors(src, "codesys")
+
+
+def test_a_variable_named_like_a_library_is_not_a_namespace():
+    src = program("util.x := 3; r := util.x;", "util : S; r : INT;", "TYPE S : STRUCT x : INT; END_STRUCT END_TYPE")
+    assert run(src, 1, "codesys")["main.r"] == 3
+
+
+# ------------------------------------------------------------------ which presets
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_the_library_is_there_under_codesys_twincat_and_the_default(dialect):
+    assert value("F_LTrim(' a')", "T_MaxString", dialect) == "a"
+
+
+@pytest.mark.parametrize("dialect", ["iec", "openplc"])
+def test_iec_and_openplc_do_not_load_it(dialect):
+    assert "error[E010]: undeclared function or function block 'F_LTrim'" in errors(
+        program("s := F_LTrim(' a');", "s : STRING;"), dialect
+    )
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_user_declarations_win_over_the_library(dialect):
+    src = (
+        "TYPE T_MaxString : STRING(10); END_TYPE\n"
+        "VAR_GLOBAL CONSTANT ADSLOG_MSGTYPE_HINT : DWORD := 7; END_VAR\n"
+        "FUNCTION F_LTrim : INT\nVAR_INPUT x : INT; END_VAR\nF_LTrim := x + 1;\nEND_FUNCTION\n"
+        + program(
+            "s := 'abcdefghijklmno'; k := ADSLOG_MSGTYPE_HINT; i := F_LTrim(4);", "s : T_MaxString; k : DWORD; i : INT;"
+        )
+    )
+    plc = run(src, 1, dialect)
+    assert (plc["main.s"], plc["main.k"], plc["main.i"]) == ("abcdefghij", 7, 5)
+
+
+# ------------------------------------------------------------------ qualified_only
+
+
+GVL = """
+{gvl 'GVL_Param'}
+{attribute 'qualified_only'}
+VAR_GLOBAL CONSTANT
+  N : INT := 3;
+END_VAR
+"""
+
+
+@pytest.mark.parametrize("dialect", ["codesys", "twincat"])
+def test_a_qualified_only_list_is_reached_qualified_and_sizes_arrays(dialect):
+    plc = run(
+        GVL + program("k := GVL_Param.N + UPPER_BOUND(a, 1);", "a : ARRAY[1..GVL_Param.N] OF INT; k : DINT;"),
+        1,
+        dialect,
+    )
+    assert plc["main.k"] == 6
+
+
+def test_a_qualified_only_variable_is_not_reachable_unqualified():
+    msg = errors(GVL + program("k := N;", "k : INT;"), "twincat")
+    assert "t.st:12:6: error[E010]: 'N' belongs to GVL_Param, a {attribute 'qualified_only'} list" in msg
+    assert "hint: write it qualified: GVL_Param.N" in msg
+
+
+def test_without_qualified_only_both_forms_work():
+    src = GVL.replace("{attribute 'qualified_only'}\n", "") + program("k := N + GVL_Param.N;", "k : INT;")
+    assert run(src, 1, "twincat")["main.k"] == 6
+
+
+# ------------------------------------------------------------------ a TcUnit-like project
+
+
+TESTLIB = """
+{namespace 'MiniUnit'}
+FUNCTION_BLOCK FB_TestSuite
+VAR
+  failures : INT;
+  asserts : INT;
+  name : T_MaxString;
+END_VAR
+METHOD AssertEquals_INT
+VAR_INPUT Expected, Actual : INT; Message : T_MaxString; END_VAR
+asserts := asserts + 1;
+IF Expected <> Actual THEN
+  failures := failures + 1;
+  ADSLOGSTR(ADSLOG_MSGTYPE_ERROR, 'FAILED: %s', Message);
+END_IF;
+END_METHOD
+METHOD Report
+ADSLOGDINT(ADSLOG_MSGTYPE_HINT, 'failed asserts: %d', failures);
+END_METHOD
+END_FUNCTION_BLOCK
+"""
+
+SUITE = """
+FUNCTION_BLOCK FB_MathTest EXTENDS MiniUnit.FB_TestSuite
+VAR done : BOOL; END_VAR
+IF NOT done THEN
+  AssertEquals_INT(Expected := 4, Actual := 2 + 2, Message := 'sum');
+  AssertEquals_INT(Expected := 5, Actual := 2 * 2, Message := F_RTrim('product  '));
+  Report();
+  done := TRUE;
+END_IF;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR t : FB_MathTest; END_VAR
+t();
+END_PROGRAM
+"""
+
+
+def test_a_tcunit_style_suite_extends_a_library_block_and_reports_through_the_log():
+    plc = run(TESTLIB + SUITE, 2, "twincat")
+    assert [m.text for m in plc.log.entries] == ["FAILED: product", "failed asserts: 1"]
+    assert plc["main.t.asserts"] == 2
+
+
+def test_compile_text_reports_the_library_as_loaded_for_twincat():
+    prog = compile_text(TESTLIB + SUITE, "t.st", dialect="twincat", use_cache=False)
+    assert "fb_mathtest" in prog.project.pous
+
+
+def test_st_run_prints_new_log_messages_once(capsys):
+    from st.app.session import _LogPrinter
+
+    plc = run(
+        program("n := n + 1; IF n = 2 THEN ADSLOGSTR(ADSLOG_MSGTYPE_WARN, 'at %s', 'two'); END_IF;", "n : INT;"),
+        1,
+        "twincat",
+    )
+    show = _LogPrinter(plc)
+    plc.scan(2)
+    show()
+    show()
+    assert capsys.readouterr().err == "[10 ms] warning: at two\n"
