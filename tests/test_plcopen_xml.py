@@ -715,3 +715,49 @@ def test_graphical_conditions_and_macro_steps_are_located_errors(tmp_path):
     assert [(d.code, d.span.line, d.span.col, d.message) for d in result.diagnostics] == [
         ("E051", line_of(xml, "<macroStep"), 13, "an SFC macro step in P: st does not read macro steps")
     ]
+
+
+def test_a_named_transition_used_twice_is_copied_and_an_unknown_one_is_an_error(tmp_path):
+    sfc = """\
+      <pou name="P" pouType="program">
+        <interface><localVars><variable name="n"><type><INT/></type></variable></localVars></interface>
+        <transitions>
+          <transition name="Go"><body><ST><xhtml:p><![CDATA[Go := n >= 0;]]></xhtml:p></ST></body></transition>
+        </transitions>
+        <body>
+          <SFC>
+            <step localId="1" name="S0" initialStep="true"/>
+            <transition localId="2">
+              <connectionPointIn><connection refLocalId="1"/></connectionPointIn>
+              <condition><reference name="Go"/></condition>
+            </transition>
+            <step localId="3" name="S1"><connectionPointIn><connection refLocalId="2"/></connectionPointIn></step>
+            <transition localId="4">
+              <connectionPointIn><connection refLocalId="3"/></connectionPointIn>
+              <condition><reference name="Go"/></condition>
+            </transition>
+            <step localId="5" name="S2"><connectionPointIn><connection refLocalId="4"/></connectionPointIn></step>
+            <actionBlock localId="6">
+              <connectionPointIn><connection refLocalId="5"/></connectionPointIn>
+              <action localId="0"><inline><ST><xhtml:p><![CDATA[n := n + 1;]]></xhtml:p></ST></inline></action>
+            </actionBlock>
+          </SFC>
+        </body>
+      </pou>
+"""
+    xml = project(sfc)
+    lines = _lines(xml)
+    assert "TRANSITION Go FROM S0 TO S1 := n >= 0; END_TRANSITION" in lines  # `Go` blanked in `Go := …`
+    assert "TRANSITION FROM S1 TO S2 := n >= 0 ; END_TRANSITION" in lines
+    plc = PLC.from_files(write(tmp_path, xml), use_cache=False)
+    plc.scan(3)
+    assert plc["P.n"] == 2
+    unknown = xml.replace(
+        '<reference name="Go"/></condition>\n            </transition>\n            <step localId="5"',
+        '<reference name="Went"/></condition>\n            </transition>\n            <step localId="5"',
+    )
+    path = write(tmp_path, unknown, "unknown.xml")
+    result = compile_paths([path], raise_on_error=False, use_cache=False)
+    assert [(d.code, d.span.line, d.message) for d in result.diagnostics] == [
+        ("E051", line_of(unknown, '<transition localId="4">'), "transition Went is not a transition of P")
+    ]

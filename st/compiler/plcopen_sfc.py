@@ -9,12 +9,15 @@ transition's source and target steps are found through the divergences and conve
     <transition>       TRANSITION FROM (s1, s2) TO s3 := <its inline ST condition> ; END_TRANSITION
     <action> inline    ACTION _inline_<block>_<k>: <its ST> END_ACTION   (at the action block)
 
-A transition whose condition names a transition of the POU (`<transitions>`, ST text `:= expr;`) is
-written where that transition's body stands. Macro steps and graphical conditions are not read.
+A transition whose condition names a transition of the POU (`<transitions>`, ST text `:= expr;`,
+`T := expr;` or `expr`) is written where that transition's body stands; a second use of the same
+transition is a copy of its condition, on one line. Macro steps and graphical conditions are not
+read.
 """
 
 from __future__ import annotations
 
+import re
 from collections import defaultdict
 from typing import TYPE_CHECKING
 
@@ -37,34 +40,42 @@ def _steps(names: list[str]) -> str:
     return unique[0] if len(unique) == 1 else "(" + ", ".join(unique) + ")"
 
 
+def _expression(lang: Element, name: str) -> str:
+    """The condition of a named transition's ST text (`:= e;`, `T := e;` or `e`), on one line."""
+    text = "".join(t for _, _, t in lang.code()).strip()
+    text = re.sub(r"^(?:" + re.escape(name) + r"\s*)?:=", "", text, flags=re.I).strip()
+    return " ".join(text.removesuffix(";").split())
+
+
 class Sfc:
     """One `<SFC>` body of a POU."""
 
-    def __init__(self, reader: Reader, pou: str, el: Element):
+    def __init__(self, reader: Reader, pou: str, el: Element, transitions: dict[str, Element]):
         self.reader, self.pou, self.el = reader, pou, el
+        self.transitions = transitions  # the POU's named transitions: lower name → <transition>
         self.nodes = {k.get("localId"): k for k in el.kids if k.get("localId")}
         self.below: dict[str, list[Element]] = defaultdict(list)
         for k in el.kids:
             for ref in _refs(k):
                 self.below[ref].append(k)
-        self.named: dict[str, tuple[Element, str]] = {}  # transition name (lower) → (its use, FROM … TO …)
+        self.named: dict[str, str] = {}  # transition name (lower) → FROM … TO … of its first use
+        self.copies: dict[int, str] = {}  # id of a later use → the name (lower) it uses
         self.inline: dict[int, str] = {}  # id of an inline <action> → its ACTION's name
         for k in el.all("transition"):
             cond = k.kid("condition")
             use = cond.first() if cond is not None else None
-            if use is not None and use.tag == "reference":
-                key = use.get("name").lower()
+            if use is None or use.tag != "reference":
+                continue
+            key = use.get("name").lower()
+            try:
+                if key not in transitions:
+                    raise Unread(Code.XML_FILE, k, f"transition {use.get('name')} is not a transition of {pou}")
                 if key in self.named:
-                    reader.problem(
-                        Code.XML_FILE,
-                        k,
-                        f"transition {use.get('name')} is used twice in {pou}: st reads a named transition once",
-                    )
-                    continue
-                try:
-                    self.named[key] = (k, self.arc(k))
-                except Unread as e:
-                    reader.unread(e)
+                    self.copies[id(k)] = key
+                else:
+                    self.named[key] = self.arc(k)
+            except Unread as e:
+                reader.unread(e)
 
     # ---------------------------------------------------------------- the graph
     def up(self, ref: str, at: Element, seen: set[str]) -> list[str]:
@@ -156,8 +167,13 @@ class Sfc:
         kind = cond.first() if cond is not None else None
         if kind is None:
             raise Unread(Code.XML_FILE, el, f"an SFC transition of {self.pou} has no condition")
-        if kind.tag == "reference":
-            return  # written with the named transition's body (named_transition)
+        if kind.tag == "reference":  # the first use is written with the named transition's body
+            key = self.copies.get(id(el))
+            body = self.transitions[key].kid("body") if key is not None else None
+            lang = body.first() if body is not None else None
+            if key is not None and lang is not None and lang.tag == "ST":  # a later use: its text copied
+                self.reader.at(el, f"TRANSITION{self.arc(el)} := {_expression(lang, key)} ; END_TRANSITION")
+            return
         lang = kind.first() if kind.tag == "inline" else None
         if lang is None or lang.tag != "ST":
             what = lang.tag if lang is not None else "a graphical network"
@@ -165,6 +181,7 @@ class Sfc:
                 Code.XML_LANGUAGE,
                 el,
                 f"the condition of an SFC transition of {self.pou} is {what}: st reads ST conditions",
+                lang.tag if lang is not None else "FBD",
             )
         self.reader.at(el, f"TRANSITION{self.arc(el)} :=")
         code = lang.code()
@@ -178,8 +195,8 @@ class Sfc:
 
     def named_transition(self, tr: Element) -> None:
         """A transition of the POU's `<transitions>`, written where its body stands if this SFC uses it."""
-        use = self.named.get(tr.get("name").lower())
-        if use is None:
+        arc = self.named.get(tr.get("name").lower())
+        if arc is None:
             return
         body = tr.kid("body")
         lang = body.first() if body is not None else None
@@ -187,7 +204,7 @@ class Sfc:
             if lang is not None and body is not None:
                 self.reader.language(body, f"transition {tr.get('name')} of POU {self.pou}", lang)
             return
-        self.reader.at(tr, f"TRANSITION {tr.get('name')}{use[1]}")
+        self.reader.at(tr, f"TRANSITION {tr.get('name')}{arc}")
         code = lang.code()
         first = next((i for i, c in enumerate(code) if c[2].strip()), None)
         text = code[first][2].lstrip() if first is not None else ""

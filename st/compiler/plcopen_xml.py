@@ -16,6 +16,7 @@ or known by their `<xhtml:p>` text) → openplc. SFC networks: plcopen_sfc.py.
 
 from __future__ import annotations
 
+import os
 import re
 from xml.parsers import expat
 
@@ -81,11 +82,14 @@ class Reader:
         for line, col, text in el.code():
             self.out.place(line, col, text, code=True)
 
-    def problem(self, code: str, el: Element, message: str, hint: str = "") -> None:
-        self.diags.append(Diagnostic(code, Severity.ERROR, Span(self.path, el.line + 1, el.col + 1), message, hint))
+    def problem(self, code: str, el: Element, message: str, hint: str = "", language: str = "") -> None:
+        """An error at `el`; an E050 names the `language` it does not read (a fact for tools)."""
+        data = (("language", language),) if language else ()
+        span = Span(self.path, el.line + 1, el.col + 1)
+        self.diags.append(Diagnostic(code, Severity.ERROR, span, message, hint, data))
 
     def unread(self, e: Unread) -> None:
-        self.problem(e.code, e.el, e.message)
+        self.problem(e.code, e.el, e.message, language=e.language)
 
     # ---------------------------------------------------------------- the project
     def project(self, root: Element) -> None:
@@ -230,13 +234,14 @@ class Reader:
             if sec.tag in _SECTIONS:
                 self.section(sec)
         bodies = pou.all("body")
+        transitions = pou.kid("transitions")
+        named = {t.get("name").lower(): t for t in (transitions.all("transition") if transitions is not None else ())}
         langs = [b.first() for b in bodies]
-        sfcs = [Sfc(self, name, lang) for lang in langs if lang is not None and lang.tag == "SFC"]
+        sfcs = [Sfc(self, name, lang, named) for lang in langs if lang is not None and lang.tag == "SFC"]
         actions = pou.kid("actions")
         for action in actions.all("action") if actions is not None else ():
             self.action(name, action)
-        transitions = pou.kid("transitions")
-        for tr in transitions.all("transition") if transitions is not None else ():
+        for tr in named.values():
             for sfc in sfcs:
                 sfc.named_transition(tr)
         for body in bodies:
@@ -270,6 +275,7 @@ class Reader:
                 body,
                 f"{what} is written in {lang.tag}: st reads ST and SFC bodies",
                 "rewrite the body in ST (the editor can show the ST it generates), or leave this POU out",
+                lang.tag,
             )
         else:
             self.problem(Code.XML_FILE, lang, f"{what} has a <{lang.tag}> body: st reads ST and SFC bodies")
@@ -328,7 +334,14 @@ def plcopen_source(xml: str, path: str) -> tuple[str, list[Diagnostic]]:
             'a PLCopen project (plc.xml) starts with <project xmlns="http://www.plcopen.org/xml/tc6_0201">',
         )
         return reader.out.text(), reader.diags
-    reader.project(root)
+    try:
+        reader.project(root)
+    except Exception as exc:  # a reader bug must still not show the user a traceback
+        if os.environ.get("ST_DEBUG"):
+            raise
+        message = f"internal compiler error while reading PLCopen XML: {type(exc).__name__}: {exc}"
+        hint = "please report this with the file; set ST_DEBUG=1 to see the traceback"
+        reader.diags.append(Diagnostic(Code.INTERNAL, Severity.ERROR, Span(path, 1, 1), message, hint))
     return reader.out.text(), reader.diags
 
 

@@ -81,8 +81,9 @@ def parse(xml: str) -> Element:
 
 
 class Unread(Exception):
-    """A part of the project this reader does not turn into ST: (code, element, message)."""
+    """A part of the file its reader does not turn into text: (code, element, message, and the
+    language it is written in when that is why)."""
 
-    def __init__(self, code: str, el: Element, message: str):
+    def __init__(self, code: str, el: Element, message: str, language: str = ""):
         super().__init__(message)
-        self.code, self.el, self.message = code, el, message
+        self.code, self.el, self.message, self.language = code, el, message, language
