@@ -5,18 +5,16 @@ with the dialect that fits the source, classified clean / refused / internal err
 
 CORPORA is a directory holding the public repositories (docs/conformance.md says how to fetch
 them); nothing of theirs is in this repository. The report (markdown) goes to stdout and to
-DIR/conformance.md, every file's result to DIR/results.json; ST extracted from PLCopen XML goes to
-DIR/extracted/. A file is:
+DIR/conformance.md, every file's result to DIR/results.json. A file is:
 
 - clean: no error (warnings allowed);
 - refused: an error other than E099, reported by its first error (code, message with names
   replaced by '…', file:line);
 - internal: E099, an exception out of the compiler, or no answer within the timeout.
 
-PLCopen XML (`plc.xml`, the OpenPLC Editor's library files) is read when every POU body is ST:
-its types, POUs and configuration are written out as ST. Projects with LD/FBD/SFC/IL bodies are
-skipped and counted as such; TwinCAT's .TcPOU/.TcDUT/.TcGVL are counted as a project format st
-does not read yet.
+PLCopen XML (`plc.xml`, the OpenPLC Editor's library files) is compiled as it is (st reads its ST
+and SFC bodies); a project with an FBD, LD or IL body (E050) is counted as skipped, not as refused.
+TwinCAT's .TcPOU/.TcDUT/.TcGVL are counted as a project format unless --projects compiles them.
 """
 
 from __future__ import annotations
@@ -31,7 +29,6 @@ import signal
 import sys
 import time
 import traceback
-import xml.etree.ElementTree as ET
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -111,6 +108,7 @@ class Outcome:
     raw: str = ""  # the message as given
     others: list[list[str]] = field(default_factory=list)  # every error's [code, message, file:line], one per reason
     run: str = ""  # --scans: "ok", "fault: …", "not started: …" or "internal: …" (a clean unit run on virtual time)
+    languages: list[str] = field(default_factory=list)  # PLCopen XML: the languages of its bodies st does not read
 
 
 @dataclass
@@ -155,6 +153,8 @@ JUDGED = [
     ("E029", "", "smart-traffic", "?", "variable named as its type"),
     ("E023", "'…' is not a structure", "fb_", "a", "THIS.x without ^ (IEC ed. 3; new)"),
     ("E010", "undeclared function or function block '…'", "Estun", "b", "vendor C functions"),
+    ("E010", "undeclared identifier '…'", "plcopen/Arduino_", "b", "C block's placeholder body: undeclared name"),
+    ("E010", "undeclared identifier '…'", "plcopen/CAN_", "b", "C block's placeholder body: undeclared name"),
     ("E010", "undeclared function or function block '…'", "time_types", "b", "TIME_TO_US: STruC++ only"),
     ("E010", "undeclared function or function block 'TIME'", "", "a", "TIME() (rule 4)"),
     ("E013", "'%…' is N bit(s) wide", "", "?", "%ML as DWORD"),
@@ -247,209 +247,6 @@ def normalise(message: str) -> str:
     return "".join(pieces).strip()
 
 
-# ---------------------------------------------------------------- PLCopen XML → ST
-
-NS = {"p": "http://www.plcopen.org/xml/tc6_0201"}
-_GRAPHICAL = ("LD", "FBD", "SFC", "IL")
-
-
-class Unreadable(Exception):
-    """A PLCopen project this sweep does not turn into ST (graphical bodies, unknown types)."""
-
-
-def _local(tag: str) -> str:
-    return tag.rsplit("}", 1)[-1]
-
-
-def _kids(el):
-    return [c for c in el if isinstance(c.tag, str)]
-
-
-def _type(el) -> str:
-    """A <type>/<baseType> element's content as ST."""
-    kids = _kids(el)
-    if not kids:
-        raise Unreadable("empty type")
-    t = kids[0]
-    name = _local(t.tag)
-    if name == "derived":
-        return t.get("name")
-    if name in ("string", "wstring"):
-        length = t.get("length")
-        return name.upper() + (f"[{length}]" if length else "")
-    if name == "array":
-        dims = ", ".join(f"{d.get('lower')}..{d.get('upper')}" for d in t if _local(d.tag) == "dimension")
-        base = next(c for c in t if _local(c.tag) == "baseType")
-        return f"ARRAY [{dims}] OF {_type(base)}"
-    if name == "pointer":
-        base = next(c for c in t if _local(c.tag) == "baseType")
-        return f"REF_TO {_type(base)}"
-    if name in ("subrangeSigned", "subrangeUnsigned"):
-        rng = next(c for c in t if _local(c.tag) == "range")
-        base = next(c for c in t if _local(c.tag) == "baseType")
-        return f"{_type(base)} ({rng.get('lower')}..{rng.get('upper')})"
-    if name in ("struct", "enum"):
-        raise Unreadable(f"anonymous {name} in a variable's type")
-    return name.upper()
-
-
-def _value(el) -> str:
-    """An <initialValue> as ST."""
-    kids = _kids(el)
-    if not kids:
-        return ""
-    v = kids[0]
-    name = _local(v.tag)
-    if name == "simpleValue":
-        return v.get("value", "")
-    if name == "arrayValue":
-        parts = []
-        for item in _kids(v):
-            inner = _value(item)
-            rep = item.get("repetitionValue")
-            parts.append(f"{rep}({inner})" if rep else inner)
-        return "[" + ", ".join(parts) + "]"
-    if name == "structValue":
-        return "(" + ", ".join(f"{m.get('member')} := {_value(m)}" for m in _kids(v)) + ")"
-    raise Unreadable(f"initial value {name}")
-
-
-def _variables(section) -> list[str]:
-    out = []
-    for var in section:
-        if _local(var.tag) != "variable":
-            continue
-        typ = next(c for c in var if _local(c.tag) == "type")
-        init = next((c for c in var if _local(c.tag) == "initialValue"), None)
-        address = var.get("address")
-        typename = _type(typ)
-        line = var.get("name") + (f" AT {address}" if address else "") + " : " + typename
-        value = _value(init) if init is not None else ""
-        if value and typename.split("[")[0] in ("STRING", "WSTRING") and value[0] not in "'\"":
-            quote = "'" if typename.startswith("STRING") else '"'
-            value = quote + value + quote  # the editor keeps a string's text unquoted
-        elif value and typename.startswith("STRING") and value[0] == '"':
-            value = "'" + value + "'"  # as the OpenPLC Editor writes it: the quotes are the text
-        out.append(f"    {line}{' := ' + value if value else ''};")
-    return out
-
-
-_SECTIONS = {
-    "inputVars": "VAR_INPUT",
-    "outputVars": "VAR_OUTPUT",
-    "inOutVars": "VAR_IN_OUT",
-    "localVars": "VAR",
-    "tempVars": "VAR_TEMP",
-    "externalVars": "VAR_EXTERNAL",
-    "globalVars": "VAR_GLOBAL",
-}
-
-
-def _var_blocks(parent) -> list[str]:
-    out = []
-    for section in _kids(parent):
-        keyword = _SECTIONS.get(_local(section.tag))
-        if keyword is None:
-            continue
-        qualifiers = [q for q in ("constant", "retain", "persistent") if section.get(q) == "true"]
-        out.append(" ".join([keyword, *(q.upper() for q in qualifiers)]))
-        out += _variables(section)
-        out.append("END_VAR")
-    return out
-
-
-def _st_body(body) -> str:
-    kids = _kids(body)
-    lang = _local(kids[0].tag) if kids else ""
-    if lang != "ST":
-        raise Unreadable(f"{lang or 'empty'} body")
-    xhtml = next(iter(kids[0]), None)
-    text = "".join(xhtml.itertext()) if xhtml is not None else (kids[0].text or "")
-    return text
-
-
-def _data_type(dt) -> list[str]:
-    name = dt.get("name")
-    base = next(c for c in dt if _local(c.tag) == "baseType")
-    init = next((c for c in dt if _local(c.tag) == "initialValue"), None)
-    value = f" := {_value(init)}" if init is not None and _value(init) else ""
-    kind = _kids(base)[0]
-    k = _local(kind.tag)
-    if k == "struct":
-        lines = [f"  {name} : STRUCT"]
-        lines += ["  " + v for v in _variables(kind)]
-        return [*lines, "  END_STRUCT;"]
-    if k == "enum":
-        values = next(c for c in kind if _local(c.tag) == "values")
-        names = ", ".join(v.get("name") for v in values)
-        return [f"  {name} : ({names}){value};"]
-    return [f"  {name} : {_type(base)}{value};"]
-
-
-def plcopen_to_st(path: Path) -> str:
-    """The ST text of a PLCopen XML project whose bodies are all ST (Unreadable otherwise)."""
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as e:
-        raise Unreadable(f"XML: {e}") from None
-    if _local(root.tag) != "project":
-        raise Unreadable("not a PLCopen project")
-    out: list[str] = []
-    types = root.find("p:types", NS)
-    if types is None:
-        raise Unreadable("no <types>")
-    dts = types.find("p:dataTypes", NS)
-    if dts is not None and len(dts):
-        out.append("TYPE")
-        for dt in dts:
-            out += _data_type(dt)
-        out.append("END_TYPE")
-    pous = types.find("p:pous", NS)
-    for pou in pous if pous is not None else ():
-        kind = pou.get("pouType")
-        keyword = {"function": "FUNCTION", "functionBlock": "FUNCTION_BLOCK", "program": "PROGRAM"}[kind]
-        head = f"{keyword} {pou.get('name')}"
-        interface = pou.find("p:interface", NS)
-        if kind == "function":
-            ret = interface.find("p:returnType", NS) if interface is not None else None
-            if ret is None:
-                raise Unreadable("function without a return type")
-            head += f" : {_type(ret)}"
-        out.append(head)
-        if interface is not None:
-            out += _var_blocks(interface)
-        body = pou.find("p:body", NS)
-        if body is None:
-            raise Unreadable("POU without a body")
-        actions = pou.find("p:actions", NS)
-        if actions is not None and len(actions):
-            raise Unreadable("actions")
-        out.append(_st_body(body))
-        out.append(f"END_{keyword}")
-        out.append("")
-    for conf in root.iterfind("p:instances/p:configurations/p:configuration", NS):
-        out.append(f"CONFIGURATION {conf.get('name')}")
-        out += _var_blocks(conf)
-        for res in conf.iterfind("p:resource", NS):
-            out.append(f"  RESOURCE {res.get('name')} ON PLC")
-            out += _var_blocks(res)
-            for task in res.iterfind("p:task", NS):
-                opts = []
-                if task.get("interval"):
-                    opts.append(f"INTERVAL := {task.get('interval')}")
-                if task.get("single"):
-                    opts.append(f"SINGLE := {task.get('single')}")
-                opts.append(f"PRIORITY := {task.get('priority', '0')}")
-                out.append(f"    TASK {task.get('name')}({', '.join(opts)});")
-                for inst in task.iterfind("p:pouInstance", NS):
-                    out.append(f"    PROGRAM {inst.get('name')} WITH {task.get('name')} : {inst.get('typeName')};")
-            for inst in res.iterfind("p:pouInstance", NS):
-                out.append(f"    PROGRAM {inst.get('name')} : {inst.get('typeName')};")
-            out.append("  END_RESOURCE")
-        out.append("END_CONFIGURATION")
-    return "\n".join(out) + "\n"
-
-
 # ---------------------------------------------------------------- checking one file
 
 
@@ -521,7 +318,8 @@ def check_file(paths: list[str], dialect: str | None, timeout: int, scans: int =
         others.setdefault((d.code, normalise(d.message)), f"{d.span.file}:{d.span.line}")
     status = "internal" if internal else "refused"
     listed = [[c, m, w] for (c, m), w in others.items()]
-    return Outcome(status, first.code, normalise(first.message), where, first.message, listed)
+    languages = sorted({d.datum("language") for d in errors if d.code == "E050"})
+    return Outcome(status, first.code, normalise(first.message), where, first.message, listed, languages=languages)
 
 
 def _check_job(job: tuple[list[str], list[str | None], int, int]) -> dict[str, dict]:
@@ -532,8 +330,8 @@ def _check_job(job: tuple[list[str], list[str | None], int, int]) -> dict[str, d
 # ---------------------------------------------------------------- the sweep
 
 
-def collect(corpora: Path, out: Path, only: str | None, projects: bool = False) -> list[FileResult]:
-    """Every file of every source, its outcomes still to fill (ST from XML written under `out`)."""
+def collect(corpora: Path, only: str | None, projects: bool = False) -> list[FileResult]:
+    """Every file of every source, its outcomes still to fill."""
     files: list[FileResult] = []
     seen: dict[str, str] = {}
     for src in SOURCES:
@@ -582,23 +380,12 @@ def collect(corpora: Path, out: Path, only: str | None, projects: bool = False) 
             files.append(FileResult(src.name, rel, "st", str(unit[0]), [str(p) for p in unit]))
         for p in matches(src.xml):
             rel = str(p.relative_to(corpora))
-            try:
-                text = plcopen_to_st(p)
-            except Unreadable as e:
-                files.append(FileResult(src.name, rel, "skipped-xml", str(e)))
-                continue
-            except (StopIteration, KeyError, AttributeError, TypeError) as e:
-                files.append(FileResult(src.name, rel, "skipped-xml", f"not read by this sweep ({type(e).__name__})"))
-                continue
-            digest = hashlib.sha1(text.encode()).hexdigest()
+            digest = hashlib.sha1(p.read_bytes()).hexdigest()
             if digest in seen:
-                files.append(FileResult(src.name, rel, "duplicate", f"same ST as {seen[digest]}"))
+                files.append(FileResult(src.name, rel, "duplicate", f"same text as {seen[digest]}"))
                 continue
             seen[digest] = rel
-            target = out / "extracted" / (rel + ".st")
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_text(text)
-            files.append(FileResult(src.name, rel, "xml", str(target), [str(target)]))
+            files.append(FileResult(src.name, rel, "xml", str(p), [str(p)]))
         found = matches(src.project)
         if projects and found:
             rel = str(found[0].relative_to(corpora)) + f" (+{len(found) - 1} files)"
@@ -624,6 +411,10 @@ def run(files: list[FileResult], timeout: int, jobs: int, scans: int = 0) -> Non
                 f.outcomes = {k: Outcome(**v) for k, v in ans.items()}
                 _progress(i, len(todo), started)
     print(file=sys.stderr)
+    for f in todo:
+        languages = sorted({lang for o in f.outcomes.values() for lang in o.languages})
+        if f.kind == "xml" and languages:  # a body st does not read: skipped, whatever else it has
+            f.kind, f.note, f.outcomes = "skipped-xml", " and ".join(languages) + " body", {}
 
 
 def _progress(i: int, n: int, started: float) -> None:
@@ -633,16 +424,12 @@ def _progress(i: int, n: int, started: float) -> None:
 # ---------------------------------------------------------------- the report
 
 
-def _shown(where: str, corpora: Path, out: Path) -> str:
-    """file:line relative to the corpora (ST extracted from XML: the XML's path, "as ST")."""
-    extracted = str(out / "extracted") + "/"
-    if where.startswith(extracted):
-        path, _, line = where[len(extracted) :].rpartition(":")
-        return f"{path.removesuffix('.st')} (as ST):{line}"
+def _shown(where: str, corpora: Path) -> str:
+    """file:line relative to the corpora."""
     return where.removeprefix(str(corpora) + "/")
 
 
-def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
+def report(files: list[FileResult], top: int, corpora: Path) -> str:
     lines = ["# st on real-world ST code", ""]
     lines += [
         "Each unit (a file, or the files its own build compiles together) compiled alone; *default* is no",
@@ -700,7 +487,7 @@ def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
             if key == "default":
                 r[1] += 1
             if not r[2]:
-                r[2] = _shown(o.where, corpora, out)
+                r[2] = _shown(o.where, corpora)
     ranked = sorted(reasons.items(), key=lambda kv: (-max(kv[1][0], kv[1][1]), kv[0]))
     for i, ((code, msg), (n_preset, n_default, example)) in enumerate(ranked[:top], 1):
         msg = msg.replace("|", "\\|")[:140]
@@ -713,7 +500,7 @@ def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
         for code, msg, where in o.others if o else ():
             r = every[(code, msg)]
             r[0] += 1
-            r[1] = r[1] or _shown(where, corpora, out)
+            r[1] = r[1] or _shown(where, corpora)
             r[2][verdict(code, msg, f"{f.path} {where}")] += 1
     ranked_all = sorted(every.items(), key=lambda kv: (-kv[1][0], kv[0]))
     for i, ((code, msg), (n, example, verdicts)) in enumerate(ranked_all[:top], 1):
@@ -731,7 +518,7 @@ def report(files: list[FileResult], top: int, corpora: Path, out: Path) -> str:
         lines += [f"- `{f.path}`: {r.replace(str(corpora) + '/', '')}" for f, r in runs if r != "ok"]
     skipped = collections.Counter(f.note for f in files if f.kind == "skipped-xml")
     if skipped:
-        lines += ["", "## PLCopen XML not turned into ST by this sweep", ""]
+        lines += ["", "## PLCopen XML skipped (a body in a language st does not read, E050)", ""]
         lines += [f"- {n} × {why}" for why, n in skipped.most_common()]
     return "\n".join(lines) + "\n"
 
@@ -756,9 +543,9 @@ def main(argv: list[str] | None = None) -> int:
         global SOURCES
         SOURCES = tuple(replace(s, dialect=args.preset) for s in SOURCES)
     args.out.mkdir(parents=True, exist_ok=True)
-    files = collect(args.corpora.resolve(), args.out, args.only, args.projects)
+    files = collect(args.corpora.resolve(), args.only, args.projects)
     run(files, args.timeout, args.jobs, args.scans)
-    text = report(files, args.top, args.corpora.resolve(), args.out)
+    text = report(files, args.top, args.corpora.resolve())
     (args.out / "conformance.md").write_text(text)
     (args.out / "results.json").write_text(json.dumps([asdict(f) for f in files], indent=1))
     print(text)

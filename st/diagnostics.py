@@ -173,6 +173,23 @@ class Code(str, Enum):
             "used inside an expression; call it as a statement."
         ),
     )
+    XML_LANGUAGE = (
+        "E050",
+        (
+            "A POU, action or transition of a PLCopen XML project (plc.xml) is written in FBD, LD or IL, or an "
+            "SFC transition's condition is a graphical network: st reads ST and SFC bodies. The POU keeps its "
+            "declarations, its body is left empty, and the file's other POUs are still checked."
+        ),
+    )
+    XML_FILE = (
+        "E051",
+        (
+            "An XML file st cannot read as a PLCopen XML project: malformed XML (at the XML parser's position), "
+            "a root element other than <project> of the TC6 namespace (http://www.plcopen.org/xml/tc6_0201 or "
+            "tc6_0200), or a part of the project st does not read (an SFC macro step, a type or value element "
+            "it does not know, an SFC connection to nothing)."
+        ),
+    )
     INTERNAL = "E099", ("An internal compiler error (a bug in st): please report it with the source file.")
     IGNORED_PRAGMA = "W001", ("A pragma { ... } is ignored.")
     UNUSED_VARIABLE = "W002", ("A variable is declared but never used.")

@@ -30,6 +30,9 @@ class SourceFile:
     path: str
     text: str
     _line_starts: list[int] = field(default_factory=list, repr=False)
+    # diagnostics found while reading the file (a PLCopen XML body in FBD, malformed XML), reported
+    # with the compile's (st.diagnostics.Diagnostic objects; this module cannot name the class)
+    load_diagnostics: list = field(default_factory=list, repr=False)
 
     def _starts(self) -> list[int]:
         if not self._line_starts:

@@ -19,7 +19,7 @@ from ..model.compiled import CompiledProgram
 from ..model.program import Project
 from ..source import SourceFile, Span
 from . import ast as A
-from . import cache, twincat
+from . import cache, plcopen_xml, twincat
 from .artefact import artefact, libraries_only
 from .build import EDGE_NAMES, AstBuilder
 from .check import Checker
@@ -119,7 +119,8 @@ def _compile_sources(
     for lib in libraries:
         helpers.update(lib.helpers)
     key = cache.cache_key(sources, libraries, options)
-    cdir = cache.cache_dir() if options.use_cache and not options.coverage else None
+    cached = options.use_cache and not options.coverage and not any(s.load_diagnostics for s in sources)
+    cdir = cache.cache_dir() if cached else None
     if cdir is not None:
         hit = cache.load(cdir, key, sources=all_sources, helpers=helpers)
         if hit is not None:
@@ -211,6 +212,8 @@ def _parse_all(
     nested = options.dialect.nested_comments if options.dialect is not None else None
     edge_names = options.dialect is None or options.dialect.vendor_extensions
     for s in sources:
+        for d in s.load_diagnostics:
+            sink.add(d)
         u = parse_source(s, sink, nested, edge_names)
         if u is not None:
             units.append(u)
@@ -263,8 +266,10 @@ def _read_text(p: str) -> str:
 
 
 def load_files(paths: list[str]) -> list[SourceFile]:
-    """The sources: .st files as they are; TwinCAT's .TcPOU/.TcDUT/.TcGVL/.TcIO as their ST laid out
-    at the XML's lines (diagnostics point into the TwinCAT file); a .plcproj as the files it compiles."""
+    """The sources: .st files as they are; TwinCAT's .TcPOU/.TcDUT/.TcGVL/.TcIO and PLCopen XML
+    projects (plc.xml) as their ST laid out at the XML's lines (diagnostics point into the XML file,
+    and the problems of reading it are the source's `load_diagnostics`); a .plcproj as the files it
+    compiles."""
     out = []
     for p in paths:
         if str(p).lower().endswith(twincat.PROJECT_SUFFIX):
@@ -273,7 +278,10 @@ def load_files(paths: list[str]) -> list[SourceFile]:
             out.append(SourceFile(str(p), twincat.project_namespaces(xml)))  # only pragmas
             continue
         text = _read_text(str(p))
+        problems: list[Diagnostic] = []
         if twincat.is_twincat(str(p)):
             text = twincat.twincat_source(text)
-        out.append(SourceFile(str(p), text))
+        elif plcopen_xml.handles(str(p), text):
+            text, problems = plcopen_xml.plcopen_source(text, str(p))
+        out.append(SourceFile(str(p), text, load_diagnostics=problems))
     return out

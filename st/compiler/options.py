@@ -39,7 +39,8 @@ class CompileOptions:
         """The options of a compile of `sources`. The preset is `dialect` (an unknown name is a
         ValueError) or else the one a `{dialect '…'}` pragma names (an unknown one is a CompileError,
         E045), or else twincat when every source is a TwinCAT file; a preset decides the time unit and
-        the F_TRIG behaviour."""
+        the F_TRIG behaviour. (A PLCopen XML file names the preset of the tool that wrote it with a
+        pragma in its laid-out ST: plcopen_xml.py.)"""
         sources = list(sources)
         chosen = preset(dialect) if dialect is not None else pragma_preset(sources)
         if chosen is None and sources and all(is_twincat(s.path) for s in sources):

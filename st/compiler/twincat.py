@@ -15,6 +15,8 @@ import os
 import re
 from pathlib import PureWindowsPath
 
+from .layout import Layout
+
 SUFFIXES = (".tcpou", ".tcdut", ".tcgvl", ".tcio")
 PROJECT_SUFFIX = ".plcproj"
 
@@ -54,52 +56,9 @@ def project_files(project_path: str, xml: str) -> list[str]:
     return out
 
 
-class _Layout:
-    """The output: the XML's lines, blank, with code and keywords placed at columns."""
-
-    def __init__(self, xml: str):
-        self.starts = [0]
-        for i, c in enumerate(xml):
-            if c == "\n":
-                self.starts.append(i + 1)
-        self.pieces: list[list[tuple[int, str]]] = [[] for _ in self.starts]
-
-    def where(self, offset: int) -> tuple[int, int]:
-        lo, hi = 0, len(self.starts) - 1
-        while lo < hi:
-            mid = (lo + hi + 1) // 2
-            if self.starts[mid] <= offset:
-                lo = mid
-            else:
-                hi = mid - 1
-        return lo, offset - self.starts[lo]
-
-    def code(self, offset: int, text: str) -> None:
-        """CDATA text starting at `offset` of the XML, kept at its lines and columns."""
-        line, col = self.where(offset)
-        for k, part in enumerate(text.split("\n")):
-            if part:
-                self.pieces[line + k].append((col if k == 0 else 0, part))
-
-    def keyword(self, offset: int, text: str) -> None:
-        line, col = self.where(offset)
-        self.pieces[line].append((col, text))
-
-    def text(self) -> str:
-        lines = []
-        for pieces in self.pieces:
-            out = ""
-            for col, part in sorted(pieces, key=lambda p: p[0]):
-                if col < len(out) + (1 if out else 0):
-                    col = len(out) + (1 if out else 0)  # a keyword pushed right of what precedes it
-                out += " " * (col - len(out)) + part
-            lines.append(out)
-        return "\n".join(lines)
-
-
 def twincat_source(xml: str) -> str:
     """The ST of one TwinCAT file, laid out at the XML's lines and columns (see the module doc)."""
-    out = _Layout(xml)
+    out = Layout(xml)
     stack: list[str] = []
     pou_end = ""  # END_FUNCTION_BLOCK etc. of the file's POU, until it is written
     itf = False
