@@ -761,3 +761,41 @@ def test_a_named_transition_used_twice_is_copied_and_an_unknown_one_is_an_error(
     assert [(d.code, d.span.line, d.message) for d in result.diagnostics] == [
         ("E051", line_of(unknown, '<transition localId="4">'), "transition Went is not a transition of P")
     ]
+
+
+def test_an_st_body_calls_the_pous_own_actions(tmp_path):
+    pou = """\
+      <pou name="main" pouType="program">
+        <interface><localVars><variable name="n"><type><INT/></type></variable></localVars></interface>
+        <actions>
+          <action name="Bump"><body><ST><xhtml:p><![CDATA[n := n + 10;]]></xhtml:p></ST></body></action>
+        </actions>
+        <body><ST><xhtml:p><![CDATA[Bump(); n := n + 1;]]></xhtml:p></ST></body>
+      </pou>
+"""
+    plc = PLC.from_files(write(tmp_path, project(pou)), use_cache=False)
+    plc.scan(2)
+    assert plc["main.n"] == 22
+
+
+def test_tc6_xml_1_0_names_a_type_and_a_clock_interval(tmp_path):
+    xml = project(
+        '      <pou name="P" pouType="program">\n'
+        '        <interface><localVars><variable name="n"><type><INT/></type></variable></localVars></interface>\n'
+        "        <body><ST><xhtml:p><![CDATA[n := n + 1;]]></xhtml:p></ST></body>\n"
+        "      </pou>\n",
+        configs='      <configuration name="C"><resource name="R">\n'
+        '        <task name="T" interval="00:00:00.050" priority="0"/>\n'
+        '        <pouInstance name="inst" type="P"/>\n'
+        "      </resource></configuration>\n",
+    ).replace("tc6_0201", "tc6.xsd")
+    lines = _lines(xml)
+    assert lines[-4:] == [
+        "CONFIGURATION C RESOURCE R ON PLC",
+        "TASK T(INTERVAL := T#50ms, PRIORITY := 0);",
+        "PROGRAM inst : P;",
+        "END_RESOURCE END_CONFIGURATION",
+    ]
+    plc = PLC.from_files(write(tmp_path, xml), use_cache=False)
+    plc.scan(3)
+    assert (plc.tasks[0].interval, plc["inst.n"]) == (50_000_000, 3)
