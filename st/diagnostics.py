@@ -224,6 +224,23 @@ class Code(str, Enum):
             "skipped: st does not run C. Write what it does in ST to have it run."
         ),
     )
+    OWN_MOTION_LIBRARY = (
+        "W010",
+        (
+            "The project declares a type (or a block) named like one of the types of st's PLCopen motion "
+            "library (AXIS_REF, MC_DIRECTION, ...): it brings its own motion library, so st's is left out of "
+            "the compilation and the project's own blocks are used. A project block named like a library "
+            "block (MC_Power) always keeps its own body."
+        ),
+    )
+    ADDRESS_PART_IGNORED = (
+        "W011",
+        (
+            "A byte, word, double or long address with a '.' (%IW0.0): OpenPLC's runtime binds it by its first "
+            "number (%IW0) and ignores the rest, and so do the openplc preset and the default; iec, codesys and "
+            "twincat refuse it (E004)."
+        ),
+    )
 
 
 class Severity(str, Enum):

@@ -10,7 +10,7 @@ import pytest
 from st import PLC
 from st.api import compile_text
 
-from helpers import errors, fault, run
+from helpers import diagnostics, errors, fault, run
 
 WRITES_OWN_INPUT = """
 FUNCTION_BLOCK Cnt
@@ -337,6 +337,33 @@ END_PROGRAM
 def test_this_dot_member_as_iec_writes_it(dialect):
     plc = run(THIS_DOT, 3, dialect)
     assert (plc["main.f.x"], plc["main.n"]) == (3, 3)
+
+
+THIS_SUPER_CALLS = """FUNCTION_BLOCK B
+VAR x : INT; END_VAR
+METHOD Get : INT
+Get := x + 100;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK D EXTENDS B
+METHOD Get : INT
+Get := x + 200;
+END_METHOD
+METHOD Both : INT
+Both := THIS.Get() * 100 + SUPER.Get();
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR d : D; n : DINT; END_VAR
+n := d.Both();
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "iec"])
+def test_this_dot_and_super_dot_method_calls_as_iec_writes_them(dialect):
+    plc = run(THIS_SUPER_CALLS, 1, dialect)
+    assert plc["main.n"] == 200 * 100 + 100  # THIS.Get() is D's, SUPER.Get() is B's
 
 
 def test_codesys_wants_this_dereferenced_and_says_how():
@@ -722,14 +749,47 @@ def test_a_union_member_must_have_bytes_and_no_initial_value():
     )
     out = errors(src, "codesys")
     assert (
-        "t.st:3:7: error[E012]: a UNION member must be a number, a bit string, BOOL, an array of one or a STRING, not ST_A"
-        in out
+        "t.st:3:7: error[E012]: a UNION member must be an elementary value or a one-dimensional array of numbers, "
+        "not ST_A" in out
     )
-    assert (
-        "t.st:4:7: error[E012]: a UNION member must be a number, a bit string, BOOL, an array of one or a STRING, not TIME"
-        in out
-    )
+    assert "t.st:4:" not in out  # a TIME has bytes (4, in ms)
     assert "t.st:5:14: error[E013]: a UNION member cannot have an initial value (they share their bytes)" in out
+
+
+TIME_UNION = """TYPE U_Any : UNION
+  t : TIME;
+  lt : LTIME;
+  d : DATE;
+  tod : TOD;
+  ws : WSTRING(7);
+  raw : ARRAY[0..15] OF BYTE;
+END_UNION END_TYPE
+PROGRAM main
+VAR u : U_Any; t : TIME; d : DATE; ms, days : UDINT; lt : LTIME; w : WSTRING; b0, b1 : BYTE; n : DINT; END_VAR
+u.t := T#1s500ms;
+ms := BYTE_TO_UDINT(u.raw[0]) + BYTE_TO_UDINT(u.raw[1]) * 256;
+t := u.t;
+u.d := D#1970-01-02;
+days := (BYTE_TO_UDINT(u.raw[0]) + BYTE_TO_UDINT(u.raw[1]) * 256 + BYTE_TO_UDINT(u.raw[2]) * 65536) / 86400;
+d := u.d;
+u.tod := TOD#00:00:02;
+t := t + UDINT_TO_TIME(BYTE_TO_UDINT(u.raw[0]) + BYTE_TO_UDINT(u.raw[1]) * 256);
+u.lt := LTIME#3us;
+lt := u.lt;
+u.ws := "Hé";
+w := u.ws;
+b0 := u.raw[0]; b1 := u.raw[2];
+n := SIZEOF(U_Any);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "twincat"])
+def test_union_members_of_times_dates_and_wstrings_share_bytes_as_twincat_stores_them(dialect):
+    plc = run(TIME_UNION, 1, dialect)
+    assert (plc["main.ms"], plc["main.days"], plc["main.d"]) == (1500, 1, 86_400_000_000_000)  # TIME in ms, DATE in s
+    assert (plc["main.t"], plc["main.lt"]) == (1_500_000_000 + 2_000_000_000, 3000)  # TOD in ms, LTIME in ns
+    assert (plc["main.w"], plc["main.b0"], plc["main.b1"], plc["main.n"]) == ("Hé", ord("H"), 0xE9, 16)  # UTF-16
 
 
 def test_a_union_is_a_vendor_extension():
@@ -756,3 +816,172 @@ def test_a_call_skipped_by_en_leaves_the_instance_s_eno_false():
     )
     plc = run(src, 1)
     assert (plc["main.ran"], plc["main.skipped"]) == (True, False)
+
+
+OWN_MC_POWER = """FUNCTION_BLOCK MC_Power
+VAR_INPUT Enable : BOOL; END_VAR
+VAR_OUTPUT Status : BOOL; n : INT; END_VAR
+n := n + 1;
+Status := Enable;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR p : MC_Power; END_VAR
+p(Enable := TRUE);
+END_PROGRAM
+"""
+
+
+def test_a_project_block_named_like_a_plcopen_block_runs_its_own_body():
+    assert diagnostics(OWN_MC_POWER) == [("W004", 1, 16)]
+    plc = run(OWN_MC_POWER, 2)
+    assert (plc["main.p.n"], plc["main.p.Status"]) == (2, True)  # not st's MC_Power (no axis here)
+
+
+OWN_MOTION_LIBRARY = """TYPE MC_DIRECTION : (mcPositiveDirection := 1, mcNegativeDirection := -1); END_TYPE
+TYPE AXIS_REF : STRUCT pos : LREAL; END_STRUCT END_TYPE
+FUNCTION_BLOCK MC_MoveVelocity
+VAR_IN_OUT Axis : AXIS_REF; END_VAR
+VAR_INPUT Velocity : LREAL; Direction : MC_DIRECTION; END_VAR
+IF Direction = mcNegativeDirection THEN
+Axis.pos := Axis.pos - Velocity;
+ELSE
+Axis.pos := Axis.pos + Velocity;
+END_IF;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR ax : AXIS_REF; mv : MC_MoveVelocity; END_VAR
+mv(Axis := ax, Velocity := 2.5, Direction := mcNegativeDirection);
+END_PROGRAM
+"""
+
+
+def test_a_project_with_its_own_motion_types_leaves_st_plcopen_library_out():
+    result = compile_text(OWN_MOTION_LIBRARY, "t.st", use_cache=False)
+    assert [(d.code, d.span.line, d.span.col, d.message) for d in result.diagnostics] == [
+        (
+            "W010",
+            1,
+            6,
+            "the project declares its own MC_DIRECTION and 1 more of its types: st's plcopen library is left out",
+        )
+    ]
+    plc = PLC(result)
+    plc.scan(3)
+    assert plc["main.ax.pos"] == -7.5
+
+
+SPECIALS = """PROGRAM main
+VAR
+  local AT %ML1024 : LINT;
+  cycles AT %ML1025 : ULINT;
+  utc AT %ML1027 : ULINT;
+  exec_us AT %ML1028 : ULINT;
+  spare AT %ML1030 : ULINT;
+  seen : ULINT;
+END_VAR
+seen := cycles;
+cycles := 0;   (* overwritten before the next scan, as OpenPLC does *)
+spare := spare + 2;
+END_PROGRAM
+CONFIGURATION c RESOURCE r ON PLC
+TASK t(INTERVAL := T#250ms, PRIORITY := 0);
+PROGRAM inst WITH t : main;
+END_RESOURCE END_CONFIGURATION
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "openplc"])
+def test_openplc_special_registers_are_filled_before_each_scan(dialect):
+    plc = run(SPECIALS, 9, dialect)  # ticks at 0, 250 ms, ..., 2 s
+    assert (plc["inst.seen"], plc["inst.local"], plc["inst.utc"]) == (9, 2, 2)  # virtual time: PLC seconds
+    assert (plc["inst.exec_us"], plc["inst.spare"]) == (0, 18)  # no cost on virtual time; %ML1030: memory
+    assert plc.image.get("%ML1025") == 0  # the program's own write, published; the next scan overwrites it
+
+
+def test_special_registers_end_at_ml2047():
+    src = "PROGRAM main\nVAR a AT %ML2047 : ULINT; b AT %ML2048 : ULINT; END_VAR\nEND_PROGRAM\n"
+    assert diagnostics(src) == [("E004", 2, 27)]  # b
+
+
+WORD_DOT = """PROGRAM main
+VAR
+  t1 AT %IW3.0 : UINT;
+  copy : UINT;
+END_VAR
+copy := t1 + %IW3.7;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "openplc"])
+def test_openplc_reads_a_word_address_with_a_dot_by_its_first_number(dialect):
+    assert diagnostics(WORD_DOT, dialect=dialect) == [("W011", 3, 3), ("W011", 6, 14)]
+    plc = PLC(compile_text(WORD_DOT, "t.st", dialect=dialect, use_cache=False))
+    plc.image.set("%IW3", 1200)
+    plc.scan()
+    assert plc["main.copy"] == 2400
+
+
+@pytest.mark.parametrize("dialect", ["iec", "codesys"])
+def test_other_presets_refuse_a_word_address_with_a_dot(dialect):
+    assert "t.st:3:3: error[E004]: %IW3.0: only bit addresses (X) have a '.'" in errors(WORD_DOT, dialect)
+
+
+NEW_ARRAY = """PROGRAM main
+VAR p, q, z : POINTER TO DINT; n : INT := 4; i : INT; s : DINT; END_VAR
+IF p = 0 THEN
+  p := __NEW(DINT, n);
+  FOR i := 0 TO n - 1 DO p[i] := (i + 1) * 10; END_FOR;
+  q := p + 2 * SIZEOF(s);
+  z := __NEW(DINT, 0);
+END_IF;
+s := q^ + p[3];
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys"])
+def test_new_with_a_count_makes_that_many_values_behind_one_pointer(dialect):
+    plc = run(NEW_ARRAY, 2, dialect)
+    assert (plc["main.s"], plc["main.z"]) == (30 + 40, None)  # a count below 1: NULL
+
+
+def test_new_with_a_count_cannot_move_past_its_values():
+    _plc, info = fault(NEW_ARRAY.replace("p[3]", "p[4]"))
+    assert (info.kind, info.line) == ("INDEX", 9)
+
+
+def test_new_of_a_function_block_takes_no_count():
+    src = "FUNCTION_BLOCK F\nEND_FUNCTION_BLOCK\nPROGRAM main\nVAR p : POINTER TO F; END_VAR\np := __NEW(F, 2);\nEND_PROGRAM\n"
+    assert "t.st:5:15: error[E017]: __NEW of a FUNCTION_BLOCK makes one instance; 'F' takes no count" in errors(src)
+
+
+SHADOWED_ENUM = """TYPE State : (IDLE, RUNNING, DONE); END_TYPE
+FUNCTION_BLOCK Machine
+VAR_OUTPUT state : State := State.RUNNING; END_VAR
+IF state = State.RUNNING THEN
+  state := State.DONE;
+END_IF;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR m : Machine; before : State; END_VAR
+before := m.state;
+m();
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys"])
+def test_a_variable_named_like_its_enumeration_type_still_reaches_the_type_values(dialect):
+    plc = run(SHADOWED_ENUM, 1, dialect)
+    assert (plc["main.before"], plc["main.m.state"]) == ("RUNNING", "DONE")
+
+
+def test_time_converts_to_and_from_dates_counted_from_1970():
+    src = (
+        "PROGRAM main\nVAR t : TIME := T#1d2h; dt1 : DT; d : DATE; back : TIME; END_VAR\n"
+        "dt1 := TO_DT(t); d := TIME_TO_DATE(t); back := DT_TO_TIME(DT#1970-01-01-00:01:00);\nEND_PROGRAM\n"
+    )
+    plc = run(src, 1)
+    day, hour = 86_400_000_000_000, 3_600_000_000_000
+    assert (plc["main.dt1"], plc["main.d"], plc["main.back"]) == (day + 2 * hour, day, 60_000_000_000)

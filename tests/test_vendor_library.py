@@ -78,10 +78,49 @@ def test_memcpy_copies_a_structure_and_memset_memcmp_work_on_arrays():
     assert plc["main.u"] == [1, 2, 0, 0]
 
 
-def test_memcpy_between_different_types_is_a_clear_fault():
-    _, f = fault(program("MEMCPY(ADR(d), ADR(i), 2);", "d : DINT; i : INT;"), "twincat")
-    assert (f.kind, f.line) == ("MEMORY", 6)
-    assert f.message == "MEMCPY between variables of different types is not supported by st"
+BYTE_IMAGES = """
+d := 16#11223344; i := -2;
+MEMCPY(ADR(d), ADR(i), 2);                     (* the INT's two bytes over the DINT's low ones *)
+t := T#1s500ms;
+MEMCPY(ADR(dw), ADR(t), SIZEOF(t));            (* a TIME is its milliseconds *)
+s := 'PLC';
+MEMCPY(ADR(raw), ADR(s), 4);                   (* three characters and the NUL *)
+raw[0] := 16#70;
+MEMCPY(ADR(s2), ADR(raw), 4);
+MEMSET(ADR(w), 16#FF, 1);                      (* part of a value *)
+pt.x := 7; pt.y := -1;
+MEMCPY(ADR(blob), ADR(pt), SIZEOF(pt));        (* a structure: x at 0, y at 4 *)
+MEMSET(ADR(pt2), 16#01, SIZEOF(pt2));
+cmp := MEMCMP(ADR(d), ADR(dw), 1);             (* 16#FE against 16#DC *)
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_memory_functions_between_types_work_on_byte_images(dialect):
+    decls = (
+        "d : DINT; i : INT; t : TIME; dw : DWORD; s, s2 : STRING(10); raw : ARRAY[0..3] OF BYTE; w : WORD;\n"
+        "pt, pt2 : ST_Pt; blob : ARRAY[0..7] OF BYTE; cmp : DINT;"
+    )
+    src = "TYPE ST_Pt : STRUCT x : INT; y : DINT; END_STRUCT END_TYPE\n" + program(BYTE_IMAGES, decls)
+    plc = run(src, 1, dialect)
+    assert (plc["main.d"], plc["main.dw"]) == (0x1122FFFE, 1500)
+    assert (plc["main.raw"], plc["main.s2"], plc["main.w"]) == ([0x70, ord("L"), ord("C"), 0], "pLC", 0xFF)
+    assert plc["main.blob"] == [7, 0, 0, 0, 0xFF, 0xFF, 0xFF, 0xFF]  # x, 2 bytes of padding, y
+    assert (plc["main.pt2"], plc["main.cmp"]) == ({"x": 0x0101, "y": 0x01010101}, 1)
+
+
+def test_a_byte_pointer_walks_over_a_string_and_writes_into_it():
+    src = program(
+        "pb := ADR(s); pb := pb + 1; b := pb^; pb^ := 16#41;",
+        "s : STRING(5) := 'xyz'; pb : POINTER TO BYTE; b : BYTE;",
+    )
+    plc = run(src, 1, "twincat")
+    assert (plc["main.b"], plc["main.s"]) == (ord("y"), "xAz")
+
+
+def test_memcpy_beyond_the_source_is_a_fault():
+    _, f = fault(program("MEMCPY(ADR(d), ADR(i), 4);", "d : DINT; i : INT;"), "twincat")
+    assert (f.kind, f.line, f.message) == ("MEMORY", 6, "MEMCPY of 4 bytes beyond a variable of 2 bytes")
 
 
 def test_memcpy_beyond_the_variable_is_a_fault():

@@ -126,8 +126,8 @@ def _compile_sources(
         if hit is not None:
             return hit
     sink = DiagnosticSink()
-    units, lib_paths = _parse_all(sources, lib_sources, options, sink)
-    checker = Checker(sink, libraries, options)
+    units, lib_paths, in_use = _parse_all(sources, libraries, options, sink)
+    checker = Checker(sink, in_use, options)
     modules: list[tuple[str, CodeType]] = []
     test_modules: list[tuple[str, CodeType]] = []
     pysrc: dict[str, str] = {}
@@ -200,15 +200,16 @@ def _compile_sources(
 
 
 def _parse_all(
-    sources: list[SourceFile], lib_sources: list[SourceFile], options: CompileOptions, sink: DiagnosticSink
-) -> tuple[list[A.Unit], set[str]]:
-    """Parse the libraries' sources and the user's; (units, the library paths)."""
-    units = []
-    lib_paths = {src.path for src in lib_sources}
-    for src in lib_sources:
-        u = parse_source(src, sink)
-        if u is not None:
-            units.append(u)
+    sources: list[SourceFile], libraries: list[Library], options: CompileOptions, sink: DiagnosticSink
+) -> tuple[list[A.Unit], set[str], list[Library]]:
+    """Parse the libraries' sources and the user's; (units, the library paths, the libraries in use)."""
+    lib_units: list[tuple[Library, A.Unit]] = []
+    for lib in libraries:
+        for path, text in lib.sources:
+            u = parse_source(SourceFile(path, text), sink)
+            if u is not None:
+                lib_units.append((lib, u))
+    units: list[A.Unit] = []
     nested = options.dialect.nested_comments if options.dialect is not None else None
     edge_names = options.dialect is None or options.dialect.vendor_extensions
     for s in sources:
@@ -217,14 +218,58 @@ def _parse_all(
         u = parse_source(s, sink, nested, edge_names)
         if u is not None:
             units.append(u)
+    in_use = _libraries_in_use(libraries, lib_units, units, sink)
+    lib_paths = {path for lib in in_use for path, _ in lib.sources}
+    units = [u for lib, u in lib_units if lib in in_use] + units
     # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat
     known = {"dialect", "gvl", "namespace"}
     if options.dialect is not None and options.dialect.attribute_pragmas:
         known.add("attribute")
+    every_lib_path = {path for lib in libraries for path, _ in lib.sources}
     sink.items = [
-        d for d in sink.items if not (d.code == "W001" and (d.datum("pragma") in known or d.span.file in lib_paths))
+        d
+        for d in sink.items
+        if not (d.code == "W001" and (d.datum("pragma") in known or d.span.file in every_lib_path))
     ]
-    return units, lib_paths
+    return units, lib_paths, in_use
+
+
+def _type_names(units, with_pous: bool = False) -> dict[str, A.TypeDecl | A.POU | A.Interface]:
+    """The TYPEs the units declare by (lower) name, and their POUs and interfaces if asked."""
+    names: dict[str, A.TypeDecl | A.POU | A.Interface] = {}
+    for u in units:
+        for item in u.items:
+            if isinstance(item, A.TypeBlock):
+                names.update((td.name.lower(), td) for td in item.types)
+            elif with_pous and isinstance(item, (A.POU, A.Interface)):
+                names[item.name.lower()] = item
+    return names
+
+
+def _libraries_in_use(
+    libraries: list[Library], lib_units: list[tuple[Library, A.Unit]], units: list[A.Unit], sink: DiagnosticSink
+) -> list[Library]:
+    """The libraries minus those that yield to the project's own types (Library.yields_to_own_types),
+    each left out with a warning at the first of the project's types that made it step aside."""
+    own = _type_names(units, with_pous=True)
+    kept = []
+    for lib in libraries:
+        clash = sorted(
+            (own[k] for k in _type_names(u for owner, u in lib_units if owner is lib) if k in own),
+            key=lambda td: (td.span.file, td.span.line, td.span.col),
+        )
+        if lib.yields_to_own_types and clash:
+            td = clash[0]
+            more = f" and {len(clash) - 1} more of its types" if len(clash) > 1 else ""
+            sink.warning(
+                "W010",
+                td.span,
+                f"the project declares its own {td.name}{more}: st's {lib.name} library is left out",
+                f"the project's own blocks are used; rename {td.name} to use st's {lib.name} blocks",
+            )
+            continue
+        kept.append(lib)
+    return kept
 
 
 def check_sources(
@@ -234,10 +279,9 @@ def check_sources(
     For tools and tests that look at what the compiler works on; `compile_sources` returns the
     AST-free artefact instead."""
     options = options or CompileOptions()
-    lib_sources = [SourceFile(path, text) for lib in libraries for path, text in lib.sources]
     sink = DiagnosticSink()
-    units, lib_paths = _parse_all(sources, lib_sources, options, sink)
-    project = Checker(sink, libraries, options).run(units, lib_paths)
+    units, lib_paths, in_use = _parse_all(sources, libraries, options, sink)
+    project = Checker(sink, in_use, options).run(units, lib_paths)
     return project, sink.sorted()
 
 

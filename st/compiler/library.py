@@ -50,6 +50,10 @@ class Library:
     conversion: Callable | None = None  # name → FuncSig | None (X_TO_Y family)
     version: str = "1"
     namespaces: tuple[str, ...] = ()  # the names code may qualify this library's names with (Tc2_Standard.TON)
+    # left out of a compilation whose own code declares a TYPE of one of its type names: the project
+    # brings its own library of that kind (its own PLCopen motion library: AXIS_REF, MC_DIRECTION, ...)
+    # and the library's blocks, built on its own types, cannot be mixed with it
+    yields_to_own_types: bool = False
 
     def add(self, sig: FuncSig) -> None:
         self.functions[sig.name.upper()] = sig

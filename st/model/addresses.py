@@ -1,5 +1,6 @@
 """Direct addresses (%IX0.0, %QW3, %MD10) and the process image they must fit: OpenPLC v3's
-layout, one table per area (I, Q, M) and size with TABLE_LEN entries (8 × TABLE_LEN bits for X).
+layout, one table per area (I, Q, M) and size with TABLE_LEN entries (8 × TABLE_LEN bits for X);
+%ML has OpenPLC's special function registers after them.
 
 The checker and the runtime both ask `parse_address`, so `st check` refuses exactly the
 addresses `st run` could not bind.
@@ -11,6 +12,10 @@ import re
 
 SIZES = {"X": 1, "B": 8, "W": 16, "D": 32, "L": 64}
 TABLE_LEN = 1024
+# OpenPLC v3's special function registers follow %ML's table: %ML1024 local time, %ML1025 the cycle
+# count, ... (runtime/special_registers.py); the glue generator accepts %ML1024-%ML2047
+SPECIAL_BASE = TABLE_LEN
+SPECIAL_LEN = 1024
 _ADDR = re.compile(r"%([IQM])([XBWDL]?)([0-9]+)(?:\.([0-9]+))?$", re.I)
 
 
@@ -44,7 +49,12 @@ def parse_address(addr: str) -> tuple[str, str, int]:
     else:
         if b is not None:
             raise AddressError(f"{addr}: only bit addresses (X) have a '.'")
-        index, limit = a, TABLE_LEN
+        index, limit = a, TABLE_LEN + (SPECIAL_LEN if (area, size) == ("M", "L") else 0)
     if index >= limit:
         raise AddressError(f"{addr} is outside the process image ({TABLE_LEN} entries per table)")
     return area, size, index
+
+
+def is_special(area: str, size: str, index: int) -> bool:
+    """Is this cell one of OpenPLC's special function registers (%ML1024 and up)?"""
+    return area == "M" and size == "L" and index >= SPECIAL_BASE

@@ -639,6 +639,63 @@ _BYTE_FORMATS = {
 }
 
 
+# the unit a time or date is stored in, in its byte image (ns per unit): TIME/TOD in ms, DATE/DT in s,
+# the long variants in ns, as TwinCAT and CODESYS store them
+_TIME_UNIT = {"time": 1_000_000, "tod": 1_000_000, "date": 1_000_000_000, "dt": 1_000_000_000}
+
+
+def byte_layout(t: Type) -> tuple[Any, ...] | None:
+    """The spec of the byte image of a value of type t (runtime/byteimage.py), or None for what has
+    no bytes a program may read (references, pointers, instances, interfaces)."""
+    u = unalias(t)
+    if isinstance(u, SubrangeType):
+        u = u.base
+    if isinstance(u, EnumType):
+        u = u.base if getattr(u, "base", None) is not None else INT
+    if isinstance(u, StringType):
+        return ("s", u.length, u.wide)
+    if isinstance(u, ArrayType):
+        elem = byte_layout(u.element)
+        return None if elem is None else ("a", u.size, elem)
+    if isinstance(u, StructType):
+        if u.kind == "union":
+            return ("u", size_of(u)[0])
+        members = []
+        off = 0
+        for m in u.members.values():
+            ms = byte_layout(m.type)
+            if ms is None:
+                return None
+            n, a = size_of(m.type)
+            off = (off + a - 1) // a * a
+            members.append((m.pyname or m.name, off, ms))
+            off += n
+        return ("r", size_of(u)[0], tuple(members))
+    if not isinstance(u, ElemType):
+        return None
+    if u.kind == "bool":
+        return ("b",)
+    if u.kind == "real":
+        return ("f", u.bits // 8)
+    if u.kind in _TIME_UNIT:
+        return ("i", 8, True, 1) if u.long else ("i", 4, u.kind == "time", _TIME_UNIT[u.kind])
+    if u.kind in ("int", "bit", "char"):
+        return ("i", u.bits // 8, u.signed and u.kind == "int", 1)
+    return None
+
+
+def pointer_view(src: Type, dst: Type) -> tuple[tuple[Any, ...], tuple[Any, ...]] | None:
+    """A POINTER TO `src` seen as a POINTER TO `dst` (CODESYS: `pb : POINTER TO BYTE := ADR(x)`):
+    the image specs (of what is pointed into, of what the pointer reads), or None if st cannot.
+    An array on either side counts by its element; the pointer reads an elementary value."""
+    us, ud = unalias(src), unalias(dst)
+    sl = byte_layout(us.element if isinstance(us, ArrayType) else us)
+    dl = byte_layout(ud.element if isinstance(ud, ArrayType) else ud)
+    if sl is None or dl is None or dl[0] not in ("b", "i", "f", "s"):
+        return None
+    return sl, dl
+
+
 def byte_format(t: Type) -> str | None:
     """The struct format of a value whose bytes a pointer of another type may read and write
     (an elementary number, bit string or BOOL, or an array of one), else None."""

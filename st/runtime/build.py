@@ -14,6 +14,7 @@ import math
 from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
+from ..model.addresses import is_special
 from ..model.compiled import CompiledProgram
 from .access import reapply_forces
 from .faults import PLCStartError, fault_from_exception
@@ -21,6 +22,7 @@ from .namespace import build_namespace
 from .paths import norm_addr, resolve, write
 from .process_image import AddressError, Binding, ProcessImage
 from .scheduler import Policy, Task, make_policy, reset_releases
+from .special_registers import SpecialRegisters
 from .stats import TaskStats
 from .values import ValueError_, from_python
 from .watchdog import Watchdog
@@ -134,6 +136,10 @@ def install(plc: PLC, b: Build, first: bool = False) -> None:
         if prev is not None and not first:
             d.adopt(prev)
         plc.io.insert(0, d)
+    # OpenPLC's special function registers (%ML1024 and up), when the program binds one
+    plc.io = [d for d in plc.io if not isinstance(d, SpecialRegisters)]
+    if any(is_special(bd.area, bd.size, bd.index) for binds in plc.bindings.values() for bd in binds):
+        plc.io.append(SpecialRegisters(plc))
     for t in plc.tasks:
         old = plc._stats.get(t.name)
         t.stats = old if old is not None and old.period == t.interval else TaskStats(t.name, t.interval)

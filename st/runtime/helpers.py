@@ -12,6 +12,7 @@ from array import array
 from collections.abc import Callable
 from typing import Any, NoReturn
 
+from . import byteimage
 from .faults import PLCFault
 
 _F32 = struct.Struct("<f")
@@ -168,16 +169,16 @@ class _Union(_Struct):
 class _UnionArray:
     """An array member of a UNION: its elements read and written in the union's bytes."""
 
-    __slots__ = ("b", "fmt", "n")
+    __slots__ = ("b", "spec", "n", "es")
 
-    def __init__(self, b: bytearray, fmt: str, n: int):
-        self.b, self.fmt, self.n = b, fmt, n
+    def __init__(self, b: bytearray, spec: byteimage.Spec, n: int):
+        self.b, self.spec, self.n, self.es = b, spec, n, byteimage.size(spec)
 
     def __len__(self) -> int:
         return self.n
 
     def _all(self) -> list[Any]:
-        return list(struct.unpack_from(f"<{self.n}{self.fmt}", self.b))
+        return [self[i] for i in range(self.n)]
 
     def __iter__(self) -> Any:
         return iter(self._all())
@@ -187,7 +188,7 @@ class _UnionArray:
             return self._all()[i]
         if not 0 <= i < self.n:
             raise IndexError(i)
-        return struct.unpack_from("<" + self.fmt, self.b, i * struct.calcsize(self.fmt))[0]
+        return byteimage.unpack(self.spec, self.b[i * self.es : (i + 1) * self.es])
 
     def __setitem__(self, i: Any, v: Any) -> None:
         if isinstance(i, slice):
@@ -195,47 +196,41 @@ class _UnionArray:
             vals[i] = v
             if len(vals) != self.n:
                 raise IndexError("an array member of a UNION keeps its length")
-            struct.pack_into(f"<{self.n}{self.fmt}", self.b, 0, *vals)
+            self.b[: self.n * self.es] = b"".join(byteimage.pack(self.spec, x) for x in vals)
             return
         if not 0 <= i < self.n:
             raise IndexError(i)
-        struct.pack_into("<" + self.fmt, self.b, i * struct.calcsize(self.fmt), v)
+        self.b[i * self.es : (i + 1) * self.es] = byteimage.pack(self.spec, v)
 
 
-def _union_member(pyname: str, fmt: str, n: int) -> property:
-    if fmt == "s":  # STRING(n): n characters and a NUL
-
-        def get_s(self: _Union) -> str:
-            return bytes(self._b[:n]).split(b"\0", 1)[0].decode("latin-1")
-
-        def set_s(self: _Union, v: str) -> None:
-            data = v.encode("latin-1", "replace")[:n]
-            self._b[: n + 1] = data + bytes(n + 1 - len(data))
-
-        return property(get_s, set_s)
-    if n:
+def _union_member(spec: byteimage.Spec) -> property:
+    """A member of a UNION: a value of its byte image, or an array over it (byteimage specs)."""
+    if spec[0] == "a":
+        elem, n = spec[2], spec[1]
 
         def get_a(self: _Union) -> _UnionArray:
-            return _UnionArray(self._b, fmt, n)
+            return _UnionArray(self._b, elem, n)
 
         def set_a(self: _Union, v: Any) -> None:
-            struct.pack_into(f"<{n}{fmt}", self._b, 0, *v)
+            data = byteimage.pack(spec, v)
+            self._b[: len(data)] = data
 
         return property(get_a, set_a)
+    width = byteimage.size(spec)
 
     def get(self: _Union) -> Any:
-        return struct.unpack_from("<" + fmt, self._b)[0]
+        return byteimage.unpack(spec, self._b[:width])
 
     def set_(self: _Union, v: Any) -> None:
-        struct.pack_into("<" + fmt, self._b, 0, v)
+        self._b[:width] = byteimage.pack(spec, v)
 
     return property(get, set_)
 
 
-def _union_class(name: str, size: int, members: tuple[tuple[str, str, int], ...]) -> type:
+def _union_class(name: str, size: int, members: tuple[tuple[str, byteimage.Spec], ...]) -> type:
     ns: dict[str, Any] = {"__slots__": (), "_size": size, "_members": tuple(m[0] for m in members)}
-    for pyname, fmt, n in members:
-        ns[pyname] = _union_member(pyname, fmt, n)
+    for pyname, spec in members:
+        ns[pyname] = _union_member(spec)
     return type("_st_" + name, (_Union,), ns)
 
 
@@ -243,6 +238,7 @@ class _FB:
     """Base of generated FUNCTION_BLOCK and PROGRAM classes."""
 
     __slots__: tuple[str, ...] = ()
+    _from_library = False  # set by the generated class: a library's block, not the project's
 
     def _body(self) -> None:  # pragma: no cover - always overridden
         pass

@@ -12,9 +12,9 @@ that says so, never a read of some other variable.
 
 from __future__ import annotations
 
-import struct
 from typing import Any
 
+from . import byteimage
 from .faults import PLCFault
 from .helpers import _ItemRef
 
@@ -49,7 +49,7 @@ def _ptr_diff(p: Any, q: Any, size: int) -> int:
 
 def _position(p: Any, size: int) -> tuple[Any, int]:
     """(what p points into, byte offset in it)."""
-    if isinstance(p, _Bytes):
+    if isinstance(p, ByteView):
         return _position(p.ref, size)[0], p.offset
     if isinstance(p, _ItemRef) and isinstance(p.obj, list):
         return p.obj, p.key * size
@@ -97,13 +97,14 @@ class _PtrView:
         self._at(i).set(v)
 
 
-class _Bytes:
-    """A pointer of one type over the bytes of a number, or of an array of numbers from an element
-    on, of another (`ADR(dw)` as a POINTER TO BYTE): reads unpack, writes pack back."""
+class ByteView:
+    """A pointer of one type over the byte image of a value, or of an array from an element on, of
+    another (`ADR(s)` as a POINTER TO BYTE): reads unpack, writes pack back (runtime/byteimage.py).
+    `src` is the image spec of the value (or element) pointed into, `dst` the pointer's own."""
 
     __slots__ = ("ref", "src", "dst", "offset")
 
-    def __init__(self, ref: Any, src: str, dst: str, offset: int = 0):
+    def __init__(self, ref: Any, src: byteimage.Spec, dst: byteimage.Spec, offset: int = 0):
         self.ref, self.src, self.dst, self.offset = ref, src, dst, offset
 
     def _values(self) -> list[Any]:
@@ -113,27 +114,36 @@ class _Bytes:
         return [r.get()]
 
     def _size(self) -> int:
-        return struct.calcsize("<" + self.src) * len(self._values())
+        return byteimage.size(self.src) * len(self._values())
 
-    def get(self) -> Any:
-        vals = self._values()
-        data = struct.pack(f"<{len(vals)}{self.src}", *vals)
-        if self.offset + struct.calcsize("<" + self.dst) > len(data):
-            raise _fault(f"a pointer read past the {len(data)} byte(s) of the variable it points into")
-        return struct.unpack_from("<" + self.dst, data, self.offset)[0]
+    def image(self) -> bytes:
+        """The bytes of what the pointer points into, from its own position on."""
+        return b"".join(byteimage.pack(self.src, v) for v in self._values())[self.offset :]
 
-    def set(self, v: Any) -> None:
+    def write_image(self, data: bytes) -> None:
+        """Replace the bytes from the pointer's position on by `data` (at most as many as there are)."""
         vals = self._values()
-        data = bytearray(struct.pack(f"<{len(vals)}{self.src}", *vals))
-        if self.offset + struct.calcsize("<" + self.dst) > len(data):
-            raise _fault(f"a pointer write past the {len(data)} byte(s) of the variable it points into")
-        struct.pack_into("<" + self.dst, data, self.offset, v)
-        new = list(struct.unpack(f"<{len(vals)}{self.src}", data))
+        whole = bytearray(b"".join(byteimage.pack(self.src, v) for v in vals))
+        if self.offset + len(data) > len(whole):
+            raise _fault(f"a write of {len(data)} byte(s) past the {len(whole)} byte(s) of the variable pointed into")
+        whole[self.offset : self.offset + len(data)] = data
+        es = byteimage.size(self.src)
+        new = [byteimage.unpack(self.src, whole[i * es : (i + 1) * es], v) for i, v in enumerate(vals)]
         r = self.ref
         if isinstance(r, _ItemRef) and isinstance(r.obj, list):
             r.obj[r.key :] = new
         else:
             r.set(new[0])
+
+    def get(self) -> Any:
+        data = self.image()
+        n = byteimage.size(self.dst)
+        if n > len(data):
+            raise _fault(f"a pointer read past the {self._size()} byte(s) of the variable it points into")
+        return byteimage.unpack(self.dst, data[:n])
+
+    def set(self, v: Any) -> None:
+        self.write_image(byteimage.pack(self.dst, v))
 
     def __getitem__(self, _: Any) -> Any:
         return self.get()
@@ -141,14 +151,14 @@ class _Bytes:
     def __setitem__(self, _: Any, v: Any) -> None:
         self.set(v)
 
-    def _moved(self, nbytes: int, size: int) -> _Bytes:
+    def _moved(self, nbytes: int, size: int) -> ByteView:
         off = self.offset + nbytes
         if not 0 <= off <= self._size():
             raise _fault(f"a pointer moved to byte {off} of a variable of {self._size()} byte(s)")
-        return _Bytes(self.ref, self.src, self.dst, off)
+        return ByteView(self.ref, self.src, self.dst, off)
 
     def __eq__(self, other: object) -> bool:
-        return isinstance(other, _Bytes) and other.ref == self.ref and other.offset == self.offset
+        return isinstance(other, ByteView) and other.ref == self.ref and other.offset == self.offset
 
     __hash__ = None  # type: ignore[assignment]
 
@@ -160,16 +170,25 @@ def _ptr_elems(p: Any) -> Any:
     return _ItemRef(p.get(), 0, getattr(p, "spec", None))
 
 
-def _ptr_bytes(p: Any, src: str, dst: str) -> Any:
-    """A pointer to values of format `src` as a pointer to `dst` values (NULL stays NULL)."""
+def _ptr_bytes(p: Any, src: byteimage.Spec, dst: byteimage.Spec) -> Any:
+    """A pointer to values of image spec `src` as a pointer to `dst` values (NULL stays NULL)."""
     if p is None:
         return None
-    if isinstance(p, _Bytes):
-        return _Bytes(p.ref, p.src, dst, p.offset)
-    return _Bytes(p, src, dst)
+    if isinstance(p, ByteView):
+        return ByteView(p.ref, p.src, dst, p.offset)
+    return ByteView(p, src, dst)
+
+
+def _new_items(make: Any, n: int, wrap: Any) -> Any:
+    """`__NEW(T, n)`: a POINTER TO the first of `n` fresh values of T, which it may move over;
+    NULL when `n` < 1 (CODESYS's __NEW gives 0 when it cannot allocate)."""
+    if n < 1:
+        return None
+    return _ItemRef([make() for _ in range(n)], 0, wrap)
 
 
 POINTER_HELPERS = {
+    "_new_items": _new_items,
     "_PtrView": _PtrView,
     "_ptr_add": _ptr_add,
     "_ptr_diff": _ptr_diff,

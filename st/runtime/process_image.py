@@ -18,7 +18,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..model import types as T
-from ..model.addresses import SIZES, TABLE_LEN, AddressError, parse_address  # noqa: F401 (re-exported)
+from ..model.addresses import SIZES, SPECIAL_LEN, TABLE_LEN, AddressError, parse_address  # noqa: F401 (re-exported)
 
 __all__ = ["ProcessImage", "Binding", "to_raw", "from_raw", "AddressError", "parse_address", "SIZES", "TABLE_LEN"]
 
@@ -28,6 +28,7 @@ class ProcessImage:
         self.tables: dict[tuple[str, str], list[Any]] = {
             (a, s): ([False] if s == "X" else [0]) * (TABLE_LEN * (8 if s == "X" else 1)) for a in "IQM" for s in SIZES
         }
+        self.tables[("M", "L")] += [0] * SPECIAL_LEN  # OpenPLC's special function registers
 
     def get(self, addr: str) -> Any:
         area, size, i = parse_address(addr)

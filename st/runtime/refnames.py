@@ -11,7 +11,7 @@ from typing import Any
 from ..model import types as T
 from .helpers import _AttrRef, _ItemRef, _ObjRef
 from .paths import Program
-from .pointers import _Bytes
+from .pointers import ByteView
 
 _SKIP = ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT")
 
@@ -86,7 +86,7 @@ def namer(plc: Program) -> Callable[[Any], str]:
                 return "REF(__NEW)"  # a value of its own, made by __NEW
         if isinstance(ref, _ObjRef) and id(ref.obj) in index:
             return f"REF({index[id(ref.obj)][0]})"
-        if isinstance(ref, _Bytes):  # a pointer over the bytes of another variable
+        if isinstance(ref, ByteView):  # a pointer over the bytes of another variable
             whole = name(ref.ref)
             return whole if not ref.offset else f"{whole} + {ref.offset} byte(s)"
         return "REF(?)"

@@ -34,6 +34,7 @@ class TaskStats:
         self.exec_min = math.inf
         self.exec_max = 0
         self.exec_sum = 0
+        self.last_exec = 0
         self.latencies: deque[int] = deque(maxlen=keep)  # the latest `keep` samples (ns)
         self.periods: deque[int] = deque(maxlen=keep)  # start-to-start intervals (ns)
         self._last_start: int | None = None
@@ -54,6 +55,7 @@ class TaskStats:
         if ex > self.exec_max:
             self.exec_max = ex
         self.exec_sum += ex
+        self.last_exec = ex
         self.latencies.append(lat)
         if self._last_start is not None:
             self.periods.append(start - self._last_start)

@@ -587,6 +587,10 @@ def convert(node, s, d, src_bcd=False, dst_bcd=False, time_unit="ms", ctx=None):
         return node
     if sk == "tod" and dk == "time" or sk == "time" and dk == "tod":
         return node if dk == "time" else py.BinOp(node, py.Mod(), const(DAY))
+    if sk == "time" and dk == "dt" or sk in ("dt", "date") and dk == "time":  # CODESYS: from 1970-01-01
+        return node
+    if sk == "time" and dk == "date":
+        return py.BinOp(node, py.Sub(), py.BinOp(node, py.Mod(), const(DAY)))
     if sk in ("dt", "date") and dk in ("int", "bit"):
         return wrap(call("_idiv", node, const(1_000_000_000)), d)
     if sk == "tod" and dk in ("int", "bit"):

@@ -118,6 +118,7 @@ class Calls(Part):
             return None
         # a method: inst.M(...), THIS^.M(...)
         if isinstance(callee, A.Field):
+            self.exprs.self_reference_sugar(callee, scope)
             bt = self.exprs.expr(callee.base, scope)
             b = T.unalias(bt) if bt is not None else None
             if isinstance(b, T.POUType) and b.pou_kind != "FUNCTION":
@@ -179,10 +180,16 @@ class Calls(Part):
             )
 
     def _new_delete(self, c: A.Call, key: str, scope: Scope, statement: bool):
-        """__NEW(type): a POINTER TO a fresh value of that type; __DELETE(p): p becomes NULL (the value
-        is freed when nothing refers to it any more, so a dangling pointer cannot happen)."""
-        if len(c.args) != 1 or c.args[0].name:
-            self.err("E017", c.span, f"{key.upper()} takes one argument")
+        """__NEW(type): a POINTER TO a fresh value of that type; __NEW(type, n): to the first of n
+        (NULL if n < 1); __DELETE(p): p becomes NULL (the value is freed when nothing refers to it any
+        more, so a dangling pointer cannot happen)."""
+        most = 2 if key == "__new" else 1
+        if not 1 <= len(c.args) <= most or any(a.name for a in c.args):
+            self.err(
+                "E017",
+                c.span,
+                "__NEW takes a type and an optional count" if most == 2 else "__DELETE takes one argument",
+            )
             return None
         arg = c.args[0].value
         if key == "__delete":
@@ -209,7 +216,14 @@ class Calls(Part):
             return None
         if isinstance(t, T.POUType) and t.decl is not None and "ABSTRACT" in t.decl.modifiers:
             self.err("E043", arg.span, f"'{t.name}' is ABSTRACT and cannot be instantiated")
-        c.target = CallTarget("new", type=t)
+        count = c.args[1].value if len(c.args) == 2 else None
+        if count is not None:
+            if isinstance(t, T.POUType):  # as CODESYS: a count only for data types
+                self.err("E017", count.span, f"__NEW of a FUNCTION_BLOCK makes one instance; '{t.name}' takes no count")
+            ct = self.exprs.expr(count, scope, T.DINT)
+            if ct is not None and not (T.base_of(ct).is_int or T.base_of(ct) is T.LIT_INT):
+                self.err("E013", count.span, f"the count of __NEW must be an integer, not {ct}")
+        c.target = CallTarget("new", type=t, arg=count)
         return T.RefType(t, "POINTER")
 
     def _sizeof(self, c: A.Call, scope: Scope):

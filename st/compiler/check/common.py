@@ -20,6 +20,25 @@ CONSTRUCTION = ("fb_init", "fb_reinit", "fb_exit")
 _DIRECT_TYPES = {"X": T.BOOL, "": T.BOOL, "B": T.BYTE, "W": T.WORD, "D": T.DWORD, "L": T.LWORD}
 
 
+_WORD_WITH_BIT = re.compile(r"(%[IQM][BWDL][0-9]+)((?:\.[0-9]+)+)", re.I)
+
+
+def openplc_address(ctx, addr: str, span) -> str:
+    """OpenPLC binds a byte, word, double or long address by its first number only (its glue
+    generator drops the rest: %IW0.0 is %IW0); under openplc and the default the address is read so,
+    with a warning; the other presets keep it as written (and refuse it)."""
+    m = _WORD_WITH_BIT.fullmatch(addr.strip())
+    if m is None or not (ctx.dialect is None or ctx.dialect.name == "openplc"):
+        return addr
+    ctx.warn(
+        "W011",
+        span,
+        f"'{addr}': OpenPLC binds it to {m.group(1).upper()} and ignores '{m.group(2)}'",
+        f"write {m.group(1).upper()}; only bit addresses (X) have a '.'",
+    )
+    return m.group(1)
+
+
 def image_problem(addr: str):
     """Why the process image cannot hold this address (the runtime's own rule), or None."""
     try:
@@ -50,7 +69,7 @@ class CallTarget:
     obj: A.Expr | None  # method: the instance, None for this one
     name: str  # action
     inst: A.Expr  # action of another instance
-    arg: A.Expr  # bound, delete, ref, isvalidref
+    arg: A.Expr  # bound, delete, ref, isvalidref; new: the count of __NEW(T, n) or None
     dim: int  # bound
     upper: bool  # bound
     value: Any  # bound (None for ARRAY[*]), sizeof

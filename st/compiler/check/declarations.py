@@ -18,6 +18,7 @@ from .common import (
     Scope,
     _names_in,
     image_problem,
+    openplc_address,
     same_type,
     signature,
     take_address,
@@ -48,14 +49,14 @@ class Declarations(Part):
         return t
 
     def _union_member(self, d: A.VarDecl, t: T.Type) -> None:
-        """A UNION member is bytes another member also is: a number, bit string or BOOL, an array
-        of one, or a STRING; and it has no initial value of its own."""
-        u = T.unalias(t)
-        if T.byte_format(t) is None and not (isinstance(u, T.StringType) and not u.wide):
+        """A UNION member is bytes another member also is: an elementary value (a number, bit
+        string, BOOL, time, date or string) or an array of them; and it has no initial value of its own."""
+        spec = T.byte_layout(t)
+        if spec is None or spec[0] in ("r", "u") or (spec[0] == "a" and spec[2][0] in ("a", "r", "u", "s")):
             self.err(
                 "E012",
                 d.type.span,
-                f"a UNION member must be a number, a bit string, BOOL, an array of one or a STRING, not {t}",
+                f"a UNION member must be an elementary value or a one-dimensional array of numbers, not {t}",
             )
         if d.init is not None:
             self.err("E013", d.init.span, "a UNION member cannot have an initial value (they share their bytes)")
@@ -584,6 +585,8 @@ class Declarations(Part):
                 )
             if isinstance(t, T.POUType) and t.pou_kind == "PROGRAM" and owner is not None and owner.pou_kind != "TEST":
                 self.err("E012", decl.type.span, f"a PROGRAM ('{t.name}') cannot be instantiated inside a POU")
+            if decl.location:
+                decl.location = openplc_address(self.ctx, decl.location, decl.names[0][1] if decl.names else decl.span)
             for n, sp in decl.names:
                 key = n.lower()
                 if key in table:

@@ -7,7 +7,20 @@ from typing import cast
 from ...model import types as T
 from ...model.addresses import canonical
 from .. import ast as A
-from .common import _CMP, _DIRECT, _DIRECT_TYPES, _LOGIC, _NULL, STEP, SUPER, THIS, Scope, image_problem, same_type
+from .common import (
+    _CMP,
+    _DIRECT,
+    _DIRECT_TYPES,
+    _LOGIC,
+    _NULL,
+    STEP,
+    SUPER,
+    THIS,
+    Scope,
+    image_problem,
+    openplc_address,
+    same_type,
+)
 from .context import CheckContext
 from .part import Part
 
@@ -75,6 +88,7 @@ class Expressions(Part):
             e.const = m[1]
             return et
         if isinstance(e, A.Direct):
+            e.address = openplc_address(self.ctx, e.address, e.span)
             match = _DIRECT.fullmatch(e.address.upper())
             if not match or match.group(3) == "*":
                 self.err("E004", e.span, f"malformed address '{e.address}'")
@@ -199,6 +213,34 @@ class Expressions(Part):
         if gs and id(gs[0]) not in self.ctx.qualified_only:
             return gs[0]
         return None
+
+    def _shadowed_enum_value(self, e: A.Field, scope: Scope) -> bool:
+        """`state : State := State.IDLE`: ST is case-insensitive, so the variable hides its enumeration
+        type. A variable with no fields cannot mean `.IDLE`, so the type's value is meant (as CODESYS
+        and STruC++ read it)."""
+        assert isinstance(e.base, A.Name)
+        sym = self.lookup(e.base.name.lower(), scope)
+        if not isinstance(sym, T.VarSym) or isinstance(T.unalias(sym.type), (T.StructType, T.POUType, T.RefType)):
+            return False
+        et = self.decls.resolve_named_type(e.base.name.lower(), e.base.span)
+        named = T.unalias(et) if et is not None else None
+        if not isinstance(named, T.EnumType) or e.name.lower() not in named.members:
+            return False
+        e.const = named.members[e.name.lower()][1]
+        e.sym = named
+        return True
+
+    def self_reference_sugar(self, e: A.Field, scope: Scope) -> None:
+        """IEC 61131-3 3rd edition writes THIS.x and SUPER.M() (THIS/SUPER as references);
+        CODESYS writes THIS^.x. Outside the vendor presets the first is read as the second."""
+        b = e.base
+        if (
+            isinstance(b, A.Name)
+            and b.name.upper() in ("THIS", "SUPER")
+            and self.lookup(b.name.lower(), scope) in (THIS, SUPER)
+            and (self.ctx.dialect is None or self.ctx.dialect.name == "iec")
+        ):
+            e.base = A.Deref(b.span, b)
 
     def _name(self, e: A.Name, scope: Scope, expected):
         key = e.name.lower()
@@ -443,6 +485,8 @@ class Expressions(Part):
         return t
 
     def _field(self, e: A.Field, scope: Scope, lvalue: bool = False):
+        if isinstance(e.base, A.Name) and not lvalue and self._shadowed_enum_value(e, scope):
+            return e.sym
         if isinstance(e.base, A.Name) and self.lookup(e.base.name.lower(), scope) is None:
             gvl = self.ctx.gvls.get(e.base.name.lower())
             if gvl is not None:
@@ -466,14 +510,7 @@ class Expressions(Part):
                 e.const = m[1]
                 e.sym = et
                 return et
-        if (
-            isinstance(e.base, A.Name)
-            and e.base.name.upper() == "THIS"
-            and self.lookup("this", scope) is THIS
-            and (self.ctx.dialect is None or self.ctx.dialect.name == "iec")
-        ):
-            # IEC 61131-3 3rd edition writes THIS.x (THIS as a reference); CODESYS writes THIS^.x
-            e.base = A.Deref(e.base.span, e.base)
+        self.self_reference_sugar(e, scope)
         bt = self.expr(e.base, scope)
         if bt is None:
             return None

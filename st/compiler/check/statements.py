@@ -291,13 +291,8 @@ class Statements(Part):
             st_, dt_ = T.unalias(s.target), T.unalias(d.target)
             if isinstance(st_, T.POUType) and isinstance(dt_, T.POUType) and T.implements(st_, dt_):
                 return True  # a reference to a derived block is a reference to its base
-            if (
-                d.ref_kind == "POINTER"
-                and T.byte_format(st_) is not None
-                and T.byte_format(dt_) is not None
-                and self.ctx.feature_quiet("vendor")
-            ):
-                return True  # ADR(dw) into a POINTER TO BYTE: its bytes (CODESYS; st: of numbers and arrays of them)
+            if d.ref_kind == "POINTER" and T.pointer_view(st_, dt_) is not None and self.ctx.feature_quiet("vendor"):
+                return True  # ADR(x) into a POINTER TO BYTE: its bytes (CODESYS)
         if s is _NULL and isinstance(d, T.RefType):
             return True
         if isinstance(d, T.POUType) and d.pou_kind == "INTERFACE":

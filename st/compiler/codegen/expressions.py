@@ -11,7 +11,7 @@ from ..check import STEP, CallTarget
 
 if TYPE_CHECKING:
     from .module import ModuleGen
-from .pyast import DAY_NS, Unsupported, _attr, _call, _const, _name, default_value, f32
+from .pyast import DAY_NS, Unsupported, _args, _attr, _call, _const, _name, default_value, f32
 
 
 class InitGen:
@@ -200,13 +200,13 @@ class ExprGen:
         d = T.base_of(dst)
         s = T.base_of(src) if src is not None else None
         if isinstance(d, T.RefType) and isinstance(s, T.RefType) and d.ref_kind == "POINTER":
-            sf, df = T.byte_format(s.target), T.byte_format(d.target)
-            if sf is None or df is None:
+            view = T.pointer_view(s.target, d.target)
+            if view is None:
                 return node
             if isinstance(T.unalias(s.target), T.ArrayType) and not isinstance(T.unalias(d.target), T.ArrayType):
                 node = _call("_ptr_elems", node)  # ADR(arr) as a POINTER TO its element: the first one
-            if sf != df:  # ADR(dw) as a POINTER TO BYTE: its bytes
-                node = _call("_ptr_bytes", node, _const(sf), _const(df))
+            if view[0] != view[1]:  # ADR(dw) as a POINTER TO BYTE: its bytes
+                node = _call("_ptr_bytes", node, _const(view[0]), _const(view[1]))
             return node
         if isinstance(node, py.Constant) and node.value is not None and not isinstance(node.value, str):
             v = node.value
@@ -604,6 +604,9 @@ class ExprGen:
             return py.Subscript(
                 py.Subscript(dims, _const(tgt.dim - 1), py.Load()), _const(1 if tgt.upper else 0), py.Load()
             )
+        if tgt.kind == "new" and tgt.arg is not None:  # __NEW(T, n): n fresh values, a pointer to the first
+            make = py.Lambda(_args([]), InitGen(self.mod).initial(tgt.type, None))
+            return _call("_new_items", make, self.expr(tgt.arg), _const(_wrap_spec(tgt.type)))
         if tgt.kind == "new":  # a one-element box the pointer refers to
             return _call(
                 "_ItemRef",

@@ -157,14 +157,8 @@ class ModuleGen:
 
     def union_class(self, st: T.StructType) -> py.stmt:
         """A UNION: one bytearray, each member a property reading and writing it (runtime.helpers)."""
-        members = []
-        for m in st.members.values():
-            u = T.unalias(m.type)
-            if isinstance(u, T.StringType):
-                members.append((m.pyname, "s", u.length))
-            else:
-                fmt = T.byte_format(m.type) or "B"  # the checker allows only members with a format
-                members.append((m.pyname, fmt, u.size if isinstance(u, T.ArrayType) else 0))
+        # the checker allows only members with a byte image
+        members = [(m.pyname, T.byte_layout(m.type) or ("i", 1, False, 1)) for m in st.members.values()]
         size = T.size_of(st)[0]
         line = next(iter(st.members.values())).span.line if st.members else 1
         call = _call("_union_class", _const(st.name), _const(size), _const(tuple(members)))

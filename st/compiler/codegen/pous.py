@@ -200,6 +200,8 @@ class BodyGen(StmtGen):
             py.Assign([_name("_kinds", py.Store())], _const(block.kinds)),
             py.FunctionDef("__init__", _args(["self"]), init_body or [py.Pass()], [], None, None),
         ]
+        if pou.library:  # a library's own block (a project's block of the same name keeps its own body)
+            members.insert(2, py.Assign([_name("_from_library", py.Store())], _const(True)))
         # caching policy: with actions, methods, THIS or SFC other code touches the variables during
         # the body: keep them attributes
         can_cache = (

@@ -17,7 +17,9 @@ SOURCE_PATH = Path(__file__).with_name("plcopen.st")
 
 
 def library() -> Library:
-    lib = Library("plcopen", sources=[(str(SOURCE_PATH), SOURCE_PATH.read_text())], version="1")
+    lib = Library(
+        "plcopen", sources=[(str(SOURCE_PATH), SOURCE_PATH.read_text())], version="1", yields_to_own_types=True
+    )
     lib.helpers["_post_exec_plcopen"] = install
     return lib
 

@@ -316,13 +316,13 @@ BODIES = {
 
 def install(ns: dict) -> None:
     """Namespace hook: native bodies for the MC_* classes of this namespace and its registry."""
-    if "_fb_MC_Power" not in ns:
+    found = {name: ns.get("_fb_" + name) for name in BODIES}
+    classes = {name: cls for name, cls in found.items() if cls is not None and cls._from_library}
+    if not classes:  # no motion here, or the project's own blocks of these names
         return
     reg = MotionRegistry()
     ns["_motion"] = reg
     ns.setdefault("_io_drivers", []).append(reg)
-    for name, body in BODIES.items():
-        cls = ns.get("_fb_" + name)
-        if cls is not None:
-            cls._body = body
-            cls._motion = reg
+    for name, cls in classes.items():
+        cls._body = BODIES[name]
+        cls._motion = reg

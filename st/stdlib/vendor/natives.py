@@ -1,9 +1,11 @@
 """The vendor compatibility library's native functions: signatures (FuncSig) and the Python that
 generated code calls.
 
-Memory functions (MEMCPY, MEMSET, MEMCMP, MEMMOVE) work on st's values, not on bytes: a pointer is
-a reference to a whole variable, so they copy, fill or compare whole variables of one type, or
-whole elements of arrays of one element type; anything else is a PLC fault that says so.
+Memory functions (MEMCPY, MEMSET, MEMCMP, MEMMOVE) work on st's values where they can: whole
+variables of one type, or whole elements of arrays of one element type, are copied, filled or
+compared as values (structures, instances and pointers included). Anything else (two types, part
+of a value, a byte view such as an ANY input's pValue) goes through the byte images of the values
+(runtime/byteimage.py); what has no byte image (a pointer, an instance) is a PLC fault that says so.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from ...compiler.codegen.emit import call, const
 from ...compiler.library import FuncSig, Param
 from ...model import types as T
 from ...runtime.faults import PLCFault
+from ...runtime.pointers import ByteView
 
 MAX_STRING = T.StringType(255, False)
 
@@ -122,15 +125,46 @@ def _elements(n: int, size: int, esize: int, what: str) -> int | None:
     raise PLCFault(f"{what} of {n} bytes: st copies whole variables or whole array elements only", "MEMORY")
 
 
+_BYTE = ("i", 1, False, 1)
+
+
+def _as_bytes(p: Any, spec: tuple | None, what: str) -> ByteView:
+    """The pointer as a view of bytes: a byte view already, or one over what it points to."""
+    if p is None:
+        raise PLCFault("a memory function was given a NULL pointer", "NULL")
+    if isinstance(p, ByteView):
+        return p
+    if spec is None:
+        raise PLCFault(f"{what}: what the pointer points to has no bytes st can copy", "MEMORY")
+    return ByteView(p, spec, _BYTE)
+
+
+def _whole(p: Any, q: Any, n: int, same: bool, size: int, esize: int) -> bool:
+    """Can a memory function work on values here (one type, whole variables or elements)?"""
+    if not same or isinstance(p, ByteView) or isinstance(q, ByteView):
+        return False
+    return n == size or bool(esize and n % esize == 0 and n < size)
+
+
+def _bytes_of(view: ByteView, n: int, what: str) -> bytes:
+    data = view.image()
+    if n > len(data):
+        raise PLCFault(f"{what} of {n} bytes beyond a variable of {len(data)} bytes", "MEMORY")
+    return data[:n]
+
+
 def _vd_memcpy(dest: Any, src: Any, n: int, layout: tuple) -> int:
-    """MEMCPY/MEMMOVE over st values (see the module doc); `layout` from the compiler."""
-    same, dsize, ssize, esize = layout
+    """MEMCPY/MEMMOVE over st values (see the module doc); `layout` from the compiler. Between
+    different types, or part of a value, it copies byte images (runtime/byteimage.py)."""
+    same, dsize, ssize, esize, dspec, sspec = layout
     if n <= 0:
         return 0
-    if n > dsize or n > ssize:
-        raise PLCFault(f"MEMCPY of {n} bytes beyond a variable of {min(dsize, ssize)} bytes", "MEMORY")
-    if not same:
-        raise PLCFault("MEMCPY between variables of different types is not supported by st", "MEMORY")
+    if not _whole(dest, src, n, same, dsize, esize) or n > ssize:
+        data = _bytes_of(_as_bytes(src, sspec, "MEMCPY"), n, "MEMCPY")
+        target = _as_bytes(dest, dspec, "MEMCPY")
+        _bytes_of(target, n, "MEMCPY")
+        target.write_image(data)
+        return n
     count = _elements(n, dsize, esize, "MEMCPY")
     v = _get(src)
     if count is None:
@@ -159,9 +193,16 @@ def _fill_value(proto: Any, byte: int, spec: tuple) -> Any:
 
 def _vd_memset(dest: Any, byte: int, n: int, layout: tuple) -> int:
     """MEMSET: every byte of the variable (or of its first whole elements) set to `byte`."""
-    size, esize, spec, zero = layout
+    size, esize, spec, zero, image = layout
     if n <= 0:
         return 0
+    if (not _whole(dest, dest, n, True, size, esize) or spec is None) and (
+        image is not None or isinstance(dest, ByteView)
+    ):
+        target = _as_bytes(dest, image, "MEMSET")
+        _bytes_of(target, n, "MEMSET")
+        target.write_image(bytes([byte & 0xFF]) * n)
+        return n
     if n > size:
         raise PLCFault(f"MEMSET of {n} bytes beyond a variable of {size} bytes", "MEMORY")
     count = _elements(n, size, esize, "MEMSET")
@@ -182,11 +223,13 @@ def _vd_memset(dest: Any, byte: int, n: int, layout: tuple) -> int:
 
 def _vd_memcmp(a: Any, b: Any, n: int, layout: tuple) -> int:
     """MEMCMP: 0 when equal, else -1 or 1 as the first differing element (or value) compares."""
-    same, size, _ssize, esize = layout
+    same, size, ssize, esize, aspec, bspec = layout
     if n <= 0:
         return 0
-    if not same or n > size:
-        raise PLCFault("MEMCMP is supported for variables of one type, within their size", "MEMORY")
+    if not _whole(a, b, n, same, size, esize) or n > ssize:
+        x = _bytes_of(_as_bytes(a, aspec, "MEMCMP"), n, "MEMCMP")
+        y = _bytes_of(_as_bytes(b, bspec, "MEMCMP"), n, "MEMCMP")
+        return 0 if x == y else -1 if x < y else 1  # the first differing byte, unsigned
     count = _elements(n, size, esize, "MEMCMP")
     x, y = _get(a), _get(b)
     if count is not None:
@@ -225,7 +268,7 @@ def _pair_layout(types, _rt):
     dsize, ssize = size_of(d)[0], size_of(s)[0]
     ud, us = T.unalias(d), T.unalias(s)
     esize = size_of(ud.element)[0] if isinstance(ud, T.ArrayType) else 0
-    return [(str(ud) == str(us), dsize, ssize, esize)]
+    return [(str(ud) == str(us), dsize, ssize, esize, T.byte_layout(ud), T.byte_layout(us))]
 
 
 def _fill_spec(t) -> tuple | None:
@@ -253,7 +296,7 @@ def _fill_layout(types, _rt):
     elem = d.element if isinstance(d, T.ArrayType) else d
     esize = size_of(elem)[0] if isinstance(d, T.ArrayType) else 0
     spec = _fill_spec(elem)
-    return [(size, esize, spec, None)]
+    return [(size, esize, spec, None, T.byte_layout(d))]
 
 
 def _now_ticks(ctx, args, types, rt):
