@@ -985,3 +985,147 @@ def test_time_converts_to_and_from_dates_counted_from_1970():
     plc = run(src, 1)
     day, hour = 86_400_000_000_000, 3_600_000_000_000
     assert (plc["main.dt1"], plc["main.d"], plc["main.back"]) == (day + 2 * hour, day, 60_000_000_000)
+
+
+ANY_INPUTS = """FUNCTION_BLOCK FB_Assert
+METHOD Same : BOOL
+VAR_INPUT Expected : ANY; Actual : ANY; END_VAR
+VAR i : DINT; END_VAR
+IF Expected.TypeClass <> Actual.TypeClass OR Expected.diSize <> Actual.diSize THEN
+  RETURN;
+END_IF
+FOR i := 0 TO Expected.diSize - 1 DO
+  IF Expected.pValue[i] <> Actual.pValue[i] THEN
+    RETURN;
+  END_IF
+END_FOR
+Same := TRUE;
+END_METHOD
+METHOD AsDint : DINT
+VAR_INPUT v : ANY_INT; END_VAR
+VAR d : DINT; END_VAR
+IF v.TypeClass = __SYSTEM.TYPE_CLASS.TYPE_DINT THEN
+  MEMCPY(destAddr := ADR(d), srcAddr := v.pValue, n := SIZEOF(DINT));
+END_IF
+AsDint := d;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION Size : DINT
+VAR_INPUT x : ANY; END_VAR
+Size := x.diSize;
+END_FUNCTION
+PROGRAM main
+VAR
+  a : FB_Assert; same, mixed, text, times : BOOL; n, m : DINT := 42; k : INT := 42;
+  s : STRING := 'abc'; t : TIME := T#5s; got, sz_s, sz_k, sz_t, cls : DINT;
+END_VAR
+same := a.Same(n, m);
+mixed := a.Same(n, k);             (* DINT against INT: other class and size *)
+text := a.Same(s, s);
+times := a.Same(T#5s, t);
+got := a.AsDint(n + 1);
+sz_s := Size(s); sz_k := Size(k); sz_t := Size(t);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_any_inputs_receive_type_class_size_and_a_byte_pointer_to_the_argument(dialect):
+    plc = run(ANY_INPUTS, 1, dialect)
+    assert [plc["main." + k] for k in ("same", "mixed", "text", "times", "got")] == [True, False, True, True, 43]
+    assert (plc["main.sz_s"], plc["main.sz_k"], plc["main.sz_t"]) == (81, 2, 4)  # STRING(80), INT, TIME
+
+
+def test_an_any_input_checks_its_family_and_is_a_vendor_extension():
+    src = ANY_INPUTS.replace("got := a.AsDint(n + 1);", "got := a.AsDint(1.5);")
+    assert "error[E013]: 'v' is ANY_INT; LREAL cannot be passed to it" in errors(src, "codesys")
+    assert "error[E044]: an ANY input is not part of the iec dialect" in errors(ANY_INPUTS, "iec")
+
+
+REF_RESULTS = """FUNCTION_BLOCK F
+VAR x : INT := 5; END_VAR
+METHOD GetX : REFERENCE TO INT
+GetX REF= x;
+END_METHOD
+METHOD Again : REFERENCE TO INT
+Again REF= GetX();
+Again := Again + 100;              (* through the result: x itself *)
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR f : F; r : REFERENCE TO INT; v, w, z : INT; END_VAR
+r REF= f.GetX();
+v := f.GetX();
+r := 7;
+w := f.GetX() + 1;
+z := f.Again();
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys"])
+def test_a_reference_to_result_is_bound_with_ref_and_read_through(dialect):
+    plc = run(REF_RESULTS, 1, dialect)
+    assert (plc["main.v"], plc["main.w"], plc["main.z"], plc["main.f.x"]) == (5, 8, 107, 107)
+
+
+TWINCAT_BITS = """{gvl 'GVL_App'}
+{attribute 'qualified_only'}
+VAR_GLOBAL
+  queue : FB_Queue;
+END_VAR
+VAR_GLOBAL CONSTANT
+  N : UINT := 3;
+END_VAR
+TYPE ST_M : STRUCT a : DINT; b : INT; flag : BIT; END_STRUCT END_TYPE
+TYPE E_Kind : (KIND_A := 1, KIND_B := 2) UDINT; END_TYPE
+FUNCTION_BLOCK FB_Queue
+VAR_OUTPUT calls : INT; END_VAR
+VAR
+  buf : ARRAY[0..((GVL_App.N * (SIZEOF(ST_M) + EXTRA)) - 1)] OF BYTE;
+  t : TON := (IN := TRUE, PT := GAP);  (* constants declared below *)
+END_VAR
+VAR CONSTANT
+  EXTRA : USINT := 4;
+  GAP : TIME := T#10MS;
+END_VAR
+calls := calls + 1;
+END_FUNCTION_BLOCK
+FUNCTION Pair : DINT
+VAR_INPUT a, b : DINT; END_VAR
+Pair := a * 10 + b;
+END_FUNCTION
+FUNCTION Note
+VAR_INPUT x : INT; END_VAR
+VAR note : INT; END_VAR     (* no result type: no result variable of the function's name *)
+note := x;
+END_FUNCTION
+PROGRAM main
+VAR
+  n, p : DINT; k : E_Kind; code : INT; lw : LWORD; u : UDINT := 16#FFFFFFFF; name : STRING;
+  s : STRING := 'hello'; c : STRING := 'xyz'; pb, pc : POINTER TO BYTE; i : UDINT; calls : INT;
+END_VAR
+GVL_App.queue();
+n := UPPER_BOUND(GVL_App.queue.buf, 1);
+p := Pair(a := 3, 2);                    (* a positional argument after a named one takes its place's parameter *)
+calls := GVL_App.queue.calls;
+k := 2;                                   (* an integer into a non-strict enumeration *)
+code := UDINT_TO_INT(k);
+CASE code OF KIND_A: name := 'A'; KIND_B: name := 'B'; END_CASE
+lw := DWORD_TO_LWORD(u);
+Note(1);
+FOR i := 0 TO 2 DO
+  pc := ADR(c) + i;
+  pb := ADR(s) + i + 1;
+  pb^ := pc^;
+END_FOR
+END_PROGRAM
+"""
+
+
+def test_twincat_library_code_constructs():
+    plc = run(TWINCAT_BITS, 1, "twincat")
+    # GVL_App.queue() calls the instance; SIZEOF(ST_M) = 8 (DINT, INT, BIT as a BOOL byte, aligned to 4)
+    assert (plc["main.calls"], plc["main.n"], plc["main.p"]) == (1, 3 * (8 + 4) - 1, 32)
+    assert (plc["main.code"], plc["main.name"], plc["main.lw"]) == (2, "B", 0xFFFFFFFF)
+    assert plc["main.s"] == "hxyzo"  # ADR(x) + n: the byte n bytes into x

@@ -89,6 +89,7 @@ class Call(Expr):
     args: list[Arg]
     # filled by the checker: what is being called
     target: Any = field(default=None, repr=False)
+    deref: bool = False  # the checker: a REFERENCE TO result used as the variable it refers to
 
 
 @dataclass(slots=True, eq=False)

@@ -305,6 +305,7 @@ class VarSym:
     is_global: bool = False
     global_ref: Any = None  # VAR_EXTERNAL → the VAR_GLOBAL symbol
     access: str = ""  # PUBLIC, PRIVATE, PROTECTED or INTERNAL from `VAR PRIVATE`; "" = unrestricted
+    any_input: str = ""  # an input declared ANY / ANY_NUM / ...: the generic family (its type is AnyType)
 
 
 @dataclass(eq=False)
@@ -682,6 +683,32 @@ def byte_layout(t: Type) -> tuple[Any, ...] | None:
     if u.kind in ("int", "bit", "char"):
         return ("i", u.bits // 8, u.signed and u.kind == "int", 1)
     return None
+
+
+# CODESYS's __SYSTEM.TYPE_CLASS numbering (the vendor library's TYPE_CLASS enumeration)
+_TYPE_CLASS = {
+    "BOOL": 0, "BYTE": 2, "WORD": 3, "DWORD": 4, "LWORD": 5, "SINT": 6, "INT": 7, "DINT": 8, "LINT": 9,
+    "USINT": 10, "UINT": 11, "UDINT": 12, "ULINT": 13, "REAL": 14, "LREAL": 15, "TIME": 18, "DATE": 19,
+    "DATE_AND_TIME": 20, "TIME_OF_DAY": 21, "LTIME": 37, "LDATE": 46, "LDATE_AND_TIME": 47, "LTIME_OF_DAY": 48,
+}  # fmt: skip
+
+
+def type_class(t: Type) -> int:
+    """The TYPE_CLASS an ANY input reports for a value of type t."""
+    u = unalias(t)
+    if isinstance(u, StringType):
+        return 17 if u.wide else 16
+    if isinstance(u, ArrayType):
+        return 26
+    if isinstance(u, EnumType):
+        return 25
+    if isinstance(u, SubrangeType):
+        return 24
+    if isinstance(u, RefType):
+        return 22 if u.ref_kind == "POINTER" else 23
+    if isinstance(u, (StructType, POUType)):
+        return 28
+    return _TYPE_CLASS.get(getattr(u, "name", ""), 29)
 
 
 def pointer_view(src: Type, dst: Type) -> tuple[tuple[Any, ...], tuple[Any, ...]] | None:

@@ -179,6 +179,20 @@ def _ptr_bytes(p: Any, src: byteimage.Spec, dst: byteimage.Spec) -> Any:
     return ByteView(p, src, dst)
 
 
+_BYTE = ("i", 1, False, 1)
+
+
+def _any_value(cls: Any, ref: Any, spec: byteimage.Spec, type_class: int, names: tuple[str, str, str]) -> Any:
+    """The AnyType an ANY input receives: `pValue` a POINTER TO BYTE over the argument's bytes (the
+    caller's variable itself, or a temporary for an expression), `diSize` their number, `TypeClass`."""
+    value = cls()
+    pv, size, tc = names
+    setattr(value, pv, ByteView(ref, spec, _BYTE))
+    setattr(value, size, byteimage.size(spec))
+    setattr(value, tc, type_class)
+    return value
+
+
 def _new_items(make: Any, n: int, wrap: Any) -> Any:
     """`__NEW(T, n)`: a POINTER TO the first of `n` fresh values of T, which it may move over;
     NULL when `n` < 1 (CODESYS's __NEW gives 0 when it cannot allocate)."""
@@ -188,6 +202,7 @@ def _new_items(make: Any, n: int, wrap: Any) -> Any:
 
 
 POINTER_HELPERS = {
+    "_any_value": _any_value,
     "_new_items": _new_items,
     "_PtrView": _PtrView,
     "_ptr_add": _ptr_add,

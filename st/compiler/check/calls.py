@@ -116,8 +116,8 @@ class Calls(Part):
                 if not a.output:
                     self.exprs.expr(a.value, scope)
             return None
-        # a method: inst.M(...), THIS^.M(...)
-        if isinstance(callee, A.Field):
+        # a method: inst.M(...), THIS^.M(...); GVL_Name.inst(...) is an instance call below
+        if isinstance(callee, A.Field) and not self.exprs.names_gvl(callee.base, scope):
             self.exprs.self_reference_sugar(callee, scope)
             bt = self.exprs.expr(callee.base, scope)
             b = T.unalias(bt) if bt is not None else None
@@ -342,15 +342,18 @@ class Calls(Part):
         bind: dict = {}
         extras: dict = {}
         npos = 0
+        place = 0  # the argument's place in the call: after named ones, a positional one takes its place's parameter
         p: T.VarSym | None
         for a in c.args:
             key = a.name.lower()
+            if key not in ("en", "eno"):
+                place += 1
             if not a.name:
-                if npos >= len(pos_params):
+                if place > len(pos_params):
                     self.err("E017", a.span, f"too many arguments for {pou.name} (it has {len(pos_params)} parameters)")
                     self.exprs.expr(a.value, scope)
                     continue
-                p = pos_params[npos]
+                p = pos_params[place - 1]
                 npos += 1
                 if p.section == "VAR_OUTPUT":
                     a.output = True
@@ -409,6 +412,8 @@ class Calls(Part):
                 take_address(a.value)
                 if vt is not None and not same_type(vt, want) and not T.extends(vt, want):
                     self.err("E013", a.value.span, f"'{p.name}' is a REFERENCE TO {want}; {vt} cannot be bound to it")
+            elif p.any_input:
+                self._any_arg(a, p, scope)
             else:
                 vt = self.exprs.expr(a.value, scope, p.type)
                 self.stmts.assignable(a.value, vt, p.type, a.value.span, "pass")
@@ -438,6 +443,46 @@ class Calls(Part):
                 if p.name.lower() not in bind:
                     self.err("E017", c.span, f"VAR_IN_OUT '{p.name}' of {pou.name} must be given")
         return {"params": bind, "en": extras.get("en"), "eno": extras.get("eno")}
+
+    def _vendor_argument(self, t: T.Type, constraint: str) -> T.Type | None:
+        """CODESYS/TwinCAT (and the default) pass a value to a function's elementary parameter where
+        it converts implicitly without loss: an integer as a bit string of its width or wider
+        (DWORD_TO_LWORD(udint)), a non-strict enumeration as its integer (UDINT_TO_INT(class)).
+        The type the argument is then read as, or None."""
+        want = T.ELEMENTARY.get(constraint)
+        if want is None or not self.ctx.bits_as_numbers():
+            return None
+        b = T.base_of(t)
+        if isinstance(b, T.EnumType):
+            if not self.ctx.enum_as_int(b):
+                return None
+            b = T.base_of(b.base) if b.base is not None else T.INT
+        w = T.base_of(want)
+        if (
+            isinstance(b, T.ElemType)
+            and isinstance(w, T.ElemType)
+            and b.kind in ("int", "bit")
+            and w.kind in ("int", "bit")
+            and (b.bits < w.bits or (b.bits == w.bits and (w.kind == "bit" or b.kind == "bit" or b.signed == w.signed)))
+        ):
+            return b
+        return None
+
+    def _any_arg(self, a: A.Arg, p: T.VarSym, scope: Scope) -> None:
+        """An argument for an ANY input: any value of the family that has bytes; a variable is
+        passed by address (pValue points at it), an expression as a temporary. Codegen reads the
+        type from `a.value.ty`."""
+        vt = self.exprs.expr(a.value, scope)
+        if vt is None:
+            return
+        if isinstance(T.base_of(vt), T.LiteralType):
+            vt = T.default_type_for_literal(T.base_of(vt))
+            a.value.ty = vt
+        if T.byte_layout(vt) is None or not _satisfies(vt, p.any_input):
+            self.err("E013", a.value.span, f"'{p.name}' is {p.any_input}; {vt} cannot be passed to it")
+            return
+        if isinstance(a.value, (A.Name, A.Field, A.Index, A.Deref)):
+            take_address(a.value)
 
     def _native_call(self, c: A.Call, sig: FuncSig, scope: Scope, expected=None):
         args = []
@@ -510,9 +555,12 @@ class Calls(Part):
             if t is None:
                 continue
             if not _satisfies(t, p.constraint):
-                self.err("E013", a.value.span, f"argument {i + 1} of {sig.name} must be {p.constraint}, not {t}")
-                arg_types[-1] = None
-                continue
+                stand_in = self._vendor_argument(t, p.constraint)
+                if stand_in is None:
+                    self.err("E013", a.value.span, f"argument {i + 1} of {sig.name} must be {p.constraint}, not {t}")
+                    arg_types[-1] = None
+                    continue
+                t = arg_types[-1] = a.value.ty = stand_in
             if p.group:
                 prev = groups.get(p.group)
                 if prev is None:

@@ -178,6 +178,12 @@ def method_of(fb, key: str):
     return fb.methods.get(key) if fb is not None else None
 
 
+# the generic type names a user POU's input may be declared with (CODESYS, TwinCAT)
+ANY_FAMILIES = frozenset(
+    {"ANY", "ANY_NUM", "ANY_REAL", "ANY_INT", "ANY_BIT", "ANY_STRING", "ANY_DATE", "ANY_ELEMENTARY", "ANY_MAGNITUDE"}
+)
+
+
 def _satisfies(t: T.Type, constraint: str) -> bool:
     b = T.base_of(t)
     if constraint == "ANY":

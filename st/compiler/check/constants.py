@@ -20,6 +20,8 @@ class Constants(Part):
             return None
         if isinstance(e, A.Literal):
             return e.value
+        if isinstance(e, A.Call):
+            return self._sizeof(e, scope)
         if isinstance(e, A.EnumLit):
             et = self.decls.resolve_named_type(e.type_name.lower(), e.span)
             if isinstance(et, T.EnumType):
@@ -29,6 +31,7 @@ class Constants(Part):
         if isinstance(e, A.Name):
             key = e.name.lower()
             sym = scope.vars.get(key) if scope is not None else None
+            own = sym is not None and sym.global_ref is None  # the POU's own: its initial value may name others
             if sym is None:
                 gs = self.p.global_names.get(key)
                 sym = gs[0] if gs else None
@@ -37,7 +40,13 @@ class Constants(Part):
                     sym = sym.global_ref
                 if sym.constant and sym.init is not None and isinstance(sym.init, A.Expr):
                     sym.used = True
-                    return self.value(sym.init, None)
+                    if key in self.ctx.raw_const_busy:
+                        return None
+                    self.ctx.raw_const_busy.add(key)
+                    try:
+                        return self.value(sym.init, scope if own else None)
+                    finally:
+                        self.ctx.raw_const_busy.discard(key)
                 return None
             mems = self.p.enum_members.get(key)
             if mems and len({m[2] for m in mems}) == 1:
@@ -86,6 +95,20 @@ class Constants(Part):
                 return None
             return None
         return None
+
+    def _sizeof(self, e: A.Call, scope: Scope | None):
+        """SIZEOF(type or variable) in a constant expression (CODESYS: array bounds from sizes)."""
+        if not (isinstance(e.callee, A.Name) and e.callee.name.upper() == "SIZEOF" and len(e.args) == 1):
+            return None
+        arg = e.args[0].value
+        if not isinstance(arg, A.Name) or e.args[0].name:
+            return None
+        key = arg.name.lower()
+        sym = scope.vars.get(key) if scope is not None else None
+        t = sym.type if sym is not None else T.ELEMENTARY.get(arg.name.upper())
+        if t is None:
+            t = self.decls.resolve_named_type(key, arg.span) or self.p.pous.get(key)
+        return T.size_of(t)[0] if t is not None else None
 
     def _raw_local_constant(self, key: str, scope: Scope | None):
         """A VAR CONSTANT of the POU being declared whose section comes later (CODESYS lets

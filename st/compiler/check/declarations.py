@@ -14,6 +14,7 @@ from ..names import mangle, qualified
 from .common import (
     _DIRECT,
     _DIRECT_TYPES,
+    ANY_FAMILIES,
     CONSTRUCTION,
     Scope,
     _names_in,
@@ -156,6 +157,8 @@ class Declarations(Part):
             t = self.resolve_named_type(key, spec.span)
             if t is not None:
                 return t
+            if up == "BIT" and key not in self.p.pous and self.ctx.feature_quiet("vendor"):
+                return T.BOOL  # CODESYS's BIT (structures, blocks): one BOOL; st does not pack bits
             pou = self.p.pous.get(key)
             if pou is not None:
                 if pou.pou_kind == "FUNCTION":
@@ -329,8 +332,7 @@ class Declarations(Part):
             for k, v in base.vars.items():
                 if k not in ("en", "eno"):
                     pou.vars[k] = v
-        for block in d.var_blocks:
-            self.declare_block(block, pou.vars, scope, pou)
+        self.declare_blocks(d.var_blocks, pou.vars, scope, pou)
         if d.kind in ("FUNCTION", "FUNCTION_BLOCK"):
             # EN and ENO are implicit in every function and FB; declare them when the body uses them
             mentioned = {n.name.lower() for n in _names_in(d.body)}
@@ -453,8 +455,7 @@ class Declarations(Part):
         scope = Scope(mt, mt.vars)
         if m.return_type is not None:
             mt.return_type = self.resolve_type(m.return_type, scope)
-        for block in m.var_blocks:
-            self.declare_block(block, mt.vars, scope, mt)
+        self.declare_blocks(m.var_blocks, mt.vars, scope, mt)
         return mt
 
     def _base_of(self, pou: T.POUType):
@@ -504,8 +505,7 @@ class Declarations(Part):
         scope = Scope(mt, mt.vars)
         if m.return_type is not None:
             mt.return_type = self.resolve_type(m.return_type, scope)
-        for block in m.var_blocks:
-            self.declare_block(block, mt.vars, scope, mt)
+        self.declare_blocks(m.var_blocks, mt.vars, scope, mt)
         for v in mt.vars.values():
             if v.name.lower() in fb.vars and v.section != "VAR_EXTERNAL":
                 self.warn("W006", v.span, f"'{v.name}' in method {m.name} hides the variable of {fb.name}")
@@ -563,7 +563,11 @@ class Declarations(Part):
             if len(access) > 1:
                 self.err("E003", block.span, f"a VAR section has one access specifier, not {' and '.join(access)}")
         for decl in block.decls:
-            t = self.resolve_type(decl.type, scope)
+            family = self._any_input(decl, kind, owner)
+            t = self.resolve_type(A.NamedType(decl.type.span, "AnyType"), scope) if family else None
+            if t is None:
+                family = ""
+                t = self.resolve_type(decl.type, scope)
             if T.is_conformant(t) and kind != "VAR_IN_OUT":
                 self.err(
                     "E012",
@@ -592,7 +596,12 @@ class Declarations(Part):
                 if key in table:
                     self.err("E011", sp, f"'{n}' is declared twice")
                     continue
-                if owner is not None and owner.pou_kind == "FUNCTION" and key == owner.name.lower():
+                if (
+                    owner is not None
+                    and owner.pou_kind == "FUNCTION"
+                    and key == owner.name.lower()
+                    and (owner.return_type is not None or getattr(owner.decl, "return_type", None) is not None)
+                ):  # a FUNCTION without a result type has no variable of its name (TwinCAT)
                     self.err("E011", sp, f"'{n}' is the function's own name (its return value)")
                     continue
                 sym = T.VarSym(
@@ -611,6 +620,7 @@ class Declarations(Part):
                 )
                 if kind == "VAR_EXTERNAL":
                     sym.is_global = True
+                sym.any_input = family
                 if access:
                     sym.access = access[0]
                 if kind == "VAR_STAT" and owner is not None:
@@ -636,6 +646,37 @@ class Declarations(Part):
                             table[n.lower()].const_value = cv
             if kind in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT") and owner is None:
                 self.err("E003", decl.span, f"{kind} is only allowed in a POU")
+
+    def declare_blocks(self, blocks: list[A.VarBlock], table: dict, scope: Scope, owner) -> None:
+        """A POU's VAR sections: its VAR CONSTANT sections first, since CODESYS lets an initial value
+        name a constant declared below (`t : TON := (PT := GAP);` above `GAP : TIME := T#10MS;`);
+        `table` keeps the order of declaration."""
+        before = list(table)
+        constants_first = sorted(blocks, key=lambda b: 0 if b.kind == "VAR" and "CONSTANT" in b.qualifiers else 1)
+        for block in constants_first:
+            self.declare_block(block, table, scope, owner)
+        order = before + [n.lower() for b in blocks for d in b.decls for n, _ in d.names]
+        declared = {k: table[k] for k in order if k in table}
+        declared.update(table)
+        table.clear()
+        table.update(declared)
+
+    def _any_input(self, decl: A.VarDecl, kind: str, owner) -> str:
+        """`x : ANY` (or ANY_NUM, ...) as an input of a function, block or method (CODESYS,
+        TwinCAT): the family, the argument then arriving as an AnyType (TypeClass, pValue, diSize);
+        "" for any other declaration. A vendor extension; elsewhere the generic names stay unknown
+        types, as IEC leaves them to the standard functions."""
+        spec = decl.type
+        if not (isinstance(spec, A.NamedType) and spec.name.upper() in ANY_FAMILIES):
+            return ""
+        if kind != "VAR_INPUT" or owner is None or owner.pou_kind not in ("FUNCTION", "FUNCTION_BLOCK"):
+            self.err("E012", spec.span, f"{spec.name.upper()} is for the inputs of functions, blocks and methods only")
+            return ""
+        if not self.feature("vendor", spec.span, f"an {spec.name.upper()} input"):
+            return ""
+        if self.resolve_named_type("anytype", spec.span) is None:
+            return ""
+        return spec.name.upper()
 
     def check_location(self, loc: str, t: T.Type, span: Span) -> None:
         m = _DIRECT.fullmatch(loc.upper())

@@ -46,7 +46,11 @@ class Expressions(Part):
         if isinstance(e, A.Unary):
             return self._unary(e, scope, expected)
         if isinstance(e, A.Call):
-            return self.calls.call(e, scope, expected=expected)
+            t = self.calls.call(e, scope, expected=expected)
+            if t is not None and T.is_reference(t):  # a REFERENCE TO result: the variable it refers to
+                e.deref = True
+                return cast(T.RefType, T.unalias(t)).target
+            return t
         if isinstance(e, A.Field):
             t = self._field(e, scope, lvalue)
             self._property_read(e, lvalue)
@@ -214,6 +218,10 @@ class Expressions(Part):
             return gs[0]
         return None
 
+    def names_gvl(self, e: A.Expr, scope: Scope) -> bool:
+        """Is `e` the name of a global variable list (GVL_Main in GVL_Main.x), not a variable?"""
+        return isinstance(e, A.Name) and e.name.lower() in self.ctx.gvls and self.lookup(e.name.lower(), scope) is None
+
     def _shadowed_enum_value(self, e: A.Field, scope: Scope) -> bool:
         """`state : State := State.IDLE`: ST is case-insensitive, so the variable hides its enumeration
         type. A variable with no fields cannot mean `.IDLE`, so the type's value is meant (as CODESYS
@@ -248,6 +256,8 @@ class Expressions(Part):
         if sym == "RESULT":
             pou = cast(T.POUType, scope.pou)
             e.sym = pou
+            if T.is_reference(pou.return_type):  # a REFERENCE TO result: written and read through it
+                return cast(T.RefType, T.unalias(cast(T.Type, pou.return_type))).target
             return pou.return_type
         if sym == "STEP":
             e.sym = STEP
@@ -353,6 +363,8 @@ class Expressions(Part):
             return T.BOOL if op in _CMP else (lt or rt)
         if op in ("+", "-", "<", ">", "<=", ">=") and (_is_pointer(lt) or _is_pointer(rt)):
             return self._pointer_arithmetic(e, lt, rt)
+        if op in ("+", "-") and _is_address(e.left, lt) or op == "+" and _is_address(e.right, rt):
+            return self._pointer_arithmetic(e, lt, rt)  # ADR(x) + n
         # CODESYS (non-strict enumerations): an enumeration value next to a number is its integer
         la, rb = T.base_of(lt), T.base_of(rt)
         if self.ctx.enum_as_int(la) and not isinstance(rb, T.EnumType) and (rb.is_num or rb is T.LIT_INT):
@@ -581,6 +593,10 @@ class Expressions(Part):
         if e.op == "+" and num(a) and _is_pointer(rt):
             return rt
         ul, ur = T.unalias(lt), T.unalias(rt)
+        # ADR(x) + n (CODESYS: an address n bytes on): a POINTER TO BYTE over x's bytes
+        for ref, other in ((ul, b), (ur, a)) if e.op == "+" else ((ul, b),):
+            if isinstance(ref, T.RefType) and num(other) and T.pointer_view(ref.target, T.BYTE) is not None:
+                return T.RefType(T.BYTE, "POINTER")
         if (
             e.op != "+"
             and isinstance(ul, T.RefType)
@@ -639,6 +655,16 @@ def _null_at(e) -> A.Name:
     n.sym = _NULL
     n.ty = _NULL
     return n
+
+
+def _is_address(e: A.Expr, t) -> bool:
+    """ADR(x) itself (CODESYS: an address, on which + and - count bytes)."""
+    return (
+        isinstance(e, A.Call)
+        and isinstance(e.callee, A.Name)
+        and e.callee.name.upper() == "ADR"
+        and isinstance(T.unalias(t), T.RefType)
+    )
 
 
 def _is_pointer(t) -> bool:

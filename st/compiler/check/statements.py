@@ -19,6 +19,12 @@ class Statements(Part):
         self.feature("vendor", s.span, "REF=")
         tgt = s.target
         sym = self.exprs.lookup(tgt.name.lower(), scope) if isinstance(tgt, A.Name) else None
+        if sym == "RESULT" and T.is_reference(cast(T.POUType, scope.pou).return_type):
+            pou = cast(T.POUType, scope.pou)  # GetX REF= x: the REFERENCE TO a function or method returns
+            cast(A.Name, tgt).sym = pou
+            tgt.ty = pou.return_type
+            self._ref_source(s, cast(T.RefType, T.unalias(cast(T.Type, pou.return_type))).target, scope)
+            return
         if isinstance(tgt, A.Field):  # inst.r REF= x: an instance's REFERENCE TO
             bt = self.exprs.expr(tgt.base, scope)
             b = T.unalias(bt) if bt is not None else None
@@ -32,12 +38,27 @@ class Statements(Part):
         sym.used = sym.written = True
         cast(A.Name, tgt).sym = sym  # a Name or a Field
         tgt.ty = sym.type
-        want = cast(T.RefType, T.unalias(sym.type)).target
+        self._ref_source(s, cast(T.RefType, T.unalias(sym.type)).target, scope)
+
+    def _ref_source(self, s: A.Assign, want: T.Type | None, scope: Scope) -> None:
+        """What REF= binds to: a variable, NULL (or 0), or the REFERENCE TO a call returns."""
         v = s.value
         if isinstance(v, A.Literal) and v.kind == "int" and v.value == 0 and not v.type_name:
             s.value = v = A.Name(v.span, "NULL")  # CODESYS: r REF= 0 unbinds, as REF= NULL
         if isinstance(v, A.Name) and v.name.upper() == "NULL":
             self.exprs.expr(v, scope)
+            return
+        if isinstance(v, A.Call):
+            rt = self.calls.call(v, scope)
+            v.ty = rt
+            if rt is None:
+                return
+            if not T.is_reference(rt):
+                self.err("E031", v.span, f"REF= needs a variable to refer to; this call returns a {rt}")
+                return
+            got = cast(T.RefType, T.unalias(rt)).target
+            if want is not None and got is not None and not same_type(got, want) and not T.extends(got, want):
+                self.err("E013", v.span, f"REF= needs a {want} variable, not {got}")
             return
         if not isinstance(v, (A.Name, A.Field, A.Index, A.Deref)):
             self.err("E031", v.span, "REF= needs a variable to refer to")
@@ -195,7 +216,9 @@ class Statements(Part):
                         if isinstance(bst, T.EnumType):
                             if T.base_of(et) is not bst:
                                 self.err("E019", e.span, f"CASE label of type {et} for a selector of type {st}")
-                        elif not (T.base_of(et).is_intlike or et is T.LIT_INT):
+                        elif not (
+                            T.base_of(et).is_intlike or et is T.LIT_INT or self.ctx.enum_as_int(T.base_of(et))
+                        ):  # CODESYS: a non-strict enumeration value labels an integer selector
                             self.err("E019", e.span, f"CASE label of type {et} for a selector of type {st}")
                     v = self.consts.value(e, scope)
                     if v is None:
@@ -282,6 +305,8 @@ class Statements(Part):
             and (cast(T.EnumType, s).base is d or T.widens_to(cast(T.EnumType, s).base, d) or d.is_real)
         ):
             return True  # CODESYS: a (non-strict) enumeration value as its integer
+        if self.ctx.enum_as_int(d) and (s.is_intlike or s is T.LIT_INT) and not s.is_bool:
+            return True  # CODESYS: an integer into a non-strict enumeration (its value as the member's)
         if isinstance(s, T.ArrayType) and isinstance(d, T.ArrayType):
             if same_type(s, d):
                 return True

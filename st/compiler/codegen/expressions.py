@@ -365,6 +365,8 @@ class ExprGen:
                 return _call(_attr(self.var_load(sym), "get"))
             return self.var_load(sym)
         if isinstance(sym, T.POUType):  # a function's own result variable
+            if T.is_reference(sym.return_type):
+                return _call(_attr(_name(self.result_name), "get"))
             return _name(self.result_name)
         if sym is STEP:
             return _const(e.const)
@@ -513,7 +515,11 @@ class ExprGen:
         if isinstance(pl, T.RefType) or isinstance(pr, T.RefType):
             if op in ("+", "-") and not (isinstance(pl, T.RefType) and isinstance(pr, T.RefType)):
                 p, n = (l, r) if isinstance(pl, T.RefType) else (r, l)
-                size = T.size_of(cast(T.RefType, pl if isinstance(pl, T.RefType) else pr).target)[0]
+                ptr = cast(T.RefType, pl if isinstance(pl, T.RefType) else pr)
+                size = T.size_of(ptr.target)[0]
+                if ptr.ref_kind != "POINTER":  # ADR(x) + n: the byte address n bytes into x
+                    side = e.left if isinstance(pl, T.RefType) else e.right
+                    p, size = self.coerce(p, side, T.RefType(T.BYTE, "POINTER")), 1
                 return _call("_ptr_add", p, n if op == "+" else py.UnaryOp(py.USub(), n), _const(size))
             if op not in ("=", "<>"):  # p - q, p < q: by the distance in bytes
                 ptr = cast(T.RefType, pl if _is_pointer(pl) else pr)
@@ -584,6 +590,12 @@ class ExprGen:
 
     # ------------------------------------------------------------------ calls
     def x_Call(self, e: A.Call) -> py.expr:
+        if e.deref:  # a REFERENCE TO result: the variable it refers to
+            e.deref = False
+            try:
+                return _call(_attr(self.x_Call(e), "get"))
+            finally:
+                e.deref = True
         tgt = e.target
         if not isinstance(tgt, CallTarget):
             raise Unsupported(e.span, "unresolved call")
@@ -675,6 +687,8 @@ class ExprGen:
             if p.section == "VAR_INPUT":
                 if a is None:
                     args.append(InitGen(self.mod).initial(p.type, p.init))
+                elif p.any_input:
+                    args.append(self.any_arg(a.value, p))
                 elif T.is_reference(p.type):  # bound to the argument
                     args.append(self.ref_to(a.value))
                 else:
@@ -701,6 +715,20 @@ class ExprGen:
             rt = pou.return_type
             node = py.IfExp(self.expr(en.value), node, _const(default_value(rt) if rt is not None else None))
         return node
+
+    def any_arg(self, e, p: T.VarSym) -> py.expr:
+        """The AnyType for an ANY input: over the argument variable's bytes (so pValue reads the
+        caller's variable, as CODESYS passes its address), or over a temporary for an expression."""
+        t = e.ty
+        if isinstance(e, (A.Name, A.Field, A.Index, A.Deref)):
+            ref = self.ref_to(e)
+        else:
+            ref = _call("_ItemRef", py.List([self.expr(e)], py.Load()), _const(0), _const(_wrap_spec(t)))
+        st = cast(T.StructType, T.unalias(p.type))
+        names = tuple(st.members[k].pyname for k in ("pvalue", "disize", "typeclass"))
+        return _call(
+            "_any_value", _name(st.pyname), ref, _const(T.byte_layout(t)), _const(T.type_class(t)), _const(names)
+        )
 
     def ref_to(self, e, negated: bool = False) -> py.expr:
         """A reference object for an output or in-out argument, or REF(x) (runtime.helpers)."""

@@ -91,7 +91,15 @@ class StmtGen(ExprGen):
         tt = tgt.ty
         if s.kind == "REF=":  # bind a REFERENCE TO variable
             v = s.value
-            ref = _const(None) if isinstance(v, A.Name) and getattr(v.sym, "kind", "") == "null" else self.ref_to(v)
+            ref: py.expr
+            if isinstance(v, A.Name) and getattr(v.sym, "kind", "") == "null":
+                ref = _const(None)
+            elif isinstance(v, A.Call):
+                ref = self.expr(v)  # the REFERENCE TO the call returns (not dereferenced)
+            else:
+                ref = self.ref_to(v)
+            if isinstance(tgt, A.Name) and isinstance(tgt.sym, T.POUType):  # a function's REFERENCE TO result
+                return [py.Assign([_name(self.result_name, py.Store())], ref)]
             if isinstance(tgt, A.Field):
                 return [py.Assign([_attr(self.expr(tgt.base), tgt.sym.pyname, py.Store())], ref)]
             assert isinstance(tgt, A.Name)  # the checker allows REF= to a name or a field only
@@ -165,6 +173,8 @@ class StmtGen(ExprGen):
             return [py.Expr(_call(_attr(_attr(self.expr(tgt.base), tgt.sym.pyname), "set"), value))]
         if isinstance(tgt, A.Name):
             sym = tgt.sym
+            if isinstance(sym, T.POUType) and T.is_reference(sym.return_type):
+                return [py.Expr(_call(_attr(_name(self.result_name), "set"), value))]  # through the result
             if isinstance(sym, T.POUType):
                 return [py.Assign([_name(self.result_name, py.Store())], value)]
             return [py.Assign([self.var_store(sym)], value)]
@@ -264,6 +274,8 @@ class StmtGen(ExprGen):
                     )
             elif T.is_reference(p.type):  # an input REFERENCE TO: bound to the argument
                 out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.ref_to(a.value)))
+            elif p.any_input:
+                out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.any_arg(a.value, p)))
             elif ut.is_aggregate:
                 out.append(py.Expr(_call("_assign", _attr(inst, p.pyname), self.expr(a.value))))
             else:

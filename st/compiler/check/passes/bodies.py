@@ -45,7 +45,12 @@ def _check_body(sem: Semantics, pou: T.POUType) -> None:
     sem.stmts.stmt_list(d.body, scope)
     for act in d.actions:
         sem.stmts.stmt_list(act.body, scope)
-    if pou.pou_kind == "FUNCTION" and pou.return_type is None and _assigns_name(d.body, pou.name):
+    if (
+        pou.pou_kind == "FUNCTION"
+        and pou.return_type is None
+        and pou.name.lower() not in pou.vars  # a variable of its name is that variable (TwinCAT)
+        and _assigns_name(d.body, pou.name)
+    ):
         ctx.err("E013", d.span, f"FUNCTION {pou.name} has no return type but assigns a result")
 
 
@@ -57,7 +62,12 @@ def _check_method(sem: Semantics, fb: T.POUType, mt: T.POUType) -> None:
     scope = Scope(mt, names, library=fb.library)
     scope.fb = fb
     sem.stmts.stmt_list(mt.decl.body, scope)
-    if mt.pyname.startswith("_m_") and mt.return_type is None and _assigns_name(mt.decl.body, mt.name):
+    if (
+        mt.pyname.startswith("_m_")
+        and mt.return_type is None
+        and mt.name.lower() not in names
+        and _assigns_name(mt.decl.body, mt.name)
+    ):
         ctx.err("E013", mt.decl.span, f"METHOD {mt.name} has no return type but assigns a result")
 
 
