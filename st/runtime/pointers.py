@@ -116,12 +116,31 @@ class ByteView:
     def _size(self) -> int:
         return byteimage.size(self.src) * len(self._values())
 
+    def _byte_list(self) -> list[int] | None:
+        """The list of BYTE (or USINT) values pointed into, when it is one (the fast path)."""
+        r = self.ref
+        if self.src[0] == "i" and self.src[1] == 1 and isinstance(r, _ItemRef) and isinstance(r.obj, list):
+            return r.obj
+        return None
+
     def image(self) -> bytes:
         """The bytes of what the pointer points into, from its own position on."""
+        raw = self._byte_list()
+        if raw is not None:
+            return bytes(v & 0xFF for v in raw[self.ref.key + self.offset :])
         return b"".join(byteimage.pack(self.src, v) for v in self._values())[self.offset :]
 
     def write_image(self, data: bytes) -> None:
         """Replace the bytes from the pointer's position on by `data` (at most as many as there are)."""
+        raw = self._byte_list()
+        if raw is not None:
+            start = self.ref.key + self.offset
+            if start + len(data) > len(raw):
+                size = len(raw) - self.ref.key
+                raise _fault(f"a write of {len(data)} byte(s) past the {size} byte(s) of the variable pointed into")
+            signed = self.src[2]
+            raw[start : start + len(data)] = [b - 256 if signed and b > 127 else b for b in data]
+            return
         vals = self._values()
         whole = bytearray(b"".join(byteimage.pack(self.src, v) for v in vals))
         if self.offset + len(data) > len(whole):
@@ -180,6 +199,19 @@ def _ptr_bytes(p: Any, src: byteimage.Spec, dst: byteimage.Spec) -> Any:
 
 
 _BYTE = ("i", 1, False, 1)
+
+
+def byte_view(p: Any, spec: byteimage.Spec | None = _BYTE, what: str = "a memory function") -> ByteView:
+    """A pointer as a view of the bytes from where it points on (for library code that reads or
+    writes memory: MEMCPY, a file write): a byte view already, or one over what it points to,
+    whose image spec is `spec` (BYTE for a POINTER TO BYTE into an array of bytes)."""
+    if p is None:
+        raise PLCFault(f"{what} was given a NULL pointer", "NULL")
+    if isinstance(p, ByteView):
+        return p
+    if spec is None:
+        raise PLCFault(f"{what}: what the pointer points to has no bytes st can copy", "MEMORY")
+    return ByteView(p, spec, _BYTE)
 
 
 def _any_value(cls: Any, ref: Any, spec: byteimage.Spec, type_class: int, names: tuple[str, str, str]) -> Any:

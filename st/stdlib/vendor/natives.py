@@ -18,7 +18,7 @@ from ...compiler.codegen.emit import call, const
 from ...compiler.library import FuncSig, Param
 from ...model import types as T
 from ...runtime.faults import PLCFault
-from ...runtime.pointers import ByteView
+from ...runtime.pointers import ByteView, byte_view
 
 MAX_STRING = T.StringType(255, False)
 
@@ -125,18 +125,8 @@ def _elements(n: int, size: int, esize: int, what: str) -> int | None:
     raise PLCFault(f"{what} of {n} bytes: st copies whole variables or whole array elements only", "MEMORY")
 
 
-_BYTE = ("i", 1, False, 1)
-
-
 def _as_bytes(p: Any, spec: tuple | None, what: str) -> ByteView:
-    """The pointer as a view of bytes: a byte view already, or one over what it points to."""
-    if p is None:
-        raise PLCFault("a memory function was given a NULL pointer", "NULL")
-    if isinstance(p, ByteView):
-        return p
-    if spec is None:
-        raise PLCFault(f"{what}: what the pointer points to has no bytes st can copy", "MEMORY")
-    return ByteView(p, spec, _BYTE)
+    return byte_view(p, spec, what)
 
 
 def _whole(p: Any, q: Any, n: int, same: bool, size: int, esize: int) -> bool:
