@@ -1129,3 +1129,60 @@ def test_twincat_library_code_constructs():
     assert (plc["main.calls"], plc["main.n"], plc["main.p"]) == (1, 3 * (8 + 4) - 1, 32)
     assert (plc["main.code"], plc["main.name"], plc["main.lw"]) == (2, "B", 0xFFFFFFFF)
     assert plc["main.s"] == "hxyzo"  # ADR(x) + n: the byte n bytes into x
+
+
+ACTION_ARGS = """FUNCTION_BLOCK FB_Acc
+VAR_INPUT step : INT; END_VAR
+VAR_OUTPUT total : INT; calls : INT; END_VAR
+ACTION A_Add:
+  total := total + step;
+  calls := calls + 1;
+END_ACTION
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR acc : FB_Acc; seen : INT; END_VAR
+acc.A_Add(step := 5);
+acc.A_Add(step := 2, total => seen);
+acc.A_Add();                 (* the input keeps its last value *)
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "twincat"])
+def test_an_action_call_passes_the_blocks_inputs_and_reads_its_outputs(dialect):
+    plc = run(ACTION_ARGS, 1, dialect)
+    assert (plc["main.seen"], plc["main.acc.total"], plc["main.acc.calls"]) == (7, 9, 3)
+
+
+def test_action_arguments_are_a_vendor_extension():
+    assert "t.st:11:1: error[E044]: an action call with arguments is not part of the iec dialect" in errors(
+        ACTION_ARGS, "iec"
+    )
+
+
+ADR_OF_RESULT = """FUNCTION SetVia : DINT
+VAR_INPUT p : POINTER TO DINT; END_VAR
+p^ := 17;
+SetVia := 1;
+END_FUNCTION
+FUNCTION_BLOCK F
+METHOD Open : DINT
+SetVia(ADR(Open));           (* the callee writes the method's result *)
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION G : DINT
+SetVia(p := ADR(G));
+G := G + 1;
+END_FUNCTION
+PROGRAM main
+VAR f : F; a, b : DINT; END_VAR
+a := f.Open();
+b := G();
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys"])
+def test_adr_of_a_functions_own_result(dialect):
+    plc = run(ADR_OF_RESULT, 1, dialect)
+    assert (plc["main.a"], plc["main.b"]) == (17, 18)

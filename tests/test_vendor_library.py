@@ -367,3 +367,73 @@ def test_st_run_prints_new_log_messages_once(capsys):
     show()
     show()
     assert capsys.readouterr().err == "[10 ms] warning: at two\n"
+
+
+RING = """
+m.mask := 16#04; m.text := 'first';
+ring.A_AddTail(pWrite := ADR(m), cbWrite := SIZEOF(m), pBuffer := ADR(buf), cbBuffer := SIZEOF(buf));
+ok1 := ring.bOk;
+m.mask := 16#10; m.text := 'second';
+ring.A_AddTail(pWrite := ADR(m), cbWrite := SIZEOF(m), pBuffer := ADR(buf), cbBuffer := SIZEOF(buf));
+ok2 := ring.bOk;                   (* 2 x (28 + 4) bytes do not fit in 60 *)
+n1 := ring.nCount; used := ring.cbSize;
+ring.A_GetHead(pRead := ADR(small), cbRead := SIZEOF(small), pBuffer := ADR(buf), cbBuffer := SIZEOF(buf));
+ok3 := ring.bOk; need := ring.cbReturn;
+ring.A_RemoveHead(pRead := ADR(got), cbRead := SIZEOF(got), pBuffer := ADR(buf), cbBuffer := SIZEOF(buf));
+ok4 := ring.bOk; n2 := ring.nCount;
+FOR i := 1 TO 5 DO                  (* around the end of the buffer *)
+  m.mask := i; m.text := 'w';
+  ring.A_AddTail(pWrite := ADR(m), cbWrite := SIZEOF(m), pBuffer := ADR(buf), cbBuffer := SIZEOF(buf));
+  ring.A_RemoveHead(pRead := ADR(got), cbRead := SIZEOF(got), pBuffer := ADR(buf), cbBuffer := SIZEOF(buf));
+  sum := sum + got.mask;
+END_FOR
+ring.A_RemoveHead(pRead := ADR(got), cbRead := SIZEOF(got), pBuffer := ADR(buf), cbBuffer := SIZEOF(buf));
+ok5 := ring.bOk;                   (* empty *)
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_mem_ring_buffer_keeps_records_in_order_in_the_callers_bytes(dialect):
+    decls = (
+        "ring : FB_MemRingBuffer; buf : ARRAY[0..59] OF BYTE; m, got : ST_Msg; small : DWORD;"
+        " ok1, ok2, ok3, ok4, ok5 : BOOL; n1, n2, used, need, sum : UDINT; i : UDINT;"
+    )
+    src = "TYPE ST_Msg : STRUCT mask : DWORD; text : STRING(20); END_STRUCT END_TYPE\n" + program(RING, decls)
+    plc = run(src, 1, dialect)
+    assert [plc["main." + k] for k in ("ok1", "ok2", "n1", "used", "ok3", "need", "ok4", "n2")] == [
+        True, False, 1, 32, False, 28, True, 0,
+    ]  # fmt: skip
+    assert (plc["main.got"], plc["main.sum"], plc["main.ok5"]) == ({"mask": 5, "text": "w"}, 15, False)
+
+
+@pytest.mark.parametrize(
+    ("fmt", "args", "expected"),
+    [
+        ("x=%d r=%.2f s=%s", "arg1 := F_INT(-42), arg2 := F_LREAL(3.14159), arg3 := F_STRING('abc')", "x=-42 r=3.14 s=abc"),
+        ("%04X|%x|%o|%b|%u", "arg1 := F_UDINT(255), arg2 := F_BYTE(171), arg3 := F_WORD(8), arg4 := F_USINT(5),"
+         " arg5 := F_DINT(7)", "00FF|ab|10|101|7"),
+        ("[%-6s][%6s][%+d][%5.1f]", "arg1 := F_STRING('ab'), arg2 := F_STRING('cd'), arg3 := F_SINT(3),"
+         " arg4 := F_REAL(2.25)", "[ab    ][    cd][+3][  2.2]"),
+        ("100%% %s", "arg1 := F_BOOL(TRUE)", "100% TRUE"),
+        ("%e", "arg1 := F_LREAL(1234.5)", "1.234500e+03"),
+    ],
+)  # fmt: skip
+def test_format_string_writes_its_arguments_as_printf_does(fmt, args, expected):
+    src = program(
+        f"f(sFormat := '{fmt}', {args}); s := f.sOut; e := f.bError;", "f : FB_FormatString; s : STRING(255); e : BOOL;"
+    )
+    plc = run(src, 1, "twincat")
+    assert (plc["main.s"], plc["main.e"]) == (expected, False)
+
+
+@pytest.mark.parametrize(
+    ("fmt", "args", "arg"),
+    [("%d and %d", "arg1 := F_INT(1)", 2), ("%d", "arg1 := F_STRING('x')", 1), ("%q", "arg1 := F_INT(1)", 0)],
+)
+def test_format_string_reports_the_argument_at_fault(fmt, args, arg):
+    src = program(
+        f"f(sFormat := '{fmt}', {args}); s := f.sOut; e := f.bError; n := f.nErrArg;",
+        "f : FB_FormatString; s : STRING; e : BOOL; n : UDINT;",
+    )
+    plc = run(src, 1, "twincat")
+    assert (plc["main.s"], plc["main.e"], plc["main.n"]) == ("", True, arg)

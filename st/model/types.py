@@ -226,6 +226,7 @@ class StructType(Type):
     kind: str = "struct"
     pyname: str = ""
     resolved: bool = False
+    result_address_taken: bool = False  # ADR(F) inside F: its result lives in a box (codegen)
 
 
 @dataclass(eq=False)

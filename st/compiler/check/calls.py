@@ -127,9 +127,14 @@ class Calls(Part):
                 if mt is not None:
                     return self._method_call(c, mt, scope, callee.base)
                 if callee.name.lower() in b.actions and b.pou_kind == "FUNCTION_BLOCK":
-                    if c.args:  # inst.Action(): CODESYS and TwinCAT call actions so
-                        self.err("E017", c.span, "an action takes no arguments")
+                    # inst.Action(): CODESYS and TwinCAT call actions so; TwinCAT also passes the
+                    # block's inputs and reads its outputs there, as in a call of the instance
                     c.target = CallTarget("action", name=callee.name.lower(), inst=callee.base)
+                    if c.args:
+                        self.feature("vendor", c.span, "an action call with arguments")
+                        c.target.pou = b
+                        c.target.bind = self._bind_args(c, b, scope, True)
+                        c.target.nonvirtual = None
                     return None
                 key = callee.name.lower()
                 if key not in b.vars and key not in b.properties:
@@ -283,6 +288,8 @@ class Calls(Part):
             return None
         t = self.stmts.lvalue(arg, scope)
         take_address(arg)
+        if isinstance(arg, A.Name) and isinstance(arg.sym, T.POUType):  # ADR(F) inside F: its result
+            arg.sym.result_address_taken = True
         c.target = CallTarget("ref", arg=arg)
         return T.RefType(t) if t is not None else None
 

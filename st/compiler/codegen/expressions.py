@@ -154,6 +154,24 @@ class ExprGen:
         self.written_locals: set = set()
         self.result_name = ""
 
+    def _result_boxed(self) -> bool:
+        return bool(getattr(self.pou, "result_address_taken", False))
+
+    def result_load(self) -> py.expr:
+        """The function's (or method's) own result variable, read."""
+        if self._result_boxed():  # ADR(F): the result lives in a one-element box
+            return py.Subscript(_name(self.result_name), _const(0), py.Load())
+        return _name(self.result_name)
+
+    def result_store(self) -> py.expr:
+        if self._result_boxed():
+            return py.Subscript(_name(self.result_name), _const(0), py.Store())
+        return _name(self.result_name, py.Store())
+
+    def result_init(self, value: py.expr) -> py.stmt:
+        box = py.List([value], py.Load()) if self._result_boxed() else value
+        return py.Assign([_name(self.result_name, py.Store())], box)
+
     @classmethod
     def constant_expr(cls, mod, e, t: T.Type) -> py.expr:
         g = cls(mod, None)
@@ -366,8 +384,8 @@ class ExprGen:
             return self.var_load(sym)
         if isinstance(sym, T.POUType):  # a function's own result variable
             if T.is_reference(sym.return_type):
-                return _call(_attr(_name(self.result_name), "get"))
-            return _name(self.result_name)
+                return _call(_attr(self.result_load(), "get"))
+            return self.result_load()
         if sym is STEP:
             return _const(e.const)
         if isinstance(sym, T.EnumType):
@@ -736,6 +754,8 @@ class ExprGen:
             return _call("_NegRef", self.ref_to(e))
         if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym) and T.is_reference(e.sym.type):
             return self.var_load(e.sym)  # the reference a REFERENCE TO variable holds
+        if isinstance(e, A.Name) and isinstance(e.sym, T.POUType) and self._result_boxed():
+            return _call("_ItemRef", _name(self.result_name), _const(0), _const(_wrap_spec(e.ty)))  # ADR(F)
         if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym):
             sym = e.sym
             t = sym.type

@@ -63,6 +63,7 @@ class ModuleGen:
             if d is None or pou.pou_kind == "INTERFACE":
                 continue
             node: py.stmt | list[py.stmt]
+            self.tmp = 0  # temporaries are local to a POU's functions: numbered per POU
             try:
                 if pou.pou_kind == "FUNCTION":
                     node = FuncGen(self, pou).function()

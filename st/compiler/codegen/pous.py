@@ -83,14 +83,12 @@ class FuncGen(StmtGen):
                 )
         locals_init = []
         if pou.return_type is not None:
-            locals_init.append(
-                py.Assign([_name(self.result_name, py.Store())], InitGen(self.mod).initial(pou.return_type, None))
-            )
+            locals_init.append(self.result_init(InitGen(self.mod).initial(pou.return_type, None)))
         for v in pou.vars.values():
             if v.section in ("VAR", "VAR_TEMP"):
                 locals_init.append(_set_lines(box(v, InitGen(self.mod).initial(v.type, v.init)), v.span.line))
         body = self.stmts(d.body)
-        ret = py.Return(_name(self.result_name) if pou.return_type is not None else None)
+        ret = py.Return(self.result_load() if pou.return_type is not None else None)
         end_line = d.end_span.line if d.end_span else d.span.line
         _set_lines(ret, end_line)
         main = prologue + locals_init + body + [ret]

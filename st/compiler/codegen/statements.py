@@ -84,7 +84,7 @@ class StmtGen(ExprGen):
 
     def s_Return(self, s):
         has_result = self.result_name and getattr(self.pou, "return_type", None) is not None
-        return [py.Return(_name(self.result_name) if has_result else None)]
+        return [py.Return(self.result_load() if has_result else None)]
 
     def s_Assign(self, s: A.Assign) -> list:
         tgt = s.target
@@ -99,7 +99,7 @@ class StmtGen(ExprGen):
             else:
                 ref = self.ref_to(v)
             if isinstance(tgt, A.Name) and isinstance(tgt.sym, T.POUType):  # a function's REFERENCE TO result
-                return [py.Assign([_name(self.result_name, py.Store())], ref)]
+                return [py.Assign([self.result_store()], ref)]
             if isinstance(tgt, A.Field):
                 return [py.Assign([_attr(self.expr(tgt.base), tgt.sym.pyname, py.Store())], ref)]
             assert isinstance(tgt, A.Name)  # the checker allows REF= to a name or a field only
@@ -174,9 +174,9 @@ class StmtGen(ExprGen):
         if isinstance(tgt, A.Name):
             sym = tgt.sym
             if isinstance(sym, T.POUType) and T.is_reference(sym.return_type):
-                return [py.Expr(_call(_attr(_name(self.result_name), "set"), value))]  # through the result
+                return [py.Expr(_call(_attr(self.result_load(), "set"), value))]  # through the result
             if isinstance(sym, T.POUType):
-                return [py.Assign([_name(self.result_name, py.Store())], value)]
+                return [py.Assign([self.result_store()], value)]
             return [py.Assign([self.var_store(sym)], value)]
         if isinstance(tgt, A.Field):
             bt = T.unalias(tgt.base.ty)
@@ -222,6 +222,8 @@ class StmtGen(ExprGen):
             raise Unsupported(s.span, "unresolved call")
         if tgt.kind == "fb":
             return self.fb_call(c, tgt)
+        if tgt.kind == "action" and getattr(tgt, "bind", None) is not None:  # inst.A(in := ...) (TwinCAT)
+            return self.fb_call(c, tgt, run="_act_" + tgt.name)
         if tgt.kind == "action":
             inst = self.expr(tgt.inst) if getattr(tgt, "inst", None) is not None else self.this()
             return [py.Expr(_call(_attr(inst, "_act_" + tgt.name)))]
@@ -244,11 +246,13 @@ class StmtGen(ExprGen):
             return self._en_wrap(en, eno, body)
         raise Unsupported(s.span, "cannot call this")
 
-    def fb_call(self, c: A.Call, tgt) -> list:
+    def fb_call(self, c: A.Call, tgt, run: str = "_body") -> list:
+        """An instance call: inputs in, the body (or, `run`, one of its actions), outputs out."""
         fb: T.POUType = tgt.pou
         bind = tgt.bind["params"]
         out: list[py.stmt] = []
-        inst = self.expr(c.callee)
+        callee = tgt.inst if run != "_body" else c.callee
+        inst = self.expr(callee)
         if not isinstance(inst, py.Name):
             tmp = self.new_tmp()
             out.append(py.Assign([_name(tmp, py.Store())], inst))
@@ -285,10 +289,10 @@ class StmtGen(ExprGen):
         own = fb.vars.get("eno")
         if own is not None:  # IEC: a call that runs starts with ENO TRUE; the body may clear it
             out.append(py.Assign([_attr(inst, own.pyname, py.Store())], _const(True)))
-        if tgt.nonvirtual is not None:  # SUPER^(): the base block's body on this instance
+        if run == "_body" and tgt.nonvirtual is not None:  # SUPER^(): the base block's body on this instance
             out.append(py.Expr(_call(_attr(_name(tgt.nonvirtual.pyname), "_body"), inst)))
         else:
-            out.append(py.Expr(_call(_attr(inst, "_body"))))
+            out.append(py.Expr(_call(_attr(inst, run))))
         out.extend(after)
         for key, a in bind.items():
             p = fb.vars[key]
@@ -301,7 +305,7 @@ class StmtGen(ExprGen):
                 out.append(py.Expr(_call("_assign", self.expr(a.value), val)))
             else:
                 out.extend(self.assign(a.value, self.coerce(val, _Typed(p.type), a.value.ty), None))
-        own_eno = _attr(self.expr(c.callee), own.pyname, py.Store()) if own is not None else None
+        own_eno = _attr(self.expr(callee), own.pyname, py.Store()) if own is not None else None
         return self._en_wrap(tgt.bind.get("en"), tgt.bind.get("eno"), out, "eno" in bind, own_eno)
 
     def s_If(self, s: A.If) -> list:

@@ -9,9 +9,10 @@ from functools import lru_cache
 from pathlib import Path
 
 from ...compiler.library import Library
+from . import formatting
 from .natives import HELPERS, signatures
 
-SOURCES = (Path(__file__).with_name("vendor.st"), Path(__file__).with_name("sysinfo.st"))
+SOURCES = tuple(Path(__file__).with_name(name) for name in ("vendor.st", "sysinfo.st", "utilities.st"))
 NAMESPACES = ("Tc2_System", "Tc2_Utilities", "Util", "__SYSTEM", "IBaseLibrary")
 
 
@@ -19,7 +20,8 @@ NAMESPACES = ("Tc2_System", "Tc2_Utilities", "Util", "__SYSTEM", "IBaseLibrary")
 def library() -> Library:
     lib = Library("vendor", namespaces=NAMESPACES)
     lib.sources.extend((str(p), p.read_text()) for p in SOURCES)
-    for sig in signatures():
+    for sig in signatures() + formatting.signatures():
         lib.add(sig)
     lib.helpers.update(HELPERS)
+    lib.helpers.update(formatting.HELPERS)
     return lib
