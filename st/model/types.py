@@ -226,7 +226,6 @@ class StructType(Type):
     kind: str = "struct"
     pyname: str = ""
     resolved: bool = False
-    result_address_taken: bool = False  # ADR(F) inside F: its result lives in a box (codegen)
 
 
 @dataclass(eq=False)
@@ -321,6 +320,7 @@ class POUType(Type):
     native: Any = None  # a native implementation (Python) for library POUs
     actions: dict[str, Any] = field(default_factory=dict)  # lower → syntax: ast.ActionDecl (artefact: PouInfo)
     resolved: bool = False
+    result_address_taken: bool = False  # ADR(F) inside F: its result lives in a box (codegen)
     methods: dict[str, POUType] = field(default_factory=dict)  # lower → POUType (pou_kind FUNCTION, owner_fb set)
     owner_fb: Any = None  # a METHOD: the function block it belongs to
     base: Any = None  # FUNCTION_BLOCK … EXTENDS base
