@@ -258,31 +258,38 @@ def test_embedded_c_blocks_are_skipped_with_a_located_warning(dialect):
 
 
 MUX_OUT_OF_RANGE = """PROGRAM main
-VAR k : INT := 5; i : INT := 9; r : REAL := 1.5; s : STRING := 'x'; b : BOOL := TRUE; ok : INT; END_VAR
+VAR
+  k : INT := 5; i : INT := 9; r : REAL := 1.5; s : STRING := 'x'; b : BOOL := TRUE; ok : INT;
+  eno_out, eno_in : BOOL := TRUE;
+END_VAR
 i := MUX(k, 1, 2, 3);
 r := MUX(k, 2.5, 3.5);
 s := MUX(k, 'a', 'b');
 b := MUX(k, TRUE, TRUE);
 ok := MUX(1, 10, 20, 30);
+i := MUX(K := k, IN0 := 1, IN1 := 2, ENO => eno_out);
+ok := MUX(K := 1, IN0 := 10, IN1 := 20, ENO => eno_in);
 END_PROGRAM
 """
 
 
-def test_a_mux_selector_out_of_range_gives_the_default_value_under_openplc_as_matiec():
+def test_a_mux_selector_out_of_range_gives_the_default_value_and_eno_false_under_openplc_as_matiec():
     plc = run(MUX_OUT_OF_RANGE, 1, "openplc")
-    assert {k: plc[f"main.{k}"] for k in ("i", "r", "s", "b", "ok")} == {
+    assert {k: plc[f"main.{k}"] for k in ("i", "r", "s", "b", "ok", "eno_out", "eno_in")} == {
         "i": 0,
         "r": 0.0,
         "s": "",
         "b": False,
         "ok": 20,
+        "eno_out": False,
+        "eno_in": True,
     }
 
 
 @pytest.mark.parametrize("dialect", [None, "iec", "codesys"])
 def test_a_mux_selector_out_of_range_is_an_index_fault_elsewhere(dialect):
     _, f = fault(MUX_OUT_OF_RANGE, dialect)
-    assert (f.kind, f.line, f.message) == ("INDEX", 3, "MUX selector 5 is outside 0..2")
+    assert (f.kind, f.line, f.message) == ("INDEX", 6, "MUX selector 5 is outside 0..2")
 
 
 EDGE_NAMES = """FUNCTION_BLOCK F

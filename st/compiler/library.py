@@ -39,6 +39,9 @@ class FuncSig:
     min_args: int = 0
     doc: str = ""
     aliases: dict = field(default_factory=dict)  # another name of a parameter (lower) → its name (lower)
+    # ENO after a call that ran, from the argument count: (n_args) → callable(arg expressions) → expr;
+    # None: TRUE (MatIEC's MUX: FALSE for a selector out of range)
+    eno_ok: Callable | None = None
 
 
 @dataclass

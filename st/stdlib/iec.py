@@ -331,6 +331,7 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", mat
             helper="_std_mux" if not matiec_errors else "_std_mux_or_default",
             extra=None if not matiec_errors else _mux_default,
             min_args=2,
+            eno_ok=None if not matiec_errors else _mux_in_range,
         )
     )
     # comparison
@@ -636,6 +637,15 @@ def _section(text: str, name: str) -> str:
 
 
 NAMESPACE_EXTRA = {"_ord": ord, "_chr": chr}
+
+
+def _mux_in_range(n_args: int):
+    """MatIEC's MUX: ENO is whether the selector picked an input (0 <= K < the number of inputs)."""
+
+    def ok(args: list) -> py.expr:
+        return py.Compare(const(0), [py.LtE(), py.Lt()], [args[0], const(n_args - 1)])
+
+    return ok
 
 
 def _mux_default(arg_types, result_type):

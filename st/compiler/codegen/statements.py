@@ -138,25 +138,34 @@ class StmtGen(ExprGen):
             en, eno = v.target.en, v.target.eno
             v.target.en = None
             body = self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
-            return self._en_wrap(en, eno, body)
+            return self._en_wrap(en, eno, body, ok=self._native_eno(v.target, eno))
         ut = T.unalias(tt) if tt is not None else None
         if ut is not None and ut.is_aggregate:
             return [py.Expr(_call("_assign", self.expr(tgt), self.expr(v)))]
         return self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
 
-    def _en_wrap(self, en, eno, body: list, eno_bound: bool = False, own_eno: py.expr | None = None) -> list:
-        """EN := FALSE skips the call and gives ENO FALSE; else ENO is TRUE (or what the callee set).
-        `own_eno`: the instance's own ENO (inst.ENO), FALSE too when the call is skipped."""
+    def _en_wrap(
+        self, en, eno, body: list, eno_bound: bool = False, own_eno: py.expr | None = None, ok: py.expr | None = None
+    ) -> list:
+        """EN := FALSE skips the call and gives ENO FALSE; else ENO is TRUE (or what the callee set, or
+        `ok`). `own_eno`: the instance's own ENO (inst.ENO), FALSE too when the call is skipped."""
+        done = ok if ok is not None else _const(True)
         if en is None:
             out = body
             if eno is not None and not eno_bound:
-                out = out + self.assign(eno.value, _const(True), None)
+                out = out + self.assign(eno.value, done, None)
             return out
-        yes = body + (self.assign(eno.value, _const(True), None) if eno is not None and not eno_bound else [])
+        yes = body + (self.assign(eno.value, done, None) if eno is not None and not eno_bound else [])
         no = self.assign(eno.value, _const(False), None) if eno is not None else []
         if own_eno is not None:
             no.append(py.Assign([own_eno], _const(False)))
         return [py.If(self.expr(en.value), yes, no or [py.Pass()])]
+
+    def _native_eno(self, tgt, eno) -> py.expr | None:
+        """ENO after a native call that ran, when the function says (FuncSig.eno_ok), else None (TRUE)."""
+        if eno is None or tgt.sig.eno_ok is None:
+            return None
+        return tgt.sig.eno_ok(len(tgt.args))([self.expr(a.value) for a in tgt.args])
 
     def _en_call_assign(self, s, v):
         bind = v.target.bind
@@ -243,7 +252,7 @@ class StmtGen(ExprGen):
             tgt.en = None
             body = [py.Expr(self.native_call(c, tgt))]
             tgt.en = en
-            return self._en_wrap(en, eno, body)
+            return self._en_wrap(en, eno, body, ok=self._native_eno(tgt, eno))
         raise Unsupported(s.span, "cannot call this")
 
     def fb_call(self, c: A.Call, tgt, run: str = "_body") -> list:
