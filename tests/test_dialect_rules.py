@@ -1193,3 +1193,13 @@ END_PROGRAM
 def test_adr_of_a_functions_own_result(dialect):
     plc = run(ADR_OF_RESULT, 1, dialect)
     assert (plc["main.a"], plc["main.b"]) == (17, 18)
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys"])
+def test_a_parenthesised_pointer_expression_is_dereferenced(dialect):
+    src = (
+        "PROGRAM main\nVAR a : ARRAY[0..3] OF INT := [1, 2, 3, 4]; p : POINTER TO INT; v : INT; END_VAR\n"
+        "p := ADR(a[0]);\nv := (p + 4)^;\n(p + SIZEOF(v) * 2)^ := 9;\nEND_PROGRAM\n"
+    )
+    plc = run(src, 1, dialect)
+    assert (plc["main.v"], plc["main.a"]) == (3, [1, 2, 9, 4])
