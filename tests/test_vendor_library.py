@@ -225,7 +225,8 @@ def test_an_unknown_library_is_a_located_error():
     src = "PROGRAM main\nVAR\n  t : Tc3_Nothing.TON;\nEND_VAR\nEND_PROGRAM\n"
     assert (
         "t.st:3:7: error[E012]: 'Tc3_Nothing.TON': no library 'Tc3_Nothing' is available (namespaces here: "
-        "__SYSTEM, IBaseLibrary, Standard, Tc2_Standard, Tc2_System, Tc2_Utilities, Util)"
+        "__SYSTEM, CmpErrors, IBaseLibrary, Standard, SysDir, SysFile, SysTypes, Tc2_Standard, Tc2_System, "
+        "Tc2_Utilities, Util)"
     ) in errors(src, "twincat")
 
 

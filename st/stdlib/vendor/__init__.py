@@ -1,7 +1,9 @@
 """The vendor compatibility library: what TwinCAT's Tc2_System / Tc2_Utilities and CODESYS's
 system libraries give that real code uses most (T_MaxString, F_LTrim, DWORD_TO_HEXSTR, MEMCPY,
-ADSLOGSTR, DRAND, GETCPUCOUNTER, …). Loaded under the codesys and twincat presets and by default
-(none of its names is IEC's; a user declaration of the same name wins); docs/semantics.md lists it."""
+ADSLOGSTR, DRAND, GETCPUCOUNTER, …; FB_MemRingBuffer and FB_FormatString: utilities.st,
+formatting.py; SysFile / SysDir: sysfile.st, sysfile.py). Loaded under the codesys and twincat
+presets and by default (none of its names is IEC's; a user declaration of the same name wins);
+docs/semantics.md lists it."""
 
 from __future__ import annotations
 
@@ -9,19 +11,34 @@ from functools import lru_cache
 from pathlib import Path
 
 from ...compiler.library import Library
-from . import formatting
+from . import formatting, sysfile
 from .natives import HELPERS, signatures
 
-SOURCES = tuple(Path(__file__).with_name(name) for name in ("vendor.st", "sysinfo.st", "utilities.st"))
-NAMESPACES = ("Tc2_System", "Tc2_Utilities", "Util", "__SYSTEM", "IBaseLibrary")
+SOURCES = tuple(
+    Path(__file__).with_name(name) for name in ("vendor.st", "sysinfo.st", "utilities.st", "sysfile.st")
+)
+NAMESPACES = (
+    "Tc2_System",
+    "Tc2_Utilities",
+    "Util",
+    "__SYSTEM",
+    "IBaseLibrary",
+    "SysFile",
+    "SysDir",
+    "SysTypes",
+    "CmpErrors",
+)
 
 
 @lru_cache(maxsize=1)
 def library() -> Library:
     lib = Library("vendor", namespaces=NAMESPACES)
     lib.sources.extend((str(p), p.read_text()) for p in SOURCES)
-    for sig in signatures() + formatting.signatures():
+    for module in (formatting, sysfile):
+        for sig in module.signatures():
+            lib.add(sig)
+        lib.helpers.update(module.HELPERS)
+    for sig in signatures():
         lib.add(sig)
     lib.helpers.update(HELPERS)
-    lib.helpers.update(formatting.HELPERS)
     return lib
