@@ -1203,3 +1203,33 @@ def test_a_parenthesised_pointer_expression_is_dereferenced(dialect):
     )
     plc = run(src, 1, dialect)
     assert (plc["main.v"], plc["main.a"]) == (3, [1, 2, 9, 4])
+
+
+SUBRANGE_OUTSIDE = """PROGRAM main
+VAR n : UINT(1..10); m : INT(-5..5); before : UINT; zero : UINT := 0; seven : INT := 7; END_VAR
+before := n;
+n := zero;
+m := seven;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize(
+    ("dialect", "n", "m"),
+    [("openplc", 1, 5), ("codesys", 0, 7), ("twincat", 0, 7)],  # MatIEC clamps; CODESYS/TwinCAT keep the value
+)
+def test_a_value_outside_a_subrange_is_what_the_dialects_compiler_makes_of_it(dialect, n, m):
+    plc = run(SUBRANGE_OUTSIDE, 1, dialect)
+    assert (plc["main.before"], plc["main.n"], plc["main.m"]) == (1, n, m)  # the default is the lower limit
+
+
+@pytest.mark.parametrize("dialect", [None, "iec"])
+def test_a_value_outside_a_subrange_is_a_range_fault_in_iec_and_the_default(dialect):
+    _, f = fault(SUBRANGE_OUTSIDE, dialect)
+    assert (f.kind, f.line, f.message) == ("RANGE", 4, "value 0 is outside the subrange 1..10")
+
+
+@pytest.mark.parametrize("dialect", [None, "openplc", "twincat"])
+def test_a_literal_outside_a_subrange_is_refused(dialect):
+    src = "PROGRAM main\nVAR n : UINT(1..10); END_VAR\nn := 0;\nEND_PROGRAM\n"
+    assert "t.st:3:6: error[E021]: 0 does not fit in UINT(1..10) (1..10)" in errors(src, dialect)

@@ -41,6 +41,10 @@ class Dialect:
     enum_as_int: bool = False  # an enumeration value is usable as its integer (not {attribute 'strict'})
     bits_as_numbers: bool = False  # bit strings and numbers convert implicitly where the value is kept
     nested_comments: bool = True  # (* (* *) *) nests (IEC 3rd edition, CODESYS); MatIEC ends at the first *)
+    # a value outside a subrange: "fault" (IEC calls it an error: a RANGE fault), "clamp" (MatIEC's
+    # generated check functions give the nearest limit), "store" (CODESYS and TwinCAT check only
+    # with CheckRange functions in the project: the value is kept, wrapped to the base type)
+    subranges: str = "fault"
 
 
 PRESETS = {
@@ -52,10 +56,25 @@ PRESETS = {
         vendor_extensions=False,
         writable_inputs=True,
         nested_comments=False,
+        subranges="clamp",
     ),
     "iec": Dialect("iec", vendor_extensions=False),
-    "codesys": Dialect("codesys", attribute_pragmas=True, writable_inputs=True, enum_as_int=True, bits_as_numbers=True),
-    "twincat": Dialect("twincat", attribute_pragmas=True, writable_inputs=True, enum_as_int=True, bits_as_numbers=True),
+    "codesys": Dialect(
+        "codesys",
+        attribute_pragmas=True,
+        writable_inputs=True,
+        enum_as_int=True,
+        bits_as_numbers=True,
+        subranges="store",
+    ),
+    "twincat": Dialect(
+        "twincat",
+        attribute_pragmas=True,
+        writable_inputs=True,
+        enum_as_int=True,
+        bits_as_numbers=True,
+        subranges="store",
+    ),
 }
 
 _PRAGMA = re.compile(r"\{\s*dialect\s+'([A-Za-z]+)'\s*\}", re.I)

@@ -244,6 +244,7 @@ class SubrangeType(Type):
     base: ElemType = None  # type: ignore[assignment]  # always given
     lo: int = 0
     hi: int = 0
+    outside: str = "fault"  # a value outside lo..hi: fault, clamp or store (the dialect's rule)
 
     @property
     def kind(self) -> str:  # type: ignore[override]
@@ -563,9 +564,10 @@ def common_type(a: Type, b: Type) -> Type | None:
 
 
 def literal_fits(value: Any, t: Type) -> bool:
+    u = unalias(t)
+    if isinstance(u, SubrangeType):
+        return bool(u.lo <= value <= u.hi)
     t = base_of(t)
-    if isinstance(t, SubrangeType):
-        return bool(t.lo <= value <= t.hi)
     if isinstance(t, ElemType) and t.kind in ("int", "bit"):
         return bool(t.lo <= value <= t.hi)
     return True

@@ -113,6 +113,11 @@ def _subrange(v: int, lo: int, hi: int) -> int:
     raise PLCFault(f"value {v} is outside the subrange {lo}..{hi}", "RANGE")
 
 
+def _clamp_subrange(v: int, lo: int, hi: int) -> int:
+    """A value outside a subrange as MatIEC stores it: the nearest limit."""
+    return lo if v < lo else hi if v > hi else v
+
+
 def _setbit(x: int, n: int, v: Any, bits: int, signed: bool) -> int:
     x = (x | (1 << n)) if v else (x & ~(1 << n))
     x &= (1 << bits) - 1
@@ -454,6 +459,7 @@ BASE_NAMESPACE: dict[str, Any] = {
     "_trunc": _trunc,
     "_ix": _ix,
     "_subrange": _subrange,
+    "_clamp_subrange": _clamp_subrange,
     "_setbit": _setbit,
     "_setbits": _setbits,
     "_for_dir": _for_dir,

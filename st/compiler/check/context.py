@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 from ...diagnostics import DiagnosticSink
 from ...model import types as T
@@ -37,6 +38,10 @@ class CheckContext:
     """Global constants being evaluated before the globals are declared (a cycle yields no value)."""
     deferred_inits: list[tuple[A.VarDecl, T.Type]] = field(default_factory=list)
     """Initial values of globals, checked once every global is declared (they may name each other)."""
+    deferred_pou_inits: list[tuple[A.VarDecl, T.Type, Any]] = field(default_factory=list)
+    """Initial values of POU variables met before the globals are declared (they may name global
+    constants: `h : HANDLE := RTS_INVALID_HANDLE`), checked right after; (declaration, type, scope)."""
+    globals_declared: bool = False
     calls: dict[str, list[tuple[str, Span]]] = field(default_factory=dict)
     """The call graph: caller lower name → [(callee lower name, span)], for the recursion check."""
     configs: list[A.Configuration] = field(default_factory=list)

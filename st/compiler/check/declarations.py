@@ -98,7 +98,7 @@ class Declarations(Part):
         if isinstance(spec, A.SubrangeType):
             t = self.resolve_type(spec, None)
             if isinstance(t, T.SubrangeType):
-                t = T.SubrangeType(td.name, t.base, t.lo, t.hi)
+                t = T.SubrangeType(td.name, t.base, t.lo, t.hi, t.outside)
             if td.init is not None:
                 self.check_initializer(td.init, t, None)
                 return T.AliasType(td.name, t, td.init)
@@ -212,7 +212,8 @@ class Declarations(Part):
             if not isinstance(lo, int) or not isinstance(hi, int):
                 self.err("E029", spec.span, "subrange bounds must be integer constants")
                 lo, hi = base.lo, base.hi
-            return T.SubrangeType(f"{base.name}({lo}..{hi})", base, lo, hi)
+            outside = self.ctx.dialect.subranges if self.ctx.dialect is not None else "fault"
+            return T.SubrangeType(f"{base.name}({lo}..{hi})", base, lo, hi, outside)
         if isinstance(spec, A.EnumType):
             return self._enum("", spec)
         if isinstance(spec, A.StructType):
@@ -288,6 +289,8 @@ class Declarations(Part):
         if not isinstance(root, A.Name):
             return False
         sym = self.exprs.lookup(root.name.lower(), scope)
+        if isinstance(sym, T.VarSym) and sym.owner is scope.pou and _below(sym.span, init.span):
+            sym = None  # declared below the variable it initialises: not set yet
         if sym is None and _declared_in(scope.pou, root.name):
             self.err(
                 "E029",
@@ -638,7 +641,10 @@ class Declarations(Part):
             if decl.init is not None and kind != "VAR_EXTERNAL" and owner is None:
                 self.ctx.deferred_inits.append((decl, t))
             elif decl.init is not None and kind != "VAR_EXTERNAL":
-                self.check_initializer(decl.init, t, scope)
+                if self.ctx.globals_declared:
+                    self.check_initializer(decl.init, t, scope)
+                else:  # it may name a global constant: checked once the globals are declared
+                    self.ctx.deferred_pou_inits.append((decl, t, scope))
                 if "CONSTANT" in quals:
                     cv = self.consts.value(decl.init, scope) if isinstance(decl.init, A.Expr) else None
                     if cv is not None:
@@ -759,6 +765,11 @@ class Declarations(Part):
                     )
                     return
             self.stmts.assignable(init, st, t, init.span)
+
+
+def _below(a: Span | None, b: Span | None) -> bool:
+    """Is position a after position b in the same file?"""
+    return a is not None and b is not None and a.file == b.file and (a.line, a.col) > (b.line, b.col)
 
 
 def _declared_in(pou: T.POUType, name: str) -> bool:

@@ -263,8 +263,10 @@ class Statements(Part):
                 v = self.consts.value(e, None) if isinstance(e, A.Expr) else None
                 if isinstance(v, int) and not T.literal_fits(v, dst):
                     shown = v if v.bit_length() < 256 else f"a value of {v.bit_length()} bits"
-                    b = cast(T.ElemType, T.base_of(dst))
-                    self.err("E021", span, f"{shown} does not fit in {dst} ({b.lo}..{b.hi})")
+                    u = T.unalias(dst)
+                    b = u if isinstance(u, T.SubrangeType) else cast(T.ElemType, T.base_of(dst))
+                    lo, hi = b.lo, b.hi
+                    self.err("E021", span, f"{shown} does not fit in {dst} ({lo}..{hi})")
                     return False
                 return True
             if d.is_real:

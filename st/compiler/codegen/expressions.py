@@ -246,8 +246,12 @@ class ExprGen:
             return node
         if isinstance(d, T.ElemType) and d.is_intlike:  # (base_of: only an ElemType is int-like)
             sub = T.unalias(dst)
-            if isinstance(sub, T.SubrangeType):
+            if isinstance(sub, T.SubrangeType) and sub.outside == "fault":
                 return _call("_subrange", node, _const(sub.lo), _const(sub.hi))
+            if isinstance(sub, T.SubrangeType) and sub.outside == "clamp":  # MatIEC's check functions
+                return _call("_clamp_subrange", node, _const(sub.lo), _const(sub.hi))
+            if isinstance(sub, T.SubrangeType):  # CODESYS/TwinCAT without CheckRange: kept, as the base type
+                return wrap(node, d) if not self.in_range(e, d) else node
             if s is not None and s.is_bool:
                 node = _call("_int", node)
             if not self.in_range(e, d):
@@ -405,6 +409,10 @@ class ExprGen:
     def x_Field(self, e: A.Field) -> py.expr:
         if isinstance(e.sym, T.EnumType):
             return _const(e.const)
+        if isinstance(e.base, A.Name) and e.base.sym is None and getattr(e.sym, "is_global", False):
+            name = A.Name(e.span, e.sym.name, e.sym)  # GVL_Main.x in an initial value (bodies are
+            name.ty = e.ty  # lowered to the plain name, lower/qualified.py)
+            return self.x_Name(name)
         bt = T.unalias(e.base.ty) if e.base.ty is not None else None
         if bt is STEP:
             idx = e.base.const
@@ -766,6 +774,9 @@ class ExprGen:
                 return _name(sym.pyname)  # the caller's own reference
             if sym in self.boxed:
                 return _call("_ItemRef", _name(sym.pyname), _const(0), _const(_wrap_spec(t)))
+            if (sym in self.cached or self.self_name is None) and T.unalias(t).is_aggregate:
+                # an array or structure in a local: the object itself (aggregates are written in place)
+                return _call("_ItemRef", py.List([self.var_load(sym)], py.Load()), _const(0), _const(None))
             if sym in self.cached or self.self_name is None:
                 raise Unsupported(e.span, f"internal: '{sym.name}' is held in a local but passed by reference")
             return _call("_AttrRef", self.this(), _const(sym.pyname), _const(_wrap_spec(t)))

@@ -14,9 +14,7 @@ from ...compiler.library import Library
 from . import formatting, sysfile
 from .natives import HELPERS, signatures
 
-SOURCES = tuple(
-    Path(__file__).with_name(name) for name in ("vendor.st", "sysinfo.st", "utilities.st", "sysfile.st")
-)
+SOURCES = tuple(Path(__file__).with_name(name) for name in ("vendor.st", "sysinfo.st", "utilities.st", "sysfile.st"))
 NAMESPACES = (
     "Tc2_System",
     "Tc2_Utilities",

@@ -53,10 +53,15 @@ def declare_globals(sem: Semantics) -> None:
                     gvl = gvl[:-1]
                     ctx.qualified_only.add(id(sym))
                 ctx.gvls.setdefault(gvl.lower(), {})[key] = sym
-    # global initializers may name other globals: check them once all are declared
+    # global initializers may name other globals: check them once all are declared; so may the
+    # initial values of the POUs' variables met so far
+    ctx.globals_declared = True
     for decl, t in ctx.deferred_inits:
         sem.decls.check_initializer(decl.init, t, None)
     ctx.deferred_inits = []
+    for decl, t, scope in ctx.deferred_pou_inits:
+        sem.decls.check_initializer(decl.init, t, scope)
+    ctx.deferred_pou_inits = []
     # bind VAR_EXTERNAL declarations (of POUs, their methods and property accessors)
     owners = []
     for pou in ctx.project.pous.values():
