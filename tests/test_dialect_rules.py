@@ -1233,3 +1233,36 @@ def test_a_value_outside_a_subrange_is_a_range_fault_in_iec_and_the_default(dial
 def test_a_literal_outside_a_subrange_is_refused(dialect):
     src = "PROGRAM main\nVAR n : UINT(1..10); END_VAR\nn := 0;\nEND_PROGRAM\n"
     assert "t.st:3:6: error[E021]: 0 does not fit in UINT(1..10) (1..10)" in errors(src, dialect)
+
+
+GLOBAL_CONSTANT_INITS = """{gvl 'GVL_P'}
+VAR_GLOBAL CONSTANT
+  N : UINT := 3;
+END_VAR
+VAR_GLOBAL CONSTANT
+  TOP : DINT := 40;
+END_VAR
+TYPE ST_Rec : STRUCT a : DINT; b : DINT; END_STRUCT END_TYPE
+FUNCTION_BLOCK F
+VAR CONSTANT
+  M : UINT := GVL_P.N + 100;
+END_VAR
+VAR x : UINT := GVL_P.N; y : DINT := TOP + 2; END_VAR
+METHOD Fill : DINT
+VAR r : ST_Rec; END_VAR
+MEMSET(ADR(r), 1, SIZEOF(r));       (* ADR of a structure held in the method's local *)
+Fill := r.b;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR f : F; m : UINT; x : UINT; y : DINT; filled : DINT; END_VAR
+m := f.M; x := f.x; y := f.y;
+filled := f.Fill();
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "twincat"])
+def test_global_constants_in_the_initial_values_of_a_pous_variables(dialect):
+    plc = run(GLOBAL_CONSTANT_INITS, 1, dialect)
+    assert (plc["main.m"], plc["main.x"], plc["main.y"], plc["main.filled"]) == (103, 3, 42, 0x01010101)
