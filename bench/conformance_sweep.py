@@ -14,7 +14,8 @@ DIR/conformance.md, every file's result to DIR/results.json. A file is:
 
 PLCopen XML (`plc.xml`, the OpenPLC Editor's library files) is compiled as it is (st reads its ST
 and SFC bodies); a project with an FBD, LD or IL body (E050) is counted as skipped, not as refused.
-TwinCAT's .TcPOU/.TcDUT/.TcGVL are counted as a project format unless --projects compiles them.
+TwinCAT's projects (.plcproj with their .TcPOU/.TcDUT/.TcGVL) are counted as a project format
+unless --projects compiles them (a source's projects as one unit).
 """
 
 from __future__ import annotations
@@ -95,7 +96,8 @@ SOURCES = (
         together=(("libs/sources/*", "**/*.st"), ("tests/fixtures/smart-traffic-light", "**/*.st")),
         pairs=True,
     ),
-    Source("TwinCAT: TcUnit", "twincat", "tcunit-TcUnit", project=("**/*.TcPOU", "**/*.TcDUT", "**/*.TcGVL")),
+    # TcUnit's library project and its verifier project, which TwinCAT builds with the library referenced
+    Source("TwinCAT: TcUnit and its verifier", "twincat", "tcunit-TcUnit", project=("**/*.plcproj",)),
 )
 
 
@@ -541,7 +543,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--projects",
         action="store_true",
-        help="also compile project files (.TcPOU/.TcDUT/.TcGVL), each source's as one unit, once st reads them",
+        help="also compile TwinCAT project files (.plcproj), each source's together as one unit",
     )
     ap.add_argument("--preset", help="this preset for every source instead of its own (to look behind a rule)")
     args = ap.parse_args(argv)
