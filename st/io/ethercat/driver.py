@@ -70,6 +70,7 @@ class DriveLink:
         self.velocity = 0
         self.error_code = 0
         self.offset_s = 0.0  # delay compensation: how far ahead the setpoint is taken
+        self.origin = 0.0  # axis units at the drive's increment 0 (MC_SetPosition, MC_Home move it)
         self.resetting = 0  # cycles left for a fault reset to show
         m = driver.master.slaves[slave]
         rx, tx = m.rx_layout, m.tx_layout
@@ -100,6 +101,10 @@ class DriveLink:
     def enabled(self) -> bool:
         return self.state == "OPERATION_ENABLED"
 
+    def shift(self, delta: float) -> None:
+        """The axis coordinate moves by delta units; the drive's increments stay where they are."""
+        self.origin += delta
+
     def fault_reset(self) -> None:
         if self.state in ("FAULT", "FAULT_REACTION_ACTIVE"):
             self.reset_phase = 2
@@ -117,7 +122,7 @@ class DriveLink:
     def _to_axis(self) -> None:
         ax = self.axis
         if ax is not None:
-            ax.act_pos = self.actual / self.scale
+            ax.act_pos = self.actual / self.scale + self.origin
             ax.act_vel = self.velocity / self.scale
 
     def pack(self) -> bytes:
@@ -137,7 +142,7 @@ class DriveLink:
             cw = 0x0F
         ax = self.axis
         if ax is not None and self.enabled and ax.power_on:
-            pos = ax.set_pos + ax.set_vel * self.offset_s
+            pos = ax.set_pos - self.origin + ax.set_vel * self.offset_s
             target = int(round(pos * self.scale)) - self.turns * (1 << 32)
         else:
             target = self.raw_pos if self.raw_pos is not None else 0

@@ -51,6 +51,8 @@ class Drive(Protocol):
 
     def fault_reset(self) -> None: ...
 
+    def shift(self, delta: float) -> None: ...  # the axis coordinate moves by delta units, the motor does not
+
 
 @dataclass
 class AxisConfig:
@@ -257,13 +259,16 @@ class Axis:
             self._activate(cmd)
             return cmd
         if cmd.kind == "set_pos":
+            moving = self.active is not None or bool(self.queue)
+            if cmd.params.get("queued") and moving and st in (DISCRETE, CONTINUOUS):
+                cmd.buffer_mode = BUFFERED  # mcQueued: when the motion commanded before has ended
+                if len(self.queue) >= self.cfg.buffer_size:
+                    return self._fail(cmd, E.BUFFER_FULL)
+                self.queue.append(cmd)
+                return cmd
             if st not in (DISABLED, STANDSTILL):
                 return self._fail(cmd, E.INVALID_STATE)
-            new = cmd.params["position"] + (self.act_pos if cmd.params["relative"] else 0.0)
-            delta = new - self.act_pos
-            self.set_pos += delta
-            self.act_pos += delta
-            cmd.status = DONE
+            self._set_position(cmd)
             return cmd
         blocked = {
             DISABLED: E.AXIS_DISABLED,
@@ -289,6 +294,24 @@ class Axis:
         if cmd.buffer_mode != BUFFERED and len(self.queue) == 1:
             self._replan_for_blend()
         return cmd
+
+    def _set_position(self, cmd: Command) -> None:
+        """MC_SetPosition: the commanded coordinate becomes Position (or moves by it, Relative), and
+        the actual one with it; the motor stays."""
+        p = cmd.params
+        self.shift_coordinates(p["position"] if p["relative"] else p["position"] - self.set_pos)
+        cmd.status = DONE
+
+    def shift_coordinates(self, delta: float) -> None:
+        """Move the axis's coordinate system by `delta` units: set and actual positions change
+        together and a drive only changes the offset between its increments and the axis's
+        units, so its target and its position do not jump and nothing moves."""
+        if not delta:
+            return
+        self.set_pos += delta
+        self.act_pos += delta
+        if self.drive is not None:
+            self.drive.shift(delta)
 
     def _validate(self, cmd: Command) -> int:
         p = cmd.params
@@ -469,9 +492,7 @@ class Axis:
                 self.error_stop(E.HOMING_FAILED)
             return
         if cmd.steps >= self._steps(cmd.profile.duration):
-            shift = p["_shift"]
-            self.set_pos += shift
-            self.act_pos += shift
+            self.shift_coordinates(p["_shift"])
             self.set_vel = self.set_acc = 0.0
             cmd.status = DONE
             self.active = None
@@ -564,8 +585,8 @@ class Axis:
                 self.stop_cmd = None
                 self.state = STANDSTILL
             return
-        if cmd.kind == "home":  # referencing at the current position
-            self.set_pos = self.act_pos = cmd.params["pos"]
+        if cmd.kind == "home":  # referencing at the current position: the coordinate, not the motor
+            self.shift_coordinates(cmd.params["pos"] - self.set_pos)
         self.active = None
         if self.queue:
             self._next()
@@ -580,6 +601,14 @@ class Axis:
             prev.in_velocity = False
         nxt = self.queue.pop(0)
         self.active = None
+        if nxt.kind == "set_pos":  # mcQueued: the motion before it has ended
+            self._set_position(nxt)
+            if self.queue:
+                self._next()
+            else:
+                self.set_vel = self.set_acc = 0.0
+                self.state = STANDSTILL
+            return
         self._activate(nxt, 0.0)
         if self.queue and self.queue[0].buffer_mode != BUFFERED:
             self._replan_for_blend()

@@ -233,7 +233,7 @@ def _p_home(fb):
 
 
 def _p_setpos(fb):
-    return {"position": float(fb.Position), "relative": bool(fb.Relative)}
+    return {"position": float(fb.Position), "relative": bool(fb.Relative), "queued": int(fb.ExecutionMode) == 2}
 
 
 def _power_body(self):

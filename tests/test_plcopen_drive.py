@@ -1,0 +1,128 @@
+"""PLCopen on a drive-bound axis (issue 19): what the program sees is what the emulated CiA 402
+drive does, cycle by cycle."""
+
+from __future__ import annotations
+
+import pytest
+
+from st import PLC
+from st.api import compile_text
+from st.io.ethercat import EtherCATDriver
+from st.io.ethercat.config import from_dict
+from st.stdlib.plcopen import E, axis_of, configure_axes
+
+PROGRAM = """
+PROGRAM main
+  VAR
+    a1 : AXIS_REF := (AxisNo := 1);
+    pw : MC_Power;
+    sp : MC_SetPosition;
+    hm : MC_Home;
+    mv : MC_MoveAbsolute;
+    en : BOOL := TRUE;
+    set, home, go : BOOL;
+    pos : LREAL := 1000.0;
+    rel : BOOL;
+    mode : MC_EXECUTION_MODE := mcImmediate;
+    target : LREAL := 1090.0;
+  END_VAR
+  pw(Axis := a1, Enable := en);
+  sp(Axis := a1, Execute := set, Position := pos, Relative := rel, ExecutionMode := mode);
+  hm(Axis := a1, Execute := home, Position := pos);
+  mv(Axis := a1, Execute := go, Position := target, Velocity := 360.0, Acceleration := 3600.0, Deceleration := 3600.0);
+END_PROGRAM
+CONFIGURATION c RESOURCE r ON PLC
+  TASK t (INTERVAL := T#1ms, PRIORITY := 1);
+  PROGRAM main WITH t : main;
+END_RESOURCE END_CONFIGURATION
+"""
+SEGMENT = {"segment": {"cycle": "1ms", "dc": True}, "slave": [{"name": "d1", "type": "cia402", "axis": 1}]}
+CPR = 1 << 23  # the emulated drive's increments per revolution (360 units)
+_COMPILED = None
+
+
+def make(**axis_cfg):
+    global _COMPILED
+    if _COMPILED is None:
+        _COMPILED = compile_text(PROGRAM, "drive.st")
+    plc = PLC(_COMPILED)
+    configure_axes(plc, {1: {"following_error_window": 5.0, **axis_cfg}})
+    drv = EtherCATDriver(plc, from_dict(SEGMENT), backend="sim")
+    return plc, drv, drv.segment.slaves[0].device
+
+
+def until(plc, cond, limit=20000):
+    for n in range(1, limit + 1):
+        plc.scan()
+        if cond():
+            return n
+    raise AssertionError("condition never became true")
+
+
+def enabled(plc):
+    until(plc, lambda: plc["main.pw.Status"])
+    plc.scan(20)  # settled
+
+
+@pytest.mark.parametrize(("relative", "pos", "expected"), [(False, 1000.0, 1000.0), (True, 1000.0, 1000.0)])
+def test_set_position_moves_the_coordinate_not_the_motor(relative, pos, expected):
+    plc, drv, d1 = make()
+    enabled(plc)
+    before_target, before_pos = d1.od[0x607A], d1.position
+    plc["main.rel"], plc["main.pos"] = relative, pos
+    plc["main.set"] = True
+    targets = []
+    for _ in range(50):
+        plc.scan()
+        targets.append(d1.od[0x607A])
+    ax = axis_of(plc, "main.a1")
+    assert plc["main.sp.Done"] and not plc["main.sp.Error"]
+    assert set(targets) == {before_target} and d1.position == before_pos  # no jump, no motion
+    assert abs(ax.act_pos - expected) < 1e-6 and abs(ax.set_pos - expected) < 1e-6
+    # a move to 1090 in the new coordinates turns the motor by 90°
+    plc["main.go"] = True
+    until(plc, lambda: plc["main.mv.Done"])
+    plc.scan(100)
+    assert abs(d1.position - (before_pos + CPR // 4)) <= 64
+    assert abs(ax.act_pos - 1090.0) < 0.003
+
+
+def test_home_at_the_current_position_does_not_move_the_motor():
+    plc, drv, d1 = make()
+    enabled(plc)
+    before_target = d1.od[0x607A]
+    plc["main.pos"] = -250.0
+    plc["main.home"] = True
+    targets = []
+    for _ in range(30):
+        plc.scan()
+        targets.append(d1.od[0x607A])
+    assert plc["main.hm.Done"]
+    assert set(targets) == {before_target}
+    assert abs(axis_of(plc, "main.a1").act_pos - -250.0) < 1e-6
+
+
+def test_set_position_queued_waits_for_the_move_and_immediate_is_refused_in_motion():
+    plc, drv, d1 = make()
+    enabled(plc)
+    start = d1.position
+    plc["main.target"] = 90.0
+    plc["main.go"] = True
+    plc.scan(100)  # moving
+    plc["main.mode"] = "mcQueued"
+    plc["main.set"] = True
+    plc.scan()
+    assert (plc["main.sp.Busy"], plc["main.sp.Done"], plc["main.mv.Busy"]) == (True, False, True)
+    n = until(plc, lambda: plc["main.sp.Done"])
+    ax = axis_of(plc, "main.a1")
+    assert plc["main.mv.Done"] and ax.state == "Standstill" and n > 200  # after the move (0.35 s)
+    plc.scan(100)
+    assert abs(ax.act_pos - 1000.0) < 0.003 and abs(d1.position - (start + CPR // 4)) <= 64
+    # immediate while moving: PLCopen's MC_SetPosition is for an axis at standstill here
+    plc["main.set"], plc["main.go"] = False, False
+    plc.scan()
+    plc["main.target"], plc["main.go"] = 1200.0, True
+    plc.scan(50)
+    plc["main.mode"], plc["main.set"] = "mcImmediate", True
+    plc.scan()
+    assert (plc["main.sp.Error"], plc["main.sp.ErrorID"]) == (True, E.INVALID_STATE)
