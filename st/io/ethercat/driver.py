@@ -60,7 +60,7 @@ class DriveLink:
         self.increments_per_rev = increments_per_rev
         self.scale = 1.0  # increments per user unit, set when the axis is attached
         self.want = False
-        self.reset_phase = 0
+        self.reset_request = False  # MC_Reset: controlword bit 7 up until the drive leaves Fault
         self.status = 0
         self.state = "NOT_READY_TO_SWITCH_ON"
         self.was_enabled = False
@@ -71,7 +71,6 @@ class DriveLink:
         self.error_code = 0
         self.offset_s = 0.0  # delay compensation: how far ahead the setpoint is taken
         self.origin = 0.0  # axis units at the drive's increment 0 (MC_SetPosition, MC_Home move it)
-        self.resetting = 0  # cycles left for a fault reset to show
         m = driver.master.slaves[slave]
         rx, tx = m.rx_layout, m.tx_layout
         self.rx_layout, self.tx_layout = rx, tx
@@ -101,14 +100,18 @@ class DriveLink:
     def enabled(self) -> bool:
         return self.state == "OPERATION_ENABLED"
 
+    @property
+    def faulted(self) -> bool:
+        return self.state in ("FAULT", "FAULT_REACTION_ACTIVE")
+
     def shift(self, delta: float) -> None:
         """The axis coordinate moves by delta units; the drive's increments stay where they are."""
         self.origin += delta
 
     def fault_reset(self) -> None:
-        if self.state in ("FAULT", "FAULT_REACTION_ACTIVE"):
-            self.reset_phase = 2
-            self.resetting = 50  # cycles the drive gets to leave Fault
+        """MC_Reset: the rising edge of controlword bit 7 goes out with this cycle's frame (after a
+        cycle with it low, if it was high), and bit 7 stays up until the drive has left Fault."""
+        self.reset_request = self.faulted
 
     # ------------------------------------------------------------------ each cycle
     def attach(self, ax) -> None:
@@ -127,10 +130,14 @@ class DriveLink:
 
     def pack(self) -> bytes:
         st = self.state
-        if self.reset_phase:  # a rising edge of bit 7: one cycle 0, then 0x80
-            cw = 0x00 if self.reset_phase == 2 else 0x80
-            self.reset_phase -= 1
-        elif st in ("FAULT", "FAULT_REACTION_ACTIVE"):
+        if self.reset_request and not self.faulted:
+            self.reset_request = False  # it left Fault
+        ax = self.axis
+        if self.reset_request and ax is not None and ax.reset_cmd is None:
+            self.reset_request = False  # MC_Reset gave up (RESET_FAILED)
+        if self.reset_request:  # bit 7 up (the cycle before it was down: the drive was in Fault)
+            cw = 0x80
+        elif self.faulted:
             cw = 0x00
         elif not self.want:
             cw = 0x06 if st in ("READY_TO_SWITCH_ON", "SWITCHED_ON", "OPERATION_ENABLED") else 0x00
@@ -140,7 +147,6 @@ class DriveLink:
             cw = 0x07
         else:  # switched on, operation enabled, quick stop active
             cw = 0x0F
-        ax = self.axis
         if ax is not None and self.enabled and ax.power_on:
             pos = ax.set_pos - self.origin + ax.set_vel * self.offset_s
             target = int(round(pos * self.scale)) - self.turns * (1 << 32)
@@ -172,17 +178,13 @@ class DriveLink:
         ax = self.axis
         if ax is None:
             return
-        if self.state in ("FAULT", "FAULT_REACTION_ACTIVE"):
+        if self.faulted:
             ax.power_on = False
-            if self.resetting:  # MC_Reset asked the drive to leave Fault: give it time
-                self.resetting -= 1
-            elif ax.state != "ErrorStop":
+            if ax.state != "ErrorStop":
                 ax.error_stop(E.DRIVE_FAULT)
         elif self.was_enabled and not self.enabled and self.want and ax.power_on:
             ax.power_on = False
             ax.error_stop(E.POWER_STAGE_LOST)
-        else:
-            self.resetting = 0
         self.was_enabled = self.enabled
 
 

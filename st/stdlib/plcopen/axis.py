@@ -45,6 +45,9 @@ class Drive(Protocol):
     @property
     def enabled(self) -> bool: ...  # the power stage is on (CiA 402 Operation Enabled)
 
+    @property
+    def faulted(self) -> bool: ...  # the drive is in Fault (or its fault reaction)
+
     def attach(self, ax: Axis) -> None: ...
 
     def request_enable(self, on: bool) -> None: ...
@@ -70,6 +73,7 @@ class AxisConfig:
     sw_limit_max: float = math.inf
     following_error_window: float = math.inf
     enable_timeout: float = 2.0  # s
+    reset_timeout: float = 1.0  # s: MC_Reset on a drive waits this long for it to leave Fault
     enable_delay: float = 0.0  # simulated drive: seconds until the power stage is on (inf: never)
     buffer_size: int = 8
     # MC_Home: "current" references at the current position; "switch" moves at home_velocity in
@@ -133,6 +137,8 @@ class Axis:
         self.drive: Drive | None = None  # an attached drive (EtherCAT); None: virtual axis
         self.home_signal = None  # callable → bool: the reference switch (config home_switch)
         self.axis_no = 0
+        self.reset_cmd: Command | None = None  # MC_Reset waiting for the drive to leave Fault
+        self.reset_wait = 0.0
 
     # ------------------------------------------------------------------ helpers
     def new_command(self, kind: str, params: dict, buffer_mode: int = ABORTING) -> Command:
@@ -224,20 +230,47 @@ class Axis:
             self.set_vel = self.set_acc = 0.0
 
     def reset(self, cmd: Command) -> Command:
+        """MC_Reset. A virtual axis leaves ErrorStop at once; on a drive the fault reset goes out in
+        this cycle and the command stays Busy until the drive has left Fault (the axis is then
+        Disabled, and Standstill once MC_Power has the power stage on again), or ends with
+        RESET_FAILED after `reset_timeout`, the axis staying in ErrorStop."""
         if self.state != ERRORSTOP:
             return self._fail(cmd, E.NO_ERROR_TO_RESET)
+        if self.reset_cmd is not None and not self.reset_cmd.terminal:
+            self.reset_cmd.status = ABORTED  # a new Execute edge takes over
+        if self.drive is not None:
+            self.drive.fault_reset()
+            cmd.status = ACTIVE
+            self.reset_cmd, self.reset_wait = cmd, 0.0
+            self._reset_progress()
+            return cmd
+        self._leave_errorstop()
+        cmd.status = DONE
+        return cmd
+
+    def _leave_errorstop(self) -> None:
         self.axis_error = 0
         self._ramp = None
         self.set_vel = self.set_acc = 0.0
-        if self.drive is not None:  # fault reset in the drive; power returns through MC_Power
-            self.drive.fault_reset()
-            if not self.drive.enabled:
-                self.power_on = False
+        if self.drive is not None and not self.drive.enabled:
+            self.power_on = False
         self.state = STANDSTILL if (self.power_on and self.power_request) else DISABLED
         if self.state == DISABLED:
             self.power_on = False
-        cmd.status = DONE
-        return cmd
+
+    def _reset_progress(self) -> None:
+        """A pending MC_Reset on a drive: done when the drive has left Fault, failed at the timeout."""
+        cmd, drive = self.reset_cmd, self.drive
+        if cmd is None or cmd.terminal or drive is None:
+            self.reset_cmd = None
+            return
+        if not drive.faulted:
+            self._leave_errorstop()
+            cmd.status = DONE
+            self.reset_cmd = None
+        elif self.reset_wait >= self.cfg.reset_timeout - 1e-9:
+            self._fail(cmd, E.RESET_FAILED)
+            self.reset_cmd = None
 
     # ------------------------------------------------------------------ submitting commands
     def submit(self, cmd: Command) -> Command:
@@ -537,6 +570,9 @@ class Axis:
         dt = self.cycle
         if self.power_request and not self.power_on:
             self.power_wait += dt
+        if self.reset_cmd is not None:
+            self.reset_wait += dt
+            self._reset_progress()
         if self.state == ERRORSTOP:
             ramp = getattr(self, "_ramp", None)
             if ramp is not None:
