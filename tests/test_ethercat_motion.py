@@ -146,7 +146,8 @@ def test_a_drive_fault_stops_the_axis_and_reset_recovers_it():
     plc.scan(200)
     drive(drv, 0).inject_fault(0x7500)
     n = until(plc, lambda: plc["main.st1.ErrorStop"])
-    assert n <= 3 and plc["main.err1.AxisErrorID"] == E.DRIVE_FAULT
+    # AxisErrorID: the drive's own code (0x603F); StAxisErrorID: st's
+    assert n <= 3 and (plc["main.err1.AxisErrorID"], plc["main.err1.StAxisErrorID"]) == (0x7500, E.DRIVE_FAULT)
     assert plc["main.vel1.Error"] and plc["main.vel1.ErrorID"] == E.AXIS_ERRORSTOP
     assert axis_of(plc, "main.a2").state == "ContinuousMotion"  # the other axis goes on
     plc["main.spin"] = False
@@ -173,10 +174,22 @@ def test_lost_frames_put_the_axes_in_errorstop_and_the_segment_recovers():
     assert axis_of(plc, "main.a1").state == "Standstill"
     assert drv.stats()["lost_frames"] == 2 and drv.stats()["outages"] == 0
     drv.segment.drop_frames(150)  # 150 ms: the drives' SyncManager watchdog fires too
-    plc.scan(4)  # the third lost frame; ReadStatus sees it in the next scan
-    assert plc["main.st1.ErrorStop"] and plc["main.err1.AxisErrorID"] == E.COMMUNICATION_LOST
-    assert axis_of(plc, "main.a2").state == "ErrorStop"
+    plc.scan(4)  # the third lost frame; the read blocks see it in the next scan
+    assert axis_of(plc, "main.a1").state == "ErrorStop" and axis_of(plc, "main.a2").state == "ErrorStop"
+    # nothing can be read from the drive now: the read blocks say so
+    assert (plc["main.st1.Valid"], plc["main.st1.Error"], plc["main.st1.ErrorID"]) == (
+        False,
+        True,
+        E.COMMUNICATION_LOST,
+    )
+    assert (plc["main.err1.Valid"], plc["main.err1.ErrorID"]) == (False, E.COMMUNICATION_LOST)
     plc.scan(200)
+    # back in OP: valid again, and the axis error is the lost communication
+    assert (plc["main.st1.Valid"], plc["main.st1.ErrorStop"]) == (True, True)
+    assert (plc["main.err1.AxisErrorID"], plc["main.err1.StAxisErrorID"]) == (
+        E.COMMUNICATION_LOST,
+        E.COMMUNICATION_LOST,
+    )
     s = drv.stats()
     assert s["lost_frames"] == 152 and s["outages"] == 1 and s["recoveries"] == 1
     assert [x.state_name for x in drv.segment.slaves] == ["OP", "OP", "OP"]

@@ -177,3 +177,47 @@ def test_reset_of_a_drive_that_stays_in_fault_fails_after_the_reset_timeout():
     # 50 ms run out in the kernel step of cycle 50; the block reports it at its next call
     assert n == 51 and plc["main.rst.ErrorID"] == E.RESET_FAILED
     assert axis_of(plc, "main.a1").state == "ErrorStop" and link.out_values[link.i_cw] == 0x00  # bit 7 down
+
+
+REFS_PROGRAM = """
+PROGRAM main
+  VAR
+    a1 : AXIS_REF := (AxisNo := 1);
+    again : AXIS_REF := (AxisNo := 1);
+    typo : AXIS_REF := (AxisNo := 3);
+    pw : MC_Power; pw3 : MC_Power; rd3 : MC_ReadActualPosition; mv3 : MC_MoveAbsolute; st_again : MC_ReadStatus;
+  END_VAR
+  pw(Axis := a1, Enable := TRUE);
+  st_again(Axis := again, Enable := TRUE);
+  pw3(Axis := typo, Enable := TRUE);
+  rd3(Axis := typo, Enable := TRUE);
+  mv3(Axis := typo, Execute := TRUE, Position := 1.0, Velocity := 1.0, Acceleration := 1.0, Deceleration := 1.0);
+END_PROGRAM
+"""
+
+
+def test_an_axis_ref_naming_no_configured_axis_is_invalid_and_one_axis_no_is_one_axis():
+    plc = PLC(compile_text(REFS_PROGRAM, "refs.st", use_cache=False))
+    configure_axes(plc, {1: {}})
+    plc.scan(3)
+    assert (plc["main.pw.Status"], plc["main.st_again.Standstill"]) == (True, True)  # the same axis 1
+    assert axis_of(plc, "main.again") is axis_of(plc, "main.a1")
+    for fb, on in (("pw3", "Status"), ("rd3", "Valid"), ("mv3", "Busy")):
+        assert (plc[f"main.{fb}.Error"], plc[f"main.{fb}.ErrorID"], plc[f"main.{fb}.{on}"]) == (
+            True,
+            E.INVALID_AXIS_REF,
+            False,
+        )
+
+
+def test_a_following_error_reported_by_the_drive_is_a_following_error():
+    plc, drv, d1 = make(following_error_window=1e9)  # the axis's own check never fires
+    enabled(plc)
+    d1.od[0x6065] = 100  # the drive's following error window: 100 increments
+    d1.motor.max_speed = 1.0  # the motor cannot follow
+    plc["main.target"], plc["main.go"] = 10000.0, True
+    until(plc, lambda: axis_of(plc, "main.a1").state == "ErrorStop", 2000)
+    ax = axis_of(plc, "main.a1")
+    assert ax.axis_error == E.FOLLOWING_ERROR and drv.links[0].error_code == 0x8611
+    plc.scan()
+    assert (plc["main.mv.Error"], plc["main.mv.ErrorID"]) == (True, E.AXIS_ERRORSTOP)

@@ -69,6 +69,9 @@ class DriveLink:
         self.actual = 0  # unwrapped increments
         self.velocity = 0
         self.error_code = 0
+        # its inputs are current: not during an outage (lost_frame_limit frames lost in a row, until
+        # the slaves are back in OP)
+        self.readable = False
         self.offset_s = 0.0  # delay compensation: how far ahead the setpoint is taken
         self.origin = 0.0  # axis units at the drive's increment 0 (MC_SetPosition, MC_Home move it)
         m = driver.master.slaves[slave]
@@ -180,8 +183,8 @@ class DriveLink:
             return
         if self.faulted:
             ax.power_on = False
-            if ax.state != "ErrorStop":
-                ax.error_stop(E.DRIVE_FAULT)
+            if ax.state != "ErrorStop":  # statusword bit 13 in CSP: the drive's following error
+                ax.error_stop(E.FOLLOWING_ERROR if self.status & 0x2000 else E.DRIVE_FAULT)
         elif self.was_enabled and not self.enabled and self.want and ax.power_on:
             ax.power_on = False
             ax.error_stop(E.POWER_STAGE_LOST)
@@ -381,6 +384,8 @@ class EtherCATDriver(IODriverBase):
                 table[idx] = bool(v) if size == "X" else int(v)
             if self.outage:
                 self._recover()
+            for link in self.links:  # up to lost_frame_limit lost frames keep the last values
+                link.readable = not self.outage
             self.bad_run = 0
         else:
             self.bad_run += 1
@@ -389,6 +394,7 @@ class EtherCATDriver(IODriverBase):
                 self.counters["outages"] += 1
                 for link in self.links:
                     link.state = "UNKNOWN"
+                    link.readable = False
                     ax = link.axis
                     if ax is not None:
                         ax.power_on = False

@@ -48,6 +48,12 @@ class Drive(Protocol):
     @property
     def faulted(self) -> bool: ...  # the drive is in Fault (or its fault reaction)
 
+    @property
+    def readable(self) -> bool: ...  # its actual values came with the last exchange (frames, OP)
+
+    @property
+    def error_code(self) -> int: ...  # the drive's own error code (CiA 402 0x603F), 0 if none
+
     def attach(self, ax: Axis) -> None: ...
 
     def request_enable(self, on: bool) -> None: ...

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from ...runtime.iodriver import IODriver, IODriverBase
 from ...runtime.scheduler import Task
+from .errors import E
 from .axis import (
     ABORTED,
     ACTIVE,
@@ -45,10 +46,19 @@ class MotionRegistry(IODriverBase):
         self.task = None
         self.traces: list = []  # [AxisTrace]
 
-    def axis(self, ref) -> Axis:
-        """The Axis behind an AXIS_REF value (created on first use)."""
+    def axis(self, ref) -> Axis | None:
+        """The Axis behind an AXIS_REF value, created on first use: one per AxisNo (every AXIS_REF
+        naming AxisNo n is the same axis), and one per AXIS_REF with AxisNo 0 (a virtual axis).
+        Once axes are configured (configure_axes, a drive claiming one), an AxisNo that names
+        none is None: the blocks report INVALID_AXIS_REF rather than make an axis up."""
         h = ref.Handle
         ax = self.axes.get(h)
+        if ax is None and ref.AxisNo:
+            ax = next((a for a in self.axes.values() if a.axis_no == ref.AxisNo), None)
+            if ax is not None:
+                ref.Handle = ax.handle
+            elif (self.configs or self.drives) and ref.AxisNo not in self.configs and ref.AxisNo not in self.drives:
+                return None
         if ax is None:
             h = h or (max(self.axes, default=0) + 1)
             ax = Axis(h, self.configs.get(ref.AxisNo) or AxisConfig(name=f"axis{ref.AxisNo or h}"))
@@ -155,6 +165,9 @@ def _motion_body(kind: str, params):
     def body(self, _reg=None):
         reg = self._motion
         ax = reg.axis(self.Axis)
+        if ax is None:
+            _edge(self)
+            return _invalid_axis_ref(self)
         if _edge(self):
             old = _lookup(ax, self)
             if old is not None and old.terminal:
@@ -239,6 +252,8 @@ def _p_setpos(fb):
 def _power_body(self):
     reg = self._motion
     ax = reg.axis(self.Axis)
+    if ax is None:
+        return _invalid_axis_ref(self, bool(self.Enable))
     en = bool(self.Enable)
     status, code = ax.power(id(self), en)
     self.Status = status
@@ -251,6 +266,9 @@ def _power_body(self):
 def _reset_body(self):
     reg = self._motion
     ax = reg.axis(self.Axis)
+    if ax is None:
+        _edge(self)
+        return _invalid_axis_ref(self)
     if _edge(self):
         old = _lookup(ax, self)
         if old is not None:
@@ -262,12 +280,34 @@ def _reset_body(self):
     _execute_outputs(self, cmd, bool(self.Execute), False, False)
 
 
+def _invalid_axis_ref(fb, shown: bool = True) -> None:
+    """An AXIS_REF that names no configured axis: Error INVALID_AXIS_REF, nothing else TRUE."""
+    for name in ("Busy", "Active", "Done", "CommandAborted", "InVelocity", "Status", "Valid"):
+        if name in type(fb).__slots__:
+            setattr(fb, name, False)
+    fb.Error = shown
+    fb.ErrorID = int(E.INVALID_AXIS_REF) if shown else 0
+
+
+def _read_outputs(self, ax: Axis | None) -> bool:
+    """Valid/Busy/Error/ErrorID of a read block; TRUE when its values may be read now. Not while
+    the axis's drive cannot be read (communication lost, out of OP): Error COMMUNICATION_LOST,
+    Valid FALSE, Valid again once the values come back."""
+    en = bool(self.Enable)
+    code = 0
+    if en and ax is None:
+        code = E.INVALID_AXIS_REF
+    elif en and ax is not None and ax.drive is not None and not ax.drive.readable:
+        code = E.COMMUNICATION_LOST
+    self.Busy = en
+    self.Valid = en and not code
+    self.Error, self.ErrorID = bool(code), int(code)
+    return bool(self.Valid)
+
+
 def _read_status_body(self):
     ax = self._motion.axis(self.Axis)
-    en = bool(self.Enable)
-    st = ax.state if en else None
-    self.Valid = self.Busy = en
-    self.Error, self.ErrorID = False, 0
+    st = ax.state if _read_outputs(self, ax) and ax is not None else None
     self.ErrorStop, self.Disabled, self.Stopping = st == ERRORSTOP, st == DISABLED, st == STOPPING
     self.Homing, self.Standstill = st == HOMING, st == STANDSTILL
     self.DiscreteMotion, self.ContinuousMotion, self.SynchronizedMotion = st == DISCRETE, st == CONTINUOUS, False
@@ -275,26 +315,30 @@ def _read_status_body(self):
 
 def _read_position_body(self):
     ax = self._motion.axis(self.Axis)
-    en = bool(self.Enable)
-    self.Valid = self.Busy = en
-    self.Error, self.ErrorID = False, 0
-    self.Position = ax.actual_position() if en else 0.0
+    if _read_outputs(self, ax) and ax is not None:
+        self.Position = ax.actual_position()
+    elif not self.Enable:
+        self.Position = 0.0
 
 
 def _read_velocity_body(self):
     ax = self._motion.axis(self.Axis)
-    en = bool(self.Enable)
-    self.Valid = self.Busy = en
-    self.Error, self.ErrorID = False, 0
-    self.Velocity = ax.act_vel if en else 0.0
+    if _read_outputs(self, ax) and ax is not None:
+        self.Velocity = ax.act_vel
+    elif not self.Enable:
+        self.Velocity = 0.0
 
 
 def _read_axis_error_body(self):
+    """AxisErrorID: the drive's own code (0x603F) when the axis error came from a drive that
+    reports one, else st's; StAxisErrorID: st's ErrorID of the axis error."""
     ax = self._motion.axis(self.Axis)
-    en = bool(self.Enable)
-    self.Valid = self.Busy = en
-    self.Error, self.ErrorID = False, 0
-    self.AxisErrorID = int(ax.axis_error) if en else 0
+    if _read_outputs(self, ax) and ax is not None:
+        own = int(ax.axis_error)
+        drive_code = ax.drive.error_code if ax.drive is not None and own in (E.DRIVE_FAULT, E.FOLLOWING_ERROR) else 0
+        self.AxisErrorID, self.StAxisErrorID = drive_code or own, own
+    elif not self.Enable:
+        self.AxisErrorID = self.StAxisErrorID = 0
 
 
 BODIES = {
