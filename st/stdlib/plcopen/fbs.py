@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from ...runtime.iodriver import IODriver, IODriverBase
 from ...runtime.scheduler import Task
-from .errors import E
 from .axis import (
     ABORTED,
     ACTIVE,
@@ -28,6 +27,7 @@ from .axis import (
     AxisConfig,
     Drive,
 )
+from .errors import E
 
 DEFAULT_CYCLE_S = 0.001
 
