@@ -221,3 +221,65 @@ def test_a_following_error_reported_by_the_drive_is_a_following_error():
     assert ax.axis_error == E.FOLLOWING_ERROR and drv.links[0].error_code == 0x8611
     plc.scan()
     assert (plc["main.mv.Error"], plc["main.mv.ErrorID"]) == (True, E.AXIS_ERRORSTOP)
+
+
+STOP_PROGRAM = RESET_PROGRAM.replace(
+    "    rst : MC_Reset; reset : BOOL;", "    rst : MC_Reset; reset : BOOL; stp : MC_Stop; stop : BOOL;"
+).replace(
+    "  rst(Axis := a1, Execute := reset);",
+    "  rst(Axis := a1, Execute := reset);\n  stp(Axis := a1, Execute := stop, Deceleration := 3600.0);",
+)
+_STOP = None
+
+
+def make_stop():
+    global _STOP
+    if _STOP is None:
+        _STOP = compile_text(STOP_PROGRAM, "stop.st")
+    plc = PLC(_STOP)
+    configure_axes(plc, {1: {"following_error_window": 5.0}})
+    drv = EtherCATDriver(plc, from_dict(SEGMENT), backend="sim")
+    return plc, drv, drv.segment.slaves[0].device
+
+
+def held_stop(plc):
+    enabled(plc)
+    plc["main.stop"] = True
+    until(plc, lambda: plc["main.stp.Done"], 100)
+    plc.scan(5)
+    assert plc["main.stp.Done"] and axis_of(plc, "main.a1").state == "Stopping"  # held: Execute stays TRUE
+
+
+def test_a_held_stop_ends_with_command_aborted_when_the_axis_is_powered_off():
+    plc, drv, d1 = make_stop()
+    held_stop(plc)
+    plc["main.en"] = False
+    plc.scan()
+    assert (plc["main.stp.Done"], plc["main.stp.CommandAborted"], plc["main.stp.Error"]) == (False, True, False)
+
+
+def test_a_held_stop_ends_with_error_when_the_axis_goes_to_errorstop():
+    plc, drv, d1 = make_stop()
+    held_stop(plc)
+    d1.inject_fault(0x7500)
+    plc.scan(3)
+    assert (plc["main.stp.Done"], plc["main.stp.Error"], plc["main.stp.ErrorID"]) == (False, True, E.AXIS_ERRORSTOP)
+
+
+def test_power_status_follows_the_drives_statusword_not_the_enable_request():
+    plc, drv, d1 = make_stop()
+    statuses, enabled_in_drive = [], []
+    for _ in range(40):
+        plc.scan()
+        statuses.append(plc["main.pw.Status"])
+        enabled_in_drive.append(drv.links[0].enabled)
+    # the block sees the statusword of the exchange at the end of the scan before
+    assert statuses[1:] == enabled_in_drive[:-1] and statuses[-1] and not statuses[0]
+    plc["main.en"] = False
+    statuses, enabled_in_drive = [], []
+    for _ in range(10):
+        plc.scan()
+        statuses.append(plc["main.pw.Status"])
+        enabled_in_drive.append(drv.links[0].enabled)
+    # TRUE until the drive reports it left Operation Enabled, a few cycles after Enable fell
+    assert statuses[1:] == enabled_in_drive[:-1] and statuses[:2] == [True, True] and not statuses[-1]

@@ -193,15 +193,15 @@ class Axis:
                 self.power_on = False
                 if self.state != ERRORSTOP:
                     self._abort_all()
-                    if self.stop_cmd is not None and not self.stop_cmd.terminal:
-                        self.stop_cmd.status = ABORTED
+                    if self.stop_cmd is not None and self.stop_cmd.status in (ACTIVE, DONE):
+                        self.stop_cmd.status = ABORTED  # decelerating, or held with Done showing
                     self.stop_cmd = None
                     self.state = DISABLED
                 self.set_vel = self.set_acc = 0.0
-            return False, 0
+            return self._power_status(), 0
         self.power_owner = fb_id
         if self.state == ERRORSTOP:
-            return self.power_on, 0
+            return self._power_status(), 0
         if self.drive is not None:
             self.drive.request_enable(True)
         if not self.power_on:
@@ -214,16 +214,21 @@ class Axis:
                 if self.state == DISABLED:
                     self.state = STANDSTILL
             elif self.power_wait >= self.cfg.enable_timeout - 1e-9:
-                return False, E.ENABLE_TIMEOUT
-        return self.power_on, 0
+                return self._power_status(), E.ENABLE_TIMEOUT
+        return self._power_status(), 0
+
+    def _power_status(self) -> bool:
+        """MC_Power.Status: the power stage as it is, on a drive its statusword (Operation
+        Enabled), which lags the Enable request by the drive's own transitions."""
+        return self.drive.enabled if self.drive is not None else self.power_on
 
     def error_stop(self, code: int) -> None:
         """An axis error: ErrorStop now; the active and every buffered command report Error."""
         if self.state == ERRORSTOP:
             return
         self._abort_all(ERROR, E.AXIS_ERRORSTOP)
-        if self.stop_cmd is not None and not self.stop_cmd.terminal:
-            self._fail(self.stop_cmd, E.AXIS_ERRORSTOP)
+        if self.stop_cmd is not None and self.stop_cmd.status in (ACTIVE, DONE):
+            self._fail(self.stop_cmd, E.AXIS_ERRORSTOP)  # decelerating, or held with Done showing
         self.stop_cmd = None
         self.axis_error = code
         self.state = ERRORSTOP
