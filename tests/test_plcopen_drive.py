@@ -19,7 +19,11 @@ PROGRAM main
     sp : MC_SetPosition;
     hm : MC_Home;
     mv : MC_MoveAbsolute;
+    mr : MC_MoveRelative;
     en : BOOL := TRUE;
+    cu, next : BOOL;
+    acc : LREAL := 3600.0;
+    vel : LREAL := 360.0;
     set, home, go : BOOL;
     pos : LREAL := 1000.0;
     rel : BOOL;
@@ -29,7 +33,10 @@ PROGRAM main
   pw(Axis := a1, Enable := en);
   sp(Axis := a1, Execute := set, Position := pos, Relative := rel, ExecutionMode := mode);
   hm(Axis := a1, Execute := home, Position := pos);
-  mv(Axis := a1, Execute := go, Position := target, Velocity := 360.0, Acceleration := 3600.0, Deceleration := 3600.0);
+  mv(Axis := a1, Execute := go, ContinuousUpdate := cu, Position := target, Velocity := vel, Acceleration := acc,
+     Deceleration := 3600.0);
+  mr(Axis := a1, Execute := next, Distance := 10.0, Velocity := 100.0, Acceleration := 1000.0, Deceleration := 1000.0,
+     BufferMode := mcBuffered);
 END_PROGRAM
 CONFIGURATION c RESOURCE r ON PLC
   TASK t (INTERVAL := T#1ms, PRIORITY := 1);
@@ -283,3 +290,36 @@ def test_power_status_follows_the_drives_statusword_not_the_enable_request():
         enabled_in_drive.append(drv.links[0].enabled)
     # TRUE until the drive reports it left Operation Enabled, a few cycles after Enable fell
     assert statuses[1:] == enabled_in_drive[:-1] and statuses[:2] == [True, True] and not statuses[-1]
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "code"), [("acc", -1.0, E.INVALID_ACCELERATION), ("vel", 0.0, E.INVALID_VELOCITY)]
+)
+def test_an_invalid_continuous_update_ends_the_move_with_error_and_the_axis_halts(name, value, code):
+    plc, drv, d1 = make()
+    enabled(plc)
+    plc["main.cu"], plc["main.go"] = True, True
+    plc.scan(100)
+    plc[f"main.{name}"] = value
+    plc.scan()
+    ax = axis_of(plc, "main.a1")
+    assert (plc["main.mv.Error"], plc["main.mv.ErrorID"], plc["main.mv.Busy"]) == (True, code, False)
+    assert ax.state == "DiscreteMotion" and ax.set_vel > 0  # halting with the last valid deceleration
+    until(plc, lambda: ax.state == "Standstill", 200)
+    assert ax.set_vel == 0.0 and ax.set_pos < 1090.0
+
+
+def test_an_invalid_continuous_update_hands_over_to_the_buffered_successor():
+    plc, drv, d1 = make()
+    enabled(plc)
+    plc["main.cu"], plc["main.go"] = True, True
+    plc.scan(100)
+    plc["main.next"] = True
+    plc.scan()
+    assert plc["main.mr.Busy"] and not plc["main.mr.Active"]  # buffered behind the move
+    plc["main.acc"] = 0.0
+    plc.scan(2)
+    assert (plc["main.mv.ErrorID"], plc["main.mr.Active"]) == (E.INVALID_ACCELERATION, True)  # it starts now
+    start = plc["main.mr.Active"] and axis_of(plc, "main.a1").set_pos
+    until(plc, lambda: plc["main.mr.Done"], 2000)
+    assert abs(axis_of(plc, "main.a1").set_pos - (start + 10.0)) < 1.0

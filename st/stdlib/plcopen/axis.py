@@ -339,6 +339,31 @@ class Axis:
             self._replan_for_blend()
         return cmd
 
+    def update_failed(self, cmd: Command, code: int, valid: dict) -> None:
+        """ContinuousUpdate with an invalid input: the command ends with Error `code`. Buffered,
+        it leaves the queue; active, its buffered successor starts now, as after the end of the
+        command, or without one the axis halts with the command's last valid deceleration and
+        jerk (DiscreteMotion, then Standstill)."""
+        self._fail(cmd, code)
+        if cmd in self.queue:
+            self.queue.remove(cmd)
+            return
+        if cmd is not self.active:
+            return
+        self.active = None
+        if self.queue:
+            self._next()
+            return
+        halt = Command(0, "halt", {"dec": valid.get("dec", 0.0), "jerk": valid.get("jerk", 0.0)}, ABORTING)
+        if self._validate(halt):  # no valid deceleration to use: the axis's own stop ramp
+            halt.params["dec"] = self.cfg.stop_deceleration or self.cfg.max_deceleration
+        if self._validate(halt):  # none configured either: the set velocity stops at once
+            self.set_vel = self.set_acc = 0.0
+            self.state = STANDSTILL
+            return
+        self.state = DISCRETE
+        self._activate(halt)
+
     def _set_position(self, cmd: Command) -> None:
         """MC_SetPosition: the commanded coordinate becomes Position (or moves by it, Relative), and
         the actual one with it; the motor stays."""

@@ -198,11 +198,14 @@ def _continuous_update(ax: Axis, cmd, new: dict) -> None:
     changed = any(new.get(k) != cmd.params.get(k) for k in new)
     if not changed:
         return
-    start = cmd.params.get("_start")
+    old = dict(cmd.params)
     cmd.params.update(new)
-    if start is not None:
-        cmd.params["_start"] = start
-    if cmd.status == ACTIVE and ax._validate(cmd) == 0:
+    if "_start" in old:
+        cmd.params["_start"] = old["_start"]
+    code = ax._validate(cmd)
+    if code:  # the command ends with the error; the axis goes on as docs/motion.md says
+        ax.update_failed(cmd, code, old)
+    elif cmd.status == ACTIVE:
         ax._activate(cmd)
 
 
