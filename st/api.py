@@ -16,6 +16,7 @@ from .model.program import Project
 from .runtime import plc as runtime_plc
 from .source import SourceFile
 from .stdlib.iec import default_library
+from .stdlib.plcopen import AxisView, axis_view
 from .stdlib.plcopen import library as plcopen_library
 from .stdlib.vendor import library as vendor_library
 
@@ -109,6 +110,11 @@ class PLC(runtime_plc.PLC):
     @classmethod
     def from_files(cls, *paths: str, cycle=None, **kw) -> PLC:
         return cls(compile_paths(list(paths), **_compile_kw(kw)), cycle, **kw)
+
+    def axis(self, name: str | int) -> AxisView:
+        """A PLCopen axis as the blocks saw it in the last scan (st.stdlib.plcopen.AxisView): by
+        its configured name, its AxisNo or the path of an AXIS_REF variable."""
+        return axis_view(self, name)
 
 
 def _compile_kw(kw: dict) -> dict:

@@ -323,3 +323,95 @@ def test_an_invalid_continuous_update_hands_over_to_the_buffered_successor():
     start = plc["main.mr.Active"] and axis_of(plc, "main.a1").set_pos
     until(plc, lambda: plc["main.mr.Done"], 2000)
     assert abs(axis_of(plc, "main.a1").set_pos - (start + 10.0)) < 1.0
+
+
+def test_safe_torque_off_is_a_loss_of_the_power_stage_and_blocks_enabling_until_released():
+    plc, drv, d1 = make_reset()
+    enabled(plc)
+    d1.safe_torque_off()
+    plc.scan(2)
+    view = plc.axis("main.a1")
+    assert (view.state, view.axis_error, view.drive_state) == ("ErrorStop", E.POWER_STAGE_LOST, "SWITCH_ON_DISABLED")
+    assert view.drive_error == 0  # no drive fault: the safety circuit
+    plc["main.reset"] = True
+    plc.scan(50)
+    assert not plc["main.pw.Status"] and plc.axis(1).state == "Disabled"  # reset, but STO still cuts power
+    d1.safe_torque_off(False)
+    until(plc, lambda: plc["main.pw.Status"], 100)
+    assert plc.axis("axis1").state == "Standstill"  # the configured name
+
+
+def test_the_axis_view_is_what_the_read_blocks_saw_in_the_same_scan():
+    plc = PLC(compile_text(VIEW_PROGRAM, "view.st", use_cache=False))
+    configure_axes(plc, {1: {"name": "x"}})
+    drv = EtherCATDriver(plc, SEGMENT, backend="sim")  # a segment from a dict
+    for n in range(60):
+        plc.scan()
+        if n == 30:
+            plc["main.go"] = True
+        v = plc.axis("x")
+        assert (v.state == "Standstill", v.state == "DiscreteMotion") == (
+            plc["main.rs.Standstill"],
+            plc["main.rs.DiscreteMotion"],
+        )
+        assert v.actual_position == plc["main.rp.Position"] and v.readable == plc["main.rp.Valid"]
+    assert plc.axis("x").state == "DiscreteMotion" and drv.links[0].axis is axis_of(plc, "main.a1")
+
+
+VIEW_PROGRAM = """
+PROGRAM main
+  VAR
+    a1 : AXIS_REF := (AxisNo := 1);
+    pw : MC_Power; mv : MC_MoveAbsolute; rs : MC_ReadStatus; rp : MC_ReadActualPosition; go : BOOL;
+  END_VAR
+  pw(Axis := a1, Enable := TRUE);
+  mv(Axis := a1, Execute := go, Position := 90.0, Velocity := 90.0, Acceleration := 900.0, Deceleration := 900.0);
+  rs(Axis := a1, Enable := TRUE);
+  rp(Axis := a1, Enable := TRUE);
+END_PROGRAM
+CONFIGURATION c RESOURCE r ON PLC
+  TASK t (INTERVAL := T#1ms, PRIORITY := 1);
+  PROGRAM main WITH t : main;
+END_RESOURCE END_CONFIGURATION
+"""
+
+
+def test_configure_axes_names_an_unknown_setting_as_the_toml_file_does():
+    plc = PLC(compile_text(VIEW_PROGRAM, "view.st", use_cache=False))
+    with pytest.raises(ValueError) as info:
+        configure_axes(plc, {1: {"max_velocty": 5.0}})
+    assert str(info.value).startswith("configure_axes: axis 1: unknown setting 'max_velocty' (known: buffer_size, ")
+
+
+IDEAL = {
+    "segment": {"cycle": "1ms", "dc": False},
+    "slave": [{"name": "d1", "type": "cia402", "axis": 1, "ideal": True}],
+}
+
+
+def test_an_ideal_drive_follows_each_controlword_and_the_target_in_the_next_exchange():
+    plc = PLC(compile_text(VIEW_PROGRAM, "view.st", use_cache=False))
+    configure_axes(plc, {1: {"name": "x"}})
+    drv = EtherCATDriver(plc, IDEAL, backend="sim")
+    link, seen = drv.links[0], []
+    for _ in range(6):
+        plc.scan()
+        seen.append((link.out_values[link.i_cw], link.state))
+    # every controlword is answered by the frame of the next cycle (which the link, deciding
+    # before it reads that frame, still sends the same controword in)
+    assert seen == [
+        (0x06, "SWITCH_ON_DISABLED"),
+        (0x06, "READY_TO_SWITCH_ON"),
+        (0x07, "READY_TO_SWITCH_ON"),
+        (0x07, "SWITCHED_ON"),
+        (0x0F, "SWITCHED_ON"),
+        (0x0F, "OPERATION_ENABLED"),
+    ]
+    plc["main.go"] = True
+    ax = axis_of(plc, "main.a1")
+    sets = []
+    for _ in range(1200):
+        sets.append(ax.set_pos)
+        plc.scan()
+        assert ax.act_pos == pytest.approx(sets[-1], abs=360 / CPR)  # the previous set position, to an increment
+    assert plc["main.mv.Done"] and ax.act_pos == pytest.approx(90.0, abs=360 / CPR)

@@ -62,6 +62,9 @@ class SlaveConfig:
     rx_pdos: list | None = None
     tx_pdos: list | None = None
     enable_delay: float = 0.0
+    # an ideal drive (tests): follows each controlword in the next exchange and its position is
+    # the CSP target exactly, no motor dynamics
+    ideal: bool = False
 
 
 @dataclass
@@ -196,6 +199,7 @@ def build_devices(cfg: SegmentConfig) -> list:
         drive = CiA402Drive(sc.name, motor=params, **kw)
         if sc.enable_delay:
             drive.enable_delay = sc.enable_delay
+        drive.ideal = sc.ideal
         out.append(drive)
     return out
 

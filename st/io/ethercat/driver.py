@@ -22,7 +22,7 @@ from ...runtime.process_image import parse_address
 from ...runtime.scheduler import Task
 from ...stdlib.plcopen import registry
 from ...stdlib.plcopen.errors import E
-from .config import SegmentConfig, build_segment
+from .config import SegmentConfig, build_segment, from_dict
 from .master import FrameMaster, Master, MasterError
 
 if TYPE_CHECKING:
@@ -196,7 +196,11 @@ class EtherCATDriver(IODriverBase):
 
     name = "ethercat"
 
-    def __init__(self, plc, config: SegmentConfig, backend: str = "sim", iface: str = "", capture: str = ""):
+    def __init__(self, plc, config: SegmentConfig | dict, backend: str = "sim", iface: str = "", capture: str = ""):
+        """`config`: a SegmentConfig (load_segment), or the same as a dict ({"segment": {...},
+        "slave": [{"name": "d1", "type": "cia402", "axis": 1}, ...]})."""
+        if isinstance(config, dict):
+            config = from_dict(config)
         self.plc = plc
         self.cfg = config
         self.backend = backend

@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ...compiler.library import Library
-from .axis import Axis, AxisConfig
+from .axis import Axis, AxisConfig, AxisView
 from .errors import E
 from .fbs import install
 
@@ -37,6 +37,28 @@ def axis_of(plc, path: str) -> Axis:
     return reg.axis(plc.ref(path).get())
 
 
+def axis_view(plc, name: str | int) -> AxisView:
+    """An axis as the blocks saw it in the last scan (AxisView), by its configured name ("x"), its
+    AxisNo, or the path of an AXIS_REF variable ("main.a1"); `plc.axis(name)` calls this."""
+    reg = registry(plc)
+    if reg is None:
+        raise KeyError("the program uses no PLCopen motion block")
+    ax = None
+    if isinstance(name, int):
+        ax = next((a for a in reg.axes.values() if a.axis_no == name), None)
+    else:
+        ax = next((a for a in reg.axes.values() if a.cfg.name == name), None)
+        if ax is None:
+            try:
+                ax = reg.axis(plc.ref(name).get())
+            except KeyError:
+                ax = None
+    if ax is None:
+        known = ", ".join(sorted(a.cfg.name for a in reg.axes.values())) or "none in use yet"
+        raise KeyError(f"no axis {name!r} (axes: {known})")
+    return ax.last_view or ax.view()
+
+
 def configure_axes(plc, axes) -> None:
     """Axis configurations by AxisNo: a dict {no: {field: value}} or {no: AxisConfig}, or the path
     of a TOML file with [[axis]] tables (no = 1, modulo = 360.0, max_velocity = …; see AxisConfig).
@@ -50,7 +72,7 @@ def configure_axes(plc, axes) -> None:
         axes = load_axes(str(axes))
     for no, cfg in axes.items():
         if not isinstance(cfg, AxisConfig):
-            cfg = AxisConfig(**{"name": f"axis{no}", **cfg})
+            cfg = _axis_config(no, dict(cfg), where or "configure_axes: ")
         if cfg.homing not in ("current", "switch"):
             raise ValueError(f"{where}axis {no}: homing must be 'current' or 'switch', not {cfg.homing!r}")
         reg.configs[int(no)] = cfg
@@ -76,7 +98,6 @@ def _switch_reader(plc, path: str, what: str):
 
 def load_axes(path: str) -> dict:
     """[[axis]] tables of a TOML file → {AxisNo: AxisConfig}; errors name the file and the entry."""
-    import dataclasses
     import tomllib
 
     try:
@@ -86,20 +107,38 @@ def load_axes(path: str) -> dict:
         raise ValueError(f"{path}: cannot read the axis configuration: {e.strerror}") from None
     except tomllib.TOMLDecodeError as e:
         raise ValueError(f"{path}: {e}") from None
-    fields = {f.name for f in dataclasses.fields(AxisConfig)}
     out = {}
     for i, item in enumerate(doc.get("axis", []), 1):
         item = dict(item)
         no = item.pop("no", None)
         if not isinstance(no, int) or no <= 0:
             raise ValueError(f"{path}: axis entry {i}: needs no = <AxisNo>, a positive integer")
-        unknown = set(item) - fields
-        if unknown:
-            raise ValueError(
-                f"{path}: axis {no}: unknown setting '{sorted(unknown)[0]}' (known: {', '.join(sorted(fields))})"
-            )
-        out[no] = AxisConfig(**{"name": f"axis{no}", **item})
+        out[no] = _axis_config(no, item, f"{path}: ")
     return out
 
 
-__all__ = ["Axis", "AxisConfig", "E", "library", "registry", "axis_of", "configure_axes", "load_axes"]
+def _axis_config(no, item: dict, where: str) -> AxisConfig:
+    """One axis's settings → AxisConfig; an unknown setting is an error that names where it is."""
+    import dataclasses
+
+    fields = {f.name for f in dataclasses.fields(AxisConfig)}
+    unknown = set(item) - fields
+    if unknown:
+        raise ValueError(
+            f"{where}axis {no}: unknown setting '{sorted(unknown)[0]}' (known: {', '.join(sorted(fields))})"
+        )
+    return AxisConfig(**{"name": f"axis{no}", **item})
+
+
+__all__ = [
+    "Axis",
+    "AxisConfig",
+    "AxisView",
+    "E",
+    "library",
+    "registry",
+    "axis_of",
+    "axis_view",
+    "configure_axes",
+    "load_axes",
+]

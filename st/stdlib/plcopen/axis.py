@@ -120,6 +120,26 @@ class Command:
         return self.status in (DONE, ABORTED, ERROR)
 
 
+@dataclass(frozen=True)
+class AxisView:
+    """One axis as the blocks saw it in a scan: taken when the job that commands it ends, before
+    the kernel advances it, so a read block called at the end of that job shows the same."""
+
+    name: str
+    axis_no: int
+    state: str  # PLCopen state: Disabled, Standstill, Homing, DiscreteMotion, ContinuousMotion, Stopping, ErrorStop
+    set_position: float
+    set_velocity: float
+    set_acceleration: float
+    actual_position: float
+    actual_velocity: float
+    power: bool  # MC_Power.Status
+    axis_error: int  # st's ErrorID of the axis error (MC_ReadAxisError.StAxisErrorID), 0 if none
+    drive_error: int  # the drive's own error code (CiA 402 0x603F), 0 without a drive or an error
+    drive_state: str  # the drive's CiA 402 state ("" on a virtual axis)
+    readable: bool  # the drive's values are current (False during a communication outage)
+
+
 class Axis:
     def __init__(self, handle: int, config: AxisConfig | None = None):
         self.handle = handle
@@ -143,6 +163,7 @@ class Axis:
         self.drive: Drive | None = None  # an attached drive (EtherCAT); None: virtual axis
         self.home_signal = None  # callable → bool: the reference switch (config home_switch)
         self.axis_no = 0
+        self.last_view: AxisView | None = None  # at the end of the last job that commanded it
         self.reset_cmd: Command | None = None  # MC_Reset waiting for the drive to leave Fault
         self.reset_wait = 0.0
 
@@ -177,6 +198,24 @@ class Axis:
 
     def actual_position(self) -> float:
         return self.act_pos % self.modulo if self.modulo else self.act_pos
+
+    def view(self) -> AxisView:
+        d = self.drive
+        return AxisView(
+            self.cfg.name,
+            self.axis_no,
+            self.state,
+            self.position(),
+            self.set_vel,
+            self.set_acc,
+            self.actual_position(),
+            self.act_vel,
+            self._power_status(),
+            int(self.axis_error),
+            d.error_code if d is not None else 0,
+            str(getattr(d, "state", "")) if d is not None else "",
+            d.readable if d is not None else True,
+        )
 
     # ------------------------------------------------------------------ power, reset, errors
     def power(self, fb_id: int, enable: bool):

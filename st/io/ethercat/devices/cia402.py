@@ -147,6 +147,10 @@ class CiA402Drive(Device):
         self.state = State.NOT_READY_TO_SWITCH_ON
         self.mode = CSP if CSP in self.modes else self.modes[0]  # the mode in effect (0x6061)
         self.mains_on = True  # DC link supplied: statusword bit 4; switch-on needs it
+        self.sto = False  # Safe Torque Off active: the power stage is cut and cannot be switched on
+        # ideal (tests): every transition the controlword asks for in one step, the position the
+        # CSP target exactly (no motor dynamics, no following error)
+        self.ideal = False
         self.warning = False  # statusword bit 7, for tests
         self.velocity_window = int(10 * self.motor.cpr / 60)  # target reached in CSV: 10 rev/min
         self.torque_window = 10  # per-mille, target reached in CST
@@ -417,6 +421,16 @@ class CiA402Drive(Device):
         """The injected condition is gone; the next fault-reset edge will succeed."""
         self._persistent = False
 
+    def safe_torque_off(self, active: bool = True) -> None:
+        """Safe Torque Off (the safety circuit opens): the power stage is cut at once, the motor
+        coasts, the drive drops to Switch On Disabled without a fault and cannot be switched on
+        again until STO is released (`safe_torque_off(False)`)."""
+        self.sto = active
+        if active and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE):
+            self.motor.disable()
+            self._set_state(State.SWITCH_ON_DISABLED)
+            self._publish()
+
     # ------------------------------------------------------------------ Device hooks
     def on_outputs(self) -> None:
         if self._last_outputs_t is not None:
@@ -431,8 +445,16 @@ class CiA402Drive(Device):
         try:
             self._take_outputs()
             self._transition(t, dt)
+            if self.ideal:  # what the controlword asks for, at once
+                for _ in range(4):
+                    before = self.state
+                    self._transition(t, dt)
+                    if self.state == before:
+                        break
             self._apply_setpoints()
             self.motor.step(dt)
+            if self.ideal:
+                self._ideal_motion(dt)
             self.t = t
             self._supervise(dt)
         finally:
@@ -567,7 +589,7 @@ class CiA402Drive(Device):
             if cmd == CMD_SHUTDOWN:
                 self._set_state(State.READY_TO_SWITCH_ON)  # 2
         elif s == State.READY_TO_SWITCH_ON:
-            if cmd in (CMD_SWITCH_ON, CMD_ENABLE) and self.mains_on:
+            if cmd in (CMD_SWITCH_ON, CMD_ENABLE) and self.mains_on and not self.sto:
                 self._set_state(State.SWITCHED_ON)  # 3
             elif cmd in (CMD_DISABLE_VOLTAGE, CMD_QUICK_STOP):
                 self._set_state(State.SWITCH_ON_DISABLED)  # 7
@@ -607,6 +629,14 @@ class CiA402Drive(Device):
                     self._set_state(State.OPERATION_ENABLED)  # 16
             elif not mo.enabled or mo.stopped:
                 self._set_state(State.SWITCH_ON_DISABLED)  # 12 (after the ramp)
+
+    def _ideal_motion(self, dt: float) -> None:
+        """The ideal drive: in CSP with the power stage on, the shaft is at the target."""
+        mo = self.motor
+        if self.state == State.OPERATION_ENABLED and self.mode == CSP and mo.enabled:
+            before = mo.position
+            mo.set_position(self._target)
+            mo.omega = (self._target - before) / dt / mo.k if dt > 0 else 0.0
 
     def _supervise(self, dt: float) -> None:
         """After the physics: following error, DC link, fault reaction progress."""
