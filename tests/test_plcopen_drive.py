@@ -415,3 +415,50 @@ def test_an_ideal_drive_follows_each_controlword_and_the_target_in_the_next_exch
         plc.scan()
         assert ax.act_pos == pytest.approx(sets[-1], abs=360 / CPR)  # the previous set position, to an increment
     assert plc["main.mv.Done"] and ax.act_pos == pytest.approx(90.0, abs=360 / CPR)
+
+
+BAD_ENUMS = """
+PROGRAM main
+  VAR
+    a1 : AXIS_REF;
+    pw : MC_Power; mv : MC_MoveAbsolute; mv2 : MC_MoveAbsolute;
+    dir : MC_DIRECTION; mode : MC_BUFFER_MODE;
+  END_VAR
+  dir := 7;    (* CODESYS: an integer into an enumeration without {attribute 'strict'} *)
+  mode := 9;
+  pw(Axis := a1, Enable := TRUE);
+  mv(Axis := a1, Execute := pw.Status, Position := 1.0, Velocity := 1.0, Acceleration := 1.0, Deceleration := 1.0,
+     Direction := dir);
+  mv2(Axis := a1, Execute := pw.Status, Position := 1.0, Velocity := 1.0, Acceleration := 1.0, Deceleration := 1.0,
+      BufferMode := mode);
+END_PROGRAM
+"""
+
+
+def test_an_enumeration_input_out_of_its_values_is_invalid_direction_or_buffer_mode():
+    plc = PLC(compile_text(BAD_ENUMS, "bad.st", dialect="codesys", use_cache=False))
+    plc.scan(3)
+    assert (plc["main.mv.Error"], plc["main.mv.ErrorID"]) == (True, E.INVALID_DIRECTION)
+    assert (plc["main.mv2.Error"], plc["main.mv2.ErrorID"]) == (True, E.INVALID_BUFFER_MODE)
+
+
+def test_homing_on_a_switch_shifts_the_coordinate_at_the_end_without_a_jump_in_the_drive_target():
+    plc, drv, d1 = make(homing="switch", home_switch="main.rel", home_direction=1, home_velocity=90.0,
+                        home_acceleration=900.0)  # fmt: skip
+    enabled(plc)
+    plc["main.pos"], plc["main.home"] = 0.0, True
+    targets, latched_at = [], None
+    for n in range(600):
+        plc.scan()
+        targets.append(d1.od[0x607A])
+        if n == 200:
+            plc["main.rel"] = True  # the reference switch (a BOOL of the program) comes on
+            latched_at = axis_of(plc, "main.a1").act_pos
+        if plc["main.hm.Done"]:
+            break
+    ax = axis_of(plc, "main.a1")
+    assert plc["main.hm.Done"] and ax.state == "Standstill"
+    step = 90.0 / 360.0 * CPR / 1000  # increments per cycle at the homing velocity
+    assert max(abs(b - a) for a, b in zip(targets, targets[1:])) <= step * 1.01  # no jump at the shift
+    # the switch edge is now at Position 0: the axis stands its braking distance past it
+    assert 0.0 < ax.act_pos < 5.0 and latched_at > 0.0
