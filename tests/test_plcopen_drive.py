@@ -125,12 +125,34 @@ def test_set_position_queued_waits_for_the_move_and_immediate_is_refused_in_moti
     assert plc["main.mv.Done"] and ax.state == "Standstill" and n > 200  # after the move (0.35 s)
     plc.scan(100)
     assert abs(ax.act_pos - 1000.0) < 0.003 and abs(d1.position - (start + CPR // 4)) <= 64
-    # immediate while moving: PLCopen's MC_SetPosition is for an axis at standstill here
-    plc["main.set"], plc["main.go"] = False, False
-    plc.scan()
-    plc["main.target"], plc["main.go"] = 1200.0, True
-    plc.scan(50)
-    plc["main.mode"], plc["main.set"] = "mcImmediate", True
+
+
+def test_set_position_immediate_during_a_move_shifts_the_running_trajectory_too():
+    plc, drv, d1 = make()
+    enabled(plc)
+    start = d1.position
+    plc["main.target"], plc["main.go"] = 90.0, True
+    plc.scan(150)  # moving
+    targets = [d1.od[0x607A]]
+    plc["main.rel"], plc["main.pos"], plc["main.set"] = True, 1000.0, True
+    for _ in range(400):
+        plc.scan()
+        targets.append(d1.od[0x607A])
+    ax = axis_of(plc, "main.a1")
+    assert plc["main.sp.Done"] and plc["main.mv.Done"] and not plc["main.mv.Error"]
+    step = 360.0 / 360.0 * CPR / 1000  # at most 360°/s: increments per cycle
+    assert max(abs(b - a) for a, b in zip(targets, targets[1:])) <= step * 1.01  # no jump
+    plc.scan(100)
+    # the move ends where it would have: 90° of motor turn, 1090 in the shifted coordinates
+    assert abs(d1.position - (start + CPR // 4)) <= 64 and abs(ax.act_pos - 1090.0) < 0.003
+
+
+def test_set_position_is_refused_in_errorstop():
+    plc, drv, d1 = make()
+    enabled(plc)
+    d1.inject_fault(0x7500)
+    plc.scan(3)
+    plc["main.set"] = True
     plc.scan()
     assert (plc["main.sp.Error"], plc["main.sp.ErrorID"]) == (True, E.INVALID_STATE)
 

@@ -97,6 +97,21 @@ class AxisConfig:
     home_search_distance: float = math.inf  # no edge within this distance: ErrorStop HOMING_FAILED
 
 
+class _Shifted:
+    """A planned profile moved by `delta` units (MC_SetPosition during a motion): the same
+    trajectory in the new coordinates."""
+
+    def __init__(self, inner, delta: float):
+        self.inner, self.delta = inner, delta
+
+    def sample(self, t: float) -> tuple[float, float, float]:
+        p, v, a = self.inner.sample(t)
+        return p + self.delta, v, a
+
+    def __getattr__(self, name: str):
+        return getattr(self.inner, name)
+
+
 @dataclass(eq=False)
 class Command:
     id: int
@@ -106,7 +121,7 @@ class Command:
     status: str = QUEUED
     error_id: int = 0
     in_velocity: bool = False
-    profile: Profile | RuckigProfile | None = None
+    profile: Profile | RuckigProfile | _Shifted | None = None
     steps: int = 0  # kernel cycles run
     total_steps: int = 0  # cycles the profile needs
     target: float = 0.0
@@ -349,8 +364,8 @@ class Axis:
                     return self._fail(cmd, E.BUFFER_FULL)
                 self.queue.append(cmd)
                 return cmd
-            if st not in (DISABLED, STANDSTILL):
-                return self._fail(cmd, E.INVALID_STATE)
+            if st not in (DISABLED, STANDSTILL, DISCRETE, CONTINUOUS, STOPPING):
+                return self._fail(cmd, E.INVALID_STATE)  # not while homing, not in ErrorStop
             self._set_position(cmd)
             return cmd
         blocked = {
@@ -420,6 +435,14 @@ class Axis:
         self.act_pos += delta
         if self.drive is not None:
             self.drive.shift(delta)
+        for cmd in (self.active, self.stop_cmd):  # a motion under way: the same trajectory, moved
+            if cmd is None or cmd.terminal or cmd.profile is None:
+                continue
+            cmd.profile = _Shifted(cmd.profile, delta)
+            if cmd.kind in ("move_abs", "move_rel"):
+                cmd.target += delta
+                if "_start" in cmd.params:
+                    cmd.params["_start"] += delta
 
     def _validate(self, cmd: Command) -> int:
         p = cmd.params

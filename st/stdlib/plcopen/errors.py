@@ -13,7 +13,7 @@ class E(IntEnum):
     AXIS_ERRORSTOP = 0x1002  # any command in ErrorStop; also the active and buffered FBs on entering it
     AXIS_STOPPING = 0x1003  # a motion command while MC_Stop is active or held
     AXIS_HOMING = 0x1004  # a motion command during Homing
-    INVALID_STATE = 0x1005  # MC_Home while moving, MC_SetPosition while moving
+    INVALID_STATE = 0x1005  # MC_Home while moving, MC_SetPosition while Homing or in ErrorStop
     NO_ERROR_TO_RESET = 0x1006  # MC_Reset outside ErrorStop
     STOP_ALREADY_ACTIVE = 0x1007  # a second MC_Stop while Stopping
     POWER_ALREADY_ACTIVE = 0x1008  # a second MC_Power instance on the axis
