@@ -1266,3 +1266,53 @@ END_PROGRAM
 def test_global_constants_in_the_initial_values_of_a_pous_variables(dialect):
     plc = run(GLOBAL_CONSTANT_INITS, 1, dialect)
     assert (plc["main.m"], plc["main.x"], plc["main.y"], plc["main.filled"]) == (103, 3, 42, 0x01010101)
+
+
+ROUNDING = """PROGRAM main
+VAR a, b, c, d, e, f : DINT; x : REAL := 2.5; END_VAR
+a := REAL_TO_DINT(x);
+b := REAL_TO_DINT(3.5);
+c := REAL_TO_DINT(-2.5);
+d := REAL_TO_DINT(2.4999);
+e := LREAL_TO_DINT(-3.5);
+f := REAL_TO_DINT(0.49999997);
+END_PROGRAM
+"""
+
+
+def test_openplc_rounds_halfway_to_even_as_matiec_does():
+    plc = run(ROUNDING, 1, "openplc")
+    assert [plc[f"main.{k}"] for k in "abcdef"] == [2, 4, -2, 2, -4, 0]
+
+
+@pytest.mark.parametrize("dialect", [None, "iec", "codesys"])
+def test_other_presets_round_halfway_away_from_zero(dialect):
+    plc = run(ROUNDING, 1, dialect)
+    assert [plc[f"main.{k}"] for k in "abcdef"] == [3, 4, -3, 2, -4, 0]
+
+
+def _f32(v: float) -> float:
+    return struct.unpack("<f", struct.pack("<f", v))[0]
+
+
+SINGLE = """PROGRAM main
+VAR a : REAL := 31.343643188476562; b : REAL := 38.47433853149414; r : REAL; w : LREAL; END_VAR
+r := a * b - 1000.0;
+w := REAL_TO_LREAL(a * 3.1);
+END_PROGRAM
+"""
+
+
+def test_openplc_computes_real_with_real_in_single_precision_and_literals_in_double_as_matiec_s_c():
+    a, b = 31.343643188476562, 38.47433853149414  # REAL values
+    plc = run(SINGLE, 1, "openplc")
+    assert plc["main.r"] == _f32(_f32(a * b) - 1000.0) == 205.9259033203125  # C: (float)(a * b), then - 1000.0
+    assert _f32(a * b - 1000.0) == 205.92593383789062  # what double precision would give
+
+
+@pytest.mark.parametrize("dialect", [None, "iec", "codesys"])
+def test_real_arithmetic_elsewhere_is_double_rounded_on_store_and_a_real_argument_is_single(dialect):
+    a, b = 31.343643188476562, 38.47433853149414
+    plc = run(SINGLE, 1, dialect)
+    assert plc["main.r"] == _f32(a * b - 1000.0) == 205.92593383789062
+    assert plc["main.w"] == _f32(a * 3.1) != a * 3.1  # the REAL parameter holds a single value

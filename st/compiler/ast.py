@@ -103,6 +103,7 @@ class Binary(Expr):
     op: str  # + - * / MOD ** = <> < > <= >= AND OR XOR AND_THEN OR_ELSE
     left: Expr
     right: Expr
+    single: bool = False  # the checker, openplc: a REAL operation MatIEC's C does in single precision
 
 
 # --------------------------------------------------------------------------- initializers

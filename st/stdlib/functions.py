@@ -213,6 +213,20 @@ def _real_to_int(v, lo, hi, name):
     return int(math.floor(v + 0.5)) if v >= 0 else -int(math.floor(-v + 0.5))
 
 
+def _real_to_int_matiec(v, lo, hi, name):
+    """REAL/LREAL → an integer as MatIEC converts (lib/C/iec_std_lib.h, __real_round): v ± 0.5 in
+    double precision, truncated, and a result that was an exact integer (v exactly halfway)
+    made even: 2.5 → 2, 3.5 → 4, -2.5 → -2. Out of range stays a CONVERSION fault (MatIEC's cast
+    is undefined there)."""
+    if v != v or not (lo - 0.5 < v < hi + 0.5):
+        raise _out_of_range(v, lo, hi, name)
+    x = v + 0.5 if v >= 0 else v - 0.5
+    q = int(x)  # toward zero, as C's cast
+    if x == q:  # halfway: C's (q / 2) * 2, toward zero
+        q = q - q % 2 if q >= 0 else q + (-q) % 2
+    return q
+
+
 def _real_trunc_to(v, lo, hi, name):
     """TRUNC: toward zero, with the same range rule as _real_to_int."""
     if v != v or not (lo - 1 < v < hi + 1):

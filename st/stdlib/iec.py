@@ -236,6 +236,8 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", mat
     lib.sources.append((str(FUNCTIONS_PATH), FUNCTIONS_PATH.read_text()))
     lib.sources.append((str(OPENPLC_FBS_PATH), OPENPLC_FBS_PATH.read_text()))
     lib.helpers.update(functions.NAMESPACE)
+    if matiec_errors:  # REAL → integer rounds as MatIEC does: halfway cases to even
+        lib.helpers["_real_to_int"] = functions._real_to_int_matiec
     add = lib.add
     # numeric
     add(FuncSig("ABS", [_p("IN", "ANY_NUM", "T")], "T", emit=_abs_emit))

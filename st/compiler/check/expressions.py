@@ -418,6 +418,8 @@ class Expressions(Part):
                 c = T.common_type(a, b)
                 if c is None:
                     return self._bad_operands(e, lt, rt)
+                if c is T.REAL and self.ctx.dialect is not None and self.ctx.dialect.name == "openplc":
+                    e.single = _c_float(e.left) and _c_float(e.right)
                 return c
             if a.is_bit and b.is_bit or a.is_bit and b is T.LIT_INT or b.is_bit and a is T.LIT_INT:
                 # IEC has no arithmetic on bit strings, but every dialect allows it
@@ -655,6 +657,20 @@ def _null_at(e) -> A.Name:
     n.sym = _NULL
     n.ty = _NULL
     return n
+
+
+def _c_float(e: A.Expr) -> bool:
+    """Is this operand a C `float` (or an integer, which C turns into one) in the code MatIEC
+    generates? A REAL literal is a C double, and so is anything it takes part in."""
+    if isinstance(e, A.Literal):
+        return not isinstance(e.value, float)
+    if isinstance(e, A.Unary):
+        return _c_float(e.operand)
+    if isinstance(e, A.Binary):
+        t = T.base_of(e.ty) if e.ty is not None else None
+        return e.single if t is T.REAL else t is not None and t.is_intlike
+    t = T.base_of(e.ty) if e.ty is not None else None
+    return t is not None and (t is T.REAL or t.is_intlike)
 
 
 def _is_address(e: A.Expr, t) -> bool:

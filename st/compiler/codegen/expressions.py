@@ -532,6 +532,12 @@ class ExprGen:
         return v
 
     def x_Binary(self, e: A.Binary) -> py.expr:
+        if e.single:  # openplc: REAL op REAL in single precision, as MatIEC's generated C
+            e.single = False
+            try:
+                return _call("_f32", self.x_Binary(e))
+            finally:
+                e.single = True
         op = e.op
         lt = T.base_of(e.left.ty) if e.left.ty is not None else None
         rt = T.base_of(e.right.ty) if e.right.ty is not None else None
@@ -691,6 +697,8 @@ class ExprGen:
                 and T.base_of(a.value.ty) is not T.base_of(want)
             ):
                 v = self.coerce(v, a.value, want)
+            elif want is T.REAL and not self.is_f32(a.value):
+                v = _call("_f32", v)  # a REAL parameter holds a single-precision value (rounded on store)
             args.append(v)
         if sig.emit is not None:
             try:

@@ -1,0 +1,171 @@
+"""st against OpenPLC's native path on the same ST: ns per scan and the ratio, with checksums.
+
+    python bench/bench_native.py --matiec DIR [--scans N] [--workloads NAME ...]
+
+DIR is a built MatIEC (OpenPLC's fork: `autoreconf -i && ./configure && make` in a checkout of
+github.com/thiagoralves/matiec, outside this repository): its `iec2c` and `lib/`. Each workload
+of bench/workloads/ is compiled as OpenPLC v3 compiles a program — `iec2c -f -l -p -r -R -a`,
+then `g++ -I lib -c Config0.c` and `Res0.c` without optimisation (its compile_program.sh) — and
+again with -O2, linked with a harness that calls `config_run__(tick)` once per tick as OpenPLC's
+main loop does (no I/O, no sleeping) and prints ns per call and the workload's checksum (its
+`checksum AT %QD0 : DINT`). st runs the same file under the openplc preset on virtual time
+(`PLC.scan`, the whole job: latch, body, publish, statistics). The checksums after the same
+number of scans must be equal, which shows both computed the same thing.
+
+Without `--matiec` (or `ST_MATIEC`), or without g++, only st's numbers are printed, with a message.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from st import PLC  # noqa: E402
+from st.api import compile_paths  # noqa: E402
+
+WORKLOADS = ROOT / "bench" / "workloads"
+
+HARNESS = r"""
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+#include "iec_types_all.h"
+TIME __CURRENT_TIME;
+BOOL __DEBUG;
+#define __LOCATED_VAR(type, name, ...) type __##name; type *name = &__##name;
+#include "LOCATED_VARIABLES.h"
+#undef __LOCATED_VAR
+void config_init__(void);
+void config_run__(unsigned long tick);
+extern unsigned long long common_ticktime__;
+static long long now_ns(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return t.tv_sec * 1000000000LL + t.tv_nsec;
+}
+int main(int argc, char **argv) {
+  long n = argc > 1 ? atol(argv[1]) : 100000;
+  config_init__();
+  long long t0 = now_ns();
+  for (long tick = 0; tick < n; tick++) {
+    config_run__(tick);
+    __CURRENT_TIME.tv_nsec += common_ticktime__;
+    if (__CURRENT_TIME.tv_nsec >= 1000000000) {
+      __CURRENT_TIME.tv_nsec -= 1000000000;
+      __CURRENT_TIME.tv_sec += 1;
+    }
+  }
+  long long t1 = now_ns();
+  printf("%.1f %lld\n", (double)(t1 - t0) / n, (long long)*__QD0);
+  return 0;
+}
+"""
+
+
+def native_builds(workload: Path, matiec: Path, work: Path) -> dict[str, Path]:
+    """The workload built as OpenPLC ships it (-O0) and with -O2: {label: executable}."""
+    out = work / workload.stem
+    out.mkdir()
+    lib = matiec / "lib"
+    run = subprocess.run(
+        [str(matiec / "iec2c"), "-f", "-l", "-p", "-r", "-R", "-a", "-I", str(lib), str(workload)],
+        cwd=out,
+        capture_output=True,
+        text=True,
+    )
+    if run.returncode:
+        raise RuntimeError(f"iec2c refused {workload.name}: {run.stdout}{run.stderr}")
+    (out / "harness.cpp").write_text(HARNESS)
+    exes = {}
+    for label, opt in (("OpenPLC (as shipped, -O0)", []), ("MatIEC at -O2", ["-O2"])):
+        objs = []
+        for src in ("Config0.c", "Res0.c"):
+            obj = out / f"{src}.{len(opt)}.o"
+            subprocess.run(
+                ["g++", *opt, "-w", "-I", str(lib / "C"), "-I", str(out), "-c", src, "-o", str(obj)],
+                cwd=out,
+                check=True,
+            )
+            objs.append(str(obj))
+        exe = out / f"run{len(opt)}"
+        subprocess.run(
+            ["g++", *opt, "-w", "-I", str(lib / "C"), "-I", str(out), "harness.cpp", *objs, "-o", str(exe)],
+            cwd=out,
+            check=True,
+        )
+        exes[label] = exe
+    return exes
+
+
+def native_run(exe: Path, scans: int) -> tuple[float, int]:
+    text = subprocess.run([str(exe), str(scans)], capture_output=True, text=True, check=True).stdout.split()
+    return float(text[0]), int(text[1])
+
+
+def st_run(workload: Path, scans: int) -> tuple[float, int]:
+    plc = PLC(compile_paths([str(workload)], dialect="openplc", use_cache=False))
+    t0 = time.perf_counter()
+    plc.scan(scans)
+    dt = time.perf_counter() - t0
+    return dt / scans * 1e9, int(plc["%QD0"])
+
+
+def to_signed32(v: int) -> int:
+    v &= 0xFFFFFFFF
+    return v - (1 << 32) if v >= 1 << 31 else v
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--matiec", type=Path, default=os.environ.get("ST_MATIEC"), help="a built MatIEC (iec2c, lib/)")
+    ap.add_argument("--scans", type=int, default=20000, help="scans per run (the checksums are compared after them)")
+    ap.add_argument("--runs", type=int, default=3, help="runs of each; the median is shown")
+    ap.add_argument("--workloads", nargs="*", default=None, help="names in bench/workloads (default: all)")
+    args = ap.parse_args()
+    files = sorted(WORKLOADS.glob("*.st"))
+    if args.workloads:
+        files = [f for f in files if f.stem in args.workloads]
+    native = args.matiec is not None and (args.matiec / "iec2c").exists() and shutil.which("g++") is not None
+    if not native:
+        print("no MatIEC build (--matiec DIR or ST_MATIEC) or no g++: st's numbers only\n")
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for wl in files:
+            st_times, st_sum = [], None
+            for _ in range(args.runs):
+                ns, st_sum = st_run(wl, args.scans)
+                st_times.append(ns)
+            row = {"workload": wl.stem, "st": statistics.median(st_times), "checksum": to_signed32(st_sum or 0)}
+            if native:
+                for label, exe in native_builds(wl, args.matiec, Path(tmp)).items():
+                    times, sums = zip(*(native_run(exe, args.scans) for _ in range(args.runs)), strict=True)
+                    row[label] = (statistics.median(times), to_signed32(sums[0]))
+            rows.append(row)
+    print(f"{args.scans} scans per run, median of {args.runs}; ns per scan\n")
+    labels = ["OpenPLC (as shipped, -O0)", "MatIEC at -O2"] if native else []
+    head = "| workload | st | " + " | ".join(f"{lab} | st / it" for lab in labels) + " | checksums |"
+    print(head)
+    print("|---|---:|" + "---:|---:|" * len(labels) + "---|")
+    for row in rows:
+        cells = [row["workload"], f"{row['st']:,.0f}"]
+        same = True
+        for lab in labels:
+            ns, chk = row[lab]
+            cells += [f"{ns:,.0f}", f"{row['st'] / ns:,.0f}x"]
+            same = same and chk == row["checksum"]
+        cells.append(("equal" if same else "DIFFER") + f" ({row['checksum']})" if labels else str(row["checksum"]))
+        print("| " + " | ".join(cells) + " |")
+
+
+if __name__ == "__main__":
+    main()
