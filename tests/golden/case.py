@@ -26,7 +26,7 @@ class _prg_main(_FB):  # st:4
                 lamp = False  # st:14
             elif mode in {1, 2}:  # st:15
                 lamp = True  # st:15
-            code = _imod(code + 1, 12)  # st:17
+            code = _t1 % 12 if (_t1 := (code + 1)) >= 0 else -(-_t1 % 12)  # st:17
         finally:
             self.code = code  # st:18
             self.lamp = lamp  # st:18

@@ -153,6 +153,7 @@ class ExprGen:
         self.loop_vars: list = []
         self.written_locals: set = set()
         self.result_name = ""
+        self.loop_ranges: dict = {}  # VarSym → (lo, hi): a FOR counter inside its body (range form)
 
     def _result_boxed(self) -> bool:
         return bool(getattr(self.pou, "result_address_taken", False))
@@ -302,6 +303,8 @@ class ExprGen:
             return (min(vals), max(vals))
         sub = T.unalias(e.ty)
         declared = (sub.lo, sub.hi) if isinstance(sub, T.SubrangeType) else ((t.lo, t.hi) if t.is_intlike else None)
+        if isinstance(e, A.Name) and e.sym in self.loop_ranges:
+            return self.loop_ranges[e.sym]  # a FOR counter its body does not write: start..end
         if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit, A.AccessorCall)) or (
             isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method")
         ):
@@ -506,6 +509,11 @@ class ExprGen:
         return flat
 
     def _index_safe(self, i, lo, hi) -> bool:
+        """Can the index never leave lo..hi? (Then it needs no check: a FOR over the array's range,
+        `i + 1` in a FOR to hi - 1, a subrange-typed index, …)"""
+        r = self.value_range(i)
+        if r is not None and lo <= r[0] and r[1] <= hi:
+            return True
         t = T.base_of(i.ty) if i.ty is not None else None
         if isinstance(t, T.SubrangeType):
             return lo <= t.lo and t.hi <= hi
@@ -604,7 +612,8 @@ class ExprGen:
                 and not rt.signed
             ):
                 return py.BinOp(l, py.FloorDiv(), r)
-            return _call("_idiv", l, r)
+            inline = self._by_constant(e, l, py.FloorDiv())
+            return inline if inline is not None else _call("_idiv", l, r)
         if op == "MOD":
             if (
                 isinstance(lt, T.ElemType)
@@ -615,10 +624,28 @@ class ExprGen:
                 and not rt.signed
             ):
                 return _call("_umod", l, r)
-            return _call("_imod", l, r)
+            inline = self._by_constant(e, l, py.Mod())
+            return inline if inline is not None else _call("_imod", l, r)
         if op == "**":
             return _call("_pow", l, r)
         raise Unsupported(e.span, f"operator {op}")
+
+    def _by_constant(self, e: A.Binary, l: py.expr, op: py.operator) -> py.expr | None:
+        """Integer DIV or MOD by a positive constant, inline (no call): truncating toward zero and
+        with the dividend's sign as IEC says — Python's // and % directly when the dividend cannot
+        be negative, else `t op m if (t := x) >= 0 else -(-t op m)`. None: keep the helper."""
+        m = e.right.const if isinstance(e.right.const, int) else None
+        if m is None and isinstance(e.right, A.Literal) and isinstance(e.right.value, int):
+            m = e.right.value
+        if m is None or isinstance(m, bool) or m <= 0:
+            return None
+        r = self.value_range(e.left)
+        if r is not None and r[0] >= 0:
+            return py.BinOp(l, op, _const(m))
+        t = self.new_tmp()
+        test = py.Compare(py.NamedExpr(_name(t, py.Store()), l), [py.GtE()], [_const(0)])
+        neg = py.UnaryOp(py.USub(), py.BinOp(py.UnaryOp(py.USub(), _name(t)), op, _const(m)))
+        return py.IfExp(test, py.BinOp(_name(t), op, _const(m)), neg)
 
     # ------------------------------------------------------------------ calls
     def x_Call(self, e: A.Call) -> py.expr:

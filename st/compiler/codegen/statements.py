@@ -416,13 +416,19 @@ class StmtGen(ExprGen):
         sym = var.sym if isinstance(var, A.Name) and isinstance(var.sym, T.VarSym) else None
         direct = sym is not None and (sym in self.cached or self.self_name is None) and not sym.is_global
         pre: list[py.stmt] = []
-        if sym is not None and direct:
-            loopvar = sym.pyname
-            self.written_locals.add(sym)
-            body = self.loop_body(s.body) or [py.Pass()]
-        else:
-            loopvar = self.new_tmp()
-            body = self.loop_body(s.body, self.assign(var, _name(loopvar), None))
+        known = self._counter_range(s, step_c)
+        if sym is not None and known is not None:
+            self.loop_ranges[sym] = known  # index checks and wraps in the body can use it
+        try:
+            if sym is not None and direct:
+                loopvar = sym.pyname
+                self.written_locals.add(sym)
+                body = self.loop_body(s.body) or [py.Pass()]
+            else:
+                loopvar = self.new_tmp()
+                body = self.loop_body(s.body, self.assign(var, _name(loopvar), None))
+        finally:
+            self.loop_ranges.pop(sym, None)
         # before: loopvar = start - step (so that 'else' can add step: the IEC final value)
         init = py.Assign([_name(loopvar, py.Store())], py.BinOp(start, py.Sub(), step))
         final: py.expr = py.BinOp(_name(loopvar), py.Add(), step)
@@ -432,6 +438,17 @@ class StmtGen(ExprGen):
         if not direct:
             orelse += self.assign(var, _name(loopvar), None)
         return out + pre + [init, py.For(_name(loopvar, py.Store()), rng, body, orelse)]
+
+    def _counter_range(self, s: A.CountedFor, step_c) -> tuple[int, int] | None:
+        """The values a FOR counter takes in its body (range form: the body does not write it)."""
+        a, b = self.value_range(s.start), self.value_range(s.end)
+        if a is None or b is None:
+            return None
+        if step_c is not None and step_c > 0:
+            return (a[0], b[1]) if a[0] <= b[1] else None
+        if step_c is not None and step_c < 0:
+            return (b[0], a[1]) if b[0] <= a[1] else None
+        return (min(a[0], b[0]), max(a[1], b[1]))
 
     def _for_while(self, s: A.CountedFor, start, end, step_c):
         """FOR whose body writes the loop variable: a faithful while loop."""

@@ -1,0 +1,62 @@
+"""The generated code's fast paths (issue 20) keep every semantic: an index check is left out only
+where the FOR counter's range proves it in bounds, and DIV/MOD by a constant inline keep IEC's
+truncation toward zero and the dividend's sign."""
+
+from __future__ import annotations
+
+import pytest
+
+from st.api import compile_text
+
+from helpers import fault, run
+
+DIV_MOD = """PROGRAM main
+VAR
+  x : DINT := -7; y : DINT := 7; q1, q2, m1, m2, m3 : DINT; i : INT; neg, pos : DINT;
+END_VAR
+q1 := x / 2; q2 := y / 2;
+m1 := x MOD 3; m2 := y MOD 3; m3 := x MOD 7;
+FOR i := -3 TO 3 DO
+  neg := neg * 10 + (i MOD 2) + 5;   (* i negative: the inline form's other branch *)
+  pos := pos + i / 2;
+END_FOR;
+END_PROGRAM
+"""
+
+
+def test_div_and_mod_by_a_constant_truncate_toward_zero_with_the_dividends_sign():
+    plc = run(DIV_MOD)
+    assert [plc[f"main.{k}"] for k in ("q1", "q2", "m1", "m2", "m3")] == [-3, 3, -1, 1, 0]
+    # i = -3..3: i MOD 2 = -1, 0, -1, 0, 1, 0, 1; i / 2 = -1, -1, 0, 0, 0, 1, 1
+    assert (plc["main.neg"], plc["main.pos"]) == (4545656, 0)
+
+
+LOOP_PAST_THE_ARRAY = """PROGRAM main
+VAR a : ARRAY[0..9] OF INT; i : INT; END_VAR
+FOR i := 0 TO 9 DO
+  a[i] := i;            (* in range: no check *)
+  a[9 - i] := a[9 - i] + 1;
+END_FOR;
+FOR i := 0 TO 10 DO
+  a[i] := 0;            (* one past the end at i = 10 *)
+END_FOR;
+END_PROGRAM
+"""
+
+
+def test_an_index_the_counter_range_does_not_prove_is_still_checked():
+    src = compile_text(LOOP_PAST_THE_ARRAY, "t.st", use_cache=False, emit_python=True).python_source["t.st"]
+    assert "a[i] = i" in src and "a[_ix(i, 0, 9)] = 0" in src
+    _plc, info = fault(LOOP_PAST_THE_ARRAY)
+    assert (info.kind, info.line) == ("INDEX", 8)
+
+
+@pytest.mark.parametrize("step", ["1", "2", "-1"])
+def test_a_counter_range_follows_the_step(step):
+    start, end = ("9", "0") if step == "-1" else ("0", "9")
+    src = (
+        f"PROGRAM main\nVAR a : ARRAY[0..9] OF INT; i : INT; s : INT; END_VAR\n"
+        f"FOR i := {start} TO {end} BY {step} DO a[i] := i; s := s + a[i]; END_FOR;\nEND_PROGRAM\n"
+    )
+    plc = run(src)
+    assert plc["main.s"] == (20 if step == "2" else 45)
