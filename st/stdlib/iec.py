@@ -162,8 +162,27 @@ def _len_emit(ctx, args, types, rt):
     return call("_len", args[0])
 
 
+def _simple(node: py.expr) -> bool:
+    """An operand that may be evaluated twice: a name, a constant, `x.y`, `-1`."""
+    if isinstance(node, py.UnaryOp):
+        node = node.operand
+    if isinstance(node, py.Attribute):
+        node = node.value
+    return isinstance(node, (py.Name, py.Constant))
+
+
 def _limit_emit(ctx, args, types, rt):
-    return call("_std_limit", *args)
+    """LIMIT(MN, IN, MX) inline when MN and MX are plain operands (no call per use)."""
+    mn, v, mx = args
+    if not (_simple(mn) and _simple(mx)) or not hasattr(ctx, "new_tmp"):
+        return call("_std_limit", *args)
+    if _simple(v):
+        first, again = v, v
+    else:
+        t = ctx.new_tmp()
+        first, again = py.NamedExpr(py.Name(t, py.Store()), v), py.Name(t, py.Load())
+    inner = py.IfExp(py.Compare(again, [py.Gt()], [mx]), mx, again)
+    return py.IfExp(py.Compare(first, [py.Lt()], [mn]), mn, inner)
 
 
 def _move_emit(ctx, args, types, rt):
