@@ -39,6 +39,7 @@ class TaskStats:
         self.periods: deque[int] = deque(maxlen=keep)  # start-to-start intervals (ns)
         self._last_start: int | None = None
         self.utility_window: deque[int] = deque(maxlen=k)
+        self._misses = 0  # zeros in utility_window (kept so that no job sums the window)
         self.mk_violations = 0  # windows (after the first k jobs) with U < m/k
 
     def record(self, release: int, start: int, end: int) -> None:
@@ -60,10 +61,18 @@ class TaskStats:
         if self._last_start is not None:
             self.periods.append(start - self._last_start)
         self._last_start = start
-        late = end - release >= self.period > 0
-        if late:
+        if end - release >= self.period > 0:
             self.overruns += 1
-        self._utility(0 if late else 1)
+            self._utility(0)
+            return
+        w = self.utility_window  # an on-time job (the common case, inline): a 1 into the window
+        k = self.k
+        full = len(w) == k
+        if full and w[0] == 0:
+            self._misses -= 1
+        w.append(1)
+        if full and k - self._misses < self.m:
+            self.mk_violations += 1
 
     def record_skip(self, n: int = 1) -> None:
         self.skipped += n
@@ -72,8 +81,13 @@ class TaskStats:
 
     def _utility(self, u: int) -> None:
         w = self.utility_window
+        k = self.k
+        if len(w) == k and w[0] == 0:
+            self._misses -= 1  # the oldest miss leaves the window
         w.append(u)
-        if len(w) == self.k and sum(w) < self.m:
+        if not u:
+            self._misses += 1
+        if len(w) == k and k - self._misses < self.m:
             self.mk_violations += 1
 
     @property
