@@ -66,7 +66,7 @@ def test_emit_python_is_readable(tmp_path):
     r = st("compile", str(f), "--emit", "python")
     assert r.returncode == 0, r.stderr
     assert "def _fn_Twice(x):" in r.stdout
-    assert "y = _fn_Twice((y + 1 + 32768 & 65535) - 32768)" in r.stdout
+    assert "self.y = _fn_Twice((self.y + 1 + 32768 & 65535) - 32768)" in r.stdout  # used twice: on the instance
 
 
 def test_runtime_fault_exit_code_and_message(tmp_path):

@@ -10,8 +10,6 @@ class _prg_main(_FB):  # st:4
 
     def _body(self):  # st:4
         code = self.code  # st:4
-        lamp = self.lamp  # st:4
-        mode = self.mode  # st:4
         out = self.out  # st:4
         try:  # st:4
             if code == 0:  # st:7
@@ -22,12 +20,12 @@ class _prg_main(_FB):  # st:4
                 out = (code * 2 + 32768 & 65535) - 32768  # st:9
             else:
                 out = -1  # st:11
-            if mode == 0:  # st:14
-                lamp = False  # st:14
-            elif mode in {1, 2}:  # st:15
-                lamp = True  # st:15
-            code = _t1 % 12 if (_t1 := (code + 1)) >= 0 else -(-_t1 % 12)  # st:17
+            _t1 = self.mode  # st:13
+            if _t1 == 0:  # st:14
+                self.lamp = False  # st:14
+            elif _t1 in {1, 2}:  # st:15
+                self.lamp = True  # st:15
+            code = _t2 % 12 if (_t2 := (code + 1)) >= 0 else -(-_t2 % 12)  # st:17
         finally:
             self.code = code  # st:18
-            self.lamp = lamp  # st:18
             self.out = out  # st:18

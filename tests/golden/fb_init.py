@@ -51,10 +51,4 @@ class _prg_main(_FB):  # st:19
         self.sum = 0  # st:20
 
     def _body(self):  # st:19
-        sum = self.sum  # st:19
-        v1 = self.v1  # st:19
-        v2 = self.v2  # st:19
-        try:  # st:19
-            sum = (v1.id + v1.channel + v2.id + 32768 & 65535) - 32768  # st:21
-        finally:
-            self.sum = sum  # st:22
+        self.sum = (self.v1.id + self.v1.channel + self.v2.id + 32768 & 65535) - 32768  # st:21

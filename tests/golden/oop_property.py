@@ -61,13 +61,7 @@ class _prg_main(_FB):  # st:28
 
     def _body(self):  # st:28
         c = self.c  # st:28
-        full = self.full  # st:28
-        seen = self.seen  # st:28
-        try:  # st:28
-            c._ps_Limit(3)  # st:30
-            full = c._m_Step()  # st:31
-            seen = c._pg_Limit()  # st:32
-            c._body()  # st:33
-        finally:
-            self.full = full  # st:34
-            self.seen = seen  # st:34
+        c._ps_Limit(3)  # st:30
+        self.full = c._m_Step()  # st:31
+        self.seen = c._pg_Limit()  # st:32
+        c._body()  # st:33

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 from ...model import types as T
 from .. import ast as A
 from ..lower.fb_init import Constructor
+from ..lower.walk import walk_stmts
 from ..names import mangle
 from .expressions import InitGen
 from .pyast import _args, _attr, _call, _const, _name, _set_lines, _store
@@ -280,6 +281,7 @@ class BodyGen(StmtGen):
         pou = self.pou
         by_ref = _by_ref_names(body)
         used = set()
+        uses: dict = {}
         for e in _walk_exprs_in(body):
             if (
                 isinstance(e, A.Name)
@@ -289,11 +291,18 @@ class BodyGen(StmtGen):
                 and not e.sym.is_global
             ):
                 used.add(e.sym)
+                uses[e.sym] = uses.get(e.sym, 0) + 1
         for v in edges:
             used.add(v)
         temps = [v for v in pou.vars.values() if v.section == "VAR_TEMP"]
         if can_cache:
-            self.cached = {v for v in used if v not in by_ref and not v.address_taken}
+            # copied into Python locals (and back at the end), which pays where a loop uses them or
+            # a variable is used often; in a straight-line body (most FB bodies: TON, a controller
+            # step) a variable used once or twice is read and written on the instance directly
+            loops = _loops_in(body)
+            self.cached = {
+                v for v in used if v not in by_ref and not v.address_taken and (loops or uses.get(v, 0) >= 3)
+            }
         else:
             self.cached = set()
         # VAR_TEMP lives for one call: always a Python local (boxed if passed by reference)
@@ -363,3 +372,8 @@ class BodyGen(StmtGen):
                     _set_lines(fn, texpr.span.line)
                     out.append(fn)
         return out
+
+
+def _loops_in(body) -> bool:
+    """Does the statement list contain a loop (FOR, WHILE, REPEAT)?"""
+    return any(isinstance(s, (A.For, A.CountedFor, A.While, A.Repeat)) for s in walk_stmts(body))
