@@ -121,6 +121,7 @@ def install(plc: PLC, b: Build, first: bool = False) -> None:
     plc.compiled, plc.project, plc.ns, plc._wd = b.compiled, b.project, b.ns, b.wd
     plc.config, plc.instances, plc.tasks = b.config, b.instances, b.tasks
     plc.tick, plc.policy = b.tick, b.policy
+    plc.job_lock = plc.image_lock if b.policy.name == "frame" else None  # the thesis's semaphore
     plc.bindings, plc._binding_of = b.bindings, b.binding_of
     # one message log per PLC: what the build itself logged (FB_init, initial values) joins it
     own = b.ns.get("_plc_log")
@@ -135,7 +136,7 @@ def install(plc: PLC, b: Build, first: bool = False) -> None:
         prev = old_drivers.get(type(d))
         if prev is not None and not first:
             d.adopt(prev)
-        plc.io.insert(0, d)
+        d.join(plc)
     # OpenPLC's special function registers (%ML1024 and up), when the program binds one
     plc.io = [d for d in plc.io if not isinstance(d, SpecialRegisters)]
     if any(is_special(bd.area, bd.size, bd.index) for binds in plc.bindings.values() for bd in binds):

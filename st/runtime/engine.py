@@ -92,6 +92,10 @@ def run(plc: PLC, t_end: Any) -> None:
     key = plc.policy.key
     tasks = plc.tasks
     idle_jobs = 0
+    # idle work only where there is some: retained data to commit, or real time (GC, the hook)
+    idle_work = clock.real or plc.retain_store is not None
+    for t in tasks:
+        t.wd_budget = _default_budget(plc, t)
     while True:
         if plc._stop_requested or (plc._stop_event is not None and plc._stop_event.is_set()):
             plc._stop_requested = False
@@ -124,8 +128,16 @@ def run(plc: PLC, t_end: Any) -> None:
             if nxt < t_end and nxt <= now:
                 _openplc_tick(plc, nxt)
                 idle_jobs += 1
-                continue
-        plc._time = max(plc._time, min(t_end, max(plc._next_tick, 0)))
+                if clock.real or plc._stop_requested or plc._stop_event is not None:
+                    continue
+                # virtual time: straight on to the wait for the next tick (what the next pass would do)
+                nxt = plc._next_tick
+                now = clock.now()
+                if nxt <= now or now >= t_end:
+                    continue
+        tick = plc._next_tick
+        if tick > plc._time:  # the PLC time: the next base tick, within the run
+            plc._time = tick if tick < t_end else max(plc._time, t_end)
         if nxt >= t_end:
             if t_end != math.inf:
                 _idle(plc, t_end, idle_jobs)
@@ -133,7 +145,8 @@ def run(plc: PLC, t_end: Any) -> None:
                 plc._time = t_end
                 plc.scans = t_end // plc.tick
             return
-        _idle(plc, nxt, idle_jobs)
+        if idle_work:
+            _idle(plc, nxt, idle_jobs)
         idle_jobs = 0
         clock.sleep_until(nxt)
 
@@ -185,23 +198,27 @@ def _openplc_tick(plc: PLC, tick_time: int) -> None:
     """OpenPLC v3: at base tick k, every due task runs, in declaration order (late ticks catch up)."""
     for t in plc.tasks:
         if t.single:
-            due = _edge(plc, t)
-        else:
-            due = t.interval > 0 and tick_time % t.interval == 0
-        if due and plc.state == RUN:
+            if _edge(plc, t) and plc.state == RUN:
+                _job(plc, t, tick_time)
+        elif t.interval > 0 and not tick_time % t.interval and plc.state == RUN:
             _job(plc, t, tick_time)
     plc._next_tick = tick_time + plc.tick
 
 
 def _job(plc: PLC, task: Task, release: int) -> None:
-    """One execution of a task: latch inputs, run its instances, publish outputs, record statistics."""
+    """One execution of a task: latch inputs, run its instances, publish outputs, record statistics.
+
+    The hot path of every scan: locals instead of repeated attribute loads, the watchdog armed
+    and disarmed inline (see Watchdog.start/stop), nothing evaluated that a run fixes once."""
     clock = plc.clock
     start = clock.now()
     ns = plc.ns
-    lock = plc.image_lock if plc.policy.name == "frame" else None
+    lock = plc.job_lock
     if lock is not None:
         lock.acquire()
     io = plc.io
+    wd = plc._wd
+    plc.job_task = task
     try:
         if io:
             for d in io:
@@ -211,12 +228,7 @@ def _job(plc: PLC, task: Task, release: int) -> None:
         if plc._forced:
             apply_forced(plc)
         ns["_now"] = release
-        plc._wd.start(
-            plc.watchdog
-            or (
-                10 * (task.interval or plc.tick) if clock.real else max(10 * (task.interval or plc.tick), 1_000_000_000)
-            )
-        )
+        wd.arm(plc.watchdog or task.wd_budget or _default_budget(plc, task))
         try:
             for _name, obj, cin, cout in task.calls:
                 if cin is not None:
@@ -225,7 +237,9 @@ def _job(plc: PLC, task: Task, release: int) -> None:
                 if cout is not None:
                     cout(obj)
         finally:
-            plc._wd.stop()
+            wd.deadline = 0
+            if wd.abort_reason or ns["_wd_armed"]:
+                wd.stop()
         if plc._forced:
             apply_forced(plc)
         for b in task.outs:
@@ -240,9 +254,18 @@ def _job(plc: PLC, task: Task, release: int) -> None:
         enter_fault(plc, info)
         raise PLCFaultError(info) from None
     finally:
+        plc.job_task = None
         if lock is not None:
             lock.release()
     cost = task.cost
-    clock.spend(cost() if callable(cost) else cost)
+    if cost:
+        clock.spend(cost() if callable(cost) else cost)
     task.stats.record(release, start, clock.now())
     task.runs += 1
+
+
+def _default_budget(plc: PLC, task: Task) -> int:
+    """The watchdog's budget when none is configured: 10 intervals (at least 1 s on virtual time,
+    where a job's wall time says nothing about the PLC's)."""
+    budget = 10 * (task.interval or plc.tick)
+    return budget if plc.clock.real or budget >= 1_000_000_000 else 1_000_000_000

@@ -9,7 +9,9 @@ driver keeps its own threads or processes off the scan's path.
 The optional parts have defaults in `IODriverBase`, which drivers extend: a `name` and
 `stats()` for the end-of-run report, and for a driver that lives in the program's namespace
 (`per_namespace`, listed in its `_io_drivers`, made again with every reload) `adopt(old)` to
-take over the state of the one it replaces.
+take over the state of the one it replaces, and `join(plc)`, which puts it into `PLC.io` (a driver
+with nothing to do yet may wait, as the motion kernel waits for its first axis: the engine
+then pays nothing for it).
 """
 
 from __future__ import annotations
@@ -28,6 +30,8 @@ class IODriver(Protocol):
     def after_job(self, task: Task | None = None) -> None: ...
 
     def rebind(self) -> None: ...
+
+    def join(self, plc: Any) -> None: ...
 
     def adopt(self, old: IODriver) -> None: ...
 
@@ -48,6 +52,11 @@ class IODriverBase:
 
     def rebind(self) -> None:
         pass
+
+    def join(self, plc: Any) -> None:
+        """A per-namespace driver joins the PLC's drivers after a (re)load: first in `plc.io`, so that
+        it runs before the drivers that carry its results to the field."""
+        plc.io.insert(0, self)
 
     def adopt(self, old: IODriver) -> None:
         """A per-namespace driver replacing `old` after a reload takes over what must survive it."""

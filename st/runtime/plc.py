@@ -53,6 +53,8 @@ class PLC:
     tasks: list[Task]
     tick: int
     policy: Policy
+    job_lock: threading.Lock | None  # what a job holds: the image lock under the frame policy
+    job_task: Task | None = None  # the task whose job is running (None between jobs)
     bindings: dict[str, list[Binding]]
     _binding_of: dict[tuple[int, Any], Binding]
     _wd: Watchdog

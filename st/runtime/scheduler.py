@@ -53,6 +53,7 @@ class Task:
     pending: int | None = None  # release time of a released job not yet started
     ins: list[Any] = field(default_factory=list)  # process image bindings latched before the job
     outs: list[Any] = field(default_factory=list)  # … published after it
+    wd_budget: int = 0  # the watchdog's default budget for this run's clock (engine.run sets it)
 
 
 class Policy:

@@ -38,8 +38,10 @@ class TaskStats:
         self.latencies: deque[int] = deque(maxlen=keep)  # the latest `keep` samples (ns)
         self.periods: deque[int] = deque(maxlen=keep)  # start-to-start intervals (ns)
         self._last_start: int | None = None
-        self.utility_window: deque[int] = deque(maxlen=k)
-        self._misses = 0  # zeros in utility_window (kept so that no job sums the window)
+        # the (m,k) window as the entries (jobs and skipped releases, numbered from 1) that missed:
+        # an on-time job with no miss in the window, the common case, only counts
+        self._entries = 0
+        self._miss_at: deque[int] = deque()
         self.mk_violations = 0  # windows (after the first k jobs) with U < m/k
 
     def record(self, release: int, start: int, end: int) -> None:
@@ -58,21 +60,17 @@ class TaskStats:
         self.exec_sum += ex
         self.last_exec = ex
         self.latencies.append(lat)
-        if self._last_start is not None:
-            self.periods.append(start - self._last_start)
+        last = self._last_start
+        if last is not None:
+            self.periods.append(start - last)
         self._last_start = start
         if end - release >= self.period > 0:
             self.overruns += 1
             self._utility(0)
             return
-        w = self.utility_window  # an on-time job (the common case, inline): a 1 into the window
-        k = self.k
-        full = len(w) == k
-        if full and w[0] == 0:
-            self._misses -= 1
-        w.append(1)
-        if full and k - self._misses < self.m:
-            self.mk_violations += 1
+        self._entries += 1
+        if self._miss_at:
+            self._slide()
 
     def record_skip(self, n: int = 1) -> None:
         self.skipped += n
@@ -80,20 +78,32 @@ class TaskStats:
             self._utility(0)
 
     def _utility(self, u: int) -> None:
-        w = self.utility_window
-        k = self.k
-        if len(w) == k and w[0] == 0:
-            self._misses -= 1  # the oldest miss leaves the window
-        w.append(u)
+        self._entries += 1
         if not u:
-            self._misses += 1
-        if len(w) == k and k - self._misses < self.m:
+            self._miss_at.append(self._entries)
+        self._slide()
+
+    def _slide(self) -> None:
+        """Misses older than the last k entries leave the window; a full window below m/k counts."""
+        miss_at, k = self._miss_at, self.k
+        oldest = self._entries - k
+        while miss_at and miss_at[0] <= oldest:
+            miss_at.popleft()
+        if oldest >= 0 and k - len(miss_at) < self.m:
             self.mk_violations += 1
 
     @property
+    def utility_window(self) -> list[int]:
+        """The last k entries' utilities, oldest first (1 on time, 0 missed)."""
+        n = min(self._entries, self.k)
+        first = self._entries - n + 1
+        missed = set(self._miss_at)
+        return [0 if i in missed else 1 for i in range(first, self._entries + 1)]
+
+    @property
     def utility(self) -> float:
-        w = self.utility_window
-        return sum(w) / len(w) if w else 1.0
+        n = min(self._entries, self.k)
+        return (n - len(self._miss_at)) / n if n else 1.0
 
     def summary(self) -> dict[str, Any]:
         """Everything as plain numbers (µs for times), for JSON and the status line."""

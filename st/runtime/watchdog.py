@@ -39,9 +39,16 @@ class Watchdog:
         self.what = what
         self.deadline = time.monotonic_ns() + budget_ns
 
+    def arm(self, budget_ns: int) -> None:
+        """start() for a task's job, on the engine's hot path: `what` is already "the job" (stop()
+        puts it back) and no abort is pending (one is cleared by stop() or raised by check())."""
+        self.budget = budget_ns
+        self.deadline = time.monotonic_ns() + budget_ns
+
     def stop(self) -> None:
         self.deadline = 0
         self.abort_reason = ""
+        self.what = "the job"
         if self.ns["_wd_armed"]:
             self.ns["_wd_armed"] = False
 

@@ -43,8 +43,13 @@ class MotionRegistry(IODriverBase):
         self.configs: dict = {}  # AxisNo → AxisConfig
         self.signals: dict = {}  # AxisNo → callable: the reference switch of MC_Home
         self.drives: dict = {}  # AxisNo → the Drive (EtherCAT) that claims the axis
-        self.task = None
         self.traces: list = []  # [AxisTrace]
+        self.plc = None  # the PLC it joined (join)
+
+    @property
+    def task(self):
+        """The task whose job is running: it claims the axes its blocks touch first."""
+        return self.plc.job_task if self.plc is not None else None
 
     def axis(self, ref) -> Axis | None:
         """The Axis behind an AXIS_REF value, created on first use: one per AxisNo (every AXIS_REF
@@ -65,6 +70,7 @@ class MotionRegistry(IODriverBase):
             ax.axis_no = ref.AxisNo
             ax.home_signal = self.signals.get(ref.AxisNo)
             self.axes[h] = ax
+            self.wake()
             link = self.drives.get(ref.AxisNo)
             if link is not None:
                 link.attach(ax)
@@ -94,8 +100,18 @@ class MotionRegistry(IODriverBase):
             ax.task = None  # the new program's tasks claim their axes on the next call
 
     # the I/O driver interface
-    def before_job(self, task: Task | None = None) -> None:
-        self.task = task
+    def join(self, plc) -> None:
+        """Into `plc.io` once there is an axis or a trace to step; until then (a program that has
+        the PLCopen library but calls no MC_* block) the engine pays nothing for the kernel."""
+        self.plc = plc
+        if self.axes or self.traces:
+            self.wake()
+
+    def wake(self) -> None:
+        """Join the PLC's drivers (first, before the drives that carry the axes' targets)."""
+        plc = self.plc
+        if plc is not None and self not in plc.io:
+            plc.io.insert(0, self)
 
     def after_job(self, task: Task | None = None) -> None:
         if task is None:

@@ -56,6 +56,7 @@ def start_traces(plc, paths: list) -> list:
             raise TypeError(f"--trace {p}: not an AXIS_REF (it is {t})")
         tr = AxisTrace(plc, p)
         reg.traces.append(tr)
+        reg.wake()
         out.append(tr)
     return out
 
