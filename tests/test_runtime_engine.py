@@ -329,6 +329,17 @@ def test_online_change_carries_values_over_and_refuses_type_changes():
     assert plc["main.n"] == 70  # still the v2 code
 
 
+def test_mk_window_counts_the_job_that_fills_it_and_skips():
+    s = TaskStats("t", 10_000_000, k=4, m=3)
+    for i, end in enumerate([15, 15, 5, 5, 5, 5]):  # two misses, then on time
+        s.record(i * 10_000_000, i * 10_000_000, i * 10_000_000 + end * 1_000_000)
+    # [0,0,1,1] (filled by an on-time job) is below 3 of 4; [0,1,1,1] and [1,1,1,1] are not
+    assert (s.mk_violations, s.utility, s.utility_window) == (1, 1.0, [1, 1, 1, 1])
+    s.record_skip(2)  # [1,1,1,0] then [1,1,0,0]
+    assert (s.skipped, s.mk_violations, s.utility, s.utility_window) == (2, 2, 0.5, [1, 1, 0, 0])
+    assert TaskStats("e", 1_000_000).utility == 1.0  # no job yet
+
+
 def test_mk_firm_utility_and_summary():
     s = TaskStats("t", 10_000_000, k=4, m=3)
     for i, end in enumerate([5, 5, 12, 5, 15, 5]):  # R of 12 and 15 ms miss the 10 ms deadline
@@ -435,3 +446,25 @@ def test_st_run_watch_swaps_new_code_in_and_refuses_a_type_change(tmp_path):
     jobs = json.loads(stats.read_text())["tasks"][0]["jobs"]  # 600 unless a loaded machine skipped some
     assert before > 50 and after > 50 and before + after == jobs
     assert (tmp_path / "lat.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_motion_kernel_joins_the_drivers_with_its_first_axis():
+    from st.stdlib.plcopen import registry
+
+    idle = PLC(compile_text("PROGRAM main VAR x : INT; END_VAR x := x + 1; END_PROGRAM", "idle.st"))
+    idle.scan(3)
+    assert registry(idle) is not None and idle.io == [] and idle.job_task is None
+    src = """PROGRAM main
+VAR ax : AXIS_REF; pw : MC_Power; on : BOOL; END_VAR
+pw(Axis := ax, Enable := on, EnableNegative := TRUE, EnablePositive := TRUE);
+END_PROGRAM"""
+    plc = PLC(compile_text(src, "pw.st"))
+    assert plc.io == []
+    plc.scan()
+    reg = registry(plc)
+    assert plc.io == [reg] and plc.job_task is None
+    ax = next(iter(reg.axes.values()))
+    assert ax.task is plc.tasks[0] and ax.cycle == plc.tasks[0].interval / 1e9
+    plc["main.on"] = True
+    plc.scan(2)
+    assert plc["main.pw.Status"] is True  # stepped after its task's jobs
