@@ -194,14 +194,32 @@ def _abs_emit(ctx, args, types, rt):
 
 
 def _minmax(name, helper):
+    cmp = py.Lt if name == "MIN" else py.Gt
+
+    def emit(ctx, args, types, rt):
+        """Two plain operands inline, deciding as the builtin does (the second replaces the first
+        only when strictly smaller, resp. larger: the same result for NaN and equal values)."""
+        if len(args) != 2 or not (_simple(args[0]) and _simple(args[1])):
+            return call(helper, *args)
+        a, b = args
+        return py.IfExp(py.Compare(b, [cmp()], [a]), b, a)
+
     return FuncSig(
         name,
         [_p("IN1", "ANY_ELEMENTARY", "T"), _p("IN2", "ANY_ELEMENTARY", "T")],
         "T",
         extensible=True,
-        helper=helper,
+        emit=emit,
         min_args=2,
     )
+
+
+def _sel_emit(ctx, args, types, rt):
+    """SEL of plain operands inline (nothing to evaluate but the one chosen)."""
+    if all(_simple(a) for a in args):
+        g, in0, in1 = args
+        return py.IfExp(g, in1, in0)
+    return call("_std_sel", *args)
 
 
 def _now_emit(ctx, args, types, rt):
@@ -332,7 +350,7 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", mat
 
     add(FuncSig("NOT", [_p("IN", "ANY_BIT", "T")], "T", emit=not_emit))
     # selection
-    add(FuncSig("SEL", [_p("G", "BOOL"), _p("IN0", "ANY", "T"), _p("IN1", "ANY", "T")], "T", helper="_std_sel"))
+    add(FuncSig("SEL", [_p("G", "BOOL"), _p("IN0", "ANY", "T"), _p("IN1", "ANY", "T")], "T", emit=_sel_emit))
     add(_minmax("MAX", "_max"))
     add(_minmax("MIN", "_min"))
     add(

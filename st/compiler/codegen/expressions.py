@@ -324,6 +324,10 @@ class ExprGen:
                 ps = [x * y for x in l for y in r]
                 return (min(ps), max(ps))
             if op == "/":
+                if r[0] >= 1:  # a positive divisor: truncation toward zero, monotone in both
+                    lo = l[0] // r[1] if l[0] >= 0 else -(-l[0] // r[0])
+                    hi = l[1] // r[0] if l[1] >= 0 else -(-l[1] // r[1])
+                    return (lo, hi)
                 m = max(abs(l[0]), abs(l[1]))
                 return (-m, m) if l[0] < 0 or r[0] < 0 else (0, m)
             if op == "MOD":
@@ -353,6 +357,13 @@ class ExprGen:
                 skip = 1 if sig.name in ("SEL", "MUX") else 0
                 rs = [self.value_range(a.value) for a in e.target.args[skip:]]
                 if rs and None not in rs:
+                    if sig.name == "MIN":
+                        return (min(r[0] for r in rs), min(r[1] for r in rs))
+                    if sig.name == "MAX":
+                        return (max(r[0] for r in rs), max(r[1] for r in rs))
+                    if sig.name == "LIMIT" and len(rs) == 3:  # MN, MX, or IN between them
+                        mn, mx = rs[0], rs[2]
+                        return (min(mn[0], mx[0]), max(mn[1], mx[1]))
                     return (min(r[0] for r in rs), max(r[1] for r in rs))
         return None
 
