@@ -207,3 +207,20 @@ def test_repeat_with_continue_still_tests_the_condition():
         "REPEAT i := i + 1; IF i < 3 THEN CONTINUE; END_IF; n := n + 1; UNTIL i >= 5 END_REPEAT;", "i : INT; n : INT;"
     )
     assert (plc["main.i"], plc["main.n"]) == (5, 3)
+
+
+def test_and_or_in_conditions_short_circuit_only_what_cannot_fault_or_act():
+    from helpers import fault, run
+
+    src = """PROGRAM main
+VAR a : BOOL; b : BOOL := TRUE; i : INT := 7; n : INT; x : ARRAY[0..3] OF INT; END_VAR
+IF a AND b OR i > 3 AND NOT a THEN n := n + 1; END_IF;
+WHILE i < 10 AND b DO i := i + 1; END_WHILE;
+REPEAT i := i - 1; UNTIL i < 5 OR a END_REPEAT;
+IF a AND x[i + 6] > 0 THEN n := 100; END_IF;
+END_PROGRAM"""
+    plc = run(src.replace("x[i + 6]", "x[i - 1]"), scans=2)
+    assert (plc["main.n"], plc["main.i"]) == (2, 4)
+    # the index is evaluated although a is FALSE: ST's AND evaluates both operands
+    _, info = fault(src)
+    assert (info.kind, info.line) == ("INDEX", 6)

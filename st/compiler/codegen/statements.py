@@ -328,10 +328,25 @@ class StmtGen(ExprGen):
         else:
             orelse = self._arm([], s, "implicit ELSE") if self.covered else []
         for (cond, _body), arm in reversed(list(zip(s.branches[1:], arms[1:]))):
-            node = py.If(self.expr(cond), arm, orelse)
+            node = py.If(self.cond(cond), arm, orelse)
             _set_lines(node, cond.span.line)
             orelse = [node]
-        return [py.If(self.expr(s.branches[0][0]), arms[0], orelse)]
+        return [py.If(self.cond(s.branches[0][0]), arms[0], orelse)]
+
+    def cond(self, e) -> py.expr:
+        """A condition (IF, ELSIF, WHILE, UNTIL). AND/OR of BOOL operands that can neither fault nor
+        act (`_inert`) are short-circuited: the same truth value, without evaluating the rest once
+        it is decided."""
+        if (
+            isinstance(e, A.Binary)
+            and e.op in ("AND", "OR")
+            and e.ty is not None
+            and T.base_of(e.ty).is_bool
+            and _inert(e.left)
+            and _inert(e.right)
+        ):
+            return py.BoolOp(py.And() if e.op == "AND" else py.Or(), [self.cond(e.left), self.cond(e.right)])
+        return self.expr(e)
 
     def s_Case(self, s: A.Case) -> list:
         out = []
@@ -372,17 +387,17 @@ class StmtGen(ExprGen):
         return out
 
     def s_While(self, s: A.While) -> list:
-        return [py.While(self.expr(s.cond), self.loop_body(s.body) or [py.Pass()], [])]
+        return [py.While(self.cond(s.cond), self.loop_body(s.body) or [py.Pass()], [])]
 
     def s_Repeat(self, s: A.Repeat) -> list:
         if _has_continue(s.body):
             flag = self.new_tmp()
             init = py.Assign([_name(flag, py.Store())], _const(True))
-            test = py.BoolOp(py.Or(), [_name(flag), py.UnaryOp(py.Not(), self.expr(s.cond))])
+            test = py.BoolOp(py.Or(), [_name(flag), py.UnaryOp(py.Not(), self.cond(s.cond))])
             body = self.loop_body(s.body, [py.Assign([_name(flag, py.Store())], _const(False))])
             return [init, py.While(test, body, [])]
         body = self.loop_body(s.body)
-        cond = self.expr(s.cond)
+        cond = self.cond(s.cond)
         br = _set_lines(py.If(cond, [py.Break()], []), s.cond.span.line)
         return [py.While(_const(True), body + [br], [])]
 
@@ -533,6 +548,34 @@ def _has_continue(body) -> bool:
         if isinstance(s, A.Case):
             if any(_has_continue(b.body) for b in s.branches) or _has_continue(s.orelse or []):
                 return True
+    return False
+
+
+_INERT_OPS = frozenset(("=", "<>", "<", ">", "<=", ">=", "AND", "OR", "XOR", "+", "-", "*"))
+
+
+def _inert(e) -> bool:
+    """An expression that can neither fault nor act: literals, variables and members (no
+    reference, pointer, VAR_IN_OUT, property or call), and comparisons, logic and + - * of such."""
+    if isinstance(e, (A.Literal, A.EnumLit)):
+        return True
+    if e.ty is not None and isinstance(T.unalias(e.ty), T.RefType):
+        return False
+    if isinstance(e, A.Name):
+        sym = e.sym
+        return isinstance(sym, T.VarSym) and sym.section != "VAR_IN_OUT" and not T.is_reference(sym.type)
+    if isinstance(e, A.Field):
+        sym = e.sym
+        return (
+            isinstance(sym, T.VarSym)
+            and sym.section != "VAR_IN_OUT"
+            and not T.is_reference(sym.type)
+            and _inert(e.base)
+        )
+    if isinstance(e, A.Unary):
+        return e.op in ("NOT", "-", "+") and _inert(e.operand)
+    if isinstance(e, A.Binary):
+        return e.op in _INERT_OPS and _inert(e.left) and _inert(e.right)
     return False
 
 
