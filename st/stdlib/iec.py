@@ -65,9 +65,33 @@ def _bits_of(t):
     return b.bits if b.is_intlike else 1
 
 
+def _shift_inline(name, v, n, bits):
+    """SHL/SHR/ROL/ROR of an unsigned value by a constant count, inline (None: keep the helper,
+    which also faults on a negative count)."""
+    mask = (1 << bits) - 1
+    if name == "SHL" and 0 <= n < bits:
+        return py.BinOp(py.BinOp(v, py.LShift(), const(n)), py.BitAnd(), const(mask))
+    if name == "SHR" and 0 <= n < bits:
+        masked = v if _simple(v) else py.BinOp(v, py.BitAnd(), const(mask))  # an exact intermediate
+        return py.BinOp(masked, py.RShift(), const(n))
+    if name in ("ROL", "ROR") and _simple(v):
+        n %= bits
+        if n == 0:
+            return py.BinOp(v, py.BitAnd(), const(mask))
+        left, right = (n, bits - n) if name == "ROL" else (bits - n, n)
+        both = py.BinOp(py.BinOp(v, py.LShift(), const(left)), py.BitOr(), py.BinOp(v, py.RShift(), const(right)))
+        return py.BinOp(both, py.BitAnd(), const(mask))
+    return None
+
+
 def _shift(name, helper):
     def emit(ctx, args, types, rt):
         b = T.base_of(rt)
+        n = args[1]
+        if b.is_intlike and not b.signed and isinstance(n, py.Constant) and type(n.value) is int:
+            inline = _shift_inline(name, args[0], n.value, b.bits)
+            if inline is not None:
+                return inline
         node = call(helper, args[0], args[1], const(b.bits))
         if b.is_int and b.signed:
             node = call("_signed", node, const(b.bits))
