@@ -224,3 +224,20 @@ END_PROGRAM"""
     # the index is evaluated although a is FALSE: ST's AND evaluates both operands
     _, info = fault(src)
     assert (info.kind, info.line) == ("INDEX", 6)
+
+
+def test_element_updated_from_itself_is_located_once_and_still_checked():
+    from helpers import fault, run
+
+    src = """PROGRAM main
+VAR i : INT := 2; j : INT := 1; x : ARRAY[0..3] OF INT := [1, 2, 3, 32767];
+  m : ARRAY[1..2, 1..3] OF DINT := [1, 2, 3, 4, 5, 6]; END_VAR
+x[i] := x[i] * 10 + x[i - 1];
+m[j + 1, i] := m[j + 1, i] * 2 - m[j, i];
+x[i + 1] := x[i + 1] + 1;
+END_PROGRAM"""
+    plc = run(src)
+    assert plc["main.x"] == [1, 2, 32, -32768]  # the INT store still wraps
+    assert plc["main.m"] == [[1, 2, 3], [4, 8, 6]]
+    _, info = fault(src.replace("i : INT := 2", "i : INT := 3"))
+    assert (info.kind, info.line) == ("INDEX", 6)

@@ -154,6 +154,7 @@ class ExprGen:
         self.written_locals: set = set()
         self.result_name = ""
         self.loop_ranges: dict = {}  # VarSym → (lo, hi): a FOR counter inside its body (range form)
+        self.index_memo: dict = {}  # index_key → temp: an element's checked index, computed once
 
     def _result_boxed(self) -> bool:
         return bool(getattr(self.pou, "result_address_taken", False))
@@ -481,6 +482,10 @@ class ExprGen:
         return _call("_conf", value, _const(tuple(at.dims)))
 
     def index_of(self, e: A.Index) -> py.expr:
+        if self.index_memo:
+            tmp = self.index_memo.get(index_key(e))
+            if tmp is not None:
+                return _name(tmp)
         at = T.unalias(e.base.ty)
         if isinstance(at, T.RefType):
             return self.expr(e.indices[0])
@@ -884,3 +889,33 @@ def wrap(node: py.expr, d) -> py.expr:
 
 def _is_pointer(t) -> bool:
     return isinstance(t, T.RefType) and t.ref_kind == "POINTER"
+
+
+def index_key(e) -> tuple | None:
+    """A structural key of an element access whose parts only read variables (`a[i + 1]`,
+    `s.v[i, j]`): equal keys name the same element within one statement. None: not such an access."""
+    if isinstance(e, A.Literal):
+        return ("L", e.value) if isinstance(e.value, int) else None
+    if isinstance(e, A.Name):
+        sym = e.sym
+        if isinstance(sym, T.VarSym) and sym.section != "VAR_IN_OUT" and not isinstance(T.unalias(sym.type), T.RefType):
+            return ("N", id(sym))
+        return None
+    if isinstance(e, A.Field):
+        base = index_key(e.base)
+        return ("F", base, e.name.lower()) if base is not None and isinstance(e.sym, T.VarSym) else None
+    if isinstance(e, A.Unary):
+        inner = index_key(e.operand)
+        return ("U", e.op, inner) if inner is not None and e.op in ("-", "+") else None
+    if isinstance(e, A.Binary):
+        if e.op not in ("+", "-", "*"):
+            return None
+        left, right = index_key(e.left), index_key(e.right)
+        return ("B", e.op, left, right) if left is not None and right is not None else None
+    if isinstance(e, A.Index):
+        if not isinstance(T.unalias(e.base.ty), T.ArrayType) or T.is_conformant(e.base.ty):
+            return None
+        base = index_key(e.base)
+        parts = [index_key(i) for i in e.indices]
+        return ("I", base, tuple(parts)) if base is not None and None not in parts else None
+    return None

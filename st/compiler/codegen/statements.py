@@ -10,7 +10,7 @@ from ...model import types as T
 from .. import ast as A
 from ..check import CallTarget
 from ..lower.walk import walk_stmts
-from .expressions import ExprGen, wrap
+from .expressions import ExprGen, index_key, wrap
 from .pyast import Unsupported, _attr, _call, _const, _name, _set_lines
 
 
@@ -142,7 +142,24 @@ class StmtGen(ExprGen):
         ut = T.unalias(tt) if tt is not None else None
         if ut is not None and ut.is_aggregate:
             return [py.Expr(_call("_assign", self.expr(tgt), self.expr(v)))]
+        if isinstance(tgt, A.Index):
+            return self._element_update(tgt, v, tt)
         return self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
+
+    def _element_update(self, tgt: A.Index, v, tt) -> list:
+        """`a[i] := a[i] + 1`: an element the value reads too is located (its index checked) once."""
+        key = index_key(tgt)
+        if key is None or not _reads_element(v, key) or key in self.index_memo:
+            return self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
+        index = self.index_of(tgt)
+        if isinstance(index, (py.Name, py.Constant)):
+            return self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
+        tmp = self.new_tmp()
+        self.index_memo[key] = tmp
+        try:
+            return [py.Assign([_name(tmp, py.Store())], index)] + self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
+        finally:
+            del self.index_memo[key]
 
     def _en_wrap(
         self, en, eno, body: list, eno_bound: bool = False, own_eno: py.expr | None = None, ok: py.expr | None = None
@@ -549,6 +566,28 @@ def _has_continue(body) -> bool:
             if any(_has_continue(b.body) for b in s.branches) or _has_continue(s.orelse or []):
                 return True
     return False
+
+
+def _reads_element(e, key) -> bool:
+    """Does the value read the element `key` names, and otherwise only read (an operand that may
+    act, a call, could change the index in between)?"""
+    found = False
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, A.Index):
+            k = index_key(x)
+            if k is None:
+                return False
+            found = found or k == key
+            continue
+        if isinstance(x, A.Binary):
+            stack += [x.left, x.right]
+        elif isinstance(x, A.Unary):
+            stack.append(x.operand)
+        elif not _inert(x):
+            return False
+    return found
 
 
 _INERT_OPS = frozenset(("=", "<>", "<", ">", "<=", ">=", "AND", "OR", "XOR", "+", "-", "*"))
