@@ -60,3 +60,34 @@ def test_a_counter_range_follows_the_step(step):
     )
     plc = run(src)
     assert plc["main.s"] == (20 if step == "2" else 45)
+
+
+def test_real_rounding_is_not_repeated_and_gives_the_same_values():
+    src = """PROGRAM main
+VAR t : REAL := 0.3; a, b, c : REAL; END_VAR
+a := SIN(t) * 2.5 + SQRT(ABS(COS(t)) + 1.0);
+b := a + t;
+c := ABS(b * t);
+END_PROGRAM"""
+    code = compile_text(src, "r.st", dialect="openplc", use_cache=False, emit_python=True).python_source["r.st"]
+    assert not _rounds_twice(code)
+    plc = run(src, dialect="openplc")
+    # the single-precision values MatIEC's C computes (each operation rounded to float)
+    assert [plc[f"main.{k}"] for k in "abc"] == [2.137134075164795, 2.437134027481079, 0.7311402559280396]
+
+
+def _rounds_twice(code: str) -> bool:
+    """Is there a `_f32(_f32(…))` or `_f32(_abs(_f32(…)))` call in the code?"""
+    import ast
+
+    def rounded(n):
+        return (
+            isinstance(n, ast.Call)
+            and isinstance(n.func, ast.Name)
+            and (n.func.id == "_f32" or (n.func.id == "_abs" and rounded(n.args[0])))
+        )
+
+    return any(
+        isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "_f32" and rounded(n.args[0])
+        for n in ast.walk(ast.parse(code))
+    )

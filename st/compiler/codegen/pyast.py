@@ -32,8 +32,18 @@ def _attr(obj: py.expr, name: str, ctx=None) -> py.Attribute:
 
 
 def _call(fn: str | py.expr, *args) -> py.Call:
+    if fn == "_f32" and len(args) == 1 and _rounded(args[0]):
+        return args[0]  # REAL rounding is idempotent: `_f32(_f32(x))` is `_f32(x)`
     f = _name(fn) if isinstance(fn, str) else fn
     return py.Call(f, list(args), [])
+
+
+def _rounded(node: py.expr) -> bool:
+    """A call whose value is already a single-precision float: `_f32(x)`, or `_abs` of one."""
+    if not isinstance(node, py.Call) or not isinstance(node.func, py.Name) or len(node.args) != 1:
+        return False
+    name = node.func.id
+    return name == "_f32" or (name == "_abs" and _rounded(node.args[0]))
 
 
 def _store(node: py.expr) -> py.expr:
