@@ -91,3 +91,18 @@ def _rounds_twice(code: str) -> bool:
         isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "_f32" and rounded(n.args[0])
         for n in ast.walk(ast.parse(code))
     )
+
+
+def test_an_integer_operand_of_real_arithmetic_converts_as_before():
+    src = """PROGRAM main
+VAR t : REAL := 0.5; l : LREAL; i : INT := 3; d : DINT := 16777217; r, q : REAL; k : LREAL; END_VAR
+l := 2.0 * i;
+k := l - i;
+r := t * d;       (* DINT -> REAL rounds to single precision first: 16777216 *)
+q := t + i;
+END_PROGRAM"""
+    code = compile_text(src, "f.st", use_cache=False, emit_python=True).python_source["f.st"]
+    assert "_float(self.i)" not in code and "_float(i)" not in code
+    plc = run(src)
+    assert [plc[f"main.{k}"] for k in ("l", "k", "r", "q")] == [6.0, 3.0, 8388608.0, 3.5]
+    assert all(type(plc[f"main.{k}"]) is float for k in ("l", "k", "r", "q"))

@@ -567,6 +567,12 @@ class ExprGen:
         rt = T.base_of(e.right.ty) if e.right.ty is not None else None
         res = T.base_of(e.ty) if e.ty is not None else None
         l, r = self.expr(e.left), self.expr(e.right)
+        if op in ("+", "-", "*") and res is not None and res.is_real:
+            # a float operand converts the other's integer itself, as float() does: no call
+            if lt is not None and lt.is_real:
+                r = _unfloat(r)
+            if rt is not None and rt.is_real:
+                l = _unfloat(l)
         pl, pr = (T.unalias(x.ty) if x.ty is not None else None for x in (e.left, e.right))
         if isinstance(pl, T.RefType) or isinstance(pr, T.RefType):
             if op in ("+", "-") and not (isinstance(pl, T.RefType) and isinstance(pr, T.RefType)):
@@ -889,6 +895,18 @@ def wrap(node: py.expr, d) -> py.expr:
 
 def _is_pointer(t) -> bool:
     return isinstance(t, T.RefType) and t.ref_kind == "POINTER"
+
+
+def _unfloat(node: py.expr) -> py.expr:
+    """`_float(x)` → `x` (where Python's float arithmetic converts x the same way)."""
+    if (
+        isinstance(node, py.Call)
+        and isinstance(node.func, py.Name)
+        and node.func.id == "_float"
+        and len(node.args) == 1
+    ):
+        return node.args[0]
+    return node
 
 
 def index_key(e) -> tuple | None:
