@@ -125,37 +125,34 @@ def to_signed32(v: int) -> int:
     return v - (1 << 32) if v >= 1 << 31 else v
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--matiec", type=Path, default=os.environ.get("ST_MATIEC"), help="a built MatIEC (iec2c, lib/)")
-    ap.add_argument("--scans", type=int, default=20000, help="scans per run (the checksums are compared after them)")
-    ap.add_argument("--runs", type=int, default=3, help="runs of each; the median is shown")
-    ap.add_argument("--workloads", nargs="*", default=None, help="names in bench/workloads (default: all)")
-    args = ap.parse_args()
+def measure(matiec: Path | None, scans: int, runs: int, names: list[str] | None = None) -> tuple[list[dict], list[str]]:
+    """(one row per workload, the native columns' labels): st's ns per scan and checksum, and each
+    native build's (ns per scan, checksum) when MatIEC and g++ are there (else no native column)."""
     files = sorted(WORKLOADS.glob("*.st"))
-    if args.workloads:
-        files = [f for f in files if f.stem in args.workloads]
-    native = args.matiec is not None and (args.matiec / "iec2c").exists() and shutil.which("g++") is not None
-    if not native:
-        print("no MatIEC build (--matiec DIR or ST_MATIEC) or no g++: st's numbers only\n")
+    if names:
+        files = [f for f in files if f.stem in names]
+    native = matiec is not None and (matiec / "iec2c").exists() and shutil.which("g++") is not None
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for wl in files:
             st_times, st_sum = [], None
-            for _ in range(args.runs):
-                ns, st_sum = st_run(wl, args.scans)
+            for _ in range(runs):
+                ns, st_sum = st_run(wl, scans)
                 st_times.append(ns)
             row = {"workload": wl.stem, "st": statistics.median(st_times), "checksum": to_signed32(st_sum or 0)}
             if native:
-                for label, exe in native_builds(wl, args.matiec, Path(tmp)).items():
-                    times, sums = zip(*(native_run(exe, args.scans) for _ in range(args.runs)), strict=True)
+                assert matiec is not None
+                for label, exe in native_builds(wl, matiec, Path(tmp)).items():
+                    times, sums = zip(*(native_run(exe, scans) for _ in range(runs)), strict=True)
                     row[label] = (statistics.median(times), to_signed32(sums[0]))
             rows.append(row)
-    print(f"{args.scans} scans per run, median of {args.runs}; ns per scan\n")
-    labels = ["OpenPLC (as shipped, -O0)", "MatIEC at -O2"] if native else []
-    head = "| workload | st | " + " | ".join(f"{lab} | st / it" for lab in labels) + " | checksums |"
-    print(head)
-    print("|---|---:|" + "---:|---:|" * len(labels) + "---|")
+    return rows, (["OpenPLC (as shipped, -O0)", "MatIEC at -O2"] if native else [])
+
+
+def table(rows: list[dict], labels: list[str]) -> str:
+    """The rows as a markdown table: ns per scan, st's ratio to each native build, the checksums."""
+    lines = ["| workload | st | " + " | ".join(f"{lab} | st / it" for lab in labels) + " | checksums |"]
+    lines.append("|---|---:|" + "---:|---:|" * len(labels) + "---|")
     for row in rows:
         cells = [row["workload"], f"{row['st']:,.0f}"]
         same = True
@@ -164,7 +161,22 @@ def main() -> None:
             cells += [f"{ns:,.0f}", f"{row['st'] / ns:,.0f}x"]
             same = same and chk == row["checksum"]
         cells.append(("equal" if same else "DIFFER") + f" ({row['checksum']})" if labels else str(row["checksum"]))
-        print("| " + " | ".join(cells) + " |")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--matiec", type=Path, default=os.environ.get("ST_MATIEC"), help="a built MatIEC (iec2c, lib/)")
+    ap.add_argument("--scans", type=int, default=20000, help="scans per run (the checksums are compared after them)")
+    ap.add_argument("--runs", type=int, default=3, help="runs of each; the median is shown")
+    ap.add_argument("--workloads", nargs="*", default=None, help="names in bench/workloads (default: all)")
+    args = ap.parse_args()
+    rows, labels = measure(args.matiec, args.scans, args.runs, args.workloads)
+    if not labels:
+        print("no MatIEC build (--matiec DIR or ST_MATIEC) or no g++: st's numbers only\n")
+    print(f"{args.scans} scans per run, median of {args.runs}; ns per scan\n")
+    print(table(rows, labels))
 
 
 if __name__ == "__main__":
