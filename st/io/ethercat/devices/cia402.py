@@ -60,6 +60,9 @@ class State(IntEnum):
     FAULT = 7
 
 
+_OPERATION_ENABLED, _QUICK_STOP_ACTIVE = State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE  # per step
+
+
 # statusword bits 0-3, 5, 6 per state (bit 5, quick stop, is 1 where the profile requires it)
 STATE_BITS = {
     State.NOT_READY_TO_SWITCH_ON: 0x0000,
@@ -473,7 +476,7 @@ class CiA402Drive(Device):
         m = E[0x6060].value
         if m in self.modes and m != self.mode:
             self.mode = m
-            if self.state == State.OPERATION_ENABLED:
+            if self.state == _OPERATION_ENABLED:
                 self._start_mode()
         self._apply_setpoints()
 
@@ -482,7 +485,7 @@ class CiA402Drive(Device):
         mo = self.motor
         mo.torque_limit = E[0x6072].value
         mo.speed_limit = E[0x6080].value * 6.283185307179586 / 60.0
-        if self.state != State.OPERATION_ENABLED or not mo.enabled:
+        if self.state != _OPERATION_ENABLED or not mo.enabled:
             return
         mo.velocity_offset = E[0x60B1].value
         mo.torque_offset = E[0x60B2].value
@@ -644,7 +647,7 @@ class CiA402Drive(Device):
         if not self.mains_on and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE):
             self._fault(FAULT_UNDERVOLTAGE)
             return
-        if self.state == State.OPERATION_ENABLED and self.mode == CSP and self.motor.enabled:
+        if self.state == _OPERATION_ENABLED and self.mode == CSP and self.motor.enabled:
             window = int(E[0x6065].value)
             if window != 0xFFFFFFFF and abs(self.motor.following_error) > window:
                 self._fe_time += dt
@@ -656,16 +659,17 @@ class CiA402Drive(Device):
     def _publish(self) -> None:
         E = self.od._by_key
         mo, s = self.motor, self.state
+        pos, demand, vel, torque, fe = mo.readings()
         sw = STATE_BITS[s] | SW_REMOTE
         if self.mains_on:
             sw |= SW_VOLTAGE
         if self.warning:
             sw |= SW_WARNING
-        if s == State.OPERATION_ENABLED and mo.enabled:
+        if s == _OPERATION_ENABLED and mo.enabled:
             sw |= SW_FOLLOWING
-            if self._target_reached():
+            if self._target_reached(pos, vel, torque):
                 sw |= SW_TARGET_REACHED
-        elif s == State.QUICK_STOP_ACTIVE and (mo.stopped or (not mo.enabled and mo.omega == 0.0)):
+        elif s == _QUICK_STOP_ACTIVE and (mo.stopped or (not mo.enabled and mo.omega == 0.0)):
             sw |= SW_TARGET_REACHED
         if mo.enabled and mo.limited:
             sw |= SW_INTERNAL_LIMIT
@@ -673,21 +677,20 @@ class CiA402Drive(Device):
             sw |= SW_FOLLOWING_ERROR
         E[0x6041].value = sw
         E[0x6061].value = self.mode
-        pos = mo.position
-        E[0x6064].value = wrap32(pos)
-        E[0x6062].value = wrap32(int(round(mo.position_demand)))
-        E[0x606C].value = max(-0x80000000, min(0x7FFFFFFF, mo.velocity))
-        E[0x6077].value = max(-0x8000, min(0x7FFF, mo.torque))
-        E[0x60F4].value = max(-0x80000000, min(0x7FFFFFFF, mo.following_error))
+        E[0x6064].value = ((pos + 0x80000000) & 0xFFFFFFFF) - 0x80000000  # wrap32
+        E[0x6062].value = ((demand + 0x80000000) & 0xFFFFFFFF) - 0x80000000
+        E[0x606C].value = -0x80000000 if vel < -0x80000000 else (0x7FFFFFFF if vel > 0x7FFFFFFF else vel)
+        E[0x6077].value = -0x8000 if torque < -0x8000 else (0x7FFF if torque > 0x7FFF else torque)
+        E[0x60F4].value = -0x80000000 if fe < -0x80000000 else (0x7FFFFFFF if fe > 0x7FFFFFFF else fe)
         E[0x603F].value = self.error_code
-        E[0x1001].value = 0x01 if s in (State.FAULT, State.FAULT_REACTION_ACTIVE) else 0x00
+        E[0x1001].value = 0x01 if s == State.FAULT or s == State.FAULT_REACTION_ACTIVE else 0x00
 
-    def _target_reached(self) -> bool:
+    def _target_reached(self, pos: int, vel: int, torque: int) -> bool:
         E = self.od._by_key
-        mo = self.motor
         if self.mode == CSP:
-            return abs(self._target - mo.position) <= E[0x6067].value
+            return abs(self._target - pos) <= E[0x6067].value
         if self.mode == CSV:
+            mo = self.motor
             goal = max(-mo.max_speed * mo.k, min(mo.max_speed * mo.k, E[0x60FF].value))
-            return abs(goal - mo.velocity) <= self.velocity_window
-        return abs(E[0x6071].value - mo.torque) <= self.torque_window
+            return abs(goal - vel) <= self.velocity_window
+        return abs(E[0x6071].value - torque) <= self.torque_window

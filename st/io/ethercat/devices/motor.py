@@ -158,6 +158,20 @@ class MotorModel:
             return int(round(self._demand)) - self.position
         return 0
 
+    def readings(self) -> tuple:
+        """(position, rounded position demand, velocity, torque, following error) at once: the
+        values of the properties, for a drive that publishes them all every step."""
+        pos = math.floor(self.turns * self.cpr)
+        if self.enabled and (self.mode == CSP or self.mode == _HOLD):
+            demand = int(round(self._demand))
+            fe = demand - pos
+        else:
+            demand = int(round(float(pos)))
+            fe = 0
+        vel = int(round(self.omega * self.k))
+        torque = int(round(self.torque_nm / self.params.rated_torque * 1000.0))
+        return pos, demand, vel, torque, fe
+
     @property
     def commanded_position(self) -> float:
         """The last position target given to `command_position`."""
@@ -349,7 +363,8 @@ class MotorModel:
 
     def _step_following(self, n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha) -> None:
         """The loop of `step` for an enabled motor in CSP or CSV without noise, with the state in
-        locals (the common case of a running axis; the same arithmetic, about twice as fast)."""
+        locals and `_coulomb_step` inlined (the common case of a running axis; the same arithmetic
+        in the same order, so the same bits, about three times as fast)."""
         csp = self.mode == CSP
         w, turns, torque, integ0 = self.omega, self.turns, self.torque_nm, self._integ
         demand, ip_start, ip_target = self._demand, self._ip_start, self._ip_target
@@ -358,24 +373,24 @@ class MotorModel:
         voff = self.velocity_offset
         load = self.load_torque
         vtarget = (self.target_velocity + voff) / k
+        span = ip_target - ip_start
+        slope = span / ip_period if ip_period > 0.0 else 0.0
         limited = False
         u = self._torque_ref
         floor = math.floor
         for _ in range(n):
             if csp:
                 err = demand - floor(turns * cpr)
-                ff = 0.0
                 if ip_period > 0.0 and ip_elapsed < ip_period:
-                    span = ip_target - ip_start
                     before = ip_elapsed
                     ip_elapsed = before + h
                     frac = ip_elapsed / ip_period
                     demand = ip_start + span * (frac if frac < 1.0 else 1.0)
                     rest = ip_period - before
-                    ff = span / ip_period * ((h if h < rest else rest) / h)
+                    vref = (slope * ((h if h < rest else rest) / h) + kp * err + voff) / k
                 else:
                     demand = ip_target
-                vref = (ff + kp * err + voff) / k
+                    vref = (0.0 + kp * err + voff) / k
             else:
                 vref = vtarget
             if vref > vmax:
@@ -399,7 +414,21 @@ class MotorModel:
                 limited = True
             torque += (u - torque) * alpha
             drive = torque + load - b * w
-            w_new = _coulomb_step(w, drive, tc, J, h)
+            # _coulomb_step(w, drive, tc, J, h), inline
+            if w > 0.0:
+                w_new = w + (drive - tc) / J * h
+                if w_new < 0.0 and abs(drive) <= tc:
+                    w_new = 0.0
+            elif w < 0.0:
+                w_new = w + (drive + tc) / J * h
+                if w_new > 0.0 and abs(drive) <= tc:
+                    w_new = 0.0
+            elif drive > tc:
+                w_new = (drive - tc) / J * h
+            elif drive < -tc:
+                w_new = (drive + tc) / J * h
+            else:
+                w_new = 0.0
             w = w_new
             turns += w_new * h / TWO_PI
         self.omega, self.turns, self.torque_nm, self._integ, self._torque_ref = w, turns, torque, integ0, u
