@@ -43,10 +43,15 @@ CSP = 8
 
 
 def drive_state(statusword: int) -> str:
-    for mask, value, name in _SW_STATES:
-        if statusword & mask == value:
-            return name
-    return "UNKNOWN"
+    name = _STATE_OF.get(statusword)
+    if name is None:
+        name = next((n for mask, value, n in _SW_STATES if statusword & mask == value), "UNKNOWN")
+        if len(_STATE_OF) < 4096:  # a few dozen statuswords occur; bounded anyway
+            _STATE_OF[statusword] = name
+    return name
+
+
+_STATE_OF: dict[int, str] = {}
 
 
 class DriveLink:

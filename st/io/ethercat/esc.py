@@ -142,7 +142,8 @@ class SlaveController:
 
     @property
     def station(self) -> int:
-        return struct.unpack_from("<H", self.mem, REG_STADR)[0]
+        m = self.mem
+        return m[REG_STADR] | (m[REG_STADR + 1] << 8)
 
     def set_links(self, downstream: bool) -> None:
         """DL status: port 0 link + communication; port 1 open to a next slave or closed (loop)."""

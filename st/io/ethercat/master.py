@@ -29,6 +29,7 @@ from .wire import APWR, BRD, BWR, FPRD, FPWR, FRMW, LRW, Datagram
 
 STATE_CODES = {v: k for k, v in STATE_NAMES.items()}
 STATION_BASE = 0x1001
+_ZERO8 = bytes(8)
 
 
 class MasterError(Exception):
@@ -461,7 +462,7 @@ class FrameMaster(Master):
         lrw.wkc = 0
         dgs = [lrw]
         if self.dc_ref is not None:
-            dgs.append(Datagram(FRMW, 0, self.dc_ref, 0x0910, bytearray(8)))
+            dgs.append(Datagram(FRMW, 0, self.dc_ref, 0x0910, bytearray(_ZERO8)))
         back = self._send(dgs)
         if back is None:
             return -1

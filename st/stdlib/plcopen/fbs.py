@@ -102,7 +102,7 @@ class MotionRegistry(IODriverBase):
             return
         for ax in self.axes.values():
             if ax.task is task:
-                ax.last_view = ax.view()  # what the blocks saw in this job (plc.axis)
+                ax.last_seen = ax.seen()  # what the blocks saw in this job (plc.axis)
                 ax.step()
         for tr in self.traces:
             ax = tr.axis
