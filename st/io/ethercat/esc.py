@@ -512,27 +512,33 @@ class SlaveController:
         # the cyclic case: FMMUs that map whole buffered SyncManagers (the same effects as the
         # generic path, without looking every register up again)
         inc = 0
-        original = bytes(data) if cmd_read and cmd_write else data
+        both = cmd_read and cmd_write
+        original = bytes(data) if both else data
         mem = self.mem
+        advanced = False  # advance(t) ran: a second call with the same t does nothing
         for out, off, start, stop in plan:
             n = stop - start
             if out:
-                chunk = bytes(original[off : off + n])
+                raw = original[off : off + n]
+                chunk = raw if isinstance(raw, bytes) else bytes(raw)
                 mem[start:stop] = chunk
                 if mem[REG_ALSTAT] & 0x0F == OP:
                     self.last_commit = t
                     self.stats["commits"] += 1
                     self._outputs(chunk, t)
+                    advanced = True
                 inc |= 2
             else:
-                self.advance(t)
+                if not advanced:
+                    self.advance(t)
+                    advanced = True
                 inp = self.device.read_inputs()
                 if len(inp) != n:
                     inp = inp[:n]
                 mem[start:stop] = inp
                 data[off : off + n] = inp
                 inc |= 1
-        if cmd_read and cmd_write:
+        if both:
             return (inc & 1) + (inc & 2)
         return 1 if inc else 0
 

@@ -409,10 +409,9 @@ class CiA402Drive(Device):
     @property
     def interpolation_period(self) -> float:
         """Seconds: 0x60C2 if the master wrote it, else the measured output cycle, else 0x60C2."""
-        ip = self.od[(0x60C2, 1)] * 10.0 ** self.od[(0x60C2, 2)]
-        if self._ip_written or self._cycle is None:
-            return ip
-        return self._cycle
+        if not self._ip_written and self._cycle is not None:
+            return self._cycle
+        return self.od[(0x60C2, 1)] * 10.0 ** self.od[(0x60C2, 2)]
 
     def inject_fault(self, code: int = FAULT_GENERIC, persistent: bool = False) -> None:
         """Raise a drive fault now (transition 13). A persistent one survives fault resets until
@@ -447,6 +446,8 @@ class CiA402Drive(Device):
         self._in_step = True
         try:
             self._take_outputs()
+            mo = self.motor
+            was = (self.state, self.mode, mo.enabled)
             self._transition(t, dt)
             if self.ideal:  # what the controlword asks for, at once
                 for _ in range(4):
@@ -454,8 +455,9 @@ class CiA402Drive(Device):
                     self._transition(t, dt)
                     if self.state == before:
                         break
-            self._apply_setpoints()
-            self.motor.step(dt)
+            if (self.state, self.mode, mo.enabled) != was:  # else they are applied already
+                self._apply_setpoints()
+            mo.step(dt)
             if self.ideal:
                 self._ideal_motion(dt)
             self.t = t

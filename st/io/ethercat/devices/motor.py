@@ -399,6 +399,7 @@ class MotorModel:
         limited = False
         u = self._torque_ref
         floor = math.floor
+        two_pi, nvmax, ntmax, ntc = TWO_PI, -vmax, -tmax, -tc
         for _ in range(n):
             if csp:
                 err = demand - floor(turns * cpr)
@@ -417,41 +418,40 @@ class MotorModel:
             if vref > vmax:
                 vref = vmax
                 limited = True
-            elif vref < -vmax:
-                vref = -vmax
+            elif vref < nvmax:
+                vref = nvmax
                 limited = True
             e = vref - w
             integ = integ0 + ki * e * h
             u = kv * e + integ + toff
-            if (u > tmax and e > 0) or (u < -tmax and e < 0):
+            if (u > tmax and e > 0) or (u < ntmax and e < 0):
                 integ = integ0
-            integ0 = -tmax if integ < -tmax else (tmax if integ > tmax else integ)
+            integ0 = ntmax if integ < ntmax else (tmax if integ > tmax else integ)
             u = kv * e + integ0 + toff
             if u > tmax:
                 u = tmax
                 limited = True
-            elif u < -tmax:
-                u = -tmax
+            elif u < ntmax:
+                u = ntmax
                 limited = True
             torque += (u - torque) * alpha
             drive = torque + load - b * w
             # _coulomb_step(w, drive, tc, J, h), inline
             if w > 0.0:
-                w_new = w + (drive - tc) / J * h
-                if w_new < 0.0 and abs(drive) <= tc:
-                    w_new = 0.0
+                w = w + (drive - tc) / J * h
+                if w < 0.0 and ntc <= drive <= tc:
+                    w = 0.0
             elif w < 0.0:
-                w_new = w + (drive + tc) / J * h
-                if w_new > 0.0 and abs(drive) <= tc:
-                    w_new = 0.0
+                w = w + (drive + tc) / J * h
+                if w > 0.0 and ntc <= drive <= tc:
+                    w = 0.0
             elif drive > tc:
-                w_new = (drive - tc) / J * h
-            elif drive < -tc:
-                w_new = (drive + tc) / J * h
+                w = (drive - tc) / J * h
+            elif drive < ntc:
+                w = (drive + tc) / J * h
             else:
-                w_new = 0.0
-            w = w_new
-            turns += w_new * h / TWO_PI
+                w = 0.0
+            turns += w * h / two_pi
         self.omega, self.turns, self.torque_nm, self._integ, self._torque_ref = w, turns, torque, integ0, u
         self._demand, self._ip_elapsed = demand, ip_elapsed
         self.limited = limited
