@@ -400,10 +400,11 @@ class MotorModel:
         u = self._torque_ref
         floor = math.floor
         two_pi, nvmax, ntmax, ntc = TWO_PI, -vmax, -tmax, -tc
+        interpolating = ip_period > 0.0
         for _ in range(n):
             if csp:
                 err = demand - floor(turns * cpr)
-                if ip_period > 0.0 and ip_elapsed < ip_period:
+                if interpolating and ip_elapsed < ip_period:
                     before = ip_elapsed
                     ip_elapsed = before + h
                     frac = ip_elapsed / ip_period
@@ -422,12 +423,19 @@ class MotorModel:
                 vref = nvmax
                 limited = True
             e = vref - w
+            kve = kv * e
             integ = integ0 + ki * e * h
-            u = kv * e + integ + toff
+            u = kve + integ + toff
+            # anti-windup: the integrator frozen while pushing into the limit, and clamped; the
+            # torque is computed again only when that changed the integrator
             if (u > tmax and e > 0) or (u < ntmax and e < 0):
-                integ = integ0
-            integ0 = ntmax if integ < ntmax else (tmax if integ > tmax else integ)
-            u = kv * e + integ0 + toff
+                integ0 = ntmax if integ0 < ntmax else (tmax if integ0 > tmax else integ0)
+                u = kve + integ0 + toff
+            elif integ < ntmax or integ > tmax:
+                integ0 = ntmax if integ < ntmax else tmax
+                u = kve + integ0 + toff
+            else:
+                integ0 = integ
             if u > tmax:
                 u = tmax
                 limited = True
