@@ -461,10 +461,11 @@ class CiA402Drive(Device):
             if self.ideal:
                 self._ideal_motion(dt)
             self.t = t
-            self._supervise(dt)
+            now = mo.readings()
+            readings = None if self._supervise(dt, now[4]) else now  # a fault changes the motor
         finally:
             self._in_step = False
-        self._publish()
+        self._publish(readings)
 
     # ------------------------------------------------------------------ internals
     def _take_outputs(self) -> None:
@@ -643,25 +644,30 @@ class CiA402Drive(Device):
             mo.set_position(self._target)
             mo.omega = (self._target - before) / dt / mo.k if dt > 0 else 0.0
 
-    def _supervise(self, dt: float) -> None:
-        """After the physics: following error, DC link, fault reaction progress."""
+    def _supervise(self, dt: float, following_error: int) -> bool:
+        """After the physics: following error, DC link, fault reaction progress. True when it
+        raised a fault."""
         E = self.od._by_key
         if not self.mains_on and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE):
             self._fault(FAULT_UNDERVOLTAGE)
-            return
+            return True
         if self.state == _OPERATION_ENABLED and self.mode == CSP and self.motor.enabled:
             window = int(E[0x6065].value)
-            if window != 0xFFFFFFFF and abs(self.motor.following_error) > window:
+            if window != 0xFFFFFFFF and abs(following_error) > window:
                 self._fe_time += dt
                 if self._fe_time > E[0x6066].value / 1000.0 + 1e-12:
                     self._fault(FAULT_FOLLOWING_ERROR, following=True)
+                    return True
             else:
                 self._fe_time = 0.0
+        return False
 
-    def _publish(self) -> None:
+    def _publish(self, readings: tuple | None = None) -> None:
+        """The statusword and the actual values into the object dictionary; `readings`: the
+        motor's, if the caller has them."""
         E = self.od._by_key
         mo, s = self.motor, self.state
-        pos, demand, vel, torque, fe = mo.readings()
+        pos, demand, vel, torque, fe = mo.readings() if readings is None else readings
         sw = STATE_BITS[s] | SW_REMOTE
         if self.mains_on:
             sw |= SW_VOLTAGE
