@@ -138,14 +138,15 @@ class DriveLink:
 
     def pack(self) -> bytes:
         st = self.state
-        if self.reset_request and not self.faulted:
+        faulted = st == "FAULT" or st == "FAULT_REACTION_ACTIVE"
+        if self.reset_request and not faulted:
             self.reset_request = False  # it left Fault
         ax = self.axis
         if self.reset_request and ax is not None and ax.reset_cmd is None:
             self.reset_request = False  # MC_Reset gave up (RESET_FAILED)
         if self.reset_request:  # bit 7 up (the cycle before it was down: the drive was in Fault)
             cw = 0x80
-        elif self.faulted:
+        elif faulted:
             cw = 0x00
         elif not self.want:
             cw = 0x06 if st in ("READY_TO_SWITCH_ON", "SWITCHED_ON", "OPERATION_ENABLED") else 0x00
@@ -155,7 +156,7 @@ class DriveLink:
             cw = 0x07
         else:  # switched on, operation enabled, quick stop active
             cw = 0x0F
-        if ax is not None and self.enabled and ax.power_on:
+        if ax is not None and st == "OPERATION_ENABLED" and ax.power_on:
             pos = ax.set_pos - self.origin + ax.set_vel * self.offset_s
             target = int(round(pos * self.scale)) - self.turns * (1 << 32)
         else:

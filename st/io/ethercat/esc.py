@@ -65,6 +65,7 @@ _WRITABLE_RANGES = (
 )
 
 MBX_OUT, MBX_IN, PD_OUT, PD_IN = 0x1000, 0x1080, 0x1100, 0x1400
+_U64 = struct.Struct("<Q")
 _SM_STATUS_MBX_FULL = 0x08
 
 
@@ -156,8 +157,8 @@ class SlaveController:
         return (int(round(t * 1e9)) + self.clock_base_ns) & 0xFFFFFFFFFFFFFFFF
 
     def system_ns(self, t: float) -> int:
-        ofs = struct.unpack_from("<Q", self.mem, REG_DCOFS)[0]
-        return (self.local_ns(t) + ofs) & 0xFFFFFFFFFFFFFFFF
+        ofs = _U64.unpack_from(self.mem, REG_DCOFS)[0]
+        return (int(round(t * 1e9)) + self.clock_base_ns + ofs) & 0xFFFFFFFFFFFFFFFF  # local_ns(t) + offset
 
     def _sms(self) -> list:
         """Enabled SyncManagers as [(k, start, end, control)], cached until their registers change."""
