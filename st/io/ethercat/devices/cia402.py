@@ -60,7 +60,18 @@ class State(IntEnum):
     FAULT = 7
 
 
-_OPERATION_ENABLED, _QUICK_STOP_ACTIVE = State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE  # per step
+# the states as module constants: `State.X` looks the member up on the enum class, which costs a
+# step more than the state machine's own work
+(
+    _NOT_READY_TO_SWITCH_ON,
+    _SWITCH_ON_DISABLED,
+    _READY_TO_SWITCH_ON,
+    _SWITCHED_ON,
+    _OPERATION_ENABLED,
+    _QUICK_STOP_ACTIVE,
+    _FAULT_REACTION_ACTIVE,
+    _FAULT,
+) = State
 
 
 # statusword bits 0-3, 5, 6 per state (bit 5, quick stop, is 1 where the profile requires it)
@@ -147,7 +158,7 @@ class CiA402Drive(Device):
         self.motor = MotorModel(params, substep)
         self.modes = tuple(modes)
         self.enable_delay = float(enable_delay)
-        self.state = State.NOT_READY_TO_SWITCH_ON
+        self.state = _NOT_READY_TO_SWITCH_ON
         self.mode = CSP if CSP in self.modes else self.modes[0]  # the mode in effect (0x6061)
         self.mains_on = True  # DC link supplied: statusword bit 4; switch-on needs it
         self.sto = False  # Safe Torque Off active: the power stage is cut and cannot be switched on
@@ -428,9 +439,9 @@ class CiA402Drive(Device):
         coasts, the drive drops to Switch On Disabled without a fault and cannot be switched on
         again until STO is released (`safe_torque_off(False)`)."""
         self.sto = active
-        if active and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE):
+        if active and self.state in (_SWITCHED_ON, _OPERATION_ENABLED, _QUICK_STOP_ACTIVE):
             self.motor.disable()
-            self._set_state(State.SWITCH_ON_DISABLED)
+            self._set_state(_SWITCH_ON_DISABLED)
             self._publish()
 
     # ------------------------------------------------------------------ Device hooks
@@ -530,23 +541,23 @@ class CiA402Drive(Device):
     def _set_state(self, new: State) -> None:
         old = self.state
         self.state = new
-        if new != State.SWITCHED_ON:
+        if new != _SWITCHED_ON:
             self._enable_req_t = None
-        if old in (State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE) and new not in (
-            State.OPERATION_ENABLED,
-            State.QUICK_STOP_ACTIVE,
-            State.FAULT_REACTION_ACTIVE,
+        if old in (_OPERATION_ENABLED, _QUICK_STOP_ACTIVE) and new not in (
+            _OPERATION_ENABLED,
+            _QUICK_STOP_ACTIVE,
+            _FAULT_REACTION_ACTIVE,
         ):
             self.motor.disable()
-        if new == State.OPERATION_ENABLED:
+        if new == _OPERATION_ENABLED:
             self._start_mode()
 
     def _fault(self, code: int, following: bool = False) -> None:
         self.error_code = code & 0xFFFF
         self._fe_latched = self._fe_latched or following
         self.emergency(code & 0xFFFF, 0x01)
-        if self.state not in (State.FAULT, State.FAULT_REACTION_ACTIVE):
-            self.state = State.FAULT_REACTION_ACTIVE
+        if self.state not in (_FAULT, _FAULT_REACTION_ACTIVE):
+            self.state = _FAULT_REACTION_ACTIVE
             self._enable_req_t = None
             # the reaction is shown for at least one published step: a fault found during a
             # step counts that step, an injected one waits for the next
@@ -572,74 +583,74 @@ class CiA402Drive(Device):
         s = self.state
         reset, self._reset_edge = self._reset_edge, False
         mo = self.motor
-        if s == State.NOT_READY_TO_SWITCH_ON:
-            self._set_state(State.SWITCH_ON_DISABLED)  # 1 (after the self test)
+        if s == _NOT_READY_TO_SWITCH_ON:
+            self._set_state(_SWITCH_ON_DISABLED)  # 1 (after the self test)
             return
-        if s == State.FAULT_REACTION_ACTIVE:
+        if s == _FAULT_REACTION_ACTIVE:
             if self._fra_steps >= 1 and (not mo.enabled or mo.stopped):
                 mo.disable()
-                self._set_state(State.FAULT)  # 14
+                self._set_state(_FAULT)  # 14
             else:
                 self._fra_steps += 1
             return
-        if s == State.FAULT:
+        if s == _FAULT:
             if reset and not self._persistent:  # 15
                 self.error_code = 0
                 self._fe_latched = False
                 self.emergency(0x0000, 0x00)  # CiA 301: error reset
-                self._set_state(State.SWITCH_ON_DISABLED)
+                self._set_state(_SWITCH_ON_DISABLED)
             return
         cmd = decode_command(int(E[0x6040].value))
         qs_option = int(E[0x605A].value)
-        if s == State.SWITCH_ON_DISABLED:
+        if s == _SWITCH_ON_DISABLED:
             if cmd == CMD_SHUTDOWN:
-                self._set_state(State.READY_TO_SWITCH_ON)  # 2
-        elif s == State.READY_TO_SWITCH_ON:
+                self._set_state(_READY_TO_SWITCH_ON)  # 2
+        elif s == _READY_TO_SWITCH_ON:
             if cmd in (CMD_SWITCH_ON, CMD_ENABLE) and self.mains_on and not self.sto:
-                self._set_state(State.SWITCHED_ON)  # 3
+                self._set_state(_SWITCHED_ON)  # 3
             elif cmd in (CMD_DISABLE_VOLTAGE, CMD_QUICK_STOP):
-                self._set_state(State.SWITCH_ON_DISABLED)  # 7
-        elif s == State.SWITCHED_ON:
+                self._set_state(_SWITCH_ON_DISABLED)  # 7
+        elif s == _SWITCHED_ON:
             if cmd == CMD_ENABLE:
                 start = t - dt
                 if self._enable_req_t is None:
                     self._enable_req_t = start
                 if start - self._enable_req_t >= self.enable_delay - 1e-12:
-                    self._set_state(State.OPERATION_ENABLED)  # 4
+                    self._set_state(_OPERATION_ENABLED)  # 4
                 return
             self._enable_req_t = None
             if cmd == CMD_SHUTDOWN:
-                self._set_state(State.READY_TO_SWITCH_ON)  # 6
+                self._set_state(_READY_TO_SWITCH_ON)  # 6
             elif cmd in (CMD_DISABLE_VOLTAGE, CMD_QUICK_STOP):
-                self._set_state(State.SWITCH_ON_DISABLED)  # 10
-        elif s == State.OPERATION_ENABLED:
+                self._set_state(_SWITCH_ON_DISABLED)  # 10
+        elif s == _OPERATION_ENABLED:
             if cmd == CMD_SWITCH_ON:
-                self._set_state(State.SWITCHED_ON)  # 5
+                self._set_state(_SWITCHED_ON)  # 5
             elif cmd == CMD_SHUTDOWN:
-                self._set_state(State.READY_TO_SWITCH_ON)  # 8
+                self._set_state(_READY_TO_SWITCH_ON)  # 8
             elif cmd == CMD_DISABLE_VOLTAGE:
-                self._set_state(State.SWITCH_ON_DISABLED)  # 9
+                self._set_state(_SWITCH_ON_DISABLED)  # 9
             elif cmd == CMD_QUICK_STOP:  # 11
-                self.state = State.QUICK_STOP_ACTIVE
+                self.state = _QUICK_STOP_ACTIVE
                 if qs_option == 0:
                     mo.disable()
                 elif qs_option in (1, 2, 5, 6):
                     mo.stop(self._qs_decel())
                 else:
                     mo.stop(None)
-        elif s == State.QUICK_STOP_ACTIVE:
+        elif s == _QUICK_STOP_ACTIVE:
             if cmd == CMD_DISABLE_VOLTAGE:
-                self._set_state(State.SWITCH_ON_DISABLED)  # 12
+                self._set_state(_SWITCH_ON_DISABLED)  # 12
             elif qs_option in (5, 6, 7, 8):
                 if cmd == CMD_ENABLE:
-                    self._set_state(State.OPERATION_ENABLED)  # 16
+                    self._set_state(_OPERATION_ENABLED)  # 16
             elif not mo.enabled or mo.stopped:
-                self._set_state(State.SWITCH_ON_DISABLED)  # 12 (after the ramp)
+                self._set_state(_SWITCH_ON_DISABLED)  # 12 (after the ramp)
 
     def _ideal_motion(self, dt: float) -> None:
         """The ideal drive: in CSP with the power stage on, the shaft is at the target."""
         mo = self.motor
-        if self.state == State.OPERATION_ENABLED and self.mode == CSP and mo.enabled:
+        if self.state == _OPERATION_ENABLED and self.mode == CSP and mo.enabled:
             before = mo.position
             mo.set_position(self._target)
             mo.omega = (self._target - before) / dt / mo.k if dt > 0 else 0.0
@@ -648,7 +659,7 @@ class CiA402Drive(Device):
         """After the physics: following error, DC link, fault reaction progress. True when it
         raised a fault."""
         E = self.od._by_key
-        if not self.mains_on and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE):
+        if not self.mains_on and self.state in (_SWITCHED_ON, _OPERATION_ENABLED, _QUICK_STOP_ACTIVE):
             self._fault(FAULT_UNDERVOLTAGE)
             return True
         if self.state == _OPERATION_ENABLED and self.mode == CSP and self.motor.enabled:
@@ -691,7 +702,7 @@ class CiA402Drive(Device):
         E[0x6077].value = -0x8000 if torque < -0x8000 else (0x7FFF if torque > 0x7FFF else torque)
         E[0x60F4].value = -0x80000000 if fe < -0x80000000 else (0x7FFFFFFF if fe > 0x7FFFFFFF else fe)
         E[0x603F].value = self.error_code
-        E[0x1001].value = 0x01 if s == State.FAULT or s == State.FAULT_REACTION_ACTIVE else 0x00
+        E[0x1001].value = 0x01 if s == _FAULT or s == _FAULT_REACTION_ACTIVE else 0x00
 
     def _target_reached(self, pos: int, vel: int, torque: int) -> bool:
         E = self.od._by_key
