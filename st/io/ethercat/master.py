@@ -522,23 +522,21 @@ class _CyclicFrame:
         self.template = bytearray(wire.encode_frame(dgs))
         self.idx_at: list[int] = []
         self.data_at: list[tuple[int, int]] = []
-        self.checks: list[tuple[int, bytes]] = [(12, bytes(self.template[12:16]))]  # EtherType, header
+        self.header = bytes(self.template[12:16])  # EtherType, EtherCAT header
+        self.commands: list[tuple[int, int, bytes]] = []  # (offset, command, length field)
         pos = 16
         for d in dgs:
             self.idx_at.append(pos + 1)
             self.data_at.append((pos + 10, pos + 10 + len(d.data)))
-            self.checks += [
-                (pos, bytes(self.template[pos : pos + 1])),
-                (pos + 6, bytes(self.template[pos + 6 : pos + 8])),
-            ]
+            self.commands.append((pos, d.cmd, bytes(self.template[pos + 6 : pos + 8])))
             pos += 12 + len(d.data)
         self.end = pos
 
     def same_shape(self, frame) -> bool:
-        if len(frame) < self.end:
+        if len(frame) < self.end or frame[12:16] != self.header:
             return False
-        for at, want in self.checks:
-            if frame[at : at + len(want)] != want:
+        for at, cmd, length in self.commands:
+            if frame[at] != cmd or frame[at + 6 : at + 8] != length:
                 return False
         return True
 

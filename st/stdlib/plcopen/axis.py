@@ -225,16 +225,17 @@ class Axis:
     def seen(self) -> tuple:
         """The fields of `view()`, as a tuple (the kernel keeps one per job; few are looked at)."""
         d = self.drive
+        m = self.cfg.modulo
         return (
             self.cfg.name,
             self.axis_no,
             self.state,
-            self.position(),
+            self.set_pos % m if m else self.set_pos,  # position()
             self.set_vel,
             self.set_acc,
-            self.actual_position(),
+            self.act_pos % m if m else self.act_pos,  # actual_position()
             self.act_vel,
-            self._power_status(),
+            d.enabled if d is not None else self.power_on,  # _power_status()
             int(self.axis_error),
             d.error_code if d is not None else 0,
             str(getattr(d, "state", "")) if d is not None else "",
