@@ -65,7 +65,7 @@ _WRITABLE_RANGES = (
 )
 
 MBX_OUT, MBX_IN, PD_OUT, PD_IN = 0x1000, 0x1080, 0x1100, 0x1400
-_U64 = struct.Struct("<Q")
+_U64, _U32 = struct.Struct("<Q"), struct.Struct("<I")
 _SM_STATUS_MBX_FULL = 0x08
 
 
@@ -356,7 +356,7 @@ class SlaveController:
         end = ado + n
         mem = self.mem
         if ado < REG_DCSYS + 8 and end > REG_DCSYS:
-            struct.pack_into("<Q", mem, REG_DCSYS, self.system_ns(t))
+            _U64.pack_into(mem, REG_DCSYS, self.system_ns(t))
         if end > 0x1000:
             for k, start, stop, ctl in self._sms():
                 if end <= start or ado >= stop or ctl & 0x0C:  # written by the master: reading is plain RAM
@@ -466,21 +466,21 @@ class SlaveController:
         """The reference clock's time written by the master (ARMW/FRMW): correct this clock."""
         mem = self.mem
         written = (
-            struct.unpack_from("<Q", mem, REG_DCSYS)[0]
+            _U64.unpack_from(mem, REG_DCSYS)[0]
             if end - ado >= 8 or ado != REG_DCSYS
-            else struct.unpack_from("<I", mem, REG_DCSYS)[0]
+            else _U32.unpack_from(mem, REG_DCSYS)[0]
         )
-        delay = struct.unpack_from("<I", mem, REG_DCDLY)[0]
+        delay = _U32.unpack_from(mem, REG_DCDLY)[0]
         mine = self.system_ns(t)
         if end - ado < 8:  # a 32-bit write compares the low halves
             diff = ((mine & 0xFFFFFFFF) - ((written + delay) & 0xFFFFFFFF) + (1 << 31)) % (1 << 32) - (1 << 31)
         else:
             diff = mine - (written + delay)
         if diff:
-            ofs = struct.unpack_from("<Q", mem, REG_DCOFS)[0]
-            struct.pack_into("<Q", mem, REG_DCOFS, (ofs - diff) & 0xFFFFFFFFFFFFFFFF)
+            ofs = _U64.unpack_from(mem, REG_DCOFS)[0]
+            _U64.pack_into(mem, REG_DCOFS, (ofs - diff) & 0xFFFFFFFFFFFFFFFF)
             self._grid = False
-        struct.pack_into("<I", mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
+        _U32.pack_into(mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
 
     def receive_times(self, t_port0: float, t_port1: float) -> None:
         """The 0x0900 latch: local times at which the frame passed port 0 (out) and port 1 (back)."""
