@@ -47,7 +47,8 @@ LOGICAL = {LRD, LWR, LRW}
 
 _DG = struct.Struct("<BBHHHH")  # cmd, idx, adp, ado, len|flags, irq
 _DG_LOG = struct.Struct("<BBIHH")  # cmd, idx, logical address, len|flags, irq
-_WKC = struct.Struct("<H")
+_WKC = struct.Struct("<H")  # also the EtherCAT header
+_ETYPE = struct.Struct(">H")
 
 
 class FrameError(ValueError):
@@ -131,14 +132,14 @@ def decode_frame(frame):
     """frame bytes → (dst, src, [Datagram]); FrameError if it is not an EtherCAT command frame."""
     if len(frame) < 16:
         raise FrameError(f"frame of {len(frame)} bytes is too short")
-    etype = struct.unpack_from(">H", frame, 12)[0]
+    (etype,) = _ETYPE.unpack_from(frame, 12)
     off = 14
     if etype == 0x8100:  # a VLAN tag
-        etype = struct.unpack_from(">H", frame, 16)[0]
+        (etype,) = _ETYPE.unpack_from(frame, 16)
         off = 18
     if etype != ETHERTYPE:
         raise FrameError(f"EtherType {etype:#06x} is not EtherCAT")
-    hdr = struct.unpack_from("<H", frame, off)[0]
+    (hdr,) = _WKC.unpack_from(frame, off)
     length, ftype = hdr & 0x7FF, hdr >> 12
     if ftype != 1:
         raise FrameError(f"EtherCAT frame type {ftype} is not 1 (commands)")
