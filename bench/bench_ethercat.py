@@ -59,13 +59,17 @@ def per_frame_us(n: int, frames: int, runs: int):
         m.configure(dc_cycle_ns=1_000_000)
         m.set_state("OP")
         rx = PdoLayout(CIA402_RX)
-        # enable every drive: 0x06, 0x07, 0x0F, a few cycles each
-        for cw in (0x06, 0x07, 0x0F, 0x0F, 0x0F):
+        # enable every drive: 0x06, 0x07, 0x0F, a few cycles each, once SYNC0 runs (the drives take
+        # their outputs on its pulses, which start 10 cycles after the DC setup)
+        for cw in (0x00,) * 4 + (0x06, 0x07, 0x0F, 0x0F, 0x0F):
             for _ in range(3):
                 clock[0] += 0.001
                 for i in range(n):
                     m.write_outputs(i, rx.pack([cw, 0, 0, 8]))
                 m.exchange()
+        states = {s.device.state_name for s in seg.slaves}
+        if states != {"OPERATION_ENABLED"}:
+            print(f"  (warning: the drives are {sorted(states)}, not enabled)")
         gc.disable()
         t0 = time.perf_counter()
         for k in range(frames):

@@ -43,10 +43,15 @@ CSP = 8
 
 
 def drive_state(statusword: int) -> str:
-    for mask, value, name in _SW_STATES:
-        if statusword & mask == value:
-            return name
-    return "UNKNOWN"
+    name = _STATE_OF.get(statusword)
+    if name is None:
+        name = next((n for mask, value, n in _SW_STATES if statusword & mask == value), "UNKNOWN")
+        if len(_STATE_OF) < 4096:  # a few dozen statuswords occur; bounded anyway
+            _STATE_OF[statusword] = name
+    return name
+
+
+_STATE_OF: dict[int, str] = {}
 
 
 class DriveLink:
@@ -133,14 +138,15 @@ class DriveLink:
 
     def pack(self) -> bytes:
         st = self.state
-        if self.reset_request and not self.faulted:
+        faulted = st == "FAULT" or st == "FAULT_REACTION_ACTIVE"
+        if self.reset_request and not faulted:
             self.reset_request = False  # it left Fault
         ax = self.axis
         if self.reset_request and ax is not None and ax.reset_cmd is None:
             self.reset_request = False  # MC_Reset gave up (RESET_FAILED)
         if self.reset_request:  # bit 7 up (the cycle before it was down: the drive was in Fault)
             cw = 0x80
-        elif self.faulted:
+        elif faulted:
             cw = 0x00
         elif not self.want:
             cw = 0x06 if st in ("READY_TO_SWITCH_ON", "SWITCHED_ON", "OPERATION_ENABLED") else 0x00
@@ -150,7 +156,7 @@ class DriveLink:
             cw = 0x07
         else:  # switched on, operation enabled, quick stop active
             cw = 0x0F
-        if ax is not None and self.enabled and ax.power_on:
+        if ax is not None and st == "OPERATION_ENABLED" and ax.power_on:
             pos = ax.set_pos - self.origin + ax.set_vel * self.offset_s
             target = int(round(pos * self.scale)) - self.turns * (1 << 32)
         else:
@@ -162,33 +168,35 @@ class DriveLink:
 
     def unpack(self, data: bytes) -> None:
         vals = self.tx_layout.unpack(data)
-        self.status = int(vals[self.i_sw])
+        self.status = status = int(vals[self.i_sw])
         raw = int(vals[self.i_ap])
-        if self.raw_pos is not None:
-            d = (raw - self.raw_pos) & 0xFFFFFFFF
+        last = self.raw_pos
+        if last is not None and raw != last:
+            d = (raw - last) & 0xFFFFFFFF
             if d >= 1 << 31:
                 d -= 1 << 32
-            if raw < self.raw_pos and d > 0:
+            if raw < last and d > 0:
                 self.turns += 1
-            elif raw > self.raw_pos and d < 0:
+            elif raw > last and d < 0:
                 self.turns -= 1
         self.raw_pos = raw
         self.actual = raw + self.turns * (1 << 32)
         self.velocity = int(vals[self.i_av]) if self.i_av is not None else 0
         self.error_code = int(vals[self.i_err]) if self.i_err is not None else 0
-        self.state = drive_state(self.status)
+        self.state = state = drive_state(status)
         self._to_axis()
         ax = self.axis
         if ax is None:
             return
-        if self.faulted:
+        enabled = state == "OPERATION_ENABLED"
+        if state == "FAULT" or state == "FAULT_REACTION_ACTIVE":  # faulted
             ax.power_on = False
             if ax.state != "ErrorStop":  # statusword bit 13 in CSP: the drive's following error
-                ax.error_stop(E.FOLLOWING_ERROR if self.status & 0x2000 else E.DRIVE_FAULT)
-        elif self.was_enabled and not self.enabled and self.want and ax.power_on:
+                ax.error_stop(E.FOLLOWING_ERROR if status & 0x2000 else E.DRIVE_FAULT)
+        elif self.was_enabled and not enabled and self.want and ax.power_on:
             ax.power_on = False
             ax.error_stop(E.POWER_STAGE_LOST)
-        self.was_enabled = self.enabled
+        self.was_enabled = enabled
 
 
 class EtherCATDriver(IODriverBase):
@@ -358,21 +366,11 @@ class EtherCATDriver(IODriverBase):
     # ------------------------------------------------------------------ one cycle
     def _exchange(self) -> None:
         m = self.master
-        outs = {}
-        for link in self.links:
-            outs[link.slave] = link.pack()
-        if self.io_out:
-            per: dict[int, list] = {}
-            for i, pos, table, idx, _size in self.io_out:
-                lay = m.slaves[i].rx_layout
-                vals = per.get(i)
-                if vals is None:
-                    vals = per[i] = list(lay.unpack(outs[i])) if i in outs else [0] * len(lay.data_entries)
-                vals[pos] = table[idx]
-            for i, vals in per.items():
-                outs[i] = m.slaves[i].rx_layout.pack(vals)
-        for i, data in outs.items():
-            m.write_outputs(i, data)
+        if not self.io_out:  # drives only: each link's image straight into the frame
+            for link in self.links:
+                m.write_outputs(link.slave, link.pack())
+        else:
+            self._outputs_with_io(m)
         wkc = m.exchange()
         self.counters["frames"] += 1
         ok = wkc == m.expected_wkc
@@ -404,6 +402,23 @@ class EtherCATDriver(IODriverBase):
                         ax.power_on = False
                         ax.error_stop(E.COMMUNICATION_LOST)
         self._cycles += 1
+
+    def _outputs_with_io(self, m: Master) -> None:
+        """The drives' images with the bound %Q variables put into their entries."""
+        outs = {}
+        for link in self.links:
+            outs[link.slave] = link.pack()
+        per: dict[int, list] = {}
+        for i, pos, table, idx, _size in self.io_out:
+            lay = m.slaves[i].rx_layout
+            vals = per.get(i)
+            if vals is None:
+                vals = per[i] = list(lay.unpack(outs[i])) if i in outs else [0] * len(lay.data_entries)
+            vals[pos] = table[idx]
+        for i, vals in per.items():
+            outs[i] = m.slaves[i].rx_layout.pack(vals)
+        for i, data in outs.items():
+            m.write_outputs(i, data)
 
     def _recover(self) -> None:
         """Frames come back: bring slaves that fell out of OP back to it."""

@@ -15,6 +15,7 @@ device's physics is advanced lazily up to that moment, so each slave sees its ow
 from __future__ import annotations
 
 import struct
+from typing import Literal
 
 from . import sii as siimod
 from .coe import SdoServer
@@ -64,6 +65,7 @@ _WRITABLE_RANGES = (
 )
 
 MBX_OUT, MBX_IN, PD_OUT, PD_IN = 0x1000, 0x1080, 0x1100, 0x1400
+_U64, _U32 = struct.Struct("<Q"), struct.Struct("<I")
 _SM_STATUS_MBX_FULL = 0x08
 
 
@@ -127,7 +129,7 @@ class SlaveController:
         self._sm_cache: list | None = None
         self._fmmu_cache: list | None = None
         self._plans: dict = {}  # (read, write, address, length) → a logical datagram's plan
-        self._grid = False  # SYNC0 pulse grid cache (False: to be computed)
+        self._grid: tuple[float, float] | None | Literal[False] = False  # SYNC0 pulses (False: to compute)
         self._wd_limit = self._watchdog_limit()
 
     # ------------------------------------------------------------------ helpers
@@ -141,7 +143,8 @@ class SlaveController:
 
     @property
     def station(self) -> int:
-        return struct.unpack_from("<H", self.mem, REG_STADR)[0]
+        m = self.mem
+        return m[REG_STADR] | (m[REG_STADR + 1] << 8)
 
     def set_links(self, downstream: bool) -> None:
         """DL status: port 0 link + communication; port 1 open to a next slave or closed (loop)."""
@@ -154,8 +157,8 @@ class SlaveController:
         return (int(round(t * 1e9)) + self.clock_base_ns) & 0xFFFFFFFFFFFFFFFF
 
     def system_ns(self, t: float) -> int:
-        ofs = struct.unpack_from("<Q", self.mem, REG_DCOFS)[0]
-        return (self.local_ns(t) + ofs) & 0xFFFFFFFFFFFFFFFF
+        ofs = _U64.unpack_from(self.mem, REG_DCOFS)[0]
+        return (int(round(t * 1e9)) + self.clock_base_ns + ofs) & 0xFFFFFFFFFFFFFFFF  # local_ns(t) + offset
 
     def _sms(self) -> list:
         """Enabled SyncManagers as [(k, start, end, control)], cached until their registers change."""
@@ -196,7 +199,9 @@ class SlaveController:
         """Bring the device to time t. With SYNC0 running the device works on the pulses, as a DC
         drive does: it steps to the last pulse at or before t, taking deferred outputs at their
         pulse, and its inputs are those of that pulse. Then the SyncManager watchdog."""
-        grid = self._sync_grid()
+        grid = self._grid
+        if grid is False:
+            grid = self._sync_grid()
         if grid is not None:
             t0, cyc = grid
             if t < t0:
@@ -204,22 +209,24 @@ class SlaveController:
             t = t0 + int((t - t0) / cyc + 1e-9) * cyc
         if t <= self.t_dev:
             return
+        device = self.device
         po = self.pending_outputs
         if po is not None and po[0] <= t + 1e-12:
             if po[0] > self.t_dev:
-                self.device.step(po[0], po[0] - self.t_dev)
+                device.step(po[0], po[0] - self.t_dev)
                 self.t_dev = po[0]
             self.pending_outputs = None
-            self.device.write_outputs(po[1])
+            device.write_outputs(po[1])
         if t > self.t_dev:
-            self.device.step(t, t - self.t_dev)
+            device.step(t, t - self.t_dev)
             self.t_dev = t
+        last = self.last_commit
         if (
-            self.last_commit is not None
-            and t - self.last_commit > self._wd_limit
-            and self.al_state == OP
+            last is not None
+            and t - last > self._wd_limit
             and self._wd_limit > 0
-            and self.device.rx_layout.size
+            and self.mem[REG_ALSTAT] & 0x0F == OP
+            and device.rx_layout.size
         ):
             self.mem[REG_WDSTAT] = 0
             self._enter(SAFEOP, AL_SYNC_WATCHDOG)
@@ -349,7 +356,7 @@ class SlaveController:
         end = ado + n
         mem = self.mem
         if ado < REG_DCSYS + 8 and end > REG_DCSYS:
-            struct.pack_into("<Q", mem, REG_DCSYS, self.system_ns(t))
+            _U64.pack_into(mem, REG_DCSYS, self.system_ns(t))
         if end > 0x1000:
             for k, start, stop, ctl in self._sms():
                 if end <= start or ado >= stop or ctl & 0x0C:  # written by the master: reading is plain RAM
@@ -372,10 +379,15 @@ class SlaveController:
         end = ado + n
         mem = self.mem
         if ado < 0x1000:
-            for a in range(ado, min(end, 0x1000)):
-                if _WRITABLE[a]:
-                    mem[a] = data[a - ado]
-            self._register_effects(ado, end, t)
+            stop = min(end, 0x1000)
+            if _WRITABLE.find(0, ado, stop) < 0:  # all of it writable (the usual case)
+                mem[ado:stop] = data[: stop - ado]
+            else:
+                for a in range(ado, stop):
+                    if _WRITABLE[a]:
+                        mem[a] = data[a - ado]
+            if _EFFECTS.find(1, ado, stop) >= 0:
+                self._register_effects(ado, end, t)
             if end <= 0x1000:
                 return True
         commit: tuple | None = None
@@ -403,7 +415,9 @@ class SlaveController:
         return True
 
     def _outputs(self, data: bytes, t: float) -> None:
-        grid = self._sync_grid()
+        grid = self._grid
+        if grid is False:
+            grid = self._sync_grid()
         if grid is not None:  # DC SYNC0: outputs take effect at the next pulse
             t0, cyc = grid
             apply_at = t0 if t < t0 else t0 + (int((t - t0) / cyc + 1e-9) + 1) * cyc
@@ -414,8 +428,9 @@ class SlaveController:
         self.device.write_outputs(data)
 
     def _register_effects(self, ado: int, end: int, t: float) -> None:
-        if not any(_EFFECTS[ado:end]):
-            return
+        """The side effects of a register write that touched [ado, end)."""
+        if ado >= REG_DCSYS and end <= REG_DCSYS + 8:  # the cyclic FRMW: nothing else is there
+            return self._dc_time_written(ado, end, t)
 
         def hit(a, n=2):
             return ado < a + n and end > a
@@ -437,23 +452,7 @@ class SlaveController:
         if hit(REG_DCRX, 4):
             self.rx_latch_ns = self.local_ns(t)
         if hit(REG_DCSYS, 8):
-            # the reference clock's time written by the master (ARMW/FRMW): correct this clock
-            written = (
-                struct.unpack_from("<Q", self.mem, REG_DCSYS)[0]
-                if end - ado >= 8 or ado != REG_DCSYS
-                else struct.unpack_from("<I", self.mem, REG_DCSYS)[0]
-            )
-            delay = struct.unpack_from("<I", self.mem, REG_DCDLY)[0]
-            mine = self.system_ns(t)
-            if end - ado < 8:  # a 32-bit write compares the low halves
-                diff = ((mine & 0xFFFFFFFF) - ((written + delay) & 0xFFFFFFFF) + (1 << 31)) % (1 << 32) - (1 << 31)
-            else:
-                diff = mine - (written + delay)
-            if diff:
-                ofs = struct.unpack_from("<Q", self.mem, REG_DCOFS)[0]
-                struct.pack_into("<Q", self.mem, REG_DCOFS, (ofs - diff) & 0xFFFFFFFFFFFFFFFF)
-                self._grid = False
-            struct.pack_into("<I", self.mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
+            self._dc_time_written(ado, end, t)
         if hit(REG_SM + 8 + 6, 1):  # SM1 repeat request: resend the last mail
             act = self.mem[REG_SM + 8 + 6]
             pdi = self.mem[REG_SM + 8 + 7]
@@ -462,6 +461,26 @@ class SlaveController:
                 self.mem[start : start + length] = self.last_mbx[:length].ljust(length, b"\0")
                 self._set_sm_status(1, True)
                 self.mem[REG_SM + 8 + 7] = (pdi & ~0x02 & 0xFF) | (act & 0x02)
+
+    def _dc_time_written(self, ado: int, end: int, t: float) -> None:
+        """The reference clock's time written by the master (ARMW/FRMW): correct this clock."""
+        mem = self.mem
+        written = (
+            _U64.unpack_from(mem, REG_DCSYS)[0]
+            if end - ado >= 8 or ado != REG_DCSYS
+            else _U32.unpack_from(mem, REG_DCSYS)[0]
+        )
+        delay = _U32.unpack_from(mem, REG_DCDLY)[0]
+        mine = self.system_ns(t)
+        if end - ado < 8:  # a 32-bit write compares the low halves
+            diff = ((mine & 0xFFFFFFFF) - ((written + delay) & 0xFFFFFFFF) + (1 << 31)) % (1 << 32) - (1 << 31)
+        else:
+            diff = mine - (written + delay)
+        if diff:
+            ofs = _U64.unpack_from(mem, REG_DCOFS)[0]
+            _U64.pack_into(mem, REG_DCOFS, (ofs - diff) & 0xFFFFFFFFFFFFFFFF)
+            self._grid = False
+        _U32.pack_into(mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
 
     def receive_times(self, t_port0: float, t_port1: float) -> None:
         """The 0x0900 latch: local times at which the frame passed port 0 (out) and port 1 (back)."""
@@ -494,25 +513,35 @@ class SlaveController:
         # the cyclic case: FMMUs that map whole buffered SyncManagers (the same effects as the
         # generic path, without looking every register up again)
         inc = 0
-        original = bytes(data) if cmd_read and cmd_write else data
+        both = cmd_read and cmd_write
+        original = bytes(data) if both else data
         mem = self.mem
+        advanced = False  # advance(t) ran: a second call with the same t does nothing
         for out, off, start, stop in plan:
             n = stop - start
             if out:
-                chunk = bytes(original[off : off + n])
+                raw = original[off : off + n]
+                chunk = raw if isinstance(raw, bytes) else bytes(raw)
                 mem[start:stop] = chunk
                 if mem[REG_ALSTAT] & 0x0F == OP:
                     self.last_commit = t
                     self.stats["commits"] += 1
                     self._outputs(chunk, t)
+                    advanced = True
                 inc |= 2
             else:
-                self.advance(t)
-                inp = self.device.read_inputs()[:n]
+                if not advanced:
+                    self.advance(t)
+                    advanced = True
+                inp = self.device.read_inputs()
+                if len(inp) != n:
+                    inp = inp[:n]
                 mem[start:stop] = inp
                 data[off : off + n] = inp
                 inc |= 1
-        return (1 if inc & 1 else 0) + (2 if inc & 2 else 0) if cmd_read and cmd_write else (1 if inc else 0)
+        if both:
+            return (inc & 1) + (inc & 2)
+        return 1 if inc else 0
 
     def _plan(self, cmd_read: bool, cmd_write: bool, addr: int, length: int):
         """[(is output, offset in the datagram, SM start, SM end)] when every FMMU the datagram touches

@@ -29,6 +29,7 @@ from .wire import APWR, BRD, BWR, FPRD, FPWR, FRMW, LRW, Datagram
 
 STATE_CODES = {v: k for k, v in STATE_NAMES.items()}
 STATION_BASE = 0x1001
+_ZERO8 = bytes(8)
 
 
 class MasterError(Exception):
@@ -129,6 +130,7 @@ class FrameMaster(Master):
         self._idx = 0
         self.lost = 0
         self._lrw: Datagram | None = None
+        self._cyclic: _CyclicFrame | None = None
 
     # ------------------------------------------------------------------ frames
     def _send(self, dgs) -> list | None:
@@ -457,13 +459,34 @@ class FrameMaster(Master):
         lrw = self._lrw
         if lrw is None:
             return 0
-        lrw.data[:] = self.image
-        lrw.wkc = 0
-        dgs = [lrw]
-        if self.dc_ref is not None:
-            dgs.append(Datagram(FRMW, 0, self.dc_ref, 0x0910, bytearray(8)))
-        back = self._send(dgs)
-        if back is None:
+        cyc = self._cyclic
+        if cyc is None or cyc.key != (lrw, len(self.image), self.dc_ref):
+            dgs = [Datagram.logical_dg(LRW, 0, self.image)]
+            if self.dc_ref is not None:
+                dgs.append(Datagram(FRMW, 0, self.dc_ref, 0x0910, bytearray(_ZERO8)))
+            cyc = self._cyclic = _CyclicFrame((lrw, len(self.image), self.dc_ref), dgs)
+        frame = cyc.template
+        lo, hi = cyc.data_at[0]
+        frame[lo:hi] = self.image
+        for at in cyc.idx_at:  # the indices _send would give the datagrams
+            self._idx = (self._idx + 1) & 0xFF
+            frame[at] = self._idx
+        out = self.transport(bytes(frame))
+        if out is None:
+            self.lost += 1
+            return -1
+        if not cyc.same_shape(out):  # not as sent: the general decoder (or a lost frame)
+            return self._answer(out)
+        self.image[self.out_size :] = out[lo + self.out_size : hi]
+        if len(cyc.data_at) > 1:
+            self.dc_time = struct.unpack_from("<Q", out, cyc.data_at[1][0])[0]
+        return struct.unpack_from("<H", out, hi)[0]
+
+    def _answer(self, out) -> int:
+        try:
+            _, _, back = wire.decode_frame(out)
+        except wire.FrameError:
+            self.lost += 1
             return -1
         got = back[0]
         self.image[self.out_size :] = got.data[self.out_size :]
@@ -486,6 +509,36 @@ class FrameMaster(Master):
     def inputs(self, slave: int) -> memoryview:
         s = self.slaves[slave]
         return memoryview(self.image)[s.in_offset : s.in_offset + s.in_bytes]
+
+
+class _CyclicFrame:
+    """The process-data frame (LRW of the image, FRMW of the DC time) encoded once by the general
+    encoder: each cycle only the datagram indices and the outputs change in it. An answer with
+    the same EtherCAT header and datagram commands and lengths has its data at the same offsets;
+    any other goes through the general decoder."""
+
+    def __init__(self, key: tuple, dgs: list):
+        self.key = key
+        self.template = bytearray(wire.encode_frame(dgs))
+        self.idx_at: list[int] = []
+        self.data_at: list[tuple[int, int]] = []
+        self.header = bytes(self.template[12:16])  # EtherType, EtherCAT header
+        self.commands: list[tuple[int, int, bytes]] = []  # (offset, command, length field)
+        pos = 16
+        for d in dgs:
+            self.idx_at.append(pos + 1)
+            self.data_at.append((pos + 10, pos + 10 + len(d.data)))
+            self.commands.append((pos, d.cmd, bytes(self.template[pos + 6 : pos + 8])))
+            pos += 12 + len(d.data)
+        self.end = pos
+
+    def same_shape(self, frame) -> bool:
+        if len(frame) < self.end or frame[12:16] != self.header:
+            return False
+        for at, cmd, length in self.commands:
+            if frame[at] != cmd or frame[at + 6 : at + 8] != length:
+                return False
+        return True
 
 
 def _sm_bytes(start: int, length: int, control: int, enable: int) -> bytes:

@@ -80,6 +80,10 @@ class PdoLayout:
     def pack(self, values) -> bytes:
         """values: a sequence in data_entries order."""
         if self._struct is not None:
+            try:  # ints for the integer entries (the usual case): no conversion needed
+                return self._struct.pack(*values)
+            except struct.error:
+                pass
             return self._struct.pack(
                 *[
                     int(v) if e.dtype != "REAL" and e.dtype != "LREAL" else float(v)

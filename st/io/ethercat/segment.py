@@ -116,11 +116,14 @@ class Segment:
     def _datagram(self, dg, reach, arrive) -> None:
         c = dg.cmd
         n = len(dg.data)
-        if c in (LRD, LWR, LRW):
+        if c == LRW or c == LRD or c == LWR:
             addr = dg.logical
             rd, wr = c != LWR, c != LRD
-            for i, s in enumerate(reach):
-                dg.wkc += s.logical(rd, wr, addr, dg.data, arrive[i])
+            data = dg.data
+            wkc = dg.wkc
+            for s, t in zip(reach, arrive):
+                wkc += s.logical(rd, wr, addr, data, t)
+            dg.wkc = wkc
             return
         if c in _BCAST:
             for i, s in enumerate(reach):

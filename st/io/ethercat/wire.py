@@ -47,13 +47,15 @@ LOGICAL = {LRD, LWR, LRW}
 
 _DG = struct.Struct("<BBHHHH")  # cmd, idx, adp, ado, len|flags, irq
 _DG_LOG = struct.Struct("<BBIHH")  # cmd, idx, logical address, len|flags, irq
+_WKC = struct.Struct("<H")  # also the EtherCAT header
+_ETYPE = struct.Struct(">H")
 
 
 class FrameError(ValueError):
     pass
 
 
-@dataclass
+@dataclass(slots=True)
 class Datagram:
     cmd: int
     idx: int = 0
@@ -81,16 +83,17 @@ class Datagram:
 
 def encode_datagrams(dgs) -> bytes:
     out = bytearray()
-    n = len(dgs)
+    last = len(dgs) - 1
+    pack_header, pack_wkc = _DG.pack, _WKC.pack
     for i, d in enumerate(dgs):
         ln = len(d.data) & 0x7FF
         if d.circulating:
             ln |= 0x4000
-        if i < n - 1:
+        if i < last:
             ln |= 0x8000
-        out += _DG.pack(d.cmd, d.idx, d.adp & 0xFFFF, d.ado & 0xFFFF, ln, d.irq)
+        out += pack_header(d.cmd, d.idx, d.adp & 0xFFFF, d.ado & 0xFFFF, ln, d.irq)
         out += d.data
-        out += struct.pack("<H", d.wkc & 0xFFFF)
+        out += pack_wkc(d.wkc & 0xFFFF)
     return bytes(out)
 
 
@@ -107,17 +110,18 @@ def encode_frame(dgs, src: bytes = MASTER_MAC, dst: bytes = BROADCAST, pad: bool
 def decode_datagrams(body, length: int) -> list:
     dgs: list[Datagram] = []
     pos = 0
+    unpack_header, unpack_wkc = _DG.unpack_from, _WKC.unpack_from
     while True:
         if pos + 12 > length:
             raise FrameError(f"datagram header truncated at byte {pos}")
-        cmd, idx, adp, ado, ln, irq = _DG.unpack_from(body, pos)
+        cmd, idx, adp, ado, ln, irq = unpack_header(body, pos)
         n = ln & 0x7FF
         pos += 10
         if pos + n + 2 > length:
             raise FrameError(f"datagram {len(dgs)} ({n} bytes) runs past the EtherCAT length {length}")
         data = bytearray(body[pos : pos + n])
         pos += n
-        wkc = struct.unpack_from("<H", body, pos)[0]
+        (wkc,) = unpack_wkc(body, pos)
         pos += 2
         dgs.append(Datagram(cmd, idx, adp, ado, data, wkc, irq, bool(ln & 0x4000)))
         if not ln & 0x8000:
@@ -128,14 +132,14 @@ def decode_frame(frame):
     """frame bytes → (dst, src, [Datagram]); FrameError if it is not an EtherCAT command frame."""
     if len(frame) < 16:
         raise FrameError(f"frame of {len(frame)} bytes is too short")
-    etype = struct.unpack_from(">H", frame, 12)[0]
+    (etype,) = _ETYPE.unpack_from(frame, 12)
     off = 14
     if etype == 0x8100:  # a VLAN tag
-        etype = struct.unpack_from(">H", frame, 16)[0]
+        (etype,) = _ETYPE.unpack_from(frame, 16)
         off = 18
     if etype != ETHERTYPE:
         raise FrameError(f"EtherType {etype:#06x} is not EtherCAT")
-    hdr = struct.unpack_from("<H", frame, off)[0]
+    (hdr,) = _WKC.unpack_from(frame, off)
     length, ftype = hdr & 0x7FF, hdr >> 12
     if ftype != 1:
         raise FrameError(f"EtherCAT frame type {ftype} is not 1 (commands)")

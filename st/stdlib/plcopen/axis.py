@@ -178,7 +178,7 @@ class Axis:
         self.drive: Drive | None = None  # an attached drive (EtherCAT); None: virtual axis
         self.home_signal = None  # callable → bool: the reference switch (config home_switch)
         self.axis_no = 0
-        self.last_view: AxisView | None = None  # at the end of the last job that commanded it
+        self.last_seen: tuple | None = None  # the view's fields at the end of the last job that commanded it
         self.reset_cmd: Command | None = None  # MC_Reset waiting for the drive to leave Fault
         self.reset_wait = 0.0
 
@@ -215,17 +215,27 @@ class Axis:
         return self.act_pos % self.modulo if self.modulo else self.act_pos
 
     def view(self) -> AxisView:
+        return AxisView(*self.seen())
+
+    @property
+    def last_view(self) -> AxisView | None:
+        """The view at the end of the last job that commanded the axis (built when asked for)."""
+        return AxisView(*self.last_seen) if self.last_seen is not None else None
+
+    def seen(self) -> tuple:
+        """The fields of `view()`, as a tuple (the kernel keeps one per job; few are looked at)."""
         d = self.drive
-        return AxisView(
+        m = self.cfg.modulo
+        return (
             self.cfg.name,
             self.axis_no,
             self.state,
-            self.position(),
+            self.set_pos % m if m else self.set_pos,  # position()
             self.set_vel,
             self.set_acc,
-            self.actual_position(),
+            self.act_pos % m if m else self.act_pos,  # actual_position()
             self.act_vel,
-            self._power_status(),
+            d.enabled if d is not None else self.power_on,  # _power_status()
             int(self.axis_error),
             d.error_code if d is not None else 0,
             str(getattr(d, "state", "")) if d is not None else "",

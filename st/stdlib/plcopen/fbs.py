@@ -118,7 +118,7 @@ class MotionRegistry(IODriverBase):
             return
         for ax in self.axes.values():
             if ax.task is task:
-                ax.last_view = ax.view()  # what the blocks saw in this job (plc.axis)
+                ax.last_seen = ax.seen()  # what the blocks saw in this job (plc.axis)
                 ax.step()
         for tr in self.traces:
             ax = tr.axis
@@ -156,13 +156,22 @@ def _execute_outputs(fb, cmd, execute: bool, has_active=True, has_aborted=True) 
             else:  # Execute fell before the end: this one call shows it
                 fb.CmdId = 0
     fb.Busy, fb.Error, fb.ErrorID = busy, error, code
-    names = type(fb).__slots__
-    if "Done" in names:
+    if _outputs_of(type(fb))[0]:
         fb.Done = done
     if has_active:
         fb.Active = active
     if has_aborted:
         fb.CommandAborted = aborted
+
+
+def _outputs_of(cls) -> tuple:
+    """(has Done, has Active, has CommandAborted) of an FB class, looked up once per class."""
+    got = cls.__dict__.get("_has_outputs")
+    if got is None:
+        names = cls.__slots__
+        got = ("Done" in names, "Active" in names, "CommandAborted" in names)
+        cls._has_outputs = got
+    return got
 
 
 def _edge(fb) -> bool:
@@ -198,8 +207,8 @@ def _motion_body(kind: str, params):
             _continuous_update(ax, cmd, params(self))
         if kind == "stop" and cmd is not None:
             ax.stop_execute(cmd, bool(self.Execute))
-        names = type(self).__slots__
-        _execute_outputs(self, cmd, bool(self.Execute), "Active" in names, "CommandAborted" in names)
+        _, has_active, has_aborted = _outputs_of(type(self))
+        _execute_outputs(self, cmd, bool(self.Execute), has_active, has_aborted)
         if kind == "move_vel":
             self.InVelocity = bool(cmd is not None and cmd.status == ACTIVE and cmd.in_velocity)
             if self.InVelocity:

@@ -57,18 +57,22 @@ class Device:
         self.emergencies: list = []  # (error code, error register, 5 bytes) waiting for the mailbox
         self._rx: PdoLayout | None = None
         self._tx: PdoLayout | None = None
+        self._rx_entries: list | None = None  # the entries the layouts map, in their order
+        self._tx_entries: list | None = None
 
     # ------------------------------------------------------------------ process data
     @property
     def rx_layout(self) -> PdoLayout:
         if self._rx is None:
             self._rx = PdoLayout.from_od(self.od, self.rx_assign) if self.od.has(self.rx_assign) else PdoLayout([])
+            self._rx_entries = None
         return self._rx
 
     @property
     def tx_layout(self) -> PdoLayout:
         if self._tx is None:
             self._tx = PdoLayout.from_od(self.od, self.tx_assign) if self.od.has(self.tx_assign) else PdoLayout([])
+            self._tx_entries = None
         return self._tx
 
     def remap(self) -> None:
@@ -77,15 +81,19 @@ class Device:
 
     def write_outputs(self, data: bytes) -> None:
         lay = self.rx_layout
-        entries = self.od.entries
-        for e, v in zip(lay.data_entries, lay.unpack(data)):
-            entries[e.key].value = v
+        mapped = self._rx_entries
+        if mapped is None:
+            mapped = self._rx_entries = [self.od.entries[e.key] for e in lay.data_entries]
+        for e, v in zip(mapped, lay.unpack(data)):
+            e.value = v
         self.on_outputs()
 
     def read_inputs(self) -> bytes:
         lay = self.tx_layout
-        entries = self.od.entries
-        return lay.pack([entries[e.key].value for e in lay.data_entries])
+        mapped = self._tx_entries
+        if mapped is None:
+            mapped = self._tx_entries = [self.od.entries[e.key] for e in lay.data_entries]
+        return lay.pack([e.value for e in mapped])
 
     # ------------------------------------------------------------------ hooks
     def check_transition(self, old: str, new: str) -> int:

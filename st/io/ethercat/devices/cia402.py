@@ -60,6 +60,20 @@ class State(IntEnum):
     FAULT = 7
 
 
+# the states as module constants: `State.X` looks the member up on the enum class, which costs a
+# step more than the state machine's own work
+(
+    _NOT_READY_TO_SWITCH_ON,
+    _SWITCH_ON_DISABLED,
+    _READY_TO_SWITCH_ON,
+    _SWITCHED_ON,
+    _OPERATION_ENABLED,
+    _QUICK_STOP_ACTIVE,
+    _FAULT_REACTION_ACTIVE,
+    _FAULT,
+) = State
+
+
 # statusword bits 0-3, 5, 6 per state (bit 5, quick stop, is 1 where the profile requires it)
 STATE_BITS = {
     State.NOT_READY_TO_SWITCH_ON: 0x0000,
@@ -144,7 +158,7 @@ class CiA402Drive(Device):
         self.motor = MotorModel(params, substep)
         self.modes = tuple(modes)
         self.enable_delay = float(enable_delay)
-        self.state = State.NOT_READY_TO_SWITCH_ON
+        self.state = _NOT_READY_TO_SWITCH_ON
         self.mode = CSP if CSP in self.modes else self.modes[0]  # the mode in effect (0x6061)
         self.mains_on = True  # DC link supplied: statusword bit 4; switch-on needs it
         self.sto = False  # Safe Torque Off active: the power stage is cut and cannot be switched on
@@ -406,10 +420,9 @@ class CiA402Drive(Device):
     @property
     def interpolation_period(self) -> float:
         """Seconds: 0x60C2 if the master wrote it, else the measured output cycle, else 0x60C2."""
-        ip = self.od[(0x60C2, 1)] * 10.0 ** self.od[(0x60C2, 2)]
-        if self._ip_written or self._cycle is None:
-            return ip
-        return self._cycle
+        if not self._ip_written and self._cycle is not None:
+            return self._cycle
+        return self.od[(0x60C2, 1)] * 10.0 ** self.od[(0x60C2, 2)]
 
     def inject_fault(self, code: int = FAULT_GENERIC, persistent: bool = False) -> None:
         """Raise a drive fault now (transition 13). A persistent one survives fault resets until
@@ -426,9 +439,9 @@ class CiA402Drive(Device):
         coasts, the drive drops to Switch On Disabled without a fault and cannot be switched on
         again until STO is released (`safe_torque_off(False)`)."""
         self.sto = active
-        if active and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE):
+        if active and self.state in (_SWITCHED_ON, _OPERATION_ENABLED, _QUICK_STOP_ACTIVE):
             self.motor.disable()
-            self._set_state(State.SWITCH_ON_DISABLED)
+            self._set_state(_SWITCH_ON_DISABLED)
             self._publish()
 
     # ------------------------------------------------------------------ Device hooks
@@ -444,6 +457,8 @@ class CiA402Drive(Device):
         self._in_step = True
         try:
             self._take_outputs()
+            mo = self.motor
+            was = (self.state, self.mode, mo.enabled)
             self._transition(t, dt)
             if self.ideal:  # what the controlword asks for, at once
                 for _ in range(4):
@@ -451,15 +466,17 @@ class CiA402Drive(Device):
                     self._transition(t, dt)
                     if self.state == before:
                         break
-            self._apply_setpoints()
-            self.motor.step(dt)
+            if (self.state, self.mode, mo.enabled) != was:  # else they are applied already
+                self._apply_setpoints()
+            mo.step(dt)
             if self.ideal:
                 self._ideal_motion(dt)
             self.t = t
-            self._supervise(dt)
+            now = mo.readings()
+            readings = None if self._supervise(dt, now[4]) else now  # a fault changes the motor
         finally:
             self._in_step = False
-        self._publish()
+        self._publish(readings)
 
     # ------------------------------------------------------------------ internals
     def _take_outputs(self) -> None:
@@ -473,7 +490,7 @@ class CiA402Drive(Device):
         m = E[0x6060].value
         if m in self.modes and m != self.mode:
             self.mode = m
-            if self.state == State.OPERATION_ENABLED:
+            if self.state == _OPERATION_ENABLED:
                 self._start_mode()
         self._apply_setpoints()
 
@@ -482,7 +499,7 @@ class CiA402Drive(Device):
         mo = self.motor
         mo.torque_limit = E[0x6072].value
         mo.speed_limit = E[0x6080].value * 6.283185307179586 / 60.0
-        if self.state != State.OPERATION_ENABLED or not mo.enabled:
+        if self.state != _OPERATION_ENABLED or not mo.enabled:
             return
         mo.velocity_offset = E[0x60B1].value
         mo.torque_offset = E[0x60B2].value
@@ -524,23 +541,23 @@ class CiA402Drive(Device):
     def _set_state(self, new: State) -> None:
         old = self.state
         self.state = new
-        if new != State.SWITCHED_ON:
+        if new != _SWITCHED_ON:
             self._enable_req_t = None
-        if old in (State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE) and new not in (
-            State.OPERATION_ENABLED,
-            State.QUICK_STOP_ACTIVE,
-            State.FAULT_REACTION_ACTIVE,
+        if old in (_OPERATION_ENABLED, _QUICK_STOP_ACTIVE) and new not in (
+            _OPERATION_ENABLED,
+            _QUICK_STOP_ACTIVE,
+            _FAULT_REACTION_ACTIVE,
         ):
             self.motor.disable()
-        if new == State.OPERATION_ENABLED:
+        if new == _OPERATION_ENABLED:
             self._start_mode()
 
     def _fault(self, code: int, following: bool = False) -> None:
         self.error_code = code & 0xFFFF
         self._fe_latched = self._fe_latched or following
         self.emergency(code & 0xFFFF, 0x01)
-        if self.state not in (State.FAULT, State.FAULT_REACTION_ACTIVE):
-            self.state = State.FAULT_REACTION_ACTIVE
+        if self.state not in (_FAULT, _FAULT_REACTION_ACTIVE):
+            self.state = _FAULT_REACTION_ACTIVE
             self._enable_req_t = None
             # the reaction is shown for at least one published step: a fault found during a
             # step counts that step, an injected one waits for the next
@@ -566,106 +583,112 @@ class CiA402Drive(Device):
         s = self.state
         reset, self._reset_edge = self._reset_edge, False
         mo = self.motor
-        if s == State.NOT_READY_TO_SWITCH_ON:
-            self._set_state(State.SWITCH_ON_DISABLED)  # 1 (after the self test)
+        if s == _NOT_READY_TO_SWITCH_ON:
+            self._set_state(_SWITCH_ON_DISABLED)  # 1 (after the self test)
             return
-        if s == State.FAULT_REACTION_ACTIVE:
+        if s == _FAULT_REACTION_ACTIVE:
             if self._fra_steps >= 1 and (not mo.enabled or mo.stopped):
                 mo.disable()
-                self._set_state(State.FAULT)  # 14
+                self._set_state(_FAULT)  # 14
             else:
                 self._fra_steps += 1
             return
-        if s == State.FAULT:
+        if s == _FAULT:
             if reset and not self._persistent:  # 15
                 self.error_code = 0
                 self._fe_latched = False
                 self.emergency(0x0000, 0x00)  # CiA 301: error reset
-                self._set_state(State.SWITCH_ON_DISABLED)
+                self._set_state(_SWITCH_ON_DISABLED)
             return
         cmd = decode_command(int(E[0x6040].value))
         qs_option = int(E[0x605A].value)
-        if s == State.SWITCH_ON_DISABLED:
+        if s == _SWITCH_ON_DISABLED:
             if cmd == CMD_SHUTDOWN:
-                self._set_state(State.READY_TO_SWITCH_ON)  # 2
-        elif s == State.READY_TO_SWITCH_ON:
+                self._set_state(_READY_TO_SWITCH_ON)  # 2
+        elif s == _READY_TO_SWITCH_ON:
             if cmd in (CMD_SWITCH_ON, CMD_ENABLE) and self.mains_on and not self.sto:
-                self._set_state(State.SWITCHED_ON)  # 3
+                self._set_state(_SWITCHED_ON)  # 3
             elif cmd in (CMD_DISABLE_VOLTAGE, CMD_QUICK_STOP):
-                self._set_state(State.SWITCH_ON_DISABLED)  # 7
-        elif s == State.SWITCHED_ON:
+                self._set_state(_SWITCH_ON_DISABLED)  # 7
+        elif s == _SWITCHED_ON:
             if cmd == CMD_ENABLE:
                 start = t - dt
                 if self._enable_req_t is None:
                     self._enable_req_t = start
                 if start - self._enable_req_t >= self.enable_delay - 1e-12:
-                    self._set_state(State.OPERATION_ENABLED)  # 4
+                    self._set_state(_OPERATION_ENABLED)  # 4
                 return
             self._enable_req_t = None
             if cmd == CMD_SHUTDOWN:
-                self._set_state(State.READY_TO_SWITCH_ON)  # 6
+                self._set_state(_READY_TO_SWITCH_ON)  # 6
             elif cmd in (CMD_DISABLE_VOLTAGE, CMD_QUICK_STOP):
-                self._set_state(State.SWITCH_ON_DISABLED)  # 10
-        elif s == State.OPERATION_ENABLED:
+                self._set_state(_SWITCH_ON_DISABLED)  # 10
+        elif s == _OPERATION_ENABLED:
             if cmd == CMD_SWITCH_ON:
-                self._set_state(State.SWITCHED_ON)  # 5
+                self._set_state(_SWITCHED_ON)  # 5
             elif cmd == CMD_SHUTDOWN:
-                self._set_state(State.READY_TO_SWITCH_ON)  # 8
+                self._set_state(_READY_TO_SWITCH_ON)  # 8
             elif cmd == CMD_DISABLE_VOLTAGE:
-                self._set_state(State.SWITCH_ON_DISABLED)  # 9
+                self._set_state(_SWITCH_ON_DISABLED)  # 9
             elif cmd == CMD_QUICK_STOP:  # 11
-                self.state = State.QUICK_STOP_ACTIVE
+                self.state = _QUICK_STOP_ACTIVE
                 if qs_option == 0:
                     mo.disable()
                 elif qs_option in (1, 2, 5, 6):
                     mo.stop(self._qs_decel())
                 else:
                     mo.stop(None)
-        elif s == State.QUICK_STOP_ACTIVE:
+        elif s == _QUICK_STOP_ACTIVE:
             if cmd == CMD_DISABLE_VOLTAGE:
-                self._set_state(State.SWITCH_ON_DISABLED)  # 12
+                self._set_state(_SWITCH_ON_DISABLED)  # 12
             elif qs_option in (5, 6, 7, 8):
                 if cmd == CMD_ENABLE:
-                    self._set_state(State.OPERATION_ENABLED)  # 16
+                    self._set_state(_OPERATION_ENABLED)  # 16
             elif not mo.enabled or mo.stopped:
-                self._set_state(State.SWITCH_ON_DISABLED)  # 12 (after the ramp)
+                self._set_state(_SWITCH_ON_DISABLED)  # 12 (after the ramp)
 
     def _ideal_motion(self, dt: float) -> None:
         """The ideal drive: in CSP with the power stage on, the shaft is at the target."""
         mo = self.motor
-        if self.state == State.OPERATION_ENABLED and self.mode == CSP and mo.enabled:
+        if self.state == _OPERATION_ENABLED and self.mode == CSP and mo.enabled:
             before = mo.position
             mo.set_position(self._target)
             mo.omega = (self._target - before) / dt / mo.k if dt > 0 else 0.0
 
-    def _supervise(self, dt: float) -> None:
-        """After the physics: following error, DC link, fault reaction progress."""
+    def _supervise(self, dt: float, following_error: int) -> bool:
+        """After the physics: following error, DC link, fault reaction progress. True when it
+        raised a fault."""
         E = self.od._by_key
-        if not self.mains_on and self.state in (State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE):
+        if not self.mains_on and self.state in (_SWITCHED_ON, _OPERATION_ENABLED, _QUICK_STOP_ACTIVE):
             self._fault(FAULT_UNDERVOLTAGE)
-            return
-        if self.state == State.OPERATION_ENABLED and self.mode == CSP and self.motor.enabled:
+            return True
+        if self.state == _OPERATION_ENABLED and self.mode == CSP and self.motor.enabled:
             window = int(E[0x6065].value)
-            if window != 0xFFFFFFFF and abs(self.motor.following_error) > window:
+            if window != 0xFFFFFFFF and abs(following_error) > window:
                 self._fe_time += dt
                 if self._fe_time > E[0x6066].value / 1000.0 + 1e-12:
                     self._fault(FAULT_FOLLOWING_ERROR, following=True)
+                    return True
             else:
                 self._fe_time = 0.0
+        return False
 
-    def _publish(self) -> None:
+    def _publish(self, readings: tuple | None = None) -> None:
+        """The statusword and the actual values into the object dictionary; `readings`: the
+        motor's, if the caller has them."""
         E = self.od._by_key
         mo, s = self.motor, self.state
+        pos, demand, vel, torque, fe = mo.readings() if readings is None else readings
         sw = STATE_BITS[s] | SW_REMOTE
         if self.mains_on:
             sw |= SW_VOLTAGE
         if self.warning:
             sw |= SW_WARNING
-        if s == State.OPERATION_ENABLED and mo.enabled:
+        if s == _OPERATION_ENABLED and mo.enabled:
             sw |= SW_FOLLOWING
-            if self._target_reached():
+            if self._target_reached(pos, vel, torque):
                 sw |= SW_TARGET_REACHED
-        elif s == State.QUICK_STOP_ACTIVE and (mo.stopped or (not mo.enabled and mo.omega == 0.0)):
+        elif s == _QUICK_STOP_ACTIVE and (mo.stopped or (not mo.enabled and mo.omega == 0.0)):
             sw |= SW_TARGET_REACHED
         if mo.enabled and mo.limited:
             sw |= SW_INTERNAL_LIMIT
@@ -673,21 +696,20 @@ class CiA402Drive(Device):
             sw |= SW_FOLLOWING_ERROR
         E[0x6041].value = sw
         E[0x6061].value = self.mode
-        pos = mo.position
-        E[0x6064].value = wrap32(pos)
-        E[0x6062].value = wrap32(int(round(mo.position_demand)))
-        E[0x606C].value = max(-0x80000000, min(0x7FFFFFFF, mo.velocity))
-        E[0x6077].value = max(-0x8000, min(0x7FFF, mo.torque))
-        E[0x60F4].value = max(-0x80000000, min(0x7FFFFFFF, mo.following_error))
+        E[0x6064].value = ((pos + 0x80000000) & 0xFFFFFFFF) - 0x80000000  # wrap32
+        E[0x6062].value = ((demand + 0x80000000) & 0xFFFFFFFF) - 0x80000000
+        E[0x606C].value = -0x80000000 if vel < -0x80000000 else (0x7FFFFFFF if vel > 0x7FFFFFFF else vel)
+        E[0x6077].value = -0x8000 if torque < -0x8000 else (0x7FFF if torque > 0x7FFF else torque)
+        E[0x60F4].value = -0x80000000 if fe < -0x80000000 else (0x7FFFFFFF if fe > 0x7FFFFFFF else fe)
         E[0x603F].value = self.error_code
-        E[0x1001].value = 0x01 if s in (State.FAULT, State.FAULT_REACTION_ACTIVE) else 0x00
+        E[0x1001].value = 0x01 if s == _FAULT or s == _FAULT_REACTION_ACTIVE else 0x00
 
-    def _target_reached(self) -> bool:
+    def _target_reached(self, pos: int, vel: int, torque: int) -> bool:
         E = self.od._by_key
-        mo = self.motor
         if self.mode == CSP:
-            return abs(self._target - mo.position) <= E[0x6067].value
+            return abs(self._target - pos) <= E[0x6067].value
         if self.mode == CSV:
+            mo = self.motor
             goal = max(-mo.max_speed * mo.k, min(mo.max_speed * mo.k, E[0x60FF].value))
-            return abs(goal - mo.velocity) <= self.velocity_window
-        return abs(E[0x6071].value - mo.torque) <= self.torque_window
+            return abs(goal - vel) <= self.velocity_window
+        return abs(E[0x6071].value - torque) <= self.torque_window
