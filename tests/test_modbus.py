@@ -621,8 +621,12 @@ def test_st_run_with_modbus_serves_and_stops_cleanly(tmp_path):
             assert time.monotonic() < deadline and child.poll() is None
             time.sleep(0.1)
     tcp.send_message(tcp.write_single_register(1, 0, 21), s)
-    time.sleep(0.2)
-    assert tcp.send_message(tcp.read_holding_registers(1, 0, 1), s) == [21]
+    # the write reaches the image at the start of the next scan: read until a scan has run (a fixed
+    # sleep was too short on a loaded machine), the value exact
+    deadline = time.monotonic() + 15
+    while (got := tcp.send_message(tcp.read_holding_registers(1, 0, 1), s)) != [21] and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert got == [21]
     s.close()
     child.terminate()
     out, err = child.communicate(timeout=20)
