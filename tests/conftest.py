@@ -4,6 +4,10 @@ and pytest would refuse to start: accept them then, and ignore them (the run is 
 
 
 def pytest_addoption(parser, pluginmanager):
-    if not pluginmanager.has_plugin("xdist"):
+    if pluginmanager.has_plugin("xdist"):
+        return
+    try:
         parser.addoption("--numprocesses", default=None, help="ignored: pytest-xdist is off (-p no:xdist)")
         parser.addoption("--dist", default="no", help="ignored: pytest-xdist is off (-p no:xdist)")
+    except ValueError:  # the other conftest (tests/ or programs/) added them already
+        pass
