@@ -18,6 +18,7 @@ def st(*args, cwd=None):
     )
 
 
+@pytest.mark.slow
 def test_run_openplc_export_and_dump_json():
     r = st("run", "programs/blink.st", "--scans", "3", "--dump-json")
     assert r.returncode == 0, r.stderr
@@ -35,6 +36,7 @@ def test_run_lone_program_with_cycle(tmp_path):
     assert json.loads(r.stdout) == {"p.n": 5, "p.t": "T#0s"}
 
 
+@pytest.mark.slow
 def test_check_reports_errors_with_location_and_exit_code(tmp_path):
     f = tmp_path / "bad.st"
     f.write_text("PROGRAM p\nVAR a : INT; END_VAR\na := b;\nEND_PROGRAM\n")
@@ -44,12 +46,14 @@ def test_check_reports_errors_with_location_and_exit_code(tmp_path):
     assert "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_check_ok(tmp_path):
     r = st("check", "programs/traffic_light.st")
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith("ok: 1 file(s)")
 
 
+@pytest.mark.slow
 def test_missing_file_is_a_clean_error(tmp_path):
     r = st("check", str(tmp_path / "nope.st"))
     assert r.returncode == 1
@@ -57,6 +61,7 @@ def test_missing_file_is_a_clean_error(tmp_path):
     assert "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_emit_python_is_readable(tmp_path):
     f = tmp_path / "e.st"
     f.write_text(
@@ -69,6 +74,7 @@ def test_emit_python_is_readable(tmp_path):
     assert "self.y = _fn_Twice((self.y + 1 + 32768 & 65535) - 32768)" in r.stdout  # used twice: on the instance
 
 
+@pytest.mark.slow
 def test_runtime_fault_exit_code_and_message(tmp_path):
     f = tmp_path / "f.st"
     f.write_text("PROGRAM p\nVAR a : INT; b : INT; END_VAR\na := 10 / b;\nEND_PROGRAM\n")
@@ -77,6 +83,7 @@ def test_runtime_fault_exit_code_and_message(tmp_path):
     assert f"{f}:3: PLC fault [DIV0]: division by zero (in p, task main)" in r.stderr
 
 
+@pytest.mark.slow
 def test_explain():
     r = st("explain", "E027")
     assert r.returncode == 0

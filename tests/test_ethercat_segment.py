@@ -434,6 +434,7 @@ def test_master_reports_a_refused_state_with_the_al_status_code():
 # ---------------------------------------------------------------------------- capture
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(shutil.which("tshark") is None, reason="tshark is not installed (apt install tshark)")
 def test_a_capture_decodes_in_tshark_without_malformed_packets(tmp_path):
     seg = segment(2)

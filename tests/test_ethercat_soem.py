@@ -118,6 +118,7 @@ def served(tmp_path):
         subprocess.run(["ip", "link", "del", master_if], capture_output=True)
 
 
+@pytest.mark.slow
 def test_soem_reaches_op_reads_sdo_and_exchanges_process_data(served):
     from st.io.ethercat.driver import drive_state
     from st.io.ethercat.pdo import CIA402_RX, CIA402_TX, PdoLayout
@@ -192,6 +193,7 @@ def test_st_run_moves_an_axis_through_soem(served, tmp_path):
     assert v["main.actual"] == pytest.approx(90.0, abs=0.01)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(shutil.which("tshark") is None, reason="tshark is not installed")
 def test_the_served_capture_decodes_in_tshark(served):
     from st.io.ethercat.soem import SoemMaster

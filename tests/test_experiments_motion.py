@@ -70,6 +70,7 @@ def test_st_experiment_writes_csv_plots_and_a_reproducible_summary(tmp_path):
     assert (outs[0] / "fig6_8_6_9_offsets.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_unknown_experiment_is_a_clear_error():
     r = subprocess.run([sys.executable, "-m", "st", "experiment", "nope"], cwd=ROOT, capture_output=True, text=True)
     assert r.returncode == 2 and "unknown experiment 'nope' (known: single-axis, multi-axis" in r.stderr

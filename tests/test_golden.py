@@ -49,6 +49,7 @@ def test_there_are_golden_programs():
     assert len(CASES) >= 4
 
 
+@pytest.mark.slow
 def test_emit_python_marks_each_statement_with_its_st_line(tmp_path):
     f = tmp_path / "e.st"
     f.write_text(

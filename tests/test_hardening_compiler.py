@@ -27,6 +27,7 @@ def _program(body: str, decls: str = "y : DINT;") -> str:
 # ---------------------------------------------------------------------- inputs that crashed it
 
 
+@pytest.mark.slow
 def test_an_unknown_dialect_pragma_is_a_located_error(tmp_path):
     src = "(* a header *)\n  {dialect 'foo'}\n" + _program("y := 1;")
     f = tmp_path / "p.st"

@@ -262,6 +262,7 @@ END_FUNCTION_BLOCK
 """
 
 
+@pytest.mark.slow
 def test_a_fault_in_fb_init_at_start_up_is_a_start_error_with_its_st_line(tmp_path):
     src = FBINIT + "PROGRAM main\nVAR f : Div; END_VAR\nf();\nEND_PROGRAM\n"
     with pytest.raises(PLCStartError) as info:

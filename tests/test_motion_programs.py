@@ -81,6 +81,7 @@ def test_st_run_trace_writes_csv_and_plot(tmp_path):
     assert json.loads(out.stdout.splitlines()[-1])["cell.step"] == 70
 
 
+@pytest.mark.slow
 def test_st_run_trace_of_something_else_is_a_clear_error(tmp_path):
     out = subprocess.run(
         [

@@ -134,6 +134,7 @@ def test_pytest_st_cov_serial_and_xdist_agree(pytester):
     parallel.stdout.fnmatch_lines([expected])
 
 
+@pytest.mark.slow
 def test_st_test_cov_command(tmp_path):
     import subprocess
     import sys

@@ -143,11 +143,24 @@ def _conversions():
 GROUPS_OF_CASES = list(_functions()) + list(_conversions())
 
 
+def _batches(groups: list, size: int = 120):
+    """The groups' cases, whole groups together in programs of at most `size` cases (a larger
+    group alone): a handful of compiles instead of one per function."""
+    batch: list = []
+    for cases in groups:
+        if batch and len(batch) + len(cases) > size:
+            yield batch
+            batch = []
+        batch = batch + cases
+    if batch:
+        yield batch
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("chunk", range(2))
 def test_every_standard_function_and_conversion_faults_cleanly_on_extreme_arguments(chunk):
     bad, ran = [], 0
-    for cases in GROUPS_OF_CASES[chunk::2]:
+    for cases in _batches(GROUPS_OF_CASES[chunk::2]):
         for call, types, vals, outcome in _sweep(cases):
             ran += 1
             if outcome != "ok" and (
