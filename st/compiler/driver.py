@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import gc
 import os
+import pickle
 import sys
 import threading
 from pathlib import Path
@@ -42,6 +43,27 @@ def _get_parser():
         _builder = AstBuilder("")
         _parser = StParser(_builder)
     return _parser, _builder
+
+
+# (path, text) of a library source → its freshly parsed unit, pickled, and the parse's diagnostics
+_library_units: dict[tuple[str, str], tuple[bytes, list[Diagnostic]]] = {}
+
+
+def parse_library_source(path: str, text: str, sink: DiagnosticSink) -> A.Unit | None:
+    """A library source's unit: parsed once per process, then a fresh copy for each compilation
+    (the checker and the lowering change the tree they are given). Unpickling the copy costs a
+    fraction of parsing the text again, and every compilation parses the standard libraries."""
+    key = (path, text)
+    got = _library_units.get(key)
+    if got is None:
+        own = DiagnosticSink()
+        unit = parse_source(SourceFile(path, text), own)
+        got = (pickle.dumps(unit, pickle.HIGHEST_PROTOCOL), list(own.items))
+        _library_units[key] = got
+    blob, diags = got
+    for d in diags:
+        sink.add(d)
+    return pickle.loads(blob)
 
 
 def parse_source(
@@ -206,7 +228,7 @@ def _parse_all(
     lib_units: list[tuple[Library, A.Unit]] = []
     for lib in libraries:
         for path, text in lib.sources:
-            u = parse_source(SourceFile(path, text), sink)
+            u = parse_library_source(path, text, sink)
             if u is not None:
                 lib_units.append((lib, u))
     units: list[A.Unit] = []
