@@ -366,6 +366,22 @@ def test_torque_limit_object_limits_torque():
     assert r.d.torque == 500
 
 
+def test_an_object_written_between_cycles_is_taken_at_the_next_step():
+    r = Rig()
+    r.enable(CST)
+    r.run(2, 0x0F, o6072=500, o6071=300)
+    assert r.d.motor.torque_limit == 500
+    r.d.od[0x6072] = 250  # outside the cyclic outputs (as an SDO download writes it)
+    r.t += r.cycle
+    r.d.step(r.t, r.cycle)
+    assert r.d.motor.torque_limit == 250
+    r.d.od.state = "OP"
+    r.d.od.download(0x6072, 0, struct.pack("<H", 120))  # an SDO download (the drive in OP)
+    r.t += r.cycle
+    r.d.step(r.t, r.cycle)
+    assert r.d.motor.torque_limit == 120
+
+
 def test_disabled_motor_coasts_down_by_friction():
     m = MotorModel()
     m.enable(CSV)

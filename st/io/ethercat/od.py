@@ -101,6 +101,7 @@ class ObjectDictionary:
         self.entries: dict = {}  # (index, sub) → Entry
         self._by_key: dict = {}  # the same entries by (index, sub) and, for subindex 0, by index
         self.state = "INIT"  # the device's AL state, for writable_in checks
+        self.writes = 0  # writes from outside the device: od[k] = v, an SDO download, the PDO outputs
 
     # ------------------------------------------------------------------ building
     def add(
@@ -173,6 +174,7 @@ class ObjectDictionary:
 
     def __setitem__(self, key, value):
         self._by_key[key].value = value
+        self.writes += 1
 
     def subindices(self, index: int) -> list:
         return sorted(s for (i, s) in self.entries if i == index)
@@ -231,6 +233,7 @@ class ObjectDictionary:
             if code:
                 raise SdoAbort(code, f"{e.index:#06x}:{e.sub}")
         e.value = v
+        self.writes += 1
 
     # ------------------------------------------------------------------ PDO layouts
     def pdo_entries(self, assign_index: int) -> list:

@@ -86,6 +86,7 @@ class Device:
             mapped = self._rx_entries = [self.od.entries[e.key] for e in lay.data_entries]
         for e, v in zip(mapped, lay.unpack(data)):
             e.value = v
+        self.od.writes += 1
         self.on_outputs()
 
     def read_inputs(self) -> bytes:

@@ -178,6 +178,7 @@ class CiA402Drive(Device):
         self._enable_req_t: float | None = None
         self._fra_steps = 0
         self._in_step = False
+        self._taken = -1  # od.writes when the outputs were last taken (_take_outputs)
         self._last_t32: int | None = None  # last 0x607A seen while following (CSP)
         self._target = 0  # the unwrapped CSP target (increments)
         self._last_outputs_t: float | None = None
@@ -456,7 +457,8 @@ class CiA402Drive(Device):
     def step(self, t: float, dt: float) -> None:
         self._in_step = True
         try:
-            self._take_outputs()
+            if self.od.writes != self._taken:  # else the last outputs are applied already
+                self._take_outputs()
             mo = self.motor
             was = (self.state, self.mode, mo.enabled)
             self._transition(t, dt)
@@ -481,6 +483,7 @@ class CiA402Drive(Device):
     # ------------------------------------------------------------------ internals
     def _take_outputs(self) -> None:
         """Latch the fault-reset edge, the mode and (when following) the setpoints."""
+        self._taken = self.od.writes
         E = self.od._by_key
         cw = int(E[0x6040].value)
         bit7 = bool(cw & 0x80)
