@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from ...model.program import Project
 from . import inheritance, loops, properties, qualified
-from .walk import bodies
+from .walk import bodies, rewrite_exprs, rewrite_outside_bodies
 
 
 @dataclass(slots=True)
@@ -36,13 +36,18 @@ class LoweredProgram:
 def lower(project: Project, options: LowerOptions | None = None) -> LoweredProgram:
     options = options or LowerOptions()
     for body in bodies(project):
-        qualified.global_names(body)
-        properties.accessor_calls(body)
-        inheritance.super_calls(body)
+        properties.property_targets(body)
+        rewrite_exprs(body, _expression)
         loops.count_fors(body)
         if options.loop_guards:
             loops.guard_loops(body)
-    qualified.global_names_outside_bodies(project)
-    properties.accessor_calls_outside_bodies(project)
-    inheritance.super_calls_outside_bodies(project)
+    rewrite_outside_bodies(project, _expression)  # SFC conditions, configuration arguments
     return LoweredProgram(project, inheritance.blocks(project))
+
+
+def _expression(e):
+    """The expression rewrites, in one walk of each body (innermost first): a GVL's or a located
+    variable's plain name, a property read's GET call, and which implementation a call runs. They
+    touch different nodes and none reads what a later one changes below it, so one walk gives
+    what three would."""
+    return inheritance.dispatch(properties.property_read(qualified.plain_name(e)))

@@ -19,7 +19,7 @@ from ...model import types as T
 from .. import ast as A
 from ..check import CallTarget
 from .fb_init import Constructor, constructor
-from .walk import is_super, rewrite_exprs, rewrite_outside_bodies
+from .walk import is_super
 
 
 @dataclass(slots=True)
@@ -53,16 +53,9 @@ def blocks(project) -> dict:
     return out
 
 
-def super_calls(body: list) -> None:
-    """Decide, for every method and block call in `body`, which implementation runs."""
-    rewrite_exprs(body, _dispatch)
-
-
-def super_calls_outside_bodies(project) -> None:
-    rewrite_outside_bodies(project, _dispatch)
-
-
-def _dispatch(e):
+def dispatch(e):
+    """The rewrite of one expression: for a method or block call, which implementation runs (a
+    SUPER^ call runs the base's, not the most derived one)."""
     if isinstance(e, A.Call) and isinstance(e.target, CallTarget):
         tgt = e.target
         if tgt.kind == "method":

@@ -11,23 +11,19 @@ from typing import TypeGuard
 
 from ...model import types as T
 from .. import ast as A
-from .walk import is_super, rewrite_exprs, rewrite_outside_bodies, walk_stmts
+from .walk import is_super, walk_stmts
 
 
-def accessor_calls(body: list) -> None:
-    """Rewrite every property access in `body` (nested statements included) into an `AccessorCall`."""
+def property_targets(body: list) -> None:
+    """A property as an assignment's target (`:=`, `S=`/`R=`) in `body`, nested statements included,
+    becomes the `AccessorCall` of its SET (its reads: `property_read`)."""
     for s in walk_stmts(body):
         if isinstance(s, A.Assign) and _is_property(s.target):
             s.target = _call(s.target, s.target.sym.set)
-    rewrite_exprs(body, _read)
 
 
-def accessor_calls_outside_bodies(project) -> None:
-    """The same in what is not a statement (SFC conditions, configuration arguments)."""
-    rewrite_outside_bodies(project, _read)
-
-
-def _read(e):
+def property_read(e):
+    """The rewrite of one expression: a property read becomes the `AccessorCall` of its GET."""
     return _call(e, e.sym.get) if _is_property(e) else e
 
 

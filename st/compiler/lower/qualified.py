@@ -5,18 +5,10 @@ variable (named, or declared `AT %QW2 : INT;` without a name); code generation p
 from __future__ import annotations
 
 from .. import ast as A
-from .walk import rewrite_exprs, rewrite_outside_bodies
 
 
-def global_names(body: list) -> None:
-    rewrite_exprs(body, _plain)
-
-
-def global_names_outside_bodies(project) -> None:
-    rewrite_outside_bodies(project, _plain)
-
-
-def _plain(e):
+def plain_name(e):
+    """The rewrite of one expression (lower/__init__.py applies it with the others in one walk)."""
     sym = getattr(e, "sym", None)
     if isinstance(e, A.Direct) and sym is not None:  # %QW2 where a variable is declared AT %QW2
         out = A.Name(e.span, sym.name, sym)
