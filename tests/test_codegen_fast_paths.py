@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import pytest
 
+from st import PLC
 from st.api import compile_text
 
 from helpers import fault, run
@@ -106,3 +107,68 @@ END_PROGRAM"""
     plc = run(src)
     assert [plc[f"main.{k}"] for k in ("l", "k", "r", "q")] == [6.0, 3.0, 8388608.0, 3.5]
     assert all(type(plc[f"main.{k}"]) is float for k in ("l", "k", "r", "q"))
+
+
+STANDARD_BLOCKS = """PROGRAM main
+VAR
+  n : INT; x, y : BOOL;
+  ton1 : TON; tof1 : TOF; tp1 : TP; r1 : R_TRIG; f1 : F_TRIG;
+  cu : CTU; cd : CTD; cud : CTUD; sr1 : SR; rs1 : RS;
+END_VAR
+n := n + 1;
+x := (n MOD 7) < 3;
+y := (n MOD 5) = 0;
+ton1(IN := x, PT := T#20ms);
+tof1(IN := x, PT := T#20ms);
+tp1(IN := y, PT := T#40ms);
+r1(CLK := x);
+f1(CLK := x);
+cu(CU := r1.Q, R := y AND (n MOD 3 = 0), PV := 4);
+cd(CD := f1.Q, LD := n = 1, PV := 5);
+cud(CU := r1.Q, CD := y, R := FALSE, LD := n = 1, PV := 3);
+sr1(S1 := y, R := x);
+rs1(S := y, R1 := x);
+END_PROGRAM
+"""
+
+
+def test_standard_blocks_copied_into_their_callers_compute_what_their_calls_compute():
+    inlined = compile_text(STANDARD_BLOCKS, "b.st", use_cache=False, emit_python=True)
+    called = compile_text(STANDARD_BLOCKS, "b.st", use_cache=False, emit_python=True, coverage=True)
+    assert "._body()" not in inlined.python_source["b.st"]  # every call inlined …
+    assert called.python_source["b.st"].count("._body()") == 10  # … where coverage keeps the calls
+    a, b = PLC(inlined), PLC(called)
+    trues = dict.fromkeys(("ton1.Q", "tof1.Q", "tp1.Q", "r1.Q", "f1.Q", "sr1.Q1", "rs1.Q1"), 0)
+    peak = dict.fromkeys(("cu.CV", "cd.CV", "cud.CV"), 0)
+    for _ in range(60):  # 10 ms scans
+        a.scan()
+        b.scan()
+        assert a.variables() == b.variables()  # every variable, the blocks' internals included
+        for k in trues:
+            trues[k] += bool(a[f"main.{k}"])
+        for k in peak:
+            peak[k] = max(peak[k], a[f"main.{k}"])
+    assert trues == {"ton1.Q": 8, "tof1.Q": 44, "tp1.Q": 45, "r1.Q": 9, "f1.Q": 9, "sr1.Q1": 26, "rs1.Q1": 18}
+    assert peak == {"cu.CV": 3, "cd.CV": 5, "cud.CV": 3}
+
+
+def test_a_block_reached_through_an_in_out_runs_its_own_body():
+    src = """FUNCTION_BLOCK Counted EXTENDS R_TRIG
+VAR_OUTPUT n : INT; END_VAR
+SUPER^();
+IF Q THEN n := n + 1; END_IF;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Driver
+VAR_IN_OUT trig : R_TRIG; END_VAR
+VAR_INPUT x : BOOL; END_VAR
+trig(CLK := x);
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR c : Counted; d : Driver; x : BOOL; plain : R_TRIG; k : INT; END_VAR
+x := NOT x;
+d(trig := c, x := x);
+plain(CLK := x);
+IF plain.Q THEN k := k + 1; END_IF;
+END_PROGRAM"""
+    plc = run(src, scans=4)
+    assert (plc["main.c.n"], plc["main.k"]) == (2, 2)  # the derived block's body ran through the in-out

@@ -159,7 +159,8 @@ def _compile_sources(
         project = checker.run(units, lib_paths)
         _attach_test_texts(project, all_sources)
         if not sink.has_errors:
-            gen = ModuleGen(lower(project), sink, coverage=options.coverage)
+            inline_files = frozenset(path for lib in in_use if lib.inline_blocks for path, _ in lib.sources)
+            gen = ModuleGen(lower(project), sink, coverage=options.coverage, inline_files=inline_files)
             py_modules = gen.generate()
             if not sink.has_errors:
                 for out, group in ((modules, py_modules), (test_modules, gen.test_modules())):

@@ -57,6 +57,9 @@ class Library:
     # brings its own library of that kind (its own PLCopen motion library: AXIS_REF, MC_DIRECTION, ...)
     # and the library's blocks, built on its own types, cannot be mixed with it
     yields_to_own_types: bool = False
+    # its blocks' ST bodies are what runs (no native body replaces them at run time), so code
+    # generation may copy a small one into its callers (codegen/inline.py)
+    inline_blocks: bool = False
 
     def add(self, sig: FuncSig) -> None:
         self.functions[sig.name.upper()] = sig

@@ -292,6 +292,7 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", mat
         "iec61131",
         version=f"1-{int(f_trig_first_scan)}-{time_unit}-{int(matiec_errors)}",
         namespaces=("Standard", "Tc2_Standard"),
+        inline_blocks=True,
     )
     lib.sources.append((str(FBS_PATH), standard_fbs_source(f_trig_first_scan)))
     lib.sources.append((str(FUNCTIONS_PATH), FUNCTIONS_PATH.read_text()))

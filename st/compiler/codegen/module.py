@@ -7,6 +7,7 @@ import ast as py
 from ...model import types as T
 from ..lower import LoweredProgram
 from .expressions import InitGen
+from .inline import inlinable
 from .pous import BodyGen, FuncGen
 from .pyast import Unsupported, _args, _attr, _call, _const, _name, _set_lines, default_value
 from .statements import StmtGen, _Typed
@@ -16,7 +17,7 @@ from .tests import TestGen
 class ModuleGen:
     """Prints the Python modules of a lowered project (compiler/lower)."""
 
-    def __init__(self, program: LoweredProgram, sink, coverage: bool = False):
+    def __init__(self, program: LoweredProgram, sink, coverage: bool = False, inline_files: frozenset = frozenset()):
         self.p = program.project
         self.blocks = program.blocks
         self.sink = sink
@@ -25,6 +26,20 @@ class ModuleGen:
         self.cov_points: list = []  # [(file, line, kind, label, target)]; index = probe id
         self._line_probe: dict = {}
         self.tests_by_file: dict = {}  # path → [FunctionDef]: unit tests, kept apart from the program
+        self.inline_candidates: dict = {}  # POUType → its `_body`, if its library allows inlining
+        self._inlinable: dict = {}  # POUType → that `_body` if it can be inlined, else None
+        # the sources of libraries whose blocks may be inlined; none with TEST blocks, whose MOCK
+        # replaces an instance's body at run time
+        self.inline_files = inline_files if not self.p.tests else frozenset()
+
+    def inline_body_of(self, pou) -> py.FunctionDef | None:
+        """The `_body` of a block that its calls may copy (inline.py), or None."""
+        fn = self.inline_candidates.get(pou)  # (None also while the block's class is not generated yet)
+        if fn is None:
+            return None
+        if pou not in self._inlinable:
+            self._inlinable[pou] = fn if inlinable(fn) else None
+        return self._inlinable[pou]
 
     def test_modules(self) -> list:
         """[(st file path, Python module)] holding the `_test_<n>` functions (after `generate`)."""

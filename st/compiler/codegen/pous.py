@@ -210,11 +210,12 @@ class BodyGen(StmtGen):
             run = py.Expr(_call(_attr(_attr(_name("self"), "_sfc"), "run"), _name("self"), _name("_now")))
             members.append(_set_lines(py.FunctionDef("_body", _args(["self"]), [run], [], None, None), d.span.line))
         else:
-            members.append(
-                self.method(
-                    "_body", d.body, can_cache, edges, d.span.line, d.end_span.line if d.end_span else d.span.line
-                )
+            body_fn = self.method(
+                "_body", d.body, can_cache, edges, d.span.line, d.end_span.line if d.end_span else d.span.line
             )
+            members.append(body_fn)
+            if d.span.file in self.mod.inline_files and not self.mod.coverage:
+                self.mod.inline_candidates[pou] = body_fn
         if block.constructor is not None:
             members.append(self._constructor(block.constructor, d.span.line))
         for act in block.actions:  # its own and inherited ones

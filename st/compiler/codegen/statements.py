@@ -11,6 +11,7 @@ from .. import ast as A
 from ..check import CallTarget
 from ..lower.walk import walk_stmts
 from .expressions import ExprGen, index_key, wrap
+from .inline import exact_instance, inline_body
 from .pyast import Unsupported, _attr, _call, _const, _name, _set_lines
 
 
@@ -315,8 +316,11 @@ class StmtGen(ExprGen):
         own = fb.vars.get("eno")
         if own is not None:  # IEC: a call that runs starts with ENO TRUE; the body may clear it
             out.append(py.Assign([_attr(inst, own.pyname, py.Store())], _const(True)))
+        inline_fn = self.mod.inline_body_of(fb) if run == "_body" and tgt.nonvirtual is None else None
         if run == "_body" and tgt.nonvirtual is not None:  # SUPER^(): the base block's body on this instance
             out.append(py.Expr(_call(_attr(_name(tgt.nonvirtual.pyname), "_body"), inst)))
+        elif inline_fn is not None and isinstance(inst, py.Name) and exact_instance(callee):
+            out.extend(inline_body(inline_fn, inst.id, self.new_tmp() + "_", c.span.line))
         else:
             out.append(py.Expr(_call(_attr(inst, run))))
         out.extend(after)
