@@ -39,8 +39,8 @@ class TaskStats:
         self.periods: deque[int] = deque(maxlen=keep)  # start-to-start intervals (ns)
         self._last_start: int | None = None
         # the (m,k) window as the entries (jobs and skipped releases, numbered from 1) that missed:
-        # an on-time job with no miss in the window, the common case, only counts
-        self._entries = 0
+        # an on-time job with no miss in the window, the common case, costs nothing more
+        self._skip_entries = 0  # entries of skipped releases (entries = jobs + these)
         self._miss_at: deque[int] = deque()
         self.mk_violations = 0  # windows (after the first k jobs) with U < m/k
 
@@ -66,27 +66,27 @@ class TaskStats:
         self._last_start = start
         if end - release >= self.period > 0:
             self.overruns += 1
-            self._utility(0)
+            self._miss_at.append(self.jobs + self._skip_entries)
+            self._slide()
             return
-        self._entries += 1
         if self._miss_at:
             self._slide()
 
     def record_skip(self, n: int = 1) -> None:
         self.skipped += n
         for _ in range(min(n, self.k)):
-            self._utility(0)
+            self._skip_entries += 1
+            self._miss_at.append(self.jobs + self._skip_entries)
+            self._slide()
 
-    def _utility(self, u: int) -> None:
-        self._entries += 1
-        if not u:
-            self._miss_at.append(self._entries)
-        self._slide()
+    @property
+    def _entries(self) -> int:
+        return self.jobs + self._skip_entries
 
     def _slide(self) -> None:
         """Misses older than the last k entries leave the window; a full window below m/k counts."""
         miss_at, k = self._miss_at, self.k
-        oldest = self._entries - k
+        oldest = self.jobs + self._skip_entries - k
         while miss_at and miss_at[0] <= oldest:
             miss_at.popleft()
         if oldest >= 0 and k - len(miss_at) < self.m:
