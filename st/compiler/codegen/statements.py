@@ -573,8 +573,9 @@ def _has_continue(body) -> bool:
 
 
 def _reads_element(e, key) -> bool:
-    """Does the value read the element `key` names, and otherwise only read (an operand that may
-    act, a call, could change the index in between)?"""
+    """Does the value read the element `key` names, and otherwise only read, without a fault of its
+    own (an operand that may act, a call, could change the index in between; a division by a
+    variable could fault before the element's index is checked, as it would not)?"""
     found = False
     stack = [e]
     while stack:
@@ -585,13 +586,18 @@ def _reads_element(e, key) -> bool:
                 return False
             found = found or k == key
             continue
-        if isinstance(x, A.Binary):
+        if isinstance(x, A.Binary) and (x.op in _INERT_OPS or _by_nonzero_literal(x)):
             stack += [x.left, x.right]
-        elif isinstance(x, A.Unary):
+        elif isinstance(x, A.Unary) and x.op in ("NOT", "-", "+"):
             stack.append(x.operand)
         elif not _inert(x):
             return False
     return found
+
+
+def _by_nonzero_literal(e: A.Binary) -> bool:
+    r = e.right
+    return e.op in ("/", "MOD") and isinstance(r, A.Literal) and type(r.value) is int and r.value != 0
 
 
 _INERT_OPS = frozenset(("=", "<>", "<", ">", "<=", ">=", "AND", "OR", "XOR", "+", "-", "*"))
