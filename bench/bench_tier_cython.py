@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import math
 import os
 import re
 import shutil
@@ -286,6 +287,42 @@ def _endless(so: str | None, mode: str) -> Any:
     return plc
 
 
+def typed_sketch(scans: int, runs: int) -> None:
+    """bench/workloads/typed/int_arrays.pyx (int_arrays.st by hand as a typed generator would emit
+    it) built with cython + gcc -O2: ns per body call, and its checksum beside st's."""
+    pyx = WORKLOADS / "typed" / "int_arrays.pyx"
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        c = work / "int_arrays.c"
+        so = work / f"int_arrays{sysconfig.get_config_var('EXT_SUFFIX')}"
+        t0 = time.perf_counter()
+        for cmd in (
+            [sys.executable, "-c", CYTHON_MAIN, str(pyx), "-o", str(c)],
+            [os.environ.get("CC", "gcc"), "-shared", "-fPIC", "-O2", "-w", f"-I{sysconfig.get_paths()['include']}"]
+            + [str(c), "-o", str(so)],
+        ):
+            run = subprocess.run(cmd, capture_output=True, text=True)
+            if run.returncode:
+                print(f"typed sketch: build failed:\n{run.stderr[-2000:]}")
+                return
+        built = time.perf_counter() - t0
+        mod = load_extension(so, "int_arrays")
+        best = math.inf
+        for _ in range(runs):
+            m = mod.Main()
+            t = time.perf_counter_ns()
+            for _ in range(scans):
+                m.body()
+            best = min(best, (time.perf_counter_ns() - t) / scans)
+        compiled = compile_paths([str(WORKLOADS / "int_arrays.st")], dialect="openplc", use_cache=False)
+        plc = PLC(compiled)
+        plc.scan(scans)
+        nat = NATIVE_O0["int_arrays"]
+        same = "equal" if to_signed32(int(plc["%QD0"])) == m.checksum else "DIFFER"
+        print(f"typed sketch of int_arrays: {best:,.0f} ns per body call ({best / nat:.1f}x native -O0 {nat:,} ns),")
+        print(f"  checksum after {scans} scans {m.checksum} ({same} to st's), built in {built:.1f} s")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scans", type=int, default=20000, help="scans (body calls) per run")
@@ -294,6 +331,11 @@ def main() -> None:
     ap.add_argument("--no-typed", action="store_true", help="skip variant (c)")
     ap.add_argument("--probe", action="store_true", help="also show what breaks (faults, watchdog, re-import)")
     ap.add_argument("--endless-child", nargs=2, help=argparse.SUPPRESS)
+    ap.add_argument(
+        "--typed-sketch",
+        action="store_true",
+        help="only the hand-typed int_arrays (bench/workloads/typed/): what a typed tier could reach",
+    )
     args = ap.parse_args()
     if args.endless_child:
         print(try_scan(_endless(*args.endless_child), 1))
@@ -301,6 +343,9 @@ def main() -> None:
     why = toolchain()
     if why:
         print(f"skipped: {why}")
+        return
+    if args.typed_sketch:
+        typed_sketch(args.scans, args.runs)
         return
     files = sorted(WORKLOADS.glob("*.st"))
     if args.workloads:
