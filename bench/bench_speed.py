@@ -99,7 +99,11 @@ def main() -> None:
     print(bench_native.table(rows, labels) + "\n")
     if labels:
         worst = max(row["st"] / row[labels[0]][0] for row in rows)
-        print(f"worst ratio to OpenPLC as shipped: {worst:.0f}x (goal ≤ 10x)\n")
+        print(f"worst ratio to OpenPLC as shipped, Python tier: {worst:.0f}x (goal ≤ 10x)")
+        if any(row.get("st --native") for row in rows):
+            worst = max(bench_native.best_st(row) / row[labels[0]][0] for row in rows)
+            print(f"worst ratio to OpenPLC as shipped, the faster tier per workload: {worst:.0f}x")
+        print()
 
     job, body = engine_cost(runs=a.runs)
     print("## The engine on virtual time (a one-statement program, 200,000 jobs, best of runs)\n")

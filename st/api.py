@@ -52,6 +52,7 @@ def compile_text(
     raise_on_error: bool = True,
     coverage: bool = False,
     dialect: str | None = None,
+    native: bool = False,
 ) -> CompiledProgram:
     src = SourceFile(name, text.replace("\r\n", "\n"))
     return _compile(
@@ -63,6 +64,7 @@ def compile_text(
         use_cache=use_cache,
         emit_python=emit_python,
         coverage=coverage,
+        native=native,
     )
 
 
@@ -76,6 +78,7 @@ def compile_paths(
     raise_on_error: bool = True,
     coverage: bool = False,
     dialect: str | None = None,
+    native: bool = False,
 ) -> CompiledProgram:
     sources = load_files([str(p) for p in paths])
     return _compile(
@@ -87,6 +90,7 @@ def compile_paths(
         use_cache=use_cache,
         emit_python=emit_python,
         coverage=coverage,
+        native=native,
     )
 
 
@@ -101,7 +105,7 @@ def _compile(sources: list[SourceFile], raise_on_error: bool, **options) -> Comp
 
 class PLC(runtime_plc.PLC):
     """The runtime's PLC, made from ST source text or files: the compile options among `kw`
-    (f_trig_first_scan, time_unit, use_cache, coverage) go to the compiler, the rest to the PLC."""
+    (f_trig_first_scan, time_unit, use_cache, coverage, native) go to the compiler, the rest to the PLC."""
 
     @classmethod
     def from_source(cls, text: str, cycle=None, *, name: str = "<source>.st", **kw) -> PLC:
@@ -119,7 +123,7 @@ class PLC(runtime_plc.PLC):
 
 def _compile_kw(kw: dict) -> dict:
     out = {}
-    for k in ("f_trig_first_scan", "time_unit", "use_cache", "coverage"):
+    for k in ("f_trig_first_scan", "time_unit", "use_cache", "coverage", "native"):
         if k in kw:
             out[k] = kw.pop(k)
     return out

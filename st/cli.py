@@ -15,11 +15,12 @@ from .errors_doc import explain as explanation_of
 _DIALECT = None  # the --dialect of this command line (set by the @dialect decorator)
 
 
-def _compile(files, emit_python=False, time_unit="ms", f_trig_first_scan=False, use_cache=True):
+def _compile(files, emit_python=False, time_unit="ms", f_trig_first_scan=False, use_cache=True, native=False):
     from .api import compile_paths
 
     return compile_paths(
         list(files),
+        native=native,
         emit_python=emit_python,
         time_unit=time_unit,
         f_trig_first_scan=f_trig_first_scan,
@@ -102,11 +103,29 @@ def check(files, time_unit, f_trig_first_scan):
     click.echo(f"ok: {len(files)} file(s), {n} POU(s)")
 
 
+_NATIVE = click.option(
+    "--native",
+    is_flag=True,
+    help="Compile the bodies that have loops to C (Cython and a C compiler needed; docs/native.md).",
+)
+
+
+def _native_summary(result) -> None:
+    """Which bodies the native tier compiled, and why the others stay Python."""
+    names = {p.pyname: p.name for p in result.project.pous.values()}
+    done = [names.get(c, c) for m in result.native for c in m.classes]
+    click.echo("native: " + (", ".join(done) if done else "no body compiled"), err=True)
+    for pou, why in sorted(result.native_skipped.items()):
+        if pou not in {p.name for p in result.project.pous.values() if p.library}:
+            click.echo(f"  {pou}: Python ({why})", err=True)
+
+
 @main.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path())
 @click.option("--emit", type=click.Choice(["python"]), default=None, help="Print the generated code.")
+@_NATIVE
 @dialect
-def compile(files, emit, time_unit, f_trig_first_scan):
+def compile(files, emit, native, time_unit, f_trig_first_scan):
     """Compile ST files (to Python bytecode, cached)."""
     result = _compile_or_exit(
         files,
@@ -114,7 +133,10 @@ def compile(files, emit, time_unit, f_trig_first_scan):
         time_unit=time_unit,
         f_trig_first_scan=f_trig_first_scan,
         use_cache=emit != "python",
+        native=native,
     )
+    if native:
+        _native_summary(result)
     if emit == "python":
         for path, text in result.python_source.items():
             if path in {p for lib in result.project.libraries for p, _ in lib.sources}:
@@ -258,6 +280,7 @@ def compile(files, emit, time_unit, f_trig_first_scan):
     help="sim backend: write every frame to a pcap file (Wireshark/tshark).",
 )
 @click.option("--quiet", "-q", is_flag=True, help="No live status line and no summary.")
+@_NATIVE
 @dialect
 def run(
     files,
@@ -298,6 +321,7 @@ def run(
     ethercat_iface,
     ethercat_capture,
     quiet,
+    native,
     time_unit,
     f_trig_first_scan,
 ):
@@ -308,7 +332,9 @@ def run(
     from .app.watch import source_mtimes
 
     seen = source_mtimes(files)  # --watch compares with the files as they were compiled
-    result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
+    result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan, native=native)
+    if native and not quiet:
+        _native_summary(result)
     opts = RunOptions(
         files=list(files),
         scans=scans,
@@ -348,6 +374,7 @@ def run(
         ethercat_iface=ethercat_iface,
         ethercat_capture=ethercat_capture,
         quiet=quiet,
+        native=native,
         time_unit=time_unit,
         f_trig_first_scan=f_trig_first_scan,
         compiled_mtimes=seen,

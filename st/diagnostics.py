@@ -241,6 +241,14 @@ class Code(str, Enum):
             "twincat refuse it (E004)."
         ),
     )
+    NATIVE_UNAVAILABLE = (
+        "W012",
+        (
+            "The native tier (--native) could not compile this program's loop bodies to C: Cython, a C compiler "
+            "or Python's C headers is missing, or the build failed (the message gives the tool's last lines). "
+            "The program compiles and runs on the Python tier, with the same results, only slower."
+        ),
+    )
 
 
 class Severity(str, Enum):

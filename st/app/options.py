@@ -45,6 +45,7 @@ class RunOptions:
     ethercat_iface: str | None = None
     ethercat_capture: str | None = None
     quiet: bool = False
+    native: bool = False  # --native: loop bodies compiled to C (also for --watch's online changes)
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
     compiled_mtimes: dict | None = None  # the sources as compiled (see --watch)

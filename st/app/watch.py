@@ -57,7 +57,10 @@ class Watcher:
     def _prepare(self) -> None:
         try:
             compiled = compile_paths(
-                self.o.files, time_unit=self.o.time_unit, f_trig_first_scan=self.o.f_trig_first_scan
+                self.o.files,
+                time_unit=self.o.time_unit,
+                f_trig_first_scan=self.o.f_trig_first_scan,
+                native=self.o.native,
             )
             self.result = self.plc.prepare_change(compiled)
         except CompileError as e:

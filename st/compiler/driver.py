@@ -16,7 +16,7 @@ from pathlib import Path
 from types import CodeType
 
 from ..diagnostics import CompileError, Diagnostic, DiagnosticSink, Severity
-from ..model.compiled import CompiledProgram
+from ..model.compiled import CompiledProgram, NativeModule
 from ..model.program import Project
 from ..source import SourceFile, Span
 from . import ast as A
@@ -28,6 +28,7 @@ from .codegen import ModuleGen
 from .codegen.source import python_text
 from .library import Library
 from .lower import lower
+from .native import build_native
 from .options import CompileOptions
 
 _parser_lock = threading.Lock()
@@ -153,6 +154,8 @@ def _compile_sources(
     modules: list[tuple[str, CodeType]] = []
     test_modules: list[tuple[str, CodeType]] = []
     pysrc: dict[str, str] = {}
+    native: list[NativeModule] = []
+    native_skipped: dict[str, str] = {}
     project = Project()
     gen = None
     try:
@@ -168,6 +171,9 @@ def _compile_sources(
                         if options.emit_python:
                             pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + python_text(mod)
                         out.append((path, compile(mod, path, "exec")))
+                if options.native and not options.coverage and not project.tests:
+                    where = Span(sources[0].path if sources else "<input>", 1, 1)
+                    native, native_skipped = build_native(py_modules, project, sink, where)
     except RecursionError as exc:
         first = sources[0].path if sources else "<input>"
         sink.error(
@@ -194,7 +200,17 @@ def _compile_sources(
         if os.environ.get("ST_DEBUG"):
             raise
     diags = sink.sorted()
-    draft = CompiledProgram(modules, project, diags, all_sources, helpers, pysrc, test_modules=test_modules)
+    draft = CompiledProgram(
+        modules,
+        project,
+        diags,
+        all_sources,
+        helpers,
+        pysrc,
+        test_modules=test_modules,
+        native=native,
+        native_skipped=native_skipped,
+    )
     if options.coverage and gen is not None:
         draft.coverage_points = gen.cov_points
         draft.coverage_hits = bytearray(len(gen.cov_points))

@@ -6,6 +6,7 @@ them to the checker and to code generation, and the compile cache keys on them.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -23,6 +24,7 @@ class CompileOptions:
     emit_python: bool = False  # keep the generated Python text (CompiledProgram.python_source)
     coverage: bool = False  # line and branch probes (never cached)
     use_cache: bool = True
+    native: bool = False  # loop bodies compiled to C by Cython (compiler/native)
 
     @classmethod
     def for_sources(
@@ -35,6 +37,7 @@ class CompileOptions:
         emit_python: bool = False,
         coverage: bool = False,
         use_cache: bool = True,
+        native: bool = False,
     ) -> CompileOptions:
         """The options of a compile of `sources`. The preset is `dialect` (an unknown name is a
         ValueError) or else the one a `{dialect '…'}` pragma names (an unknown one is a CompileError,
@@ -47,6 +50,7 @@ class CompileOptions:
             chosen = preset("twincat")
         if chosen is not None:
             time_unit, f_trig_first_scan = chosen.time_unit, chosen.f_trig_first_scan
+        native = native or os.environ.get("ST_NATIVE", "") not in ("", "0")  # the whole suite on the native tier
         return cls(
             chosen,
             time_unit,
@@ -55,6 +59,7 @@ class CompileOptions:
             emit_python,
             coverage,
             use_cache,
+            native,
         )
 
     def cache_token(self) -> str:
@@ -67,5 +72,6 @@ class CompileOptions:
                 sorted(self.strict_types),
                 self.emit_python,
                 self.coverage,
+                self.native,
             )
         )

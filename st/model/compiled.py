@@ -24,7 +24,7 @@ from ..diagnostics import Diagnostic
 from ..source import SourceFile
 from .program import Project
 
-FORMAT = 1
+FORMAT = 2
 _MAGIC = b"st-compiled\n"
 _HEADER = _MAGIC + FORMAT.to_bytes(2, "big") + importlib.util.MAGIC_NUMBER
 _LEAF = ("st.model.", "st.source", "st.diagnostics")
@@ -42,6 +42,18 @@ class FormatError(ValueError):
     """A payload that is not a compiled program of this format and this Python."""
 
 
+@dataclass(frozen=True)
+class NativeModule:
+    """A program's bodies compiled by the native tier (st/compiler/native): an extension module
+    whose `make(ns)` gives {class name: body}; `lines` maps its lines to (ST file, line, POU)."""
+
+    name: str  # the module's import name
+    path: str  # the built extension module (in the compile cache's native/ directory)
+    pyx: str  # its source file's name, as its tracebacks name it
+    classes: tuple[str, ...]  # the classes whose `_body` it replaces
+    lines: dict[int, tuple[str, int, str]]
+
+
 @dataclass
 class CompiledProgram:
     """Everything the runtime needs: code objects and the checked model."""
@@ -56,6 +68,8 @@ class CompiledProgram:
     coverage_points: list[tuple[Any, ...]] = field(default_factory=list)  # [(file, line, kind, label, target)]
     coverage_hits: bytearray | None = None  # one byte per point, shared by every PLC of this build
     test_modules: list[tuple[str, types.CodeType]] = field(default_factory=list)  # `_test_<n>` functions (TESTs)
+    native: list[NativeModule] = field(default_factory=list)  # compiled bodies of the native tier
+    native_skipped: dict[str, str] = field(default_factory=dict)  # POU → why its body stays Python
 
     def to_bytes(self, substitute: Substitute | None = None) -> bytes:
         """The compiler's output as bytes (FORMAT, this Python). `substitute(obj)` may give the
@@ -66,6 +80,8 @@ class CompiledProgram:
             "project": self.project,
             "diagnostics": list(self.diagnostics),
             "python": dict(self.python_source),
+            "native": list(self.native),
+            "native_skipped": dict(self.native_skipped),
         }
         buf = io.BytesIO()
         buf.write(_HEADER)
@@ -84,12 +100,25 @@ class CompiledProgram:
             modules = [(p, marshal.loads(c)) for p, c in d["modules"]]
             test_modules = [(p, marshal.loads(c)) for p, c in d["test_modules"]]
             project, diagnostics, python = d["project"], d["diagnostics"], d["python"]
+            native, native_skipped = list(d["native"]), dict(d["native_skipped"])
         except Exception as exc:  # noqa: BLE001 - a damaged payload, whatever broke in it
             raise FormatError(f"damaged compiled program: {type(exc).__name__}: {exc}") from None
-        if not isinstance(project, Project) or not all(isinstance(x, Diagnostic) for x in diagnostics):
+        if (
+            not isinstance(project, Project)
+            or not all(isinstance(x, Diagnostic) for x in diagnostics)
+            or not all(isinstance(x, NativeModule) for x in native)
+        ):
             raise FormatError("damaged compiled program: unexpected contents")
         return cls(
-            modules, project, diagnostics, dict(sources or {}), dict(helpers or {}), python, test_modules=test_modules
+            modules,
+            project,
+            diagnostics,
+            dict(sources or {}),
+            dict(helpers or {}),
+            python,
+            test_modules=test_modules,
+            native=native,
+            native_skipped=native_skipped,
         )
 
 

@@ -57,6 +57,10 @@ _PY_KINDS = {
 }
 
 
+# the native tier's modules: their source file's name → {line: (ST file, ST line, POU)}
+NATIVE_LINES: dict[str, dict[int, tuple[str, int, str]]] = {}
+
+
 def fault_from_exception(exc: BaseException, task: str = "") -> FaultInfo:
     """Describe an exception raised while running generated code, at its ST line."""
     if isinstance(exc, PLCFault):
@@ -74,6 +78,10 @@ def fault_from_exception(exc: BaseException, task: str = "") -> FaultInfo:
         if tb.tb_frame.f_globals.get("_st_namespace"):
             file, line = code.co_filename, tb.tb_lineno
             pou = _pou_name(tb.tb_frame)
+        elif NATIVE_LINES:
+            where = NATIVE_LINES.get(code.co_filename.rpartition("/")[2], {}).get(tb.tb_lineno)
+            if where is not None:
+                file, line, pou = where
         tb = tb.tb_next
     return FaultInfo(kind, msg, file, line, pou, task)
 

@@ -12,6 +12,7 @@ from typing import Any
 from ..model.compiled import CompiledProgram
 from .helpers import BASE_NAMESPACE, make_f32
 from .messages import MessageLog
+from .native import install_native
 from .pointers import POINTER_HELPERS
 from .sfc import SfcDesc, SfcState
 
@@ -34,4 +35,7 @@ def build_namespace(
         exec(code, ns)
     for name in sorted(k for k in ns if k.startswith("_post_exec_")):
         ns[name](ns)  # libraries with native parts finish their classes here
+    if compiled.native:
+        for problem in install_native(ns, compiled.native):
+            ns["_plc_log"].add(0, 2, problem)
     return ns

@@ -1,0 +1,154 @@
+"""What C type each value of a generated body can have without changing what it computes.
+
+The native tier compiles the Python the code generator printed, so every semantic decision
+(where a store wraps, where REAL rounds, where an index is checked) is already made. What it
+adds is representation: a local that holds a BOOL, an integer of at most 32 bits, a REAL or an
+LREAL becomes a C `bint`, `int64_t` or `double`. That is exact only while no C operation can
+leave the values Python would compute, so every integer expression carries the interval of its
+values: an operation whose result may not fit in int64 (a product of three DINTs, a shift by a
+variable count) is done on Python integers instead, as are operations whose C and Python
+meanings differ at the edges (`**`, a float `//` or `%`). An int converted to double must lie
+within ±2^53, where the conversion is exact in both.
+"""
+
+from __future__ import annotations
+
+import ast as py
+from dataclasses import dataclass
+
+from ...model import types as T
+
+INT64_MIN, INT64_MAX = -(1 << 63), (1 << 63) - 1
+EXACT = 1 << 53  # integers a double holds exactly
+
+
+@dataclass(frozen=True)
+class Int:
+    lo: int
+    hi: int
+
+
+@dataclass(frozen=True)
+class Float:
+    pass
+
+
+@dataclass(frozen=True)
+class Bool:
+    pass
+
+
+Kind = Int | Float | Bool | None  # None: a Python object
+FLOAT, BOOL = Float(), Bool()
+
+
+def ctype(kind: Kind) -> str | None:
+    if isinstance(kind, Int):
+        return "int64_t"
+    if isinstance(kind, Float):
+        return "double"
+    if isinstance(kind, Bool):
+        return "bint"
+    return None
+
+
+def of_type(t: T.Type | None) -> Kind:
+    """The kind of a variable of IEC type `t` (None: it stays a Python object)."""
+    if t is None:
+        return None
+    t = T.unalias(t)
+    if isinstance(t, T.SubrangeType):
+        return Int(t.lo, t.hi) if t.bits <= 32 else None
+    if not isinstance(t, T.ElemType):
+        return None
+    if t.kind == "bool":
+        return BOOL
+    if t.kind in ("int", "bit") and t.bits <= 32:
+        return Int(t.lo, t.hi)
+    if t.kind == "real":
+        return FLOAT
+    return None
+
+
+def element_kind(t: T.Type | None) -> Kind:
+    """The kind of an element of a one-dimensional ARRAY (a Python list), else None."""
+    if t is None:
+        return None
+    t = T.unalias(t)
+    if isinstance(t, T.ArrayType) and len(t.dims) == 1 and t.dims[0][1] >= t.dims[0][0]:
+        return of_type(t.element)
+    return None
+
+
+def join(a: Kind, b: Kind) -> Kind:
+    if isinstance(a, Int) and isinstance(b, Int):
+        return Int(min(a.lo, b.lo), max(a.hi, b.hi))
+    if a == b:
+        return a
+    return None
+
+
+def fits(lo: int, hi: int, bound_lo: int = INT64_MIN, bound_hi: int = INT64_MAX) -> bool:
+    return bound_lo <= lo and hi <= bound_hi
+
+
+def as_int(k: Kind) -> Int | None:
+    """An integer view of a kind: BOOL takes part in arithmetic as 0 or 1."""
+    if isinstance(k, Int):
+        return k
+    if isinstance(k, Bool):
+        return Int(0, 1)
+    return None
+
+
+def exact_float(k: Kind) -> bool:
+    """Whether a value of kind `k` converts to double exactly (C and Python agree)."""
+    if isinstance(k, Float):
+        return True
+    i = as_int(k)
+    return i is not None and fits(i.lo, i.hi, -EXACT, EXACT)
+
+
+def divides(a: Int, b: Int) -> bool:
+    """Whether C divides `a` by `b` without overflow: everything but INT64_MIN / -1."""
+    return fits(a.lo, a.hi) and fits(b.lo, b.hi) and not (a.lo == INT64_MIN and b.lo <= -1 <= b.hi)
+
+
+def int_binop(op: py.operator, a: Int, b: Int) -> Int | None:
+    """The interval of `a op b` on integers when C's int64 computes it as Python does, else None."""
+    if isinstance(op, py.Add):
+        r = Int(a.lo + b.lo, a.hi + b.hi)
+    elif isinstance(op, py.Sub):
+        r = Int(a.lo - b.hi, a.hi - b.lo)
+    elif isinstance(op, py.Mult):
+        ps = (a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi)
+        r = Int(min(ps), max(ps))
+    elif isinstance(op, py.FloorDiv):
+        if not divides(a, b):
+            return None
+        m = max(abs(a.lo), abs(a.hi))
+        r = Int(-m, m)
+    elif isinstance(op, py.Mod):
+        if not divides(a, b):
+            return None
+        m = max(abs(b.lo), abs(b.hi), 1) - 1
+        r = Int(0 if b.lo > 0 else -m, 0 if b.hi < 0 else m)
+    elif isinstance(op, py.LShift):
+        if a.lo < 0 or b.lo < 0 or b.hi > 62:
+            return None
+        r = Int(a.lo << b.lo, a.hi << b.hi)
+    elif isinstance(op, py.RShift):
+        if b.lo < 0 or b.hi > 63:
+            return None
+        cs = (a.lo >> b.lo, a.lo >> b.hi, a.hi >> b.lo, a.hi >> b.hi)
+        r = Int(min(cs), max(cs))
+    elif isinstance(op, (py.BitAnd, py.BitOr, py.BitXor)):
+        if a.lo >= 0 and b.lo >= 0:
+            n = max(a.hi.bit_length(), b.hi.bit_length())
+            r = Int(0, min(a.hi, b.hi)) if isinstance(op, py.BitAnd) else Int(0, (1 << n) - 1)
+        else:
+            n = max(abs(v).bit_length() for v in (a.lo, a.hi, b.lo, b.hi))
+            r = Int(-(1 << n), (1 << n) - 1)
+    else:
+        return None
+    return r if fits(r.lo, r.hi) else None

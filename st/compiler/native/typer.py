@@ -1,0 +1,373 @@
+"""One generated `_body` made ready for Cython: C types where they are exact, the rest unchanged.
+
+Input: the body's Python AST as the code generator printed it, the kinds of the instance's
+variables (kinds.py) and the names that may change between calls (globals). Output: the same
+statements with
+- the locals that cache a BOOL/integer/REAL variable, and the temporaries that only ever hold
+  such values, declared as C variables (`cdef` lines, added by pyx.py);
+- an element read from a one-dimensional ARRAY of such values converted to C where it is read;
+- an operation that C's int64 might compute differently done on Python objects (`_k_obj`);
+- the hot helpers (`_ix`, `_idiv`, `_imod`, `_fdiv`, `_f32`, MIN/MAX/ABS) replaced by C functions
+  with the same results and faults (pyx.py's prelude);
+- the loop guard `if _wd_armed: _wd_check()` replaced by a call of `_wd_check()` every 1024
+  iterations: a compiled loop holds the GIL, so the watchdog thread's flag would never come,
+  while `_wd_check` itself compares the clock with the job's deadline;
+- a global that the runtime or ST code rebinds (`_now`, VAR_GLOBALs) read from the PLC's
+  namespace at each use; every other global (helpers, classes, functions) bound once per PLC.
+"""
+
+from __future__ import annotations
+
+import ast as py
+import builtins
+import copy
+from dataclasses import dataclass, field
+
+from .kinds import FLOAT, Bool, Float, Int, Kind, as_int, ctype, divides, exact_float, fits, int_binop, join
+
+NS = "_k_ns"  # the PLC's namespace, a parameter of the module's make()
+GUARD_EVERY = 1024  # loop iterations between two watchdog checks
+_BUILTINS = frozenset(dir(builtins))
+_C_INT_MAX = (1 << 31) - 1
+# names this module's code uses unqualified, and Cython's own words: an ST variable (ST names
+# are not mangled unless they begin with '_' or are Python keywords) called so keeps its body Python
+_RESERVED = frozenset(
+    "range abs min max cython cdef cpdef cimport ctypedef struct union enum extern include inline public "
+    "readonly api sizeof typeof NULL gil nogil noexcept const volatile signed unsigned short long int char "
+    "float double bint void size_t Py_ssize_t int64_t copysign NAN INFINITY DEF IF ELIF ELSE by new".split()
+)
+_CAST = {"int64_t": "_k_i64", "double": "_k_f64", "bint": "_k_b"}
+
+
+class NotEligible(Exception):
+    """The body stays Python (the reason is reported with --native's summary)."""
+
+
+@dataclass
+class Typed:
+    fn: py.FunctionDef
+    decls: dict[str, str]  # local → C type
+    captured: set[str] = field(default_factory=set)  # globals bound once per PLC
+
+
+_BOTTOM = object()  # a temporary whose kind is not known yet (no assignment seen)
+
+
+def type_body(fn: py.FunctionDef, fields: dict[str, Kind], arrays: dict[str, Kind], volatile: frozenset[str]) -> Typed:
+    """`fields`/`arrays`: attribute name → kind of the instance's scalar / 1-D array variables."""
+    fn = copy.deepcopy(fn)
+    _check_eligible(fn)
+    stores = _stores(fn)
+    params = {a.arg for a in fn.args.args}
+    env: dict[str, Kind] = {}
+    arr: dict[str, Kind] = {}
+    for stmt in fn.body:
+        if isinstance(stmt, py.Try):
+            break
+        if (
+            isinstance(stmt, py.Assign)
+            and len(stmt.targets) == 1
+            and isinstance(stmt.targets[0], py.Name)
+            and isinstance(stmt.value, py.Attribute)
+            and isinstance(stmt.value.value, py.Name)
+            and stmt.value.value.id == "self"
+        ):
+            local, attr = stmt.targets[0].id, stmt.value.attr
+            if fields.get(attr) is not None:
+                env[local] = fields[attr]
+            elif arrays.get(attr) is not None and len(stores.get(local, ())) == 1:
+                arr[local] = arrays[attr]
+    temps = {
+        name: values
+        for name, values in stores.items()
+        if name not in env and name not in arr and name not in params and all(v is not None for v in values)
+    }
+    locals_ = set(stores) | params
+    _infer_temps(temps, env, arr, locals_)
+    t = _Transformer(env, arr, locals_, volatile)
+    t.generic_visit(fn)
+    py.fix_missing_locations(fn)
+    decls = {name: c for name, k in env.items() if (c := ctype(k)) is not None}
+    return Typed(fn, decls, t.captured)
+
+
+def _check_eligible(fn: py.FunctionDef) -> None:
+    loops = False
+    for node in py.walk(fn):
+        if isinstance(node, (py.Global, py.Nonlocal)):
+            raise NotEligible("it writes a global variable")
+        if isinstance(node, (py.Yield, py.YieldFrom, py.Await, py.Lambda, py.ClassDef)):
+            raise NotEligible(f"it contains a {type(node).__name__}")
+        if isinstance(node, (py.FunctionDef, py.AsyncFunctionDef)) and node is not fn:
+            raise NotEligible("it contains a nested function")
+        if isinstance(node, py.Name) and (node.id.startswith("_k_") or node.id in _RESERVED):
+            raise NotEligible(f"it uses the name {node.id}, which C or Cython reserve")
+        if isinstance(node, py.Attribute) and node.attr in _RESERVED:
+            raise NotEligible(f"it uses the name {node.attr}, which C or Cython reserve")
+        if isinstance(node, (py.For, py.While)):
+            loops = True
+    if not loops:
+        raise NotEligible("it has no loop")
+
+
+def _stores(fn: py.FunctionDef) -> dict[str, list[py.expr | None]]:
+    """name → the values assigned to it (None where the form is not a plain `name = value`)."""
+    out: dict[str, list[py.expr | None]] = {}
+    plain: set[int] = set()
+    for node in py.walk(fn):
+        if isinstance(node, py.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], py.Name):
+            out.setdefault(node.targets[0].id, []).append(node.value)
+            plain.add(id(node.targets[0]))
+        elif isinstance(node, py.NamedExpr):
+            out.setdefault(node.target.id, []).append(node.value)
+            plain.add(id(node.target))
+    for node in py.walk(fn):
+        if isinstance(node, py.Name) and isinstance(node.ctx, (py.Store, py.Del)) and id(node) not in plain:
+            out.setdefault(node.id, []).append(None)
+        elif isinstance(node, py.ExceptHandler) and node.name:
+            out.setdefault(node.name, []).append(None)
+    return out
+
+
+def _infer_temps(temps: dict[str, list], env: dict[str, Kind], arr: dict[str, Kind], locals_: set[str]) -> None:
+    """Kinds of the temporaries, to a fixed point (a few rounds; what does not settle stays an object)."""
+    kinds: dict[str, object] = {name: _BOTTOM for name in temps}
+    for _ in range(6):
+        changed = False
+        for name, values in temps.items():
+            k: object = _BOTTOM
+            for v in values:
+                known = {n: kk for n, kk in kinds.items() if kk is not _BOTTOM}
+                vk = _Transformer({**env, **known}, arr, locals_, frozenset()).expr(copy.deepcopy(v))[1]
+                k = vk if k is _BOTTOM else join(k, vk)  # type: ignore[arg-type]
+            if k != kinds[name]:
+                kinds[name], changed = k, True
+        if not changed:
+            break
+    else:
+        return
+    for name, k in kinds.items():
+        if k is not _BOTTOM and k is not None:
+            env[name] = k  # type: ignore[assignment]
+
+
+def _call(name: str, *args: py.expr) -> py.Call:
+    return py.Call(py.Name(name, py.Load()), list(args), [])
+
+
+def _obj(node: py.expr, kind: Kind) -> py.expr:
+    """`node` as a Python object (Cython then computes with Python's rules)."""
+    return _call("_k_obj", node) if kind is not None else node
+
+
+class _Transformer(py.NodeTransformer):
+    def __init__(self, env: dict, arr: dict, locals_: set[str], volatile: frozenset[str]):
+        self.env, self.arr, self.locals, self.volatile = env, arr, locals_, volatile
+        self.captured: set[str] = set()
+
+    # ------------------------------------------------------------------ statements
+    def visit(self, node):
+        if isinstance(node, py.expr):
+            return self.expr(node)[0]
+        return super().visit(node)
+
+    def visit_If(self, node: py.If):
+        if (
+            isinstance(node.test, py.Name)
+            and node.test.id == "_wd_armed"
+            and len(node.body) == 1
+            and isinstance(node.body[0], py.Expr)
+            and isinstance(node.body[0].value, py.Call)
+            and isinstance(node.body[0].value.func, py.Name)
+            and node.body[0].value.func.id == "_wd_check"
+            and not node.orelse
+        ):
+            self.captured.add("_wd_check")
+            count = py.AugAssign(py.Name("_k_wd", py.Store()), py.Add(), py.Constant(1))
+            due = py.UnaryOp(py.Not(), py.BinOp(py.Name("_k_wd", py.Load()), py.BitAnd(), py.Constant(GUARD_EVERY - 1)))
+            check = py.If(due, [py.Expr(_call("_wd_check"))], [])
+            for s in (count, check, check.body[0]):
+                py.copy_location(s, node)
+            return [count, check]
+        return self.generic_visit(node)
+
+    def visit_AugAssign(self, node: py.AugAssign):
+        target = node.target
+        if isinstance(target, py.Name) and target.id in self.env:
+            # `x += v` on a C local: the operation's interval decides like any other
+            load = py.copy_location(py.Name(target.id, py.Load()), target)
+            value = py.copy_location(py.BinOp(load, node.op, node.value), node)
+            return py.copy_location(py.Assign([target], self.expr(value)[0]), node)
+        return self.generic_visit(node)
+
+    # ------------------------------------------------------------------ expressions
+    def expr(self, e: py.expr) -> tuple[py.expr, Kind]:
+        m = getattr(self, "x_" + type(e).__name__, None)
+        if m is not None:
+            return m(e)
+        self.generic_visit(e)
+        return e, None
+
+    def x_Constant(self, e: py.Constant):
+        v = e.value
+        if isinstance(v, bool):
+            return e, Bool()
+        if isinstance(v, int):
+            if not fits(v, v):
+                return e, None
+            if abs(v) > _C_INT_MAX:
+                # Cython makes a literal beyond C int a Python object: spell it as a C long long
+                return py.copy_location(py.Name(f"{v}LL", py.Load()), e), Int(v, v)
+            return e, Int(v, v)
+        if isinstance(v, float):
+            return e, FLOAT
+        return e, None
+
+    def x_Name(self, e: py.Name):
+        if not isinstance(e.ctx, py.Load):
+            return e, None
+        name = e.id
+        if name in self.locals:
+            return e, self.env.get(name)
+        if name == "_range":
+            return py.copy_location(py.Name("range", py.Load()), e), None
+        if name in self.volatile:
+            return py.copy_location(py.Subscript(py.Name(NS, py.Load()), py.Constant(name), py.Load()), e), None
+        if name not in _BUILTINS:
+            self.captured.add(name)
+        return e, None
+
+    def x_Subscript(self, e: py.Subscript):
+        e.value = self.expr(e.value)[0] if not isinstance(e.value, py.Name) or e.value.id not in self.arr else e.value
+        e.slice = self.expr(e.slice)[0]
+        if isinstance(e.ctx, py.Load) and isinstance(e.value, py.Name) and e.value.id in self.arr:
+            k = self.arr[e.value.id]
+            return py.copy_location(_call(_CAST[ctype(k)], e), e), k  # type: ignore[index]
+        return e, None
+
+    def x_BinOp(self, e: py.BinOp):
+        left, kl = self.expr(e.left)
+        right, kr = self.expr(e.right)
+        op = e.op
+        il, ir = as_int(kl), as_int(kr)
+        if il is not None and ir is not None and not isinstance(op, (py.Div, py.Pow, py.MatMult)):
+            if isinstance(kl, Bool) and isinstance(kr, Bool) and isinstance(op, (py.BitAnd, py.BitOr, py.BitXor)):
+                return py.copy_location(_call("_k_bint", py.BinOp(left, op, right)), e), Bool()
+            r = int_binop(op, il, ir)
+            if r is not None:
+                return py.copy_location(py.BinOp(left, op, right), e), r
+        elif (
+            (isinstance(kl, Float) or isinstance(kr, Float) or isinstance(op, py.Div))
+            and kl is not None
+            and kr is not None
+            and exact_float(kl)
+            and exact_float(kr)
+            and isinstance(op, (py.Add, py.Sub, py.Mult, py.Div))
+        ):
+            return py.copy_location(py.BinOp(left, op, right), e), FLOAT
+        if kl is not None and kr is not None:
+            left = _obj(left, kl)  # Python's arithmetic for this one
+        return py.copy_location(py.BinOp(left, op, right), e), None
+
+    def x_UnaryOp(self, e: py.UnaryOp):
+        v, k = self.expr(e.operand)
+        op = e.op
+        if isinstance(op, py.Not):
+            return py.copy_location(py.UnaryOp(op, v), e), Bool()
+        i = as_int(k)
+        r: Kind = None
+        if isinstance(k, Float) and isinstance(op, (py.USub, py.UAdd)):
+            r = FLOAT
+        elif i is not None:
+            if isinstance(op, py.USub):
+                r = Int(-i.hi, -i.lo)
+            elif isinstance(op, py.UAdd):
+                r = i
+            elif isinstance(op, py.Invert):
+                r = Int(~i.hi, ~i.lo)
+            if isinstance(r, Int) and not fits(r.lo, r.hi):
+                r = None
+        if r is None:
+            v = _obj(v, k)
+        return py.copy_location(py.UnaryOp(op, v), e), r
+
+    def x_BoolOp(self, e: py.BoolOp):
+        parts = [self.expr(v) for v in e.values]
+        if all(isinstance(k, Bool) for _, k in parts):
+            return py.copy_location(py.BoolOp(e.op, [v for v, _ in parts]), e), Bool()
+        return py.copy_location(py.BoolOp(e.op, [_obj(v, k) for v, k in parts]), e), None
+
+    def x_Compare(self, e: py.Compare):
+        parts = [self.expr(v) for v in [e.left, *e.comparators]]
+        plain = all(isinstance(op, (py.Lt, py.LtE, py.Gt, py.GtE, py.Eq, py.NotEq)) for op in e.ops)
+        mixed = any(isinstance(k, Float) for _, k in parts) and not all(
+            exact_float(k) for _, k in parts if k is not None
+        )
+        if not plain or mixed:
+            parts = [(_obj(v, k), None) for v, k in parts]
+        return py.copy_location(py.Compare(parts[0][0], e.ops, [v for v, _ in parts[1:]]), e), Bool()
+
+    def x_IfExp(self, e: py.IfExp):
+        test = self.expr(e.test)[0]
+        body, kb = self.expr(e.body)
+        orelse, ko = self.expr(e.orelse)
+        k = join(kb, ko)
+        if k is None:
+            body, orelse = _obj(body, kb), _obj(orelse, ko)
+        return py.copy_location(py.IfExp(test, body, orelse), e), k
+
+    def x_NamedExpr(self, e: py.NamedExpr):
+        e.value = self.expr(e.value)[0]
+        return e, self.env.get(e.target.id)
+
+    def x_Call(self, e: py.Call):
+        name = e.func.id if isinstance(e.func, py.Name) else None
+        if name is not None and not e.keywords and name not in self.locals:
+            parts = [self.expr(a) for a in e.args]
+            out = self._helper(name, parts)
+            if out is not None:
+                return py.copy_location(out[0], e), out[1]
+            e.args = [v for v, _ in parts]
+            e.func = self.expr(e.func)[0]
+            return e, None
+        self.generic_visit(e)
+        return e, None
+
+    def _helper(self, name: str, parts: list[tuple[py.expr, Kind]]) -> tuple[py.expr, Kind] | None:
+        """A helper call computed in C, or None to call the Python helper."""
+        ks = [k for _, k in parts]
+        vs = [v for v, _ in parts]
+        n = len(parts)
+        if name == "_f32" and n == 1:
+            if ks[0] is None:
+                return _call("_k_f32", _call("_k_f64", vs[0])), FLOAT
+            if exact_float(ks[0]):
+                return _call("_k_f32", vs[0]), FLOAT
+        if name == "_float" and n == 1 and ks[0] is not None and exact_float(ks[0]):
+            return _call("_k_tofloat", vs[0]), FLOAT
+        if name == "_abs" and n == 1:
+            if isinstance(ks[0], Float):
+                return _call("abs", vs[0]), FLOAT
+            i = ks[0]
+            if isinstance(i, Int) and fits(i.lo, i.hi, -(1 << 62), 1 << 62):
+                lo = 0 if i.lo <= 0 <= i.hi else min(abs(i.lo), abs(i.hi))
+                return _call("abs", vs[0]), Int(lo, max(abs(i.lo), abs(i.hi)))
+        if name in ("_min", "_max") and n == 2:
+            k = join(ks[0], ks[1])
+            if isinstance(k, (Int, Float)) and isinstance(ks[0], type(ks[1])):
+                return _call(name[1:], *vs), k
+        if name == "_ix" and n == 3 and isinstance(ks[0], Int):
+            first, last = (v.value if isinstance(v, py.Constant) and type(v.value) is int else None for v in vs[1:])
+            if isinstance(first, int) and isinstance(last, int) and fits(first, last, -(1 << 62), 1 << 62):
+                return _call("_k_ix", *vs), Int(0, max(last - first, 0))
+        if name in ("_idiv", "_imod", "_umod") and n == 2:
+            a, b = (as_int(k) for k in ks)
+            if a is not None and b is not None and divides(a, b):
+                if name == "_idiv":
+                    m = max(abs(a.lo), abs(a.hi))
+                    return _call("_k_idiv", *vs), Int(-m, m)
+                m = max(abs(b.lo), abs(b.hi), 1) - 1
+                return _call("_k_imod", *vs), Int(-m if a.lo < 0 else 0, m if a.hi > 0 else 0)
+        if name == "_fdiv" and n == 2 and all(k is not None and exact_float(k) for k in ks):
+            return _call("_k_fdiv", *vs), FLOAT
+        return None

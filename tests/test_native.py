@@ -1,0 +1,253 @@
+"""The native tier (--native, st/compiler/native): the same results, faults and lifecycle as Python.
+
+Each distinct program costs one Cython + C build (about 2 s), so the programs here are few and
+shared by module-scoped fixtures; tests/test_native_differential.py compares the tiers on
+generated programs. The interval rules (kinds.py) are checked directly, with exact intervals.
+"""
+
+from __future__ import annotations
+
+import ast as py
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from st import PLC
+from st.api import compile_text
+from st.cli import main
+from st.compiler.native import kinds, toolchain
+from st.compiler.native.kinds import Int
+from st.compiler.native.pyx import module_text
+from st.compiler.native.typer import NotEligible, type_body
+from st.model.compiled import CompiledProgram
+from st.runtime.faults import PLCFaultError
+
+ROOT = Path(__file__).resolve().parents[1]
+needs_toolchain = pytest.mark.skipif(toolchain.missing() is not None, reason=f"native tier: {toolchain.missing()}")
+
+DINT = Int(-(1 << 31), (1 << 31) - 1)
+
+# faults inside loops, selected by `mode`; and ordinary work that must survive them
+FAULTS = """\
+PROGRAM main
+VAR
+  mode : INT;
+  a : ARRAY[1..5] OF DINT;
+  i : DINT;
+  d : DINT;
+  x : DINT;
+  big : DINT := 2000000000;
+  wide : BOOL;
+  r : REAL := 1.0;
+END_VAR
+FOR i := 1 TO 3 DO
+  a[i] := a[i] + i;
+  r := r / 3.0;
+END_FOR;
+wide := big * big * 4 > big;  (* exact in ST: a product beyond int64 compared *)
+IF mode = 1 THEN
+  FOR i := 1 TO 2 DO
+    x := 10 / d;
+  END_FOR;
+ELSIF mode = 2 THEN
+  FOR i := 1 TO 6 DO
+    a[i] := i;
+  END_FOR;
+ELSIF mode = 3 THEN
+  WHILE TRUE DO
+    x := x + 1;
+  END_WHILE;
+END_IF;
+END_PROGRAM
+"""
+
+
+@pytest.fixture(scope="module")
+def faults_native() -> CompiledProgram:
+    return compile_text(FAULTS, "faults.st", native=True)
+
+
+def _run_mode(compiled: CompiledProgram, mode: int):
+    plc = PLC(compiled, watchdog="100ms")
+    plc.scan(2)
+    plc["main.mode"] = mode
+    with pytest.raises(PLCFaultError) as e:
+        plc.scan(1)
+    return plc, e.value.fault
+
+
+# ---------------------------------------------------------------------------- intervals
+def test_int_binop_intervals():
+    assert kinds.int_binop(py.Add(), DINT, Int(1, 1)) == Int(-(1 << 31) + 1, 1 << 31)
+    assert kinds.int_binop(py.Mult(), DINT, DINT) == Int(-(1 << 62) + (1 << 31), 1 << 62)
+    # a third DINT factor leaves int64: computed on Python integers
+    assert kinds.int_binop(py.Mult(), kinds.int_binop(py.Mult(), DINT, DINT), DINT) is None
+    assert kinds.int_binop(py.Mod(), DINT, Int(17, 17)) == Int(0, 16)
+    assert kinds.int_binop(py.Mod(), DINT, Int(-5, 7)) == Int(-6, 6)
+    assert kinds.int_binop(py.LShift(), Int(0, 65535), Int(1, 1)) == Int(0, 131070)
+    assert kinds.int_binop(py.LShift(), Int(0, 65535), Int(0, 63)) is None  # a count beyond 62
+    assert kinds.int_binop(py.LShift(), Int(-1, 1), Int(1, 1)) is None  # negative: Python's meaning
+    assert kinds.int_binop(py.RShift(), Int(-8, 8), Int(1, 2)) == Int(-4, 4)
+    assert kinds.int_binop(py.BitAnd(), Int(0, 255), Int(0, 15)) == Int(0, 15)
+    assert kinds.int_binop(py.BitOr(), Int(0, 255), Int(0, 256)) == Int(0, 511)
+    assert kinds.int_binop(py.BitXor(), Int(-1, 0), Int(0, 3)) == Int(-4, 3)
+    assert kinds.int_binop(py.FloorDiv(), DINT, Int(-1, 1)) == Int(-(1 << 31), 1 << 31)
+    full = Int(kinds.INT64_MIN, kinds.INT64_MAX)
+    assert kinds.int_binop(py.FloorDiv(), full, Int(-1, 1)) is None  # INT64_MIN // -1
+
+
+def test_exact_float_conversion_bound():
+    assert kinds.exact_float(Int(-(1 << 53), 1 << 53))
+    assert not kinds.exact_float(Int(0, (1 << 53) + 1))
+    assert kinds.exact_float(kinds.BOOL) and kinds.exact_float(kinds.FLOAT)
+
+
+def _body(src: str) -> py.FunctionDef:
+    fn = py.parse(src).body[0]
+    assert isinstance(fn, py.FunctionDef)
+    return fn
+
+
+def test_a_product_beyond_int64_is_computed_on_python_integers():
+    fn = _body(
+        "def _body(self):\n"
+        "    x = self.x\n"
+        "    try:\n"
+        "        for i in _range(0, 3):\n"
+        "            x = (x * x * x + 2147483648 & 4294967295) - 2147483648\n"
+        "    finally:\n"
+        "        self.x = x\n"
+    )
+    typed = type_body(fn, {"x": DINT}, {}, frozenset())
+    assert typed.decls == {"x": "int64_t"}
+    text, _ = module_text([("_prg_main", "p.st", "main", typed)])
+    assert "_k_obj(x * x) * x" in text
+    assert "2147483648LL" in text  # a C literal, not a Python object
+
+
+def test_a_body_without_a_loop_or_writing_a_global_stays_python():
+    with pytest.raises(NotEligible, match="no loop"):
+        type_body(_body("def _body(self):\n    self.x = 1\n"), {}, {}, frozenset())
+    with pytest.raises(NotEligible, match="global"):
+        type_body(_body("def _body(self):\n    global g\n    while g:\n        g = 0\n"), {}, {}, frozenset())
+
+
+def test_rebound_globals_are_read_from_the_namespace_at_each_use():
+    fn = _body("def _body(self):\n    for i in _range(0, 2):\n        self.t = _now + _helper(i)\n")
+    typed = type_body(fn, {}, {}, frozenset({"_now"}))
+    text, _ = module_text([("_fb_x", "p.st", "x", typed)])
+    assert "_k_ns['_now'] + _helper(i)" in text
+    assert "    _helper = _k_ns['_helper']" in text  # bound once per PLC
+    assert typed.captured == {"_helper"}
+
+
+# ---------------------------------------------------------------------------- whole programs
+@needs_toolchain
+def test_the_integer_loop_workload_computes_the_same_checksum_on_both_tiers():
+    path = ROOT / "bench" / "workloads" / "int_arrays.st"
+    text = path.read_text()
+    out = {}
+    for native in (False, True):
+        compiled = compile_text(text, str(path), dialect="openplc", native=native)
+        assert bool(compiled.native) is native
+        plc = PLC(compiled)
+        plc.scan(300)
+        inst = plc.instances["instance0"][1]
+        out[native] = (inst.checksum, inst.total, inst.k, list(inst.a), list(inst.b))
+    assert out[True] == out[False]
+    assert out[True][:3] == (520235, 520235, 98)  # as the Python tier (and MatIEC, bench_native.py)
+    assert compiled.native[0].classes == ("_prg_main",)
+
+
+@needs_toolchain
+@pytest.mark.parametrize(
+    "mode, kind, line, message",
+    [
+        (1, "DIV0", 19, "division by zero"),
+        (2, "INDEX", 23, "array index 6 is outside the bounds 1..5"),
+        (3, "WATCHDOG", 26, "the job did not finish within 100 ms (endless loop?)"),
+    ],
+)
+def test_faults_in_compiled_loops_name_their_st_line(faults_native, mode, kind, line, message):
+    python = compile_text(FAULTS, "faults.st", use_cache=False)
+    for compiled in (python, faults_native):
+        plc, fault = _run_mode(compiled, mode)
+        assert (fault.kind, fault.file, fault.line, fault.pou, fault.message) == (
+            kind,
+            "faults.st",
+            line,
+            "main",
+            message,
+        )
+        assert plc["main.a"] == ([1, 2, 3, 4, 5] if mode == 2 else [3, 6, 9, 0, 0])
+        assert plc["main.wide"] is True
+    assert faults_native.native[0].classes == ("_prg_main",)
+
+
+@needs_toolchain
+def test_two_plcs_of_one_build_keep_their_own_state(faults_native):
+    one, two = PLC(faults_native), PLC(faults_native)
+    one.scan(3)
+    two.scan(1)
+    assert one["main.a"] == [3, 6, 9, 0, 0]
+    assert two["main.a"] == [1, 2, 3, 0, 0]
+    assert one["main.r"] == pytest.approx(1.0 / 3**9, rel=1e-6)
+    assert type(one.instances["main"][1])._body is not type(two.instances["main"][1])._body
+
+
+@needs_toolchain
+def test_online_change_binds_the_new_program_and_keeps_values(faults_native):
+    plc = PLC(faults_native)
+    plc.scan(2)
+    changed = compile_text(FAULTS.replace("a[i] := a[i] + i;", "a[i] := a[i] + 10 * i;"), "faults.st", native=True)
+    assert changed.native and changed.native[0].name != faults_native.native[0].name
+    plc.online_change(changed)
+    plc.scan(1)
+    assert plc["main.a"] == [2 + 10, 4 + 20, 6 + 30, 0, 0]
+
+
+@needs_toolchain
+def test_a_missing_module_runs_the_program_as_python_and_says_why(faults_native, tmp_path):
+    from dataclasses import replace
+
+    gone = replace(faults_native.native[0], path=str(tmp_path / "gone.so"), name="st_k_gone")
+    plc = PLC(replace(faults_native, native=[gone]))
+    plc.scan(1)
+    assert plc["main.a"] == [1, 2, 3, 0, 0]
+    assert any("native module st_k_gone not used" in m.text for m in plc.log.entries)
+
+
+def test_without_the_toolchain_the_program_compiles_as_python_with_w012(monkeypatch):
+    import st.compiler.native as native
+
+    monkeypatch.setattr(native, "missing", lambda: "Cython is not installed")
+    compiled = compile_text(FAULTS, "faults.st", native=True, use_cache=False)
+    assert compiled.native == []
+    (w,) = [d for d in compiled.diagnostics if d.code == "W012"]
+    assert w.message == "the native tier is not available: Cython is not installed"
+    plc = PLC(compiled)
+    plc.scan(1)
+    assert plc["main.a"] == [1, 2, 3, 0, 0]
+
+
+@needs_toolchain
+def test_a_build_is_found_again_not_repeated(faults_native):
+    m = faults_native.native[0]
+    text = Path(m.path).with_name(m.pyx).read_text()
+    assert toolchain.module_name(text) == m.name
+    assert toolchain.build(text) == (m.name, Path(m.path), False)
+
+
+@needs_toolchain
+def test_cli_compile_native_says_which_bodies_are_compiled(tmp_path):
+    src = tmp_path / "p.st"
+    src.write_text(
+        FAULTS
+        + "FUNCTION_BLOCK noloop\nVAR_INPUT x : INT; END_VAR\nVAR_OUTPUT y : INT; END_VAR\ny := x + 1;\n"
+        + "END_FUNCTION_BLOCK\n"
+    )
+    r = CliRunner().invoke(main, ["compile", "--native", str(src)])
+    assert r.exit_code == 0, r.output
+    assert "native: main\n" in r.output
+    assert "  noloop: Python (it has no loop)\n" in r.output
