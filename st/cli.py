@@ -106,7 +106,7 @@ def check(files, time_unit, f_trig_first_scan):
 _NATIVE = click.option(
     "--native",
     is_flag=True,
-    help="Compile the bodies that have loops to C (Cython and a C compiler needed; docs/native.md).",
+    help="Compile the program's block bodies to C (Cython and a C compiler needed; docs/native.md).",
 )
 
 

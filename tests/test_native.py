@@ -19,7 +19,7 @@ from st.cli import main
 from st.compiler.native import kinds, toolchain
 from st.compiler.native.kinds import Int
 from st.compiler.native.pyx import module_text
-from st.compiler.native.typer import NotEligible, type_body
+from st.compiler.native.typer import ClassInfo, NotEligible, type_body
 from st.model.compiled import CompiledProgram
 from st.runtime.faults import PLCFaultError
 
@@ -119,27 +119,56 @@ def test_a_product_beyond_int64_is_computed_on_python_integers():
         "    finally:\n"
         "        self.x = x\n"
     )
-    typed = type_body(fn, {"x": DINT}, {}, frozenset())
+    typed = type_body(fn, "_prg_main", {"_prg_main": ClassInfo(frozenset({"x"}), {"x": DINT})}, frozenset())
     assert typed.decls == {"x": "int64_t"}
     text, _ = module_text([("_prg_main", "p.st", "main", typed)])
     assert "_k_obj(x * x) * x" in text
     assert "2147483648LL" in text  # a C literal, not a Python object
 
 
-def test_a_body_without_a_loop_or_writing_a_global_stays_python():
-    with pytest.raises(NotEligible, match="no loop"):
-        type_body(_body("def _body(self):\n    self.x = 1\n"), {}, {}, frozenset())
-    with pytest.raises(NotEligible, match="global"):
-        type_body(_body("def _body(self):\n    global g\n    while g:\n        g = 0\n"), {}, {}, frozenset())
+def test_a_body_writing_a_global_or_using_a_reserved_name_stays_python():
+    with pytest.raises(NotEligible, match="writes a global variable"):
+        type_body(_body("def _body(self):\n    global g\n    while g:\n        g = 0\n"), "_fb_x", {}, frozenset())
+    with pytest.raises(NotEligible, match="uses the name double, which C or Cython reserve"):
+        type_body(_body("def _body(self):\n    double = self.double\n"), "_fb_x", {}, frozenset())
 
 
 def test_rebound_globals_are_read_from_the_namespace_at_each_use():
-    fn = _body("def _body(self):\n    for i in _range(0, 2):\n        self.t = _now + _helper(i)\n")
-    typed = type_body(fn, {}, {}, frozenset({"_now"}))
+    fn = _body("def _body(self):\n    for i in _range(0, 2):\n        self.t = _g_count + _helper(i)\n")
+    typed = type_body(fn, "_fb_x", {}, frozenset({"_g_count"}))
     text, _ = module_text([("_fb_x", "p.st", "x", typed)])
-    assert "_k_ns['_now'] + _helper(i)" in text
+    assert "self.t = _k_ns['_g_count'] + _helper(i)" in text
     assert "    _helper = _k_ns['_helper']" in text  # bound once per PLC
     assert typed.captured == {"_helper"}
+
+
+def test_slots_of_known_blocks_are_reached_at_their_offsets():
+    fn = _body(
+        "def _body(self):\n"
+        "    n = self.n\n"
+        "    try:\n"
+        "        _t1 = self.f\n"
+        "        _t1.x = n + 1\n"
+        "        _t1._body()\n"
+        "        n = self.f.q\n"
+        "        self.t = _now\n"
+        "    finally:\n"
+        "        self.n = n\n"
+    )
+    classes = {
+        "_prg_main": ClassInfo(frozenset({"n", "f", "t"}), {"n": DINT, "f": kinds.Inst("_fb_f")}),
+        "_fb_f": ClassInfo(frozenset({"x", "q"}), {"x": DINT, "q": DINT}),
+    }
+    typed = type_body(fn, "_prg_main", classes, frozenset())
+    assert typed.decls == {"n": "int64_t"}
+    assert typed.slots == {("_prg_main", "n"), ("_prg_main", "f"), ("_prg_main", "t"), ("_fb_f", "x"), ("_fb_f", "q")}
+    text, _ = module_text([("_prg_main", "p.st", "main", typed)])
+    assert "_k_st(_t1, _k_T_fb_f, _k_O5__fb_f_x, 'x', n + 1)" in text
+    assert "_t1._body()" in text  # _fb_f's body is not compiled in this module: the method call stays
+    assert (
+        "n = _k_i64(_k_ld(_k_ld(self, _k_T_prg_main, _k_O9__prg_main_f, 'f'), _k_T_fb_f, _k_O5__fb_f_q, 'q'))" in text
+    )
+    assert "_k_now = _k_ns['_now']" in text and "'t', _k_now)" in text  # the job's time, read once per body
 
 
 # ---------------------------------------------------------------------------- whole programs
@@ -243,11 +272,9 @@ def test_a_build_is_found_again_not_repeated(faults_native):
 def test_cli_compile_native_says_which_bodies_are_compiled(tmp_path):
     src = tmp_path / "p.st"
     src.write_text(
-        FAULTS
-        + "FUNCTION_BLOCK noloop\nVAR_INPUT x : INT; END_VAR\nVAR_OUTPUT y : INT; END_VAR\ny := x + 1;\n"
-        + "END_FUNCTION_BLOCK\n"
+        FAULTS + "FUNCTION_BLOCK odd\nVAR double : INT; END_VAR\ndouble := double + 1;\nEND_FUNCTION_BLOCK\n"
     )
     r = CliRunner().invoke(main, ["compile", "--native", str(src)])
     assert r.exit_code == 0, r.output
     assert "native: main\n" in r.output
-    assert "  noloop: Python (it has no loop)\n" in r.output
+    assert "  odd: Python (it uses the name double, which C or Cython reserve)\n" in r.output

@@ -1,9 +1,10 @@
-"""The native tier (`--native`): loop bodies compiled to C by Cython, the rest unchanged.
+"""The native tier (`--native`): block bodies compiled to C by Cython, with the same semantics.
 
-Pure CPython spends most of an integer loop on dispatch and boxing; this tier takes the
-`_body` of every PROGRAM and FUNCTION_BLOCK that has a loop, as the code generator printed it,
-gives its BOOL/integer/REAL locals C types where that computes exactly what Python computes
-(kinds.py, typer.py), and builds all of them into one extension module per program
+Pure CPython spends most of a scan on dispatch and boxing; this tier takes the `_body` of
+every PROGRAM and FUNCTION_BLOCK of the project, as the code generator printed it, gives its
+BOOL/integer/REAL locals C types where that computes exactly what Python computes, reaches
+instance variables at their slots' offsets (kinds.py, typer.py), and builds all of them into
+one extension module per program
 (pyx.py, toolchain.py) that the runtime binds to each PLC (st/runtime/native.py). Semantics,
 faults (with their ST lines), the watchdog and online change are the same as on the Python tier.
 
@@ -14,15 +15,16 @@ the program compiles and runs as Python, with warning W012.
 from __future__ import annotations
 
 import ast as py
+from typing import Any
 
 from ...diagnostics import DiagnosticSink
 from ...model.compiled import NativeModule
 from ...model.program import Project
 from ...source import Span
-from .kinds import element_kind, of_type
+from .kinds import of_type
 from .pyx import module_text
 from .toolchain import ToolchainError, build, missing
-from .typer import NotEligible, Typed, type_body
+from .typer import ClassInfo, NotEligible, Typed, type_body
 
 # what the runtime rebinds in a namespace while the program runs (st.runtime)
 RUNTIME_VOLATILE = frozenset({"_now", "_wd_armed", "_plc_log", "_cov"})
@@ -39,8 +41,8 @@ def build_native(
         return [], {}
     volatile = RUNTIME_VOLATILE | _rebound_globals(modules)
     by_class = {p.pyname: p for p in project.pous.values() if p.pyname}
-    bodies: list[tuple[str, str, str, Typed]] = []
-    skipped: dict[str, str] = {}
+    classes: dict[str, ClassInfo] = {}
+    found: list[tuple[str, py.ClassDef, Any]] = []
     for path, mod in modules:
         for node in mod.body:
             if not isinstance(node, py.ClassDef):
@@ -48,18 +50,21 @@ def build_native(
             pou = by_class.get(node.name)
             if pou is None or pou.pou_kind not in ("PROGRAM", "FUNCTION_BLOCK"):
                 continue
-            fn = next((s for s in node.body if isinstance(s, py.FunctionDef) and s.name == "_body"), None)
-            if fn is None:
-                continue
-            fields, arrays = {}, {}
-            for v in pou.vars.values():
-                if v.section in _SECTIONS and v.pyname:
-                    fields[v.pyname] = of_type(v.type)
-                    arrays[v.pyname] = element_kind(v.type)
-            try:
-                bodies.append((node.name, path, pou.name, type_body(fn, fields, arrays, volatile)))
-            except NotEligible as e:
-                skipped[pou.name] = str(e)
+            kinds = {v.pyname: of_type(v.type) for v in pou.vars.values() if v.section in _SECTIONS and v.pyname}
+            classes[node.name] = ClassInfo(_slots(node), {k: v for k, v in kinds.items() if v is not None})
+            found.append((path, node, pou))
+    bodies: list[tuple[str, str, str, Typed]] = []
+    skipped: dict[str, str] = {}
+    for path, node, pou in found:
+        if pou.library:
+            continue  # a library's bodies stay Python (most are small; the block calls into them are compiled)
+        fn = next((s for s in node.body if isinstance(s, py.FunctionDef) and s.name == "_body"), None)
+        if fn is None:
+            continue
+        try:
+            bodies.append((node.name, path, pou.name, type_body(fn, node.name, classes, volatile)))
+        except NotEligible as e:
+            skipped[pou.name] = str(e)
     if not bodies:
         return [], skipped
     text, lines = module_text(bodies)
@@ -69,6 +74,17 @@ def build_native(
         sink.warning("W012", where, f"the native tier could not build this program: {e}", "the program runs as Python")
         return [], skipped
     return [NativeModule(name, str(so), name + ".pyx", tuple(c for c, _, _, _ in bodies), lines)], skipped
+
+
+def _slots(cls: py.ClassDef) -> frozenset[str]:
+    """The names in a generated class's `__slots__` (its own; an EXTENDS block's are all declared again)."""
+    for s in cls.body:
+        if isinstance(s, py.Assign) and any(isinstance(t, py.Name) and t.id == "__slots__" for t in s.targets):
+            if isinstance(s.value, py.Tuple):
+                return frozenset(
+                    e.value for e in s.value.elts if isinstance(e, py.Constant) and isinstance(e.value, str)
+                )
+    return frozenset()
 
 
 def _rebound_globals(modules: list[tuple[str, py.Module]]) -> frozenset[str]:

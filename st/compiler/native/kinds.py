@@ -38,7 +38,22 @@ class Bool:
     pass
 
 
-Kind = Int | Float | Bool | None  # None: a Python object
+@dataclass(frozen=True)
+class Inst:
+    """An instance of the generated class `cls` (a FUNCTION_BLOCK or PROGRAM): a Python object
+    whose slots the tier reads and writes at their offsets once its exact type is checked."""
+
+    cls: str
+
+
+@dataclass(frozen=True)
+class Arr:
+    """A one-dimensional ARRAY (a Python list) whose elements are of kind `elem`."""
+
+    elem: Int | Float | Bool
+
+
+Kind = Int | Float | Bool | Inst | Arr | None  # None: a Python object
 FLOAT, BOOL = Float(), Bool()
 
 
@@ -57,6 +72,11 @@ def of_type(t: T.Type | None) -> Kind:
     if t is None:
         return None
     t = T.unalias(t)
+    if isinstance(t, T.POUType) and t.pou_kind in ("FUNCTION_BLOCK", "PROGRAM") and t.pyname:
+        return Inst(t.pyname)
+    if isinstance(t, T.ArrayType):
+        elem = element_kind(t)
+        return Arr(elem) if isinstance(elem, (Int, Float, Bool)) else None
     if isinstance(t, T.SubrangeType):
         return Int(t.lo, t.hi) if t.bits <= 32 else None
     if not isinstance(t, T.ElemType):

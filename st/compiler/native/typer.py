@@ -6,14 +6,18 @@ statements with
 - the locals that cache a BOOL/integer/REAL variable, and the temporaries that only ever hold
   such values, declared as C variables (`cdef` lines, added by pyx.py);
 - an element read from a one-dimensional ARRAY of such values converted to C where it is read;
+- a slot of an instance of a generated class read and written at its offset (`_k_ld`/`_k_st`,
+  which check the exact type first), and a call of a block's body made directly (`_k_run`,
+  resolved by pyx.py);
 - an operation that C's int64 might compute differently done on Python objects (`_k_obj`);
 - the hot helpers (`_ix`, `_idiv`, `_imod`, `_fdiv`, `_f32`, MIN/MAX/ABS) replaced by C functions
   with the same results and faults (pyx.py's prelude);
 - the loop guard `if _wd_armed: _wd_check()` replaced by a call of `_wd_check()` every 1024
   iterations: a compiled loop holds the GIL, so the watchdog thread's flag would never come,
   while `_wd_check` itself compares the clock with the job's deadline;
-- a global that the runtime or ST code rebinds (`_now`, VAR_GLOBALs) read from the PLC's
-  namespace at each use; every other global (helpers, classes, functions) bound once per PLC.
+- a global that the runtime or ST code rebinds (VAR_GLOBALs) read from the PLC's namespace at
+  each use, the job's time `_now` once per body; every other global (helpers, classes,
+  functions) bound once per PLC.
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ import builtins
 import copy
 from dataclasses import dataclass, field
 
-from .kinds import FLOAT, Bool, Float, Int, Kind, as_int, ctype, divides, exact_float, fits, int_binop, join
+from .kinds import FLOAT, Arr, Bool, Float, Inst, Int, Kind, as_int, ctype, divides, exact_float, fits, int_binop, join
 
 NS = "_k_ns"  # the PLC's namespace, a parameter of the module's make()
 GUARD_EVERY = 1024  # loop iterations between two watchdog checks
@@ -48,19 +52,28 @@ class Typed:
     fn: py.FunctionDef
     decls: dict[str, str]  # local → C type
     captured: set[str] = field(default_factory=set)  # globals bound once per PLC
+    slots: set[tuple[str, str]] = field(default_factory=set)  # (class, slot) read or written at its offset
 
 
 _BOTTOM = object()  # a temporary whose kind is not known yet (no assignment seen)
 
 
-def type_body(fn: py.FunctionDef, fields: dict[str, Kind], arrays: dict[str, Kind], volatile: frozenset[str]) -> Typed:
-    """`fields`/`arrays`: attribute name → kind of the instance's scalar / 1-D array variables."""
+@dataclass
+class ClassInfo:
+    """A generated class: its slots, and the kinds of those that hold one variable of a kind."""
+
+    slots: frozenset[str]
+    kinds: dict[str, Kind]
+
+
+def type_body(fn: py.FunctionDef, own: str, classes: dict[str, ClassInfo], volatile: frozenset[str]) -> Typed:
+    """The `_body` of class `own`; `classes`: every generated block class by name."""
     fn = copy.deepcopy(fn)
     _check_eligible(fn)
     stores = _stores(fn)
     params = {a.arg for a in fn.args.args}
-    env: dict[str, Kind] = {}
-    arr: dict[str, Kind] = {}
+    fields = classes[own].kinds if own in classes else {}
+    env: dict[str, Kind] = {"self": Inst(own)}
     for stmt in fn.body:
         if isinstance(stmt, py.Try):
             break
@@ -72,27 +85,27 @@ def type_body(fn: py.FunctionDef, fields: dict[str, Kind], arrays: dict[str, Kin
             and isinstance(stmt.value.value, py.Name)
             and stmt.value.value.id == "self"
         ):
-            local, attr = stmt.targets[0].id, stmt.value.attr
-            if fields.get(attr) is not None:
-                env[local] = fields[attr]
-            elif arrays.get(attr) is not None and len(stores.get(local, ())) == 1:
-                arr[local] = arrays[attr]
+            local, kind = stmt.targets[0].id, fields.get(stmt.value.attr)
+            if kind is not None and (not isinstance(kind, (Arr, Inst)) or len(stores.get(local, ())) == 1):
+                env[local] = kind  # a list or an instance only where nothing else is stored in the local
     temps = {
         name: values
         for name, values in stores.items()
-        if name not in env and name not in arr and name not in params and all(v is not None for v in values)
+        if name not in env and name not in params and all(v is not None for v in values)
     }
     locals_ = set(stores) | params
-    _infer_temps(temps, env, arr, locals_)
-    t = _Transformer(env, arr, locals_, volatile)
+    _infer_temps(temps, env, classes, locals_)
+    t = _Transformer(env, classes, locals_, volatile)
     t.generic_visit(fn)
+    if t.uses_now:
+        now = py.Assign([py.Name("_k_now", py.Store())], py.Subscript(py.Name(NS, py.Load()), py.Constant("_now")))
+        fn.body.insert(0, py.copy_location(now, fn.body[0]))
     py.fix_missing_locations(fn)
     decls = {name: c for name, k in env.items() if (c := ctype(k)) is not None}
-    return Typed(fn, decls, t.captured)
+    return Typed(fn, decls, t.captured, t.slots)
 
 
 def _check_eligible(fn: py.FunctionDef) -> None:
-    loops = False
     for node in py.walk(fn):
         if isinstance(node, (py.Global, py.Nonlocal)):
             raise NotEligible("it writes a global variable")
@@ -104,10 +117,6 @@ def _check_eligible(fn: py.FunctionDef) -> None:
             raise NotEligible(f"it uses the name {node.id}, which C or Cython reserve")
         if isinstance(node, py.Attribute) and node.attr in _RESERVED:
             raise NotEligible(f"it uses the name {node.attr}, which C or Cython reserve")
-        if isinstance(node, (py.For, py.While)):
-            loops = True
-    if not loops:
-        raise NotEligible("it has no loop")
 
 
 def _stores(fn: py.FunctionDef) -> dict[str, list[py.expr | None]]:
@@ -129,7 +138,7 @@ def _stores(fn: py.FunctionDef) -> dict[str, list[py.expr | None]]:
     return out
 
 
-def _infer_temps(temps: dict[str, list], env: dict[str, Kind], arr: dict[str, Kind], locals_: set[str]) -> None:
+def _infer_temps(temps: dict[str, list], env: dict[str, Kind], classes: dict, locals_: set[str]) -> None:
     """Kinds of the temporaries, to a fixed point (a few rounds; what does not settle stays an object)."""
     kinds: dict[str, object] = {name: _BOTTOM for name in temps}
     for _ in range(6):
@@ -138,7 +147,7 @@ def _infer_temps(temps: dict[str, list], env: dict[str, Kind], arr: dict[str, Ki
             k: object = _BOTTOM
             for v in values:
                 known = {n: kk for n, kk in kinds.items() if kk is not _BOTTOM}
-                vk = _Transformer({**env, **known}, arr, locals_, frozenset()).expr(copy.deepcopy(v))[1]
+                vk = _Transformer({**env, **known}, classes, locals_, frozenset()).expr(copy.deepcopy(v))[1]
                 k = vk if k is _BOTTOM else join(k, vk)  # type: ignore[arg-type]
             if k != kinds[name]:
                 kinds[name], changed = k, True
@@ -151,6 +160,14 @@ def _infer_temps(temps: dict[str, list], env: dict[str, Kind], arr: dict[str, Ki
             env[name] = k  # type: ignore[assignment]
 
 
+def type_name(cls: str) -> str:
+    return "_k_T" + cls
+
+
+def offset_name(cls: str, attr: str) -> str:
+    return f"_k_O{len(cls)}_{cls}_{attr}"  # the length first: no two (class, slot) pairs meet
+
+
 def _call(name: str, *args: py.expr) -> py.Call:
     return py.Call(py.Name(name, py.Load()), list(args), [])
 
@@ -161,9 +178,31 @@ def _obj(node: py.expr, kind: Kind) -> py.expr:
 
 
 class _Transformer(py.NodeTransformer):
-    def __init__(self, env: dict, arr: dict, locals_: set[str], volatile: frozenset[str]):
-        self.env, self.arr, self.locals, self.volatile = env, arr, locals_, volatile
+    def __init__(self, env: dict, classes: dict[str, ClassInfo], locals_: set[str], volatile: frozenset[str]):
+        self.env, self.classes, self.locals, self.volatile = env, classes, locals_, volatile
         self.captured: set[str] = set()
+        self.slots: set[tuple[str, str]] = set()
+        self.uses_now = False
+
+    def _slot(self, target: py.expr, kind: Kind, attr: str, load: bool = False) -> list[py.expr] | None:
+        """The arguments (object, class, offset, name) of a slot access, when `target` is a local
+        (or, to read, another slot read: `self.on_delay.Q`) holding an instance of a known class
+        with that slot."""
+        plain = isinstance(target, py.Name) or (
+            load and isinstance(target, py.Call) and isinstance(target.func, py.Name) and target.func.id == "_k_ld"
+        )
+        if not isinstance(kind, Inst) or not plain:
+            return None
+        info = self.classes.get(kind.cls)
+        if info is None or attr not in info.slots:
+            return None
+        self.slots.add((kind.cls, attr))
+        return [
+            target,
+            py.Name(type_name(kind.cls), py.Load()),
+            py.Name(offset_name(kind.cls, attr), py.Load()),
+            py.Constant(attr),
+        ]
 
     # ------------------------------------------------------------------ statements
     def visit(self, node):
@@ -189,6 +228,16 @@ class _Transformer(py.NodeTransformer):
             for s in (count, check, check.body[0]):
                 py.copy_location(s, node)
             return [count, check]
+        return self.generic_visit(node)
+
+    def visit_Assign(self, node: py.Assign):
+        target = node.targets[0]
+        if len(node.targets) == 1 and isinstance(target, py.Attribute):
+            obj, kind = self.expr(target.value)
+            args = self._slot(obj, kind, target.attr)
+            if args is not None:
+                value = self.expr(node.value)[0]
+                return py.copy_location(py.Expr(_call("_k_st", *args, value)), node)
         return self.generic_visit(node)
 
     def visit_AugAssign(self, node: py.AugAssign):
@@ -231,6 +280,9 @@ class _Transformer(py.NodeTransformer):
             return e, self.env.get(name)
         if name == "_range":
             return py.copy_location(py.Name("range", py.Load()), e), None
+        if name == "_now":  # the job's release time: the same all through a body (read once, at its start)
+            self.uses_now = True
+            return py.copy_location(py.Name("_k_now", py.Load()), e), None
         if name in self.volatile:
             return py.copy_location(py.Subscript(py.Name(NS, py.Load()), py.Constant(name), py.Load()), e), None
         if name not in _BUILTINS:
@@ -238,11 +290,22 @@ class _Transformer(py.NodeTransformer):
         return e, None
 
     def x_Subscript(self, e: py.Subscript):
-        e.value = self.expr(e.value)[0] if not isinstance(e.value, py.Name) or e.value.id not in self.arr else e.value
+        e.value, kind = self.expr(e.value)
         e.slice = self.expr(e.slice)[0]
-        if isinstance(e.ctx, py.Load) and isinstance(e.value, py.Name) and e.value.id in self.arr:
-            k = self.arr[e.value.id]
-            return py.copy_location(_call(_CAST[ctype(k)], e), e), k  # type: ignore[index]
+        if isinstance(e.ctx, py.Load) and isinstance(kind, Arr):
+            return py.copy_location(_call(_CAST[ctype(kind.elem) or ""], e), e), kind.elem
+        return e, None
+
+    def x_Attribute(self, e: py.Attribute):
+        e.value, kind = self.expr(e.value)
+        if isinstance(e.ctx, py.Load):
+            args = self._slot(e.value, kind, e.attr, load=True)
+            if args is not None:
+                assert isinstance(kind, Inst)
+                k = self.classes[kind.cls].kinds.get(e.attr)
+                node: py.expr = _call("_k_ld", *args)
+                c = ctype(k)
+                return py.copy_location(_call(_CAST[c], node) if c else node, e), k
         return e, None
 
     def x_BinOp(self, e: py.BinOp):
@@ -321,6 +384,14 @@ class _Transformer(py.NodeTransformer):
         return e, self.env.get(e.target.id)
 
     def x_Call(self, e: py.Call):
+        f = e.func
+        if isinstance(f, py.Attribute) and f.attr == "_body" and not e.args and not e.keywords:
+            obj, kind = self.expr(f.value)
+            if isinstance(kind, Inst) and isinstance(obj, py.Name):
+                # a block's call: pyx.py makes it a direct call of the compiled body when there is one
+                return py.copy_location(_call("_k_run", obj, py.Constant(kind.cls)), e), None
+            f.value = obj
+            return e, None
         name = e.func.id if isinstance(e.func, py.Name) else None
         if name is not None and not e.keywords and name not in self.locals:
             parts = [self.expr(a) for a in e.args]
