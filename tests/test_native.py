@@ -278,3 +278,14 @@ def test_cli_compile_native_says_which_bodies_are_compiled(tmp_path):
     assert r.exit_code == 0, r.output
     assert "native: main\n" in r.output
     assert "  odd: Python (it uses the name double, which C or Cython reserve)\n" in r.output
+
+
+@needs_toolchain
+def test_a_module_cython_refuses_is_kept_for_a_bug_report(tmp_path, monkeypatch):
+    monkeypatch.setenv("ST_CACHE_DIR", str(tmp_path))
+    with pytest.raises(toolchain.ToolchainError, match=r"^Cython failed: .*Expected an identifier or literal") as e:
+        toolchain.build("def make(dict _k_ns):\n    return {\n")
+    kept = Path(str(e.value).rsplit("kept in ", 1)[1].split(" for a bug report")[0])
+    assert kept.parent == tmp_path / "compiled" / "native" / "failed"
+    assert kept.read_text() == "def make(dict _k_ns):\n    return {\n"
+    assert "Expected an identifier or literal" in kept.with_suffix(".txt").read_text()

@@ -41,29 +41,33 @@ cdef Py_ssize_t _k_off(object cls, str name):
     return (<PyMemberDescrObject *>d).d_member.offset
 
 
-cdef inline object _k_ld(object o, object cls, Py_ssize_t off, str name):
-    # o.name: at the slot's offset when o is exactly a `cls` (as CPython's LOAD_ATTR_SLOT)
-    cdef PyObject *p
-    if type(o) is cls and off >= 0:
-        p = (<PyObject **>((<char *><PyObject *>o) + off))[0]
-        if p is not NULL:
-            return <object>p
-    return getattr(o, name)
-
-
-cdef inline int _k_st(object o, object cls, Py_ssize_t off, str name, object v) except -1:
-    # o.name = v: at the slot's offset when o is exactly a `cls` (as CPython's STORE_ATTR_SLOT)
-    cdef PyObject **slot
-    cdef PyObject *old
-    if type(o) is cls and off >= 0:
-        slot = <PyObject **>((<char *><PyObject *>o) + off)
-        old = slot[0]
-        Py_INCREF(v)
-        slot[0] = <PyObject *>v
-        Py_XDECREF(old)
-        return 0
-    setattr(o, name, v)
-    return 0
+cdef extern from *:
+    # o.name and o.name = v at the slot's offset when o is exactly a `cls` (as CPython's
+    # LOAD_ATTR_SLOT and STORE_ATTR_SLOT do), else by name; in C, so that they are always inlined
+    '''
+    static inline __attribute__((always_inline)) PyObject *
+    st_k_ld(PyObject *o, PyObject *cls, Py_ssize_t off, PyObject *name) {
+        if (Py_TYPE(o) == (PyTypeObject *)cls && off >= 0) {
+            PyObject *p = *(PyObject **)((char *)o + off);
+            if (p != NULL) { Py_INCREF(p); return p; }
+        }
+        return PyObject_GetAttr(o, name);
+    }
+    static inline __attribute__((always_inline)) int
+    st_k_st(PyObject *o, PyObject *cls, Py_ssize_t off, PyObject *name, PyObject *v) {
+        if (Py_TYPE(o) == (PyTypeObject *)cls && off >= 0) {
+            PyObject **slot = (PyObject **)((char *)o + off);
+            PyObject *old = *slot;
+            Py_INCREF(v);
+            *slot = v;
+            Py_XDECREF(old);
+            return 0;
+        }
+        return PyObject_SetAttr(o, name, v);
+    }
+    '''
+    object _k_ld "st_k_ld"(object o, object cls, Py_ssize_t off, object name)
+    int _k_st "st_k_st"(object o, object cls, Py_ssize_t off, object name, object v) except -1
 
 
 cdef inline object _k_run(object o, object cls, object body, bint own):

@@ -85,13 +85,27 @@ def build(text: str) -> tuple[str, Path, bool]:
         t_pyx = Path(tmp, name + ".pyx")
         t_pyx.write_text(text)
         c_file = Path(tmp, name + ".c")
-        _run([sys.executable, "-m", "cython", "-3", "--fast-fail", str(t_pyx), "-o", str(c_file)], "Cython")
         t_so = Path(tmp, so.name)
         cc = c_compiler() or ["cc"]
-        _run([*cc, *CFLAGS, "-I", sysconfig.get_paths()["include"], str(c_file), "-o", str(t_so)], "the C compiler")
+        try:
+            _run([sys.executable, "-m", "cython", "-3", "--fast-fail", str(t_pyx), "-o", str(c_file)], "Cython")
+            _run([*cc, *CFLAGS, "-I", sysconfig.get_paths()["include"], str(c_file), "-o", str(t_so)], "the C compiler")
+        except ToolchainError as e:
+            kept = _keep_failed(t_pyx, str(e))
+            raise ToolchainError(f"{e} (the module's source is kept in {kept} for a bug report)") from None
         os.replace(t_pyx, pyx)
         os.replace(t_so, so)
     return name, so, True
+
+
+def _keep_failed(pyx: Path, why: str) -> Path:
+    """A module that did not build is a bug of the tier: its source and the tool's words stay."""
+    failed = pyx.parent.parent / "failed"
+    failed.mkdir(exist_ok=True)
+    kept = failed / pyx.name
+    os.replace(pyx, kept)
+    kept.with_suffix(".txt").write_text(why + "\n")
+    return kept
 
 
 def _run(argv: list[str], what: str) -> None:
