@@ -378,6 +378,10 @@ class SlaveController:
         n = len(data)
         end = ado + n
         mem = self.mem
+        if ado == REG_DCSYS and n == 8:  # the cyclic FRMW of the reference clock's time
+            mem[REG_DCSYS:end] = data
+            self._dc_time_written(ado, end, t)
+            return True
         if ado < 0x1000:
             stop = min(end, 0x1000)
             if _WRITABLE.find(0, ado, stop) < 0:  # all of it writable (the usual case)

@@ -97,7 +97,7 @@ class Segment:
             self._drop -= 1
             return None
         try:
-            dst, src, dgs = wire.decode_frame(frame)
+            _dst, _src, dgs = wire.decode_frame(frame)
         except FrameError:
             return None
         self.frames += 1
@@ -106,12 +106,23 @@ class Segment:
         arrive = self._arrivals(t, n_reach)
         for dg in dgs:
             self._datagram(dg, reach, arrive)
-        out = dst + bytes([src[0] | 0x02]) + src[1:] + frame[12:16] + wire.encode_datagrams(dgs)
-        if len(out) < len(frame):
-            out += frame[len(out) :]
+        out = self._answer(frame, dgs)
         if self.capture is not None:
             self.capture.write(out, (2 * arrive[-1] - t) if arrive else t)
         return out
+
+    @staticmethod
+    def _answer(frame: bytes, dgs: list) -> bytes:
+        """The frame as it returns: the source address marked as processed (bit 1), the datagrams
+        after the EtherCAT header at byte 16 (a VLAN tag is not sent back), then what followed
+        them in the frame (padding)."""
+        out = bytearray(frame)
+        try:
+            wire.encode_datagrams_into(out, 16, dgs)
+        except FrameError:  # longer than they came (a read past the end of an ESC's memory)
+            out = out[:16] + wire.encode_datagrams(dgs)
+        out[6] |= 0x02
+        return bytes(out)
 
     def _datagram(self, dg, reach, arrive) -> None:
         c = dg.cmd
