@@ -171,13 +171,13 @@ class MotorModel:
         values of the properties, for a drive that publishes them all every step."""
         pos = math.floor(self.turns * self.cpr)
         if self.enabled and (self.mode == CSP or self.mode == _HOLD):
-            demand = int(round(self._demand))
+            demand = round(self._demand)  # an int: round() of a float is one
             fe = demand - pos
         else:
-            demand = int(round(float(pos)))
+            demand = pos
             fe = 0
-        vel = int(round(self.omega * self.k))
-        torque = int(round(self.torque_nm / self.params.rated_torque * 1000.0))
+        vel = round(self.omega * self.k)
+        torque = round(self.torque_nm / self.params.rated_torque * 1000.0)
         return pos, demand, vel, torque, fe
 
     @property
@@ -226,7 +226,8 @@ class MotorModel:
         which also gives the velocity feed-forward; period 0 jumps at once (no feed-forward)."""
         self._ip_start = self._demand if (self.enabled and self.mode == CSP) else float(self.position)
         self._ip_target = float(target)
-        self._ip_period = max(0.0, float(period))
+        period = float(period)
+        self._ip_period = period if period > 0.0 else 0.0  # max(0.0, period), NaN too
         self._ip_elapsed = 0.0
         if self._ip_period == 0.0:
             self._demand = self._ip_target
