@@ -12,7 +12,7 @@ from st.io.ethercat import wire
 from st.io.ethercat.config import build_segment, from_dict
 from st.io.ethercat.master import FrameMaster
 from st.io.ethercat.pdo import CIA402_RX, PdoLayout
-from st.io.ethercat.wire import APRD, BRD, FRMW, LRW, Datagram
+from st.io.ethercat.wire import APRD, APWR, ARMW, BRD, FRMW, LRW, Datagram
 
 
 def _master(n: int = 2):
@@ -117,6 +117,31 @@ def test_datagrams_encoded_into_a_buffer_are_the_general_encoding_and_must_fit()
     assert bytes(buf) == b"\xee\xee" + encoded + b"\xee\xee\xee"
     with pytest.raises(wire.FrameError):
         wire.encode_datagrams_into(bytearray(30), 0, dgs)
+
+
+def test_armw_and_frmw_read_at_the_addressed_slave_and_write_everywhere_else():
+    seg = build_segment(from_dict({"segment": {}, "slave": [{"name": n, "type": "dio"} for n in "abc"]}))
+    for i in range(3):  # station addresses 0x1001… as a master gives them
+        station = bytearray((0x1001 + i).to_bytes(2, "little"))
+        seg.exchange(wire.encode_frame([Datagram(APWR, 0, -i & 0xFFFF, 0x0010, station)]), 0.0)
+    answers = []
+    for t, dg in (
+        (1e-3, Datagram(ARMW, 1, -1 & 0xFFFF, 0x0910, bytearray(8))),  # read at position 1
+        (2e-3, Datagram(FRMW, 2, 0x1003, 0x0910, bytearray(8))),  # read at the last slave
+        (3e-3, Datagram(FRMW, 3, 0x1001, 0x0910, bytearray(4))),  # 32 bits
+    ):
+        answers.append(seg.exchange(wire.encode_frame([dg]), t)[16 : 16 + 12 + len(dg.data)].hex())
+    assert answers == [
+        "0d01020010090800000028e22d00000000000300",
+        "0e02031010090800000068243d00000000000300",
+        "0e03011010090400000040420f000300",
+    ]
+    # system time, receive time, offset, delay and difference of each clock
+    assert [bytes(s.mem[0x0910:0x0930]).hex() for s in seg.slaves] == [
+        "40420f00000000000000000000000000c821d2ffffffffff0000000040420f00",
+        "40420f0000000000000000000000000098dbc2ffffffffff0000000000000000",
+        "40420f000000000000000000000000006895b3ffffffffff0000000068243d00",
+    ]
 
 
 # ---------------------------------------------------------------------------- a whole run

@@ -207,6 +207,10 @@ class SlaveController:
             if t < t0:
                 return
             t = t0 + int((t - t0) / cyc + 1e-9) * cyc
+        self._advance_to(t)
+
+    def _advance_to(self, t: float) -> None:
+        """advance(t) once t is a pulse (with SYNC0)."""
         if t <= self.t_dev:
             return
         device = self.device
@@ -424,8 +428,12 @@ class SlaveController:
             grid = self._sync_grid()
         if grid is not None:  # DC SYNC0: outputs take effect at the next pulse
             t0, cyc = grid
-            apply_at = t0 if t < t0 else t0 + (int((t - t0) / cyc + 1e-9) + 1) * cyc
-            self.advance(t)
+            if t < t0:
+                apply_at = t0
+            else:  # advance(t), with the pulse at or before t computed once
+                k = int((t - t0) / cyc + 1e-9)
+                apply_at = t0 + (k + 1) * cyc
+                self._advance_to(t0 + k * cyc)
             self.pending_outputs = (apply_at, data)  # a newer frame before the pulse wins
             return
         self.advance(t)
@@ -475,13 +483,13 @@ class SlaveController:
             else _U32.unpack_from(mem, REG_DCSYS)[0]
         )
         delay = _U32.unpack_from(mem, REG_DCDLY)[0]
-        mine = self.system_ns(t)
+        ofs = _U64.unpack_from(mem, REG_DCOFS)[0]
+        mine = (round(t * 1e9) + self.clock_base_ns + ofs) & 0xFFFFFFFFFFFFFFFF  # system_ns(t)
         if end - ado < 8:  # a 32-bit write compares the low halves
             diff = ((mine & 0xFFFFFFFF) - ((written + delay) & 0xFFFFFFFF) + (1 << 31)) % (1 << 32) - (1 << 31)
         else:
             diff = mine - (written + delay)
         if diff:
-            ofs = _U64.unpack_from(mem, REG_DCOFS)[0]
             _U64.pack_into(mem, REG_DCOFS, (ofs - diff) & 0xFFFFFFFFFFFFFFFF)
             self._grid = False
         _U32.pack_into(mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
@@ -524,8 +532,7 @@ class SlaveController:
         for out, off, start, stop in plan:
             n = stop - start
             if out:
-                raw = original[off : off + n]
-                chunk = raw if isinstance(raw, bytes) else bytes(raw)
+                chunk = bytes(original[off : off + n])
                 mem[start:stop] = chunk
                 if mem[REG_ALSTAT] & 0x0F == OP:
                     self.last_commit = t
