@@ -85,7 +85,7 @@ class Device:
         plan = self._rx_plan
         if plan is None:
             lay = self.rx_layout
-            plan = self._rx_plan = ([self.od.entries[e.key] for e in lay.data_entries], lay.unpack)
+            plan = self._rx_plan = ([self.od.entries[e.key] for e in lay.data_entries], lay.unpacker())
         entries, unpack = plan
         for e, v in zip(entries, unpack(data)):
             e.value = v
