@@ -184,7 +184,7 @@ class DriveLink:
         self.actual = raw + self.turns * (1 << 32)
         self.velocity = int(vals[self.i_av]) if self.i_av is not None else 0
         self.error_code = int(vals[self.i_err]) if self.i_err is not None else 0
-        self.state = state = drive_state(status)
+        self.state = state = _STATE_OF.get(status) or drive_state(status)
         self._to_axis()
         ax = self.axis
         if ax is None:

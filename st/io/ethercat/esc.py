@@ -492,7 +492,9 @@ class SlaveController:
         if diff:
             _U64.pack_into(mem, REG_DCOFS, (ofs - diff) & 0xFFFFFFFFFFFFFFFF)
             self._grid = False
-        _U32.pack_into(mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
+            _U32.pack_into(mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
+        else:  # in step (the emulated clocks do not drift)
+            _U32.pack_into(mem, REG_DCDIFF, 0)
 
     def receive_times(self, t_port0: float, t_port1: float) -> None:
         """The 0x0900 latch: local times at which the frame passed port 0 (out) and port 1 (back)."""
