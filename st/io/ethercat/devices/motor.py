@@ -391,7 +391,6 @@ class MotorModel:
         A step that leaves the state as it found it is a fixed point (an axis holding still): a
         later step with the same inputs from that state changes nothing either, and is skipped.
         (The inputs are kept for a few step lengths: DC pulse times vary in their last bits.)"""
-        n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha = constants
         state: tuple = (self.omega, self.turns, self.torque_nm, self._integ, self._torque_ref, self._demand)
         state += (self._ip_start, self._ip_target, self._ip_period, self._ip_elapsed)
         inputs: tuple | None = None
@@ -406,6 +405,7 @@ class MotorModel:
             else:
                 self._rest_state = None
                 self._rest_inputs = {}
+        n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha = constants
         csp = self.mode == CSP
         w, turns, torque, integ0 = self.omega, self.turns, self.torque_nm, self._integ
         demand, ip_start, ip_target = self._demand, self._ip_start, self._ip_target
