@@ -622,6 +622,14 @@ def test_default_pdo_layout_round_trip():
     assert raw[:2] == b"\x31\x02"
 
 
+def test_a_layouts_unpacker_gives_the_values_of_unpack():
+    image = bytes.fromhex("0f00c0e2ffffd21e000008")  # 0x000F, -7488, 7890, CSP
+    aligned = PdoLayout(CIA402_RX)
+    assert tuple(aligned.unpacker()(image)) == tuple(aligned.unpack(image)) == (0x000F, -7488, 7890, 8)
+    bits = PdoLayout([(0x7000, k, 1, "BOOL", "") for k in range(1, 9)])  # no struct: bit by bit
+    assert bits.unpacker()(b"\x05") == bits.unpack(b"\x05") == [True, False, True] + [False] * 5
+
+
 # ---------------------------------------------------------------------------------- digital I/O
 def test_digital_io_bit_packing():
     io = DigitalIO()

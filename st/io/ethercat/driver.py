@@ -82,6 +82,7 @@ class DriveLink:
         m = driver.master.slaves[slave]
         rx, tx = m.rx_layout, m.tx_layout
         self.rx_layout, self.tx_layout = rx, tx
+        self._unpack_tx = tx.unpacker()
         keys_rx = [e.key for e in rx.data_entries]
         keys_tx = [e.key for e in tx.data_entries]
         need_rx, need_tx = [(0x6040, 0), (0x607A, 0)], [(0x6041, 0), (0x6064, 0)]
@@ -167,7 +168,7 @@ class DriveLink:
         return self.rx_layout.pack(v)
 
     def unpack(self, data: bytes) -> None:
-        vals = self.tx_layout.unpack(data)
+        vals = self._unpack_tx(data)
         self.status = status = int(vals[self.i_sw])
         raw = int(vals[self.i_ap])
         last = self.raw_pos
@@ -183,7 +184,7 @@ class DriveLink:
         self.actual = raw + self.turns * (1 << 32)
         self.velocity = int(vals[self.i_av]) if self.i_av is not None else 0
         self.error_code = int(vals[self.i_err]) if self.i_err is not None else 0
-        self.state = state = drive_state(status)
+        self.state = state = _STATE_OF.get(status) or drive_state(status)
         self._to_axis()
         ax = self.axis
         if ax is None:

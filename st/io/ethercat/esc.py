@@ -207,6 +207,10 @@ class SlaveController:
             if t < t0:
                 return
             t = t0 + int((t - t0) / cyc + 1e-9) * cyc
+        self._advance_to(t)
+
+    def _advance_to(self, t: float) -> None:
+        """advance(t) once t is a pulse (with SYNC0)."""
         if t <= self.t_dev:
             return
         device = self.device
@@ -378,6 +382,10 @@ class SlaveController:
         n = len(data)
         end = ado + n
         mem = self.mem
+        if ado == REG_DCSYS and n == 8:  # the cyclic FRMW of the reference clock's time
+            mem[REG_DCSYS:end] = data
+            self._dc_time_written(ado, end, t)
+            return True
         if ado < 0x1000:
             stop = min(end, 0x1000)
             if _WRITABLE.find(0, ado, stop) < 0:  # all of it writable (the usual case)
@@ -420,8 +428,12 @@ class SlaveController:
             grid = self._sync_grid()
         if grid is not None:  # DC SYNC0: outputs take effect at the next pulse
             t0, cyc = grid
-            apply_at = t0 if t < t0 else t0 + (int((t - t0) / cyc + 1e-9) + 1) * cyc
-            self.advance(t)
+            if t < t0:
+                apply_at = t0
+            else:  # advance(t), with the pulse at or before t computed once
+                k = int((t - t0) / cyc + 1e-9)
+                apply_at = t0 + (k + 1) * cyc
+                self._advance_to(t0 + k * cyc)
             self.pending_outputs = (apply_at, data)  # a newer frame before the pulse wins
             return
         self.advance(t)
@@ -471,16 +483,18 @@ class SlaveController:
             else _U32.unpack_from(mem, REG_DCSYS)[0]
         )
         delay = _U32.unpack_from(mem, REG_DCDLY)[0]
-        mine = self.system_ns(t)
+        ofs = _U64.unpack_from(mem, REG_DCOFS)[0]
+        mine = (round(t * 1e9) + self.clock_base_ns + ofs) & 0xFFFFFFFFFFFFFFFF  # system_ns(t)
         if end - ado < 8:  # a 32-bit write compares the low halves
             diff = ((mine & 0xFFFFFFFF) - ((written + delay) & 0xFFFFFFFF) + (1 << 31)) % (1 << 32) - (1 << 31)
         else:
             diff = mine - (written + delay)
         if diff:
-            ofs = _U64.unpack_from(mem, REG_DCOFS)[0]
             _U64.pack_into(mem, REG_DCOFS, (ofs - diff) & 0xFFFFFFFFFFFFFFFF)
             self._grid = False
-        _U32.pack_into(mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
+            _U32.pack_into(mem, REG_DCDIFF, (min(abs(diff), 0x7FFFFFFF)) | (0x80000000 if diff < 0 else 0))
+        else:  # in step (the emulated clocks do not drift)
+            _U32.pack_into(mem, REG_DCDIFF, 0)
 
     def receive_times(self, t_port0: float, t_port1: float) -> None:
         """The 0x0900 latch: local times at which the frame passed port 0 (out) and port 1 (back)."""
@@ -520,8 +534,7 @@ class SlaveController:
         for out, off, start, stop in plan:
             n = stop - start
             if out:
-                raw = original[off : off + n]
-                chunk = raw if isinstance(raw, bytes) else bytes(raw)
+                chunk = bytes(original[off : off + n])
                 mem[start:stop] = chunk
                 if mem[REG_ALSTAT] & 0x0F == OP:
                     self.last_commit = t

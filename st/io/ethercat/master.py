@@ -30,6 +30,7 @@ from .wire import APWR, BRD, BWR, FPRD, FPWR, FRMW, LRW, Datagram
 STATE_CODES = {v: k for k, v in STATE_NAMES.items()}
 STATION_BASE = 0x1001
 _ZERO8 = bytes(8)
+_U16, _U64 = struct.Struct("<H"), struct.Struct("<Q")
 
 
 class MasterError(Exception):
@@ -479,8 +480,8 @@ class FrameMaster(Master):
             return self._answer(out)
         self.image[self.out_size :] = out[lo + self.out_size : hi]
         if len(cyc.data_at) > 1:
-            self.dc_time = struct.unpack_from("<Q", out, cyc.data_at[1][0])[0]
-        return struct.unpack_from("<H", out, hi)[0]
+            self.dc_time = _U64.unpack_from(out, cyc.data_at[1][0])[0]
+        return _U16.unpack_from(out, hi)[0]
 
     def _answer(self, out) -> int:
         try:

@@ -56,7 +56,7 @@ class SdoAbort(Exception):
         self.code = code
 
 
-@dataclass
+@dataclass(slots=True)
 class Entry:
     index: int
     sub: int

@@ -97,7 +97,7 @@ class Segment:
             self._drop -= 1
             return None
         try:
-            dst, src, dgs = wire.decode_frame(frame)
+            _dst, _src, dgs = wire.decode_frame(frame)
         except FrameError:
             return None
         self.frames += 1
@@ -106,16 +106,26 @@ class Segment:
         arrive = self._arrivals(t, n_reach)
         for dg in dgs:
             self._datagram(dg, reach, arrive)
-        out = dst + bytes([src[0] | 0x02]) + src[1:] + frame[12:16] + wire.encode_datagrams(dgs)
-        if len(out) < len(frame):
-            out += frame[len(out) :]
+        out = self._answer(frame, dgs)
         if self.capture is not None:
             self.capture.write(out, (2 * arrive[-1] - t) if arrive else t)
         return out
 
+    @staticmethod
+    def _answer(frame: bytes, dgs: list) -> bytes:
+        """The frame as it returns: the source address marked as processed (bit 1), the datagrams
+        after the EtherCAT header at byte 16 (a VLAN tag is not sent back), then what followed
+        them in the frame (padding)."""
+        out = bytearray(frame)
+        try:
+            wire.encode_datagrams_into(out, 16, dgs)
+        except FrameError:  # longer than they came (a read past the end of an ESC's memory)
+            out = out[:16] + wire.encode_datagrams(dgs)
+        out[6] |= 0x02
+        return bytes(out)
+
     def _datagram(self, dg, reach, arrive) -> None:
         c = dg.cmd
-        n = len(dg.data)
         if c == LRW or c == LRD or c == LWR:
             addr = dg.logical
             rd, wr = c != LWR, c != LRD
@@ -130,24 +140,39 @@ class Segment:
                 self._access(s, dg, c, arrive[i], i, len(reach), bcast=True)
                 dg.adp = (dg.adp + 1) & 0xFFFF
             return
+        if c == FRMW or c == ARMW:
+            self._read_multiple_write(dg, reach, arrive, auto=c == ARMW)
+            return
         if c in _AUTO or c in _FIXED:
-            auto, multi = c in _AUTO, c in (ARMW, FRMW)
+            auto = c in _AUTO
             for i, s in enumerate(reach):
-                hit = dg.adp == 0 if auto else s.station == dg.adp
-                if hit and multi:  # ARMW/FRMW: the addressed slave reads …
-                    got = s.read(dg.ado, n, arrive[i])
-                    if got is not None:
-                        dg.data[:] = got
-                        dg.wkc += 1
-                elif hit:
+                if dg.adp == 0 if auto else s.station == dg.adp:
                     self._access(s, dg, c, arrive[i], i, len(reach))
-                elif multi:  # … and every other slave writes
-                    if s.write(dg.ado, bytes(dg.data), arrive[i]):
-                        dg.wkc += 1
                 if auto:
                     dg.adp = (dg.adp + 1) & 0xFFFF
             return
         # NOP and unknown commands pass untouched
+
+    @staticmethod
+    def _read_multiple_write(dg, reach, arrive, auto: bool) -> None:
+        """ARMW/FRMW (the DC time): the addressed slave reads, every other slave writes what the
+        datagram carries when it passes."""
+        n = len(dg.data)
+        carried = None  # bytes(dg.data), made again after a read
+        for s, t in zip(reach, arrive):
+            if dg.adp == 0 if auto else s.station == dg.adp:
+                got = s.read(dg.ado, n, t)
+                if got is not None:
+                    dg.data[:] = got
+                    dg.wkc += 1
+                    carried = None
+            else:
+                if carried is None:
+                    carried = bytes(dg.data)
+                if s.write(dg.ado, carried, t):
+                    dg.wkc += 1
+            if auto:
+                dg.adp = (dg.adp + 1) & 0xFFFF
 
     def _access(self, s: SlaveController, dg, c: int, t: float, i: int, n_reach: int, bcast: bool = False) -> None:
         """A register read and/or write at one slave; a write stores the data as it arrives there."""

@@ -82,19 +82,34 @@ class Datagram:
 
 
 def encode_datagrams(dgs) -> bytes:
-    out = bytearray()
+    buf = bytearray(sum(12 + len(d.data) for d in dgs))
+    encode_datagrams_into(buf, 0, dgs)
+    return bytes(buf)
+
+
+def encode_datagrams_into(buf: bytearray, pos: int, dgs) -> int:
+    """Encode dgs into buf from byte pos on, over what is there; returns where they end.
+    FrameError if they do not fit (buf is then partly written)."""
+    size = len(buf)
     last = len(dgs) - 1
-    pack_header, pack_wkc = _DG.pack, _WKC.pack
+    pack_header, pack_wkc = _DG.pack_into, _WKC.pack_into
     for i, d in enumerate(dgs):
-        ln = len(d.data) & 0x7FF
+        data = d.data
+        n = len(data)
+        if pos + 12 + n > size:
+            raise FrameError(f"datagram {i} ({n} bytes) does not fit {size} bytes from {pos}")
+        ln = n & 0x7FF
         if d.circulating:
             ln |= 0x4000
         if i < last:
             ln |= 0x8000
-        out += pack_header(d.cmd, d.idx, d.adp & 0xFFFF, d.ado & 0xFFFF, ln, d.irq)
-        out += d.data
-        out += pack_wkc(d.wkc & 0xFFFF)
-    return bytes(out)
+        pack_header(buf, pos, d.cmd, d.idx, d.adp & 0xFFFF, d.ado & 0xFFFF, ln, d.irq)
+        pos += 10
+        buf[pos : pos + n] = data
+        pos += n
+        pack_wkc(buf, pos, d.wkc & 0xFFFF)
+        pos += 2
+    return pos
 
 
 def encode_frame(dgs, src: bytes = MASTER_MAC, dst: bytes = BROADCAST, pad: bool = True) -> bytes:

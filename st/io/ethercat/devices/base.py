@@ -57,44 +57,48 @@ class Device:
         self.emergencies: list = []  # (error code, error register, 5 bytes) waiting for the mailbox
         self._rx: PdoLayout | None = None
         self._tx: PdoLayout | None = None
-        self._rx_entries: list | None = None  # the entries the layouts map, in their order
-        self._tx_entries: list | None = None
+        # (the entries a layout maps in its order, its unpack or pack): what a cycle needs of it
+        self._rx_plan: tuple | None = None
+        self._tx_plan: tuple | None = None
 
     # ------------------------------------------------------------------ process data
     @property
     def rx_layout(self) -> PdoLayout:
         if self._rx is None:
             self._rx = PdoLayout.from_od(self.od, self.rx_assign) if self.od.has(self.rx_assign) else PdoLayout([])
-            self._rx_entries = None
+            self._rx_plan = None
         return self._rx
 
     @property
     def tx_layout(self) -> PdoLayout:
         if self._tx is None:
             self._tx = PdoLayout.from_od(self.od, self.tx_assign) if self.od.has(self.tx_assign) else PdoLayout([])
-            self._tx_entries = None
+            self._tx_plan = None
         return self._tx
 
     def remap(self) -> None:
         """Forget the layouts (the master changed 0x1C12/0x1C13 or a mapping object)."""
         self._rx = self._tx = None
+        self._rx_plan = self._tx_plan = None
 
     def write_outputs(self, data: bytes) -> None:
-        lay = self.rx_layout
-        mapped = self._rx_entries
-        if mapped is None:
-            mapped = self._rx_entries = [self.od.entries[e.key] for e in lay.data_entries]
-        for e, v in zip(mapped, lay.unpack(data)):
+        plan = self._rx_plan
+        if plan is None:
+            lay = self.rx_layout
+            plan = self._rx_plan = ([self.od.entries[e.key] for e in lay.data_entries], lay.unpacker())
+        entries, unpack = plan
+        for e, v in zip(entries, unpack(data)):
             e.value = v
         self.od.writes += 1
         self.on_outputs()
 
     def read_inputs(self) -> bytes:
-        lay = self.tx_layout
-        mapped = self._tx_entries
-        if mapped is None:
-            mapped = self._tx_entries = [self.od.entries[e.key] for e in lay.data_entries]
-        return lay.pack([e.value for e in mapped])
+        plan = self._tx_plan
+        if plan is None:
+            lay = self.tx_layout
+            plan = self._tx_plan = ([self.od.entries[e.key] for e in lay.data_entries], lay.pack)
+        entries, pack = plan
+        return pack([e.value for e in entries])
 
     # ------------------------------------------------------------------ hooks
     def check_transition(self, old: str, new: str) -> int:

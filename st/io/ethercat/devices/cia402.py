@@ -108,6 +108,11 @@ def decode_command(cw: int) -> int:
     return CMD_ENABLE
 
 
+# the command of every controlword, by the bits decode_command reads (7, 3, 2, 1, 0)
+_COMMAND_OF = tuple(decode_command(cw) for cw in range(0x90))
+_COMMAND_BITS = 0x8F
+
+
 def wrap32(x: int) -> int:
     return ((int(x) + 0x80000000) & 0xFFFFFFFF) - 0x80000000
 
@@ -185,6 +190,9 @@ class CiA402Drive(Device):
         self._cycle: float | None = None  # measured interval between on_outputs() calls
         self._ip_written = False
         self._build_od(CIA402_RX if rx_mapping is None else rx_mapping, CIA402_TX if tx_mapping is None else tx_mapping)
+        # the entries _publish writes every step, in its order
+        self._published = tuple(self.od.entry(i) for i in (0x6041, 0x6061, 0x6064, 0x6062, 0x606C, 0x6077, 0x60F4))
+        self._published += (self.od.entry(0x603F), self.od.entry(0x1001))
         self._publish()
 
     # ------------------------------------------------------------------ object dictionary
@@ -585,6 +593,8 @@ class CiA402Drive(Device):
         E = self.od._by_key
         s = self.state
         reset, self._reset_edge = self._reset_edge, False
+        if s == _OPERATION_ENABLED and _COMMAND_OF[int(E[0x6040].value) & _COMMAND_BITS] == CMD_ENABLE:
+            return  # a running axis: nothing to do
         mo = self.motor
         if s == _NOT_READY_TO_SWITCH_ON:
             self._set_state(_SWITCH_ON_DISABLED)  # 1 (after the self test)
@@ -603,7 +613,7 @@ class CiA402Drive(Device):
                 self.emergency(0x0000, 0x00)  # CiA 301: error reset
                 self._set_state(_SWITCH_ON_DISABLED)
             return
-        cmd = decode_command(int(E[0x6040].value))
+        cmd = _COMMAND_OF[int(E[0x6040].value) & _COMMAND_BITS]
         qs_option = int(E[0x605A].value)
         if s == _SWITCH_ON_DISABLED:
             if cmd == CMD_SHUTDOWN:
@@ -679,7 +689,6 @@ class CiA402Drive(Device):
     def _publish(self, readings: tuple | None = None) -> None:
         """The statusword and the actual values into the object dictionary; `readings`: the
         motor's, if the caller has them."""
-        E = self.od._by_key
         mo, s = self.motor, self.state
         pos, demand, vel, torque, fe = mo.readings() if readings is None else readings
         sw = STATE_BITS[s] | SW_REMOTE
@@ -697,15 +706,16 @@ class CiA402Drive(Device):
             sw |= SW_INTERNAL_LIMIT
         if self._fe_latched and self.mode == CSP:
             sw |= SW_FOLLOWING_ERROR
-        E[0x6041].value = sw
-        E[0x6061].value = self.mode
-        E[0x6064].value = ((pos + 0x80000000) & 0xFFFFFFFF) - 0x80000000  # wrap32
-        E[0x6062].value = ((demand + 0x80000000) & 0xFFFFFFFF) - 0x80000000
-        E[0x606C].value = -0x80000000 if vel < -0x80000000 else (0x7FFFFFFF if vel > 0x7FFFFFFF else vel)
-        E[0x6077].value = -0x8000 if torque < -0x8000 else (0x7FFF if torque > 0x7FFF else torque)
-        E[0x60F4].value = -0x80000000 if fe < -0x80000000 else (0x7FFFFFFF if fe > 0x7FFFFFFF else fe)
-        E[0x603F].value = self.error_code
-        E[0x1001].value = 0x01 if s == _FAULT or s == _FAULT_REACTION_ACTIVE else 0x00
+        e_sw, e_mode, e_pos, e_demand, e_vel, e_torque, e_fe, e_code, e_register = self._published
+        e_sw.value = sw
+        e_mode.value = self.mode
+        e_pos.value = ((pos + 0x80000000) & 0xFFFFFFFF) - 0x80000000  # wrap32
+        e_demand.value = ((demand + 0x80000000) & 0xFFFFFFFF) - 0x80000000
+        e_vel.value = -0x80000000 if vel < -0x80000000 else (0x7FFFFFFF if vel > 0x7FFFFFFF else vel)
+        e_torque.value = -0x8000 if torque < -0x8000 else (0x7FFF if torque > 0x7FFF else torque)
+        e_fe.value = -0x80000000 if fe < -0x80000000 else (0x7FFFFFFF if fe > 0x7FFFFFFF else fe)
+        e_code.value = self.error_code
+        e_register.value = 0x01 if s == _FAULT or s == _FAULT_REACTION_ACTIVE else 0x00
 
     def _target_reached(self, pos: int, vel: int, torque: int) -> bool:
         E = self.od._by_key

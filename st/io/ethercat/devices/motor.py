@@ -28,8 +28,11 @@ CSP, CSV, CST = 8, 9, 10
 _STOP, _HOLD = -1, -2  # internal: a deceleration ramp, then holding the stop position
 
 
-@dataclass
+@dataclass(frozen=True)
 class MotorParams:
+    """Fixed for the life of a model (frozen): `MotorModel` derives its step constants from them
+    once per step length and limits."""
+
     rated_torque: float = 0.32  # N·m
     max_torque: float = 0.95  # N·m, the current limit (≈ 3× rated)
     max_speed_rpm: float = 6000.0  # rev/min
@@ -122,6 +125,8 @@ class MotorModel:
         # a state that following steps left as they found it, and for which inputs (→ `limited`)
         self._rest_state: tuple | None = None
         self._rest_inputs: dict = {}
+        # (dt, torque limit, speed limit) → the constants of a step (see _constants)
+        self._constants_of: dict = {}
 
     # ------------------------------------------------------------------ outputs
     @property
@@ -166,13 +171,13 @@ class MotorModel:
         values of the properties, for a drive that publishes them all every step."""
         pos = math.floor(self.turns * self.cpr)
         if self.enabled and (self.mode == CSP or self.mode == _HOLD):
-            demand = int(round(self._demand))
+            demand = round(self._demand)  # an int: round() of a float is one
             fe = demand - pos
         else:
-            demand = int(round(float(pos)))
+            demand = pos
             fe = 0
-        vel = int(round(self.omega * self.k))
-        torque = int(round(self.torque_nm / self.params.rated_torque * 1000.0))
+        vel = round(self.omega * self.k)
+        torque = round(self.torque_nm / self.params.rated_torque * 1000.0)
         return pos, demand, vel, torque, fe
 
     @property
@@ -221,7 +226,8 @@ class MotorModel:
         which also gives the velocity feed-forward; period 0 jumps at once (no feed-forward)."""
         self._ip_start = self._demand if (self.enabled and self.mode == CSP) else float(self.position)
         self._ip_target = float(target)
-        self._ip_period = max(0.0, float(period))
+        period = float(period)
+        self._ip_period = period if period > 0.0 else 0.0  # max(0.0, period), NaN too
         self._ip_elapsed = 0.0
         if self._ip_period == 0.0:
             self._demand = self._ip_target
@@ -255,13 +261,13 @@ class MotorModel:
         """Advance by dt seconds in ceil(dt / substep) equal substeps."""
         if dt <= 0:
             return
-        n = max(1, math.ceil(dt / self.substep - 1e-9))
-        h = dt / n
         self.limited = False
+        if self.enabled and self._rng is None and (self.mode == CSP or self.mode == CSV):
+            self._step_following(self._constants(dt))
+            self.time += dt
+            return
+        n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha = self._constants(dt)
         p = self.params
-        J = p.inertia
-        b = p.viscous_friction
-        tc = p.coulomb_friction
         if (
             not self.enabled
             and self.omega == 0.0
@@ -270,19 +276,6 @@ class MotorModel:
             and self.torque_nm == 0.0
         ):
             self.time += dt  # at rest and unpowered: nothing changes
-            return
-        cpr = self.cpr
-        k = self.k
-        kv, ki, kp = self.kv, self.ki, p.position_kp
-        vmax = self.max_speed if self.speed_limit is None else min(self.max_speed, self.speed_limit)
-        tmax = p.max_torque
-        if self.torque_limit is not None:
-            tmax = min(tmax, max(0.0, self.torque_limit) * p.rated_torque / 1000.0)
-        rated = p.rated_torque
-        alpha = 1.0 if p.current_tau <= 0 else 1.0 - math.exp(-h / p.current_tau)
-        if self.enabled and self._rng is None and self.mode in (CSP, CSV):
-            self._step_following(n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha)
-            self.time += dt
             return
         standstill = TWO_PI / 60.0  # 1 rev/min
         for _ in range(n):
@@ -364,7 +357,33 @@ class MotorModel:
             self.turns += w_new * h / TWO_PI
         self.time += dt
 
-    def _step_following(self, n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha) -> None:
+    def _constants(self, dt: float) -> tuple:
+        """(n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha) of a step of dt seconds:
+        n substeps of h, the parameters, the speed and torque limits in effect and the current
+        loop's factor. They depend on dt and the limits only (the parameters are frozen), so
+        they are computed once per (dt, limits); DC pulse times vary in their last bits, so a
+        few step lengths are kept."""
+        key = (dt, self.torque_limit, self.speed_limit)
+        c = self._constants_of.get(key)
+        if c is None:
+            if len(self._constants_of) >= 8:
+                self._constants_of.clear()
+            c = self._constants_of[key] = self._compute_constants(dt)
+        return c
+
+    def _compute_constants(self, dt: float) -> tuple:
+        n = max(1, math.ceil(dt / self.substep - 1e-9))
+        h = dt / n
+        p = self.params
+        vmax = self.max_speed if self.speed_limit is None else min(self.max_speed, self.speed_limit)
+        tmax = p.max_torque
+        if self.torque_limit is not None:
+            tmax = min(tmax, max(0.0, self.torque_limit) * p.rated_torque / 1000.0)
+        alpha = 1.0 if p.current_tau <= 0 else 1.0 - math.exp(-h / p.current_tau)
+        J, b, tc, kp, rated = p.inertia, p.viscous_friction, p.coulomb_friction, p.position_kp, p.rated_torque
+        return (n, h, J, b, tc, self.cpr, self.k, self.kv, self.ki, kp, vmax, tmax, rated, alpha)
+
+    def _step_following(self, constants: tuple) -> None:
         """The loop of `step` for an enabled motor in CSP or CSV without noise, with the state in
         locals and `_coulomb_step` inlined (the common case of a running axis; the same arithmetic
         in the same order, so the same bits, about three times as fast).
@@ -377,8 +396,8 @@ class MotorModel:
         inputs: tuple | None = None
         if self._rest_state is not None:
             if self._rest_state == state:
-                inputs = (n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha, self.mode)
-                inputs += (self.torque_offset, self.velocity_offset, self.load_torque, self.target_velocity)
+                inputs = (constants, self.mode, self.torque_offset, self.velocity_offset, self.load_torque)
+                inputs += (self.target_velocity,)
                 limited = self._rest_inputs.get(inputs)
                 if limited is not None:
                     self.limited = limited
@@ -386,6 +405,7 @@ class MotorModel:
             else:
                 self._rest_state = None
                 self._rest_inputs = {}
+        n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha = constants
         csp = self.mode == CSP
         w, turns, torque, integ0 = self.omega, self.turns, self.torque_nm, self._integ
         demand, ip_start, ip_target = self._demand, self._ip_start, self._ip_target
@@ -465,8 +485,8 @@ class MotorModel:
         self.limited = limited
         if w == state[0] and turns == state[1] and (torque, integ0, u, demand, ip_elapsed) == state[2:6] + state[9:]:
             if inputs is None:
-                inputs = (n, h, J, b, tc, cpr, k, kv, ki, kp, vmax, tmax, rated, alpha, self.mode)
-                inputs += (self.torque_offset, self.velocity_offset, self.load_torque, self.target_velocity)
+                inputs = (constants, self.mode, self.torque_offset, self.velocity_offset, self.load_torque)
+                inputs += (self.target_velocity,)
             if self._rest_state != state or len(self._rest_inputs) >= 8:
                 self._rest_state, self._rest_inputs = state, {}
             self._rest_inputs[inputs] = limited
