@@ -289,3 +289,12 @@ def test_a_module_cython_refuses_is_kept_for_a_bug_report(tmp_path, monkeypatch)
     assert kept.parent == tmp_path / "compiled" / "native" / "failed"
     assert kept.read_text() == "def make(dict _k_ns):\n    return {\n"
     assert "Expected an identifier or literal" in kept.with_suffix(".txt").read_text()
+
+
+def test_an_expression_nested_beyond_cythons_parser_keeps_its_body_python():
+    chain = " + ".join(["x"] * 150)  # a left-nested chain of 149 additions
+    with pytest.raises(NotEligible, match="an expression is nested more than 100 deep"):
+        type_body(_body(f"def _body(self):\n    x = self.x\n    self.y = {chain}\n"), "_fb_x", {}, frozenset())
+    type_body(
+        _body(f"def _body(self):\n    x = self.x\n    self.y = {' + '.join(['x'] * 90)}\n"), "_fb_x", {}, frozenset()
+    )

@@ -105,7 +105,12 @@ def type_body(fn: py.FunctionDef, own: str, classes: dict[str, ClassInfo], volat
     return Typed(fn, decls, t.captured, t.slots)
 
 
+MAX_DEPTH = 100  # expression nesting Cython's recursive parser is given (it fails far beyond this)
+
+
 def _check_eligible(fn: py.FunctionDef) -> None:
+    if _depth(fn) > MAX_DEPTH:
+        raise NotEligible(f"an expression is nested more than {MAX_DEPTH} deep")
     for node in py.walk(fn):
         if isinstance(node, (py.Global, py.Nonlocal)):
             raise NotEligible("it writes a global variable")
@@ -117,6 +122,18 @@ def _check_eligible(fn: py.FunctionDef) -> None:
             raise NotEligible(f"it uses the name {node.id}, which C or Cython reserve")
         if isinstance(node, py.Attribute) and node.attr in _RESERVED:
             raise NotEligible(f"it uses the name {node.attr}, which C or Cython reserve")
+
+
+def _depth(fn: py.FunctionDef) -> int:
+    """How deep expressions nest in `fn` (without recursion: a long operator chain is deep)."""
+    deepest = 0
+    todo: list[tuple[py.AST, int]] = [(fn, 0)]
+    while todo:
+        node, d = todo.pop()
+        d = d + 1 if isinstance(node, py.expr) else 0
+        deepest = max(deepest, d)
+        todo.extend((child, d) for child in py.iter_child_nodes(node))
+    return deepest
 
 
 def _stores(fn: py.FunctionDef) -> dict[str, list[py.expr | None]]:
