@@ -137,8 +137,8 @@ def test_rebound_globals_are_read_from_the_namespace_at_each_use():
     fn = _body("def _body(self):\n    for i in _range(0, 2):\n        self.t = _g_count + _helper(i)\n")
     typed = type_body(fn, "_fb_x", {}, frozenset({"_g_count"}))
     text, _ = module_text([("_fb_x", "p.st", "x", typed)])
-    assert "self.t = _k_ns['_g_count'] + _helper(i)" in text
-    assert "    _helper = _k_ns['_helper']" in text  # bound once per PLC
+    assert "self.t = _k_c.ns['_g_count'] + _k_c._helper(i)" in text
+    assert "    _k_c._helper = _k_ns['_helper']" in text  # bound once per PLC, in its context
     assert typed.captured == {"_helper"}
 
 
@@ -163,12 +163,26 @@ def test_slots_of_known_blocks_are_reached_at_their_offsets():
     assert typed.decls == {"n": "int64_t"}
     assert typed.slots == {("_prg_main", "n"), ("_prg_main", "f"), ("_prg_main", "t"), ("_fb_f", "x"), ("_fb_f", "q")}
     text, _ = module_text([("_prg_main", "p.st", "main", typed)])
-    assert "_k_st(_t1, _k_T_fb_f, _k_O5__fb_f_x, 'x', n + 1)" in text
-    assert "_t1._body()" in text  # _fb_f's body is not compiled in this module: the method call stays
+    assert "_k_st(_t1, _k_c._k_T_fb_f, _k_c._k_O5__fb_f_x, 'x', n + 1)" in text
+    assert "        _t1._body()  # st:" in text  # _fb_f's body is not compiled in this module: the method call stays
     assert (
-        "n = _k_i64(_k_ld(_k_ld(self, _k_T_prg_main, _k_O9__prg_main_f, 'f'), _k_T_fb_f, _k_O5__fb_f_q, 'q'))" in text
-    )
-    assert "_k_now = _k_ns['_now']" in text and "'t', _k_now)" in text  # the job's time, read once per body
+        "n = _k_i64(_k_ld(_k_ld(self, _k_c._k_T_prg_main, _k_c._k_O9__prg_main_f, 'f'), "
+        "_k_c._k_T_fb_f, _k_c._k_O5__fb_f_q, 'q'))"
+    ) in text
+    assert "_k_now = _k_c.ns['_now']" in text and "'t', _k_now)" in text  # the job's time, read once per body
+
+
+def test_a_call_of_a_block_compiled_in_the_same_module_is_a_c_call():
+    fn = _body("def _body(self):\n    _t1 = self.f\n    _t1._body()\n")
+    classes = {
+        "_prg_main": ClassInfo(frozenset({"f"}), {"f": kinds.Inst("_fb_f")}),
+        "_fb_f": ClassInfo(frozenset(), {}),
+    }
+    main = type_body(fn, "_prg_main", classes, frozenset())
+    callee = type_body(_body("def _body(self):\n    pass\n"), "_fb_f", classes, frozenset())
+    text, _ = module_text([("_prg_main", "p.st", "main", main), ("_fb_f", "p.st", "f", callee)])
+    assert "_k_impl_fb_f(_k_c, _t1) if _k_c._k_own_fb_f and type(_t1) is _k_c._k_T_fb_f else _t1._body()" in text
+    assert "cdef object _k_impl_fb_f(_k_Ctx _k_c, object self):" in text
 
 
 # ---------------------------------------------------------------------------- whole programs

@@ -70,13 +70,6 @@ cdef extern from *:
     int _k_st "st_k_st"(object o, object cls, Py_ssize_t off, object name, object v) except -1
 
 
-cdef inline object _k_run(object o, object cls, object body, bint own):
-    # o._body(): the compiled body itself when o is exactly a `cls` whose body it is
-    if own and type(o) is cls:
-        return body(o)
-    return o._body()
-
-
 def _k_generated(cls, str file):
     # whether `cls` still has the body the code generator printed (a library may replace one
     # with its own, as the PLCopen blocks do): only that one is replaced here
@@ -149,13 +142,21 @@ def function_name(cls: str) -> str:
     return "_k_body" + cls
 
 
+def impl_name(cls: str) -> str:
+    return "_k_impl" + cls
+
+
 def own_name(cls: str) -> str:
     return "_k_own" + cls
 
 
+CTX = "_k_c"  # a body's first parameter: the _k_Ctx of its PLC
+
+
 def _direct_calls(fn: py.FunctionDef, compiled: set[str]) -> None:
-    """Each `_k_run(obj, 'cls')` of typer.py: a direct call of cls's compiled body (checked at run
-    time: exactly that class, its body replaced), or `obj._body()` when cls is not compiled."""
+    """Each `_k_run(obj, 'cls')` of typer.py: a C call of cls's compiled body when obj is exactly
+    a `cls` whose class still has the generated body, else (and when cls is not compiled here)
+    `obj._body()`."""
     for node in py.walk(fn):
         for name, value in py.iter_fields(node):
             if isinstance(value, list):
@@ -168,58 +169,78 @@ def _direct(node, compiled: set[str]):
     if not (isinstance(node, py.Call) and isinstance(node.func, py.Name) and node.func.id == "_k_run"):
         return node
     obj, cls = node.args[0], node.args[1].value  # type: ignore[attr-defined]
-    if cls in compiled:
-        names = (type_name(cls), function_name(cls), own_name(cls))
-        node.args = [obj, *(py.Name(n, py.Load()) for n in names)]
+    method = py.copy_location(py.Call(py.Attribute(obj, "_body", py.Load()), [], []), node)
+    if cls not in compiled:
+        return method
+    exact = py.Compare(py.Call(py.Name("type", py.Load()), [obj], []), [py.Is()], [py.Name(type_name(cls), py.Load())])
+    test = py.BoolOp(py.And(), [py.Name(own_name(cls), py.Load()), exact])
+    call = py.Call(py.Name(impl_name(cls), py.Load()), [py.Name(CTX, py.Load()), obj], [])
+    return py.copy_location(py.IfExp(test, call, method), node)
+
+
+class _ToContext(py.NodeTransformer):
+    """The per-PLC names a body reads (helpers, classes, offsets, `_k_ns`) as fields of its context."""
+
+    def __init__(self, names: set[str]):
+        self.names = names
+
+    def visit_Name(self, node: py.Name):
+        if node.id in self.names and isinstance(node.ctx, py.Load):
+            field = "ns" if node.id == NS else node.id
+            return py.copy_location(py.Attribute(py.Name(CTX, py.Load()), field, py.Load()), node)
         return node
-    return py.copy_location(py.Call(py.Attribute(obj, "_body", py.Load()), [], []), node)
 
 
 def module_text(bodies: list[tuple[str, str, str, Typed]]) -> tuple[str, dict[int, tuple[str, int, str]]]:
-    """`bodies`: [(class name, ST file, POU name, typed body)] → (pyx text, {pyx line: (file, ST line, POU)})."""
+    """`bodies`: [(class name, ST file, POU name, typed body)] → (pyx text, {pyx line: (file, ST line, POU)}).
+
+    Each body is a C function `_k_impl<class>(ctx, self)`; `ctx` (a `_k_Ctx`, one per PLC) holds
+    what it reads from the PLC's namespace, bound once by make(), which returns thin Python
+    wrappers (the classes' `_body`). A compiled body calls another one in C."""
     captured = sorted({name for _, _, _, t in bodies for name in t.captured})
     slots = sorted({slot for _, _, _, t in bodies for slot in t.slots})
     compiled = {cls for cls, _, _, _ in bodies}
-    for _, _, _, t in bodies:
-        _direct_calls(t.fn, compiled)
-    typed_classes = sorted({c for c, _ in slots} | compiled)
+    classes = sorted({c for c, _ in slots} | compiled)
+    context = set(captured) | {type_name(c) for c in classes} | {own_name(c) for c in compiled} | {NS}
+    context |= {offset_name(c, a) for c, a in slots}
     out = PRELUDE.splitlines()
-    out.append("")
-    out.append(f"def make(dict {NS}):")
-    out.append(f'    """The bodies bound to one PLC\'s namespace {NS}."""')
-    if slots:
-        out.append("    cdef Py_ssize_t " + ", ".join(offset_name(c, a) for c, a in slots))
-    for name in captured:
-        out.append(f"    {name} = {NS}[{name!r}]")
-    for cls in typed_classes:
-        out.append(f"    {type_name(cls)} = {NS}[{cls!r}]")
-    for cls, file, _, _ in bodies:
-        out.append(f"    cdef bint {own_name(cls)} = _k_generated({type_name(cls)}, {file!r})")
-    for cls, attr in slots:
-        out.append(f"    {offset_name(cls, attr)} = _k_off({type_name(cls)}, {attr!r})")
+    out += ["", "cdef class _k_Ctx:", "    # what the bodies of one PLC read from its namespace", "    cdef dict ns"]
+    out += [f"    cdef object {name}" for name in captured]
+    out += [f"    cdef object {type_name(c)}" for c in classes]
+    out += [f"    cdef bint {own_name(c)}" for c in sorted(compiled)]
+    out += [f"    cdef Py_ssize_t {offset_name(c, a)}" for c, a in slots]
     where: dict[int, tuple[str, int, str]] = {}
     for cls, file, pou, typed in bodies:
-        typed.fn.name = function_name(cls)
-        text = python_text(py.Module(body=[typed.fn], type_ignores=[])).splitlines()
+        _direct_calls(typed.fn, compiled)
+        fn = _ToContext(context).visit(typed.fn)
+        text = python_text(py.Module(body=fn.body, type_ignores=[])).splitlines()
+        line = getattr(typed.fn, "lineno", 1)
         decls: dict[str, list[str]] = {}
         for local, c in sorted(typed.decls.items()):
             decls.setdefault(c, []).append(local)
-        lines = [text[0]]
+        lines = [f"cdef object {impl_name(cls)}(_k_Ctx {CTX}, object self):  # st:{line}"]
         lines += [f"    cdef {c} " + ", ".join(names) for c, names in sorted(decls.items())]
         lines.append("    cdef unsigned int _k_wd = 0")
-        lines += text[1:]
+        lines += ["    " + t for t in text]
         last = None
-        out.append("")
-        for line in lines:
-            m = _MARK.search(line)
+        out += ["", ""]
+        for text_line in lines:
+            m = _MARK.search(text_line)
             if m:
                 last = int(m.group(1))
-                line = line[: m.start()] + "  # st:" + m.group(1)
-            out.append("    " + line)
+            out.append(text_line)
             if last is not None:
                 where[len(out)] = (file, last, pou)
-    out.append("")
+    out += ["", "", f"def make(dict {NS}):", f'    """The bodies bound to one PLC\'s namespace {NS}."""']
+    out.append(f"    cdef _k_Ctx {CTX} = _k_Ctx()")
+    out.append(f"    {CTX}.ns = {NS}")
+    out += [f"    {CTX}.{name} = {NS}[{name!r}]" for name in captured]
+    out += [f"    {CTX}.{type_name(c)} = {NS}[{c!r}]" for c in classes]
+    out += [f"    {CTX}.{own_name(c)} = _k_generated({CTX}.{type_name(c)}, {f!r})" for c, f, _, _ in bodies]
+    out += [f"    {CTX}.{offset_name(c, a)} = _k_off({CTX}.{type_name(c)}, {a!r})" for c, a in slots]
+    for cls, _, _, _ in bodies:
+        out += [f"    def {function_name(cls)}(self):", f"        return {impl_name(cls)}({CTX}, self)"]
     out.append("    bodies = {" + ", ".join(f"{cls!r}: {function_name(cls)}" for cls, _, _, _ in bodies) + "}")
-    owned = ", ".join(f"{cls!r}: {own_name(cls)}" for cls, _, _, _ in bodies)
+    owned = ", ".join(f"{cls!r}: {CTX}.{own_name(cls)}" for cls, _, _, _ in bodies)
     out.append(f"    return {{cls: body for cls, body in bodies.items() if {{{owned}}}[cls]}}")
     return "\n".join(out) + "\n", where
