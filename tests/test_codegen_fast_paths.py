@@ -109,6 +109,20 @@ END_PROGRAM"""
     assert all(type(plc[f"main.{k}"]) is float for k in ("l", "k", "r", "q"))
 
 
+def test_two_converted_integers_multiply_as_lreals_not_exactly():
+    # (2^32-1)^2 is 18446744065119617025 exactly; LREAL arithmetic rounds it to the nearest double
+    src = """PROGRAM main
+VAR u : UDINT := 4294967295; p, s : LREAL; r : REAL; i : INT := 3; END_VAR
+p := UDINT_TO_LREAL(u) * UDINT_TO_LREAL(u);
+s := UDINT_TO_LREAL(u) + UDINT_TO_LREAL(u);
+r := INT_TO_REAL(i) * INT_TO_REAL(i);
+END_PROGRAM"""
+    plc = run(src)
+    assert plc["main.p"] == 1.8446744065119617e19 and plc["main.p"] != 18446744065119617025
+    assert [plc["main.s"], plc["main.r"]] == [8589934590.0, 9.0]
+    assert all(type(plc[f"main.{k}"]) is float for k in ("p", "s", "r"))
+
+
 STANDARD_BLOCKS = """PROGRAM main
 VAR
   n : INT; x, y : BOOL;

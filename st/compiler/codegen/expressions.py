@@ -568,11 +568,15 @@ class ExprGen:
         res = T.base_of(e.ty) if e.ty is not None else None
         l, r = self.expr(e.left), self.expr(e.right)
         if op in ("+", "-", "*") and res is not None and res.is_real:
-            # a float operand converts the other's integer itself, as float() does: no call
-            if lt is not None and lt.is_real:
-                r = _unfloat(r)
-            if rt is not None and rt.is_real:
-                l = _unfloat(l)
+            # a float operand converts the other's integer itself, as float() does: no call. Only
+            # one side: with both conversions gone, two integers would multiply exactly (a UDINT_TO_LREAL
+            # product of 2^32-1 by itself is an int of 64 bits, not the double LREAL arithmetic gives)
+            l2 = _unfloat(l) if rt is not None and rt.is_real else l
+            r2 = _unfloat(r) if lt is not None and lt.is_real else r
+            if r2 is not r:
+                r = r2
+            elif l2 is not l:
+                l = l2
         pl, pr = (T.unalias(x.ty) if x.ty is not None else None for x in (e.left, e.right))
         if isinstance(pl, T.RefType) or isinstance(pr, T.RefType):
             if op in ("+", "-") and not (isinstance(pl, T.RefType) and isinstance(pr, T.RefType)):

@@ -68,7 +68,7 @@ class ClassInfo:
 
 def type_body(fn: py.FunctionDef, own: str, classes: dict[str, ClassInfo], volatile: frozenset[str]) -> Typed:
     """The `_body` of class `own`; `classes`: every generated block class by name."""
-    fn = copy.deepcopy(fn)
+    fn = _unshared(copy.deepcopy(fn))
     _check_eligible(fn)
     stores = _stores(fn)
     params = {a.arg for a in fn.args.args}
@@ -122,6 +122,30 @@ def _check_eligible(fn: py.FunctionDef) -> None:
             raise NotEligible(f"it uses the name {node.id}, which C or Cython reserve")
         if isinstance(node, py.Attribute) and node.attr in _RESERVED:
             raise NotEligible(f"it uses the name {node.attr}, which C or Cython reserve")
+
+
+def _unshared(fn: py.FunctionDef) -> py.FunctionDef:
+    """`fn` as a tree: the code generator may put one node in two places (a FOR loop's start is
+    both the counter's first value and the range's), and this module rewrites nodes in place."""
+    seen: set[int] = set()
+    todo: list[py.AST] = [fn]
+    while todo:
+        node = todo.pop()
+        for name, value in py.iter_fields(node):
+            items = value if isinstance(value, list) else [value]
+            fresh = []
+            for item in items:
+                if isinstance(item, py.AST):
+                    if id(item) in seen:
+                        item = copy.deepcopy(item)
+                    seen.add(id(item))
+                    todo.append(item)
+                fresh.append(item)
+            if isinstance(value, list):
+                value[:] = fresh
+            elif isinstance(value, py.AST):
+                setattr(node, name, fresh[0])
+    return fn
 
 
 def _depth(fn: py.FunctionDef) -> int:
