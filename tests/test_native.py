@@ -312,3 +312,12 @@ def test_an_expression_nested_beyond_cythons_parser_keeps_its_body_python():
     type_body(
         _body(f"def _body(self):\n    x = self.x\n    self.y = {' + '.join(['x'] * 90)}\n"), "_fb_x", {}, frozenset()
     )
+
+
+def test_a_subrange_variable_has_its_base_types_interval():
+    # a POINTER writes a subrange variable without the check: C may not assume the subrange
+    from st.model import types as T
+
+    sub = T.SubrangeType("S", T.DINT, 0, 1000000)
+    assert kinds.of_type(sub) == Int(-(1 << 31), (1 << 31) - 1)
+    assert kinds.of_type(T.SubrangeType("L", T.LINT, 0, 5)) is None

@@ -78,7 +78,9 @@ def of_type(t: T.Type | None) -> Kind:
         elem = element_kind(t)
         return Arr(elem) if isinstance(elem, (Int, Float, Bool)) else None
     if isinstance(t, T.SubrangeType):
-        return Int(t.lo, t.hi) if t.bits <= 32 else None
+        # the base type's range, not the subrange's: a POINTER (or ANY) writes without the check
+        base = t.base
+        return Int(base.lo, base.hi) if base.bits <= 32 else None
     if not isinstance(t, T.ElemType):
         return None
     if t.kind == "bool":
