@@ -28,17 +28,28 @@ from st.runtime.faults import PLCFault as _k_PLCFault
 
 cdef extern from "Python.h":
     ctypedef struct PyMemberDef:
+        int type
         Py_ssize_t offset
+        int flags
     ctypedef struct PyMemberDescrObject:
         PyMemberDef *d_member
 
 
+cdef extern from "structmember.h":
+    int T_OBJECT_EX
+    int READONLY
+
+
 cdef Py_ssize_t _k_off(object cls, str name):
     # the offset of slot `name` in instances of `cls`, or -1 (then it is reached by name)
+    cdef PyMemberDef *m
     d = getattr(cls, name, None)
     if type(d) is not _k_MemberDescriptor:
         return -1
-    return (<PyMemberDescrObject *>d).d_member.offset
+    m = (<PyMemberDescrObject *>d).d_member
+    if m.type != T_OBJECT_EX or m.flags & READONLY:
+        return -1  # not a __slots__ entry (a C type's own member): by name
+    return m.offset
 
 
 cdef extern from *:
