@@ -20,7 +20,8 @@ from pathlib import Path
 
 from .. import cache
 
-CFLAGS = ["-O2", "-fwrapv", "-fno-strict-aliasing", "-fPIC", "-shared", "-w"]
+# -ffp-contract=off: no fused multiply-add (x * x - 0.01 must round twice, as Python does)
+CFLAGS = ["-O2", "-fwrapv", "-fno-strict-aliasing", "-ffp-contract=off", "-fPIC", "-shared", "-w"]
 TIMEOUT_S = 600
 
 
@@ -66,7 +67,8 @@ def build_dir() -> Path:
 
 
 def module_name(text: str) -> str:
-    key = "\0".join([text, cython_version() or "", sysconfig.get_config_var("EXT_SUFFIX") or "", " ".join(CFLAGS)])
+    cc = " ".join(c_compiler() or [])  # another compiler (or CC) builds another module
+    key = "\0".join([text, cython_version() or "", sysconfig.get_config_var("EXT_SUFFIX") or "", " ".join(CFLAGS), cc])
     return "st_k_" + hashlib.sha256(key.encode()).hexdigest()[:20]
 
 
