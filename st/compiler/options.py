@@ -24,7 +24,7 @@ class CompileOptions:
     emit_python: bool = False  # keep the generated Python text (CompiledProgram.python_source)
     coverage: bool = False  # line and branch probes (never cached)
     use_cache: bool = True
-    native: bool = False  # loop bodies compiled to C by Cython (compiler/native)
+    native: bool = False  # block bodies compiled to C by Cython (compiler/native, docs/native.md)
 
     @classmethod
     def for_sources(
