@@ -163,11 +163,12 @@ def test_slots_of_known_blocks_are_reached_at_their_offsets():
     assert typed.decls == {"n": "int64_t"}
     assert typed.slots == {("_prg_main", "n"), ("_prg_main", "f"), ("_prg_main", "t"), ("_fb_f", "x"), ("_fb_f", "q")}
     text, _ = module_text([("_prg_main", "p.st", "main", typed)])
-    assert "_k_st(_t1, _k_c._k_T_fb_f, _k_c._k_O5__fb_f_x, 'x', n + 1)" in text
+    # a C value is stored and read at the slot with its C type; an object (`self.f`) as an object
+    assert "_k_sti(_t1, _k_c._k_T_fb_f, _k_c._k_O5__fb_f_x, 'x', n + 1)" in text
     assert "        _t1._body()  # st:" in text  # _fb_f's body is not compiled in this module: the method call stays
     assert (
-        "n = _k_i64(_k_ld(_k_ld(self, _k_c._k_T_prg_main, _k_c._k_O9__prg_main_f, 'f'), "
-        "_k_c._k_T_fb_f, _k_c._k_O5__fb_f_q, 'q'))"
+        "n = _k_ldi(_k_ld(self, _k_c._k_T_prg_main, _k_c._k_O9__prg_main_f, 'f'), "
+        "_k_c._k_T_fb_f, _k_c._k_O5__fb_f_q, 'q')"
     ) in text
     assert "_k_now = _k_c.ns['_now']" in text and "'t', _k_now)" in text  # the job's time, read once per body
 
@@ -321,3 +322,65 @@ def test_a_subrange_variable_has_its_base_types_interval():
     sub = T.SubrangeType("S", T.DINT, 0, 1000000)
     assert kinds.of_type(sub) == Int(-(1 << 31), (1 << 31) - 1)
     assert kinds.of_type(T.SubrangeType("L", T.LINT, 0, 5)) is None
+
+
+# slots read and written with C types: their fast paths (an exact bool, small int or float in the
+# slot) and everything else (an int beyond one CPython digit, an int in a REAL, 1 in a BOOL, an
+# instance of a derived block, reached by name)
+SLOTS = """\
+FUNCTION_BLOCK acc
+VAR_INPUT k : DINT; f : REAL; b : BOOL; END_VAR
+VAR_OUTPUT big : DINT; r : REAL; q : BOOL; n : INT; END_VAR
+big := big + k;
+r := f * 2.0;
+q := b AND NOT q;
+n := n + 1;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK acc2 EXTENDS acc
+SUPER^();
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR
+  one : acc;
+  two : acc2;
+  k : DINT := 600000000;
+  f : REAL := 1.5;
+  b : BOOL := TRUE;
+  big : DINT;
+  r : REAL;
+  q : BOOL;
+  n : INT;
+END_VAR
+one(k := k, f := f, b := b);
+two(k := k, f := f, b := b);
+big := one.big - two.big + one.big;
+r := one.r + two.r;
+q := one.q AND two.q;
+n := one.n + two.n;
+END_PROGRAM
+"""
+
+
+@needs_toolchain
+def test_typed_slot_access_agrees_with_python_beyond_its_fast_paths():
+    out = {}
+    for native in (False, True):
+        compiled = compile_text(SLOTS, "slots.st", native=native)
+        assert bool(compiled.native) is native
+        plc = PLC(compiled)
+        seen = []
+        for scan in range(5):
+            if scan == 2:
+                main = plc.instances["main"][1]  # written past the API, which would convert them:
+                main.f = 3  # an int in a REAL slot
+                main.b = 1  # and 1 in a BOOL slot
+            plc.scan(1)
+            seen.append(tuple(plc[f"main.{v}"] for v in ("big", "r", "q", "n", "one.big", "two.r", "one.q")))
+        out[native] = seen
+    assert out[True] == out[False]
+    # 600000000 * 4 wraps past DINT's top: -1894967296; one.big and two.big always agree
+    assert [s[0] for s in out[True]] == [600000000, 1200000000, 1800000000, -1894967296, -1294967296]
+    assert [s[1] for s in out[True]] == [6.0, 6.0, 12.0, 12.0, 12.0]
+    assert [s[2] for s in out[True]] == [True, False, True, False, True]
+    assert [s[3] for s in out[True]] == [2, 4, 6, 8, 10]
+    assert [type(v) for v in out[True][4]] == [int, float, bool, int, int, float, bool]

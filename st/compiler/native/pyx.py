@@ -76,9 +76,111 @@ cdef extern from *:
         }
         return PyObject_SetAttr(o, name, v);
     }
+
+    /* Typed forms: a BOOL, integer or REAL slot read straight to a C value, with no reference
+       taken, when it holds an exact bool, small int or float; a C value stored only when it
+       differs from the slot's (no new int or float object each scan for a value that did not
+       change). Anything else takes the generic path, converting as the bodies' Cython does. */
+    #if PY_VERSION_HEX >= 0x030C0000
+    #define ST_K_SMALL(p) (PyLong_CheckExact(p) && PyUnstable_Long_IsCompact((PyLongObject *)(p)))
+    #define ST_K_SMALL_VALUE(p) ((int64_t)PyUnstable_Long_CompactValue((PyLongObject *)(p)))
+    #else
+    #define ST_K_SMALL(p) (PyLong_CheckExact(p) && Py_SIZE(p) >= -1 && Py_SIZE(p) <= 1)
+    #define ST_K_SMALL_VALUE(p) ((int64_t)Py_SIZE(p) * (int64_t)((PyLongObject *)(p))->ob_digit[0])
+    #endif
+    static void *st_k_to_i64;  /* the module's own object -> int64_t and -> double conversions */
+    static void *st_k_to_f64;
+    static inline __attribute__((always_inline)) PyObject **
+    st_k_slot(PyObject *o, PyObject *cls, Py_ssize_t off) {
+        return (Py_TYPE(o) == (PyTypeObject *)cls && off >= 0) ? (PyObject **)((char *)o + off) : NULL;
+    }
+    static __attribute__((noinline)) int st_k_ldb_slow(PyObject *o, PyObject *name) {
+        PyObject *p = PyObject_GetAttr(o, name);
+        int r;
+        if (p == NULL) return -1;
+        r = PyObject_IsTrue(p);
+        Py_DECREF(p);
+        return r;
+    }
+    static __attribute__((noinline)) int64_t st_k_ldi_slow(PyObject *o, PyObject *name) {
+        PyObject *p = PyObject_GetAttr(o, name);
+        int64_t r;
+        if (p == NULL) return -1;
+        r = ((int64_t (*)(PyObject *))st_k_to_i64)(p);
+        Py_DECREF(p);
+        return r;
+    }
+    static __attribute__((noinline)) double st_k_ldf_slow(PyObject *o, PyObject *name) {
+        PyObject *p = PyObject_GetAttr(o, name);
+        double r;
+        if (p == NULL) return -1.0;
+        r = ((double (*)(PyObject *))st_k_to_f64)(p);
+        Py_DECREF(p);
+        return r;
+    }
+    static __attribute__((noinline)) int st_k_st_new(PyObject *o, PyObject **slot, PyObject *name, PyObject *v) {
+        /* store a new reference `v` (NULL: its creation failed) */
+        int r = 0;
+        if (v == NULL) return -1;
+        if (slot != NULL) {
+            PyObject *old = *slot;
+            *slot = v;
+            Py_XDECREF(old);
+            return 0;
+        }
+        r = PyObject_SetAttr(o, name, v);
+        Py_DECREF(v);
+        return r;
+    }
+    static inline __attribute__((always_inline)) int
+    st_k_ldb(PyObject *o, PyObject *cls, Py_ssize_t off, PyObject *name) {
+        PyObject **slot = st_k_slot(o, cls, off);
+        if (slot != NULL) {
+            if (*slot == Py_True) return 1;
+            if (*slot == Py_False) return 0;
+        }
+        return st_k_ldb_slow(o, name);
+    }
+    static inline __attribute__((always_inline)) int64_t
+    st_k_ldi(PyObject *o, PyObject *cls, Py_ssize_t off, PyObject *name) {
+        PyObject **slot = st_k_slot(o, cls, off);
+        if (slot != NULL && *slot != NULL && ST_K_SMALL(*slot)) return ST_K_SMALL_VALUE(*slot);
+        return st_k_ldi_slow(o, name);
+    }
+    static inline __attribute__((always_inline)) double
+    st_k_ldf(PyObject *o, PyObject *cls, Py_ssize_t off, PyObject *name) {
+        PyObject **slot = st_k_slot(o, cls, off);
+        if (slot != NULL && *slot != NULL && PyFloat_CheckExact(*slot)) return PyFloat_AS_DOUBLE(*slot);
+        return st_k_ldf_slow(o, name);
+    }
+    static inline __attribute__((always_inline)) int
+    st_k_stb(PyObject *o, PyObject *cls, Py_ssize_t off, PyObject *name, int v) {
+        return st_k_st(o, cls, off, name, v ? Py_True : Py_False);
+    }
+    static inline __attribute__((always_inline)) int
+    st_k_sti(PyObject *o, PyObject *cls, Py_ssize_t off, PyObject *name, int64_t v) {
+        PyObject **slot = st_k_slot(o, cls, off);
+        if (slot != NULL && *slot != NULL && ST_K_SMALL(*slot) && ST_K_SMALL_VALUE(*slot) == v) return 0;
+        return st_k_st_new(o, slot, name, PyLong_FromLongLong(v));
+    }
+    static inline __attribute__((always_inline)) int
+    st_k_stf(PyObject *o, PyObject *cls, Py_ssize_t off, PyObject *name, double v) {
+        PyObject **slot = st_k_slot(o, cls, off);
+        if (slot != NULL && *slot != NULL && PyFloat_CheckExact(*slot)
+            && memcmp(&((PyFloatObject *)*slot)->ob_fval, &v, sizeof v) == 0) return 0;
+        return st_k_st_new(o, slot, name, PyFloat_FromDouble(v));
+    }
     '''
     object _k_ld "st_k_ld"(object o, object cls, Py_ssize_t off, object name)
     int _k_st "st_k_st"(object o, object cls, Py_ssize_t off, object name, object v) except -1
+    bint _k_ldb "st_k_ldb"(object o, object cls, Py_ssize_t off, object name) except -1
+    int64_t _k_ldi "st_k_ldi"(object o, object cls, Py_ssize_t off, object name) except? -1
+    double _k_ldf "st_k_ldf"(object o, object cls, Py_ssize_t off, object name) except? -1.0
+    int _k_stb "st_k_stb"(object o, object cls, Py_ssize_t off, object name, bint v) except -1
+    int _k_sti "st_k_sti"(object o, object cls, Py_ssize_t off, object name, int64_t v) except -1
+    int _k_stf "st_k_stf"(object o, object cls, Py_ssize_t off, object name, double v) except -1
+    void *st_k_to_i64
+    void *st_k_to_f64
 
 
 def _k_generated(cls, str file):
@@ -98,6 +200,18 @@ cdef inline double _k_f64(object o) except? -1.0:
 
 cdef inline bint _k_b(object o) except -1:
     return o
+
+
+cdef int64_t _k_to_i64(object o) except? -1:
+    return o
+
+
+cdef double _k_to_f64(object o) except? -1.0:
+    return o
+
+
+st_k_to_i64 = <void *>_k_to_i64
+st_k_to_f64 = <void *>_k_to_f64
 
 
 cdef inline object _k_obj(object o):

@@ -41,6 +41,9 @@ _RESERVED = frozenset(
     "float double bint void size_t Py_ssize_t int64_t copysign NAN INFINITY DEF IF ELIF ELSE by new".split()
 )
 _CAST = {"int64_t": "_k_i64", "double": "_k_f64", "bint": "_k_b"}
+# a slot read to a C value, and a C value stored in a slot (pyx.PRELUDE)
+_LOAD = {"int64_t": "_k_ldi", "double": "_k_ldf", "bint": "_k_ldb"}
+_STORE = {"int64_t": "_k_sti", "double": "_k_stf", "bint": "_k_stb"}
 
 
 class NotEligible(Exception):
@@ -277,8 +280,9 @@ class _Transformer(py.NodeTransformer):
             obj, kind = self.expr(target.value)
             args = self._slot(obj, kind, target.attr)
             if args is not None:
-                value = self.expr(node.value)[0]
-                return py.copy_location(py.Expr(_call("_k_st", *args, value)), node)
+                value, vk = self.expr(node.value)
+                store = _STORE.get(ctype(vk) or "", "_k_st")
+                return py.copy_location(py.Expr(_call(store, *args, value)), node)
         return self.generic_visit(node)
 
     def visit_AugAssign(self, node: py.AugAssign):
@@ -344,9 +348,7 @@ class _Transformer(py.NodeTransformer):
             if args is not None:
                 assert isinstance(kind, Inst)
                 k = self.classes[kind.cls].kinds.get(e.attr)
-                node: py.expr = _call("_k_ld", *args)
-                c = ctype(k)
-                return py.copy_location(_call(_CAST[c], node) if c else node, e), k
+                return py.copy_location(_call(_LOAD.get(ctype(k) or "", "_k_ld"), *args), e), k
         return e, None
 
     def x_BinOp(self, e: py.BinOp):
