@@ -1291,6 +1291,23 @@ def test_other_presets_round_halfway_away_from_zero(dialect):
     assert [plc[f"main.{k}"] for k in "abcdef"] == [3, 4, -3, 2, -4, 0]
 
 
+NEAR_HALF = """PROGRAM main
+VAR a, b, c, d : DINT; x : LREAL := 0.49999999999999994; END_VAR
+a := LREAL_TO_DINT(x);
+b := LREAL_TO_DINT(-x);
+c := TRUNC(x + 1.0);
+d := LREAL_TO_DINT(LREAL_TO_REAL(x));
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys"])
+def test_the_largest_double_below_a_half_rounds_to_zero(dialect):
+    # floor(x + 0.5) would give 1: x + 0.5 rounds up to 1.0 in double precision
+    plc = run(NEAR_HALF, 1, dialect)
+    assert [plc[f"main.{k}"] for k in "abcd"] == [0, 0, 1, 1]  # (as REAL, x is 0.5: away from zero)
+
+
 def _f32(v: float) -> float:
     return struct.unpack("<f", struct.pack("<f", v))[0]
 

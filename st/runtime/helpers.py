@@ -87,11 +87,21 @@ def _pow(a: float, b: float) -> float:
     return r
 
 
-def _round(v: float) -> int:
-    """Nearest integer, halves away from zero (IEC REAL_TO_INT)."""
+def round_half_away(v: float) -> int:
+    """Nearest integer, halves away from zero (IEC REAL_TO_INT). From the truncated value and the
+    exact fraction `v - q`: floor(v + 0.5) would round the sum, making 0.49999999999999994 a 1."""
     if v != v or v in (math.inf, -math.inf):
         raise PLCFault(f"cannot convert {v} to an integer", "CONVERSION")
-    return int(math.floor(v + 0.5)) if v >= 0 else -int(math.floor(-v + 0.5))
+    q = int(v)
+    d = v - q
+    if d >= 0.5:
+        return q + 1
+    if d <= -0.5:
+        return q - 1
+    return q
+
+
+_round = round_half_away  # (the generated code's name)
 
 
 def _trunc(v: float) -> int:

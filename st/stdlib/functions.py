@@ -21,7 +21,7 @@ from ..model.literals import (
     parse_real,
 )
 from ..runtime.faults import PLCFault
-from ..runtime.helpers import round_f32
+from ..runtime.helpers import round_f32, round_half_away
 
 # ------------------------------------------------------------------ numeric
 
@@ -194,10 +194,7 @@ def _std_find(s1, s2):
 # ------------------------------------------------------------------ conversions
 
 
-def _round_half_away(v):
-    if v != v or v in (math.inf, -math.inf):
-        raise PLCFault(f"cannot convert {v} to an integer", "CONVERSION")
-    return int(math.floor(v + 0.5)) if v >= 0 else -int(math.floor(-v + 0.5))
+_round_half_away = round_half_away  # (st.runtime.helpers: the one rounding of REAL → integer)
 
 
 def _out_of_range(v, lo, hi, name):
@@ -210,7 +207,7 @@ def _real_to_int(v, lo, hi, name):
     included) is a CONVERSION fault, never a silently wrapped value."""
     if v != v or not (lo - 0.5 < v < hi + 0.5):
         raise _out_of_range(v, lo, hi, name)
-    return int(math.floor(v + 0.5)) if v >= 0 else -int(math.floor(-v + 0.5))
+    return round_half_away(v)
 
 
 def _real_to_int_matiec(v, lo, hi, name):
