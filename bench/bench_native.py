@@ -1,6 +1,6 @@
 """st against OpenPLC's native path on the same ST: ns per scan and the ratio, with checksums.
 
-    python bench/bench_native.py --matiec DIR [--scans N] [--workloads NAME ...]
+    python bench/bench_native.py --matiec DIR [--scans N] [--workloads NAME ...] [--dir DIR]
 
 DIR is a built MatIEC (OpenPLC's fork: `autoreconf -i && ./configure && make` in a checkout of
 github.com/thiagoralves/matiec, outside this repository): its `iec2c` and `lib/`. Each workload
@@ -129,10 +129,12 @@ def to_signed32(v: int) -> int:
     return v - (1 << 32) if v >= 1 << 31 else v
 
 
-def measure(matiec: Path | None, scans: int, runs: int, names: list[str] | None = None) -> tuple[list[dict], list[str]]:
+def measure(
+    matiec: Path | None, scans: int, runs: int, names: list[str] | None = None, where: Path = WORKLOADS
+) -> tuple[list[dict], list[str]]:
     """(one row per workload, the native columns' labels): st's ns per scan and checksum, and each
     native build's (ns per scan, checksum) when MatIEC and g++ are there (else no native column)."""
-    files = sorted(WORKLOADS.glob("*.st"))
+    files = sorted(where.glob("*.st"))
     if names:
         files = [f for f in files if f.stem in names]
     native = matiec is not None and (matiec / "iec2c").exists() and shutil.which("g++") is not None
@@ -198,8 +200,14 @@ def main() -> None:
     ap.add_argument("--scans", type=int, default=20000, help="scans per run (the checksums are compared after them)")
     ap.add_argument("--runs", type=int, default=3, help="runs of each; the median is shown")
     ap.add_argument("--workloads", nargs="*", default=None, help="names in bench/workloads (default: all)")
+    ap.add_argument(
+        "--dir",
+        type=Path,
+        default=WORKLOADS,
+        help="another directory of workloads (each a program with a `checksum AT %%QD0 : DINT`)",
+    )
     args = ap.parse_args()
-    rows, labels = measure(args.matiec, args.scans, args.runs, args.workloads)
+    rows, labels = measure(args.matiec, args.scans, args.runs, args.workloads, args.dir)
     if not labels:
         print("no MatIEC build (--matiec DIR or ST_MATIEC) or no g++: st's numbers only\n")
     print(f"{args.scans} scans per run, median of {args.runs}; ns per scan\n")

@@ -8,6 +8,8 @@ generated programs. The interval rules (kinds.py) are checked directly, with exa
 from __future__ import annotations
 
 import ast as py
+import math
+import struct
 from pathlib import Path
 
 import pytest
@@ -384,3 +386,96 @@ def test_typed_slot_access_agrees_with_python_beyond_its_fast_paths():
     assert [s[2] for s in out[True]] == [True, False, True, False, True]
     assert [s[3] for s in out[True]] == [2, 4, 6, 8, 10]
     assert [type(v) for v in out[True][4]] == [int, float, bool, int, int, float, bool]
+
+
+# the standard functions computed by their C twins: every edge case bit for bit as on the Python
+# tier (the same libm, the helpers' NaN/INF rules), and REAL → DINT rounding of both dialects
+TWINS = """\
+PROGRAM main
+VAR
+  x : ARRAY[0..15] OF LREAL;
+  f : ARRAY[0..15] OF REAL;
+  r : ARRAY[0..175] OF LREAL;
+  y : ARRAY[0..7] OF LREAL := [2.5, -2.5, 3.5, -3.5, 0.49999999999999994, -0.5, 2147483647.4, -2147483648.4];
+  k : ARRAY[0..7] OF DINT;
+  big : LREAL := 3.0E9;
+  out : DINT;
+  mode : INT;
+  b : BOOL;
+  n : DINT;
+  i : INT;
+END_VAR
+FOR i := 0 TO 15 DO
+  r[i] := SQRT(x[i]);
+  r[16 + i] := LN(x[i]);
+  r[32 + i] := LOG(x[i]);
+  r[48 + i] := EXP(x[i]);
+  r[64 + i] := SIN(x[i]);
+  r[80 + i] := COS(x[i]);
+  r[96 + i] := TAN(x[i]);
+  r[112 + i] := ASIN(x[i]);
+  r[128 + i] := ACOS(x[i]);
+  r[144 + i] := ATAN(x[i]);
+  r[160 + i] := REAL_TO_LREAL(SIN(f[i]) + EXP(f[i]));
+END_FOR;
+FOR i := 0 TO 7 DO
+  k[i] := LREAL_TO_DINT(y[i]);
+END_FOR;
+b := NOT b;
+n := n + BOOL_TO_DINT(b) * 3;
+IF mode = 1 THEN
+  out := LREAL_TO_DINT(big);
+END_IF;
+END_PROGRAM
+"""
+EDGES = [
+    math.nan,
+    math.inf,
+    -math.inf,
+    0.0,
+    -0.0,
+    1e-310,
+    -1.0,
+    0.5,
+    1.0,
+    2.0,
+    710.0,
+    -1000.0,
+    1e300,
+    math.pi,
+    1e22,
+    -2.5,
+]
+
+
+def _bits(v: float) -> bytes:
+    return struct.pack("<d", v)
+
+
+@needs_toolchain
+@pytest.mark.parametrize("dialect", ["iec", "openplc"])
+def test_standard_functions_computed_in_c_agree_bit_for_bit(dialect):
+    out = {}
+    for native in (False, True):
+        compiled = compile_text(TWINS, "twins.st", dialect=dialect, native=native)
+        assert bool(compiled.native) is native
+        plc = PLC(compiled)
+        for i, v in enumerate(EDGES):
+            plc[f"main.x[{i}]"] = v
+            plc[f"main.f[{i}]"] = v if math.isnan(v) or abs(v) < 1e38 else math.copysign(math.inf, v)
+        plc.scan(3)
+        r = plc["main.r"]
+        assert all(type(v) is float for v in r)
+        out[native] = ([_bits(v) for v in r], plc["main.k"], plc["main.n"])
+        plc["main.mode"] = 1
+        with pytest.raises(PLCFaultError) as e:
+            plc.scan(1)
+        assert (e.value.fault.kind, e.value.fault.line) == ("CONVERSION", 34)
+        out[native] += (e.value.fault.message,)
+    assert out[True] == out[False]
+    halfway = [3, -3, 4, -4] if dialect == "iec" else [2, -2, 4, -4]  # MatIEC makes halfway even
+    # 0.49999999999999994 + 0.5 rounds to 1.0 in double: the nearest integer is still 0
+    assert out[True][1] == halfway + [0, -1 if dialect == "iec" else 0, 2147483647, -2147483648]
+    assert out[True][2] == 6  # BOOL_TO_DINT of TRUE, FALSE, TRUE
+    r = out[True][0]
+    assert r[48 + 10] == _bits(math.inf) and r[16 + 3] == _bits(-math.inf) and r[64 + 1] == _bits(math.nan)

@@ -38,12 +38,19 @@ _C_INT_MAX = (1 << 31) - 1
 _RESERVED = frozenset(
     "range abs min max cython cdef cpdef cimport ctypedef struct union enum extern include inline public "
     "readonly api sizeof typeof NULL gil nogil noexcept const volatile signed unsigned short long int char "
-    "float double bint void size_t Py_ssize_t int64_t copysign NAN INFINITY DEF IF ELIF ELSE by new".split()
+    "float double bint void size_t Py_ssize_t int64_t copysign NAN INFINITY DEF IF ELIF ELSE by new "
+    "sqrt log log10 exp sin cos tan asin acos atan TWINS".split()
 )
 _CAST = {"int64_t": "_k_i64", "double": "_k_f64", "bint": "_k_b"}
 # a slot read to a C value, and a C value stored in a slot (pyx.PRELUDE)
 _LOAD = {"int64_t": "_k_ldi", "double": "_k_ldf", "bint": "_k_ldb"}
 _STORE = {"int64_t": "_k_sti", "double": "_k_stf", "bint": "_k_stb"}
+# standard functions with a C twin in pyx.PRELUDE (`_k_m` + name), used when the PLC's namespace
+# binds the standard helper (pyx.TWINS): the same libm, the same edge cases
+MATH_TWINS = frozenset(
+    "_std_sqrt _std_ln _std_log _std_exp _std_sin _std_cos _std_tan _std_asin _std_acos _atan".split()
+)
+_EXACT_INT = (1 << 53) - 1  # REAL → integer bounds computed in C (beyond: Python)
 
 
 class NotEligible(Exception):
@@ -56,6 +63,7 @@ class Typed:
     decls: dict[str, str]  # local → C type
     captured: set[str] = field(default_factory=set)  # globals bound once per PLC
     slots: set[tuple[str, str]] = field(default_factory=set)  # (class, slot) read or written at its offset
+    twins: set[str] = field(default_factory=set)  # helpers computed by their C twin (pyx.TWINS)
 
 
 _BOTTOM = object()  # a temporary whose kind is not known yet (no assignment seen)
@@ -105,7 +113,7 @@ def type_body(fn: py.FunctionDef, own: str, classes: dict[str, ClassInfo], volat
         fn.body.insert(0, py.copy_location(now, fn.body[0]))
     py.fix_missing_locations(fn)
     decls = {name: c for name, k in env.items() if (c := ctype(k)) is not None}
-    return Typed(fn, decls, t.captured, t.slots)
+    return Typed(fn, decls, t.captured, t.slots, t.twins)
 
 
 MAX_DEPTH = 100  # expression nesting Cython's recursive parser is given (it fails far beyond this)
@@ -204,6 +212,21 @@ def _infer_temps(temps: dict[str, list], env: dict[str, Kind], classes: dict, lo
             env[name] = k  # type: ignore[assignment]
 
 
+def twin_name(helper: str) -> str:
+    """The context's flag: which C twin computes `helper` for this PLC (0: none, its own binding)."""
+    return "_k_tw" + helper
+
+
+def _ll(v: py.expr) -> int | None:
+    """The value of a literal printed as a C long long (`-2147483648LL`, x_Constant), else None."""
+    if isinstance(v, py.Name) and v.id.endswith("LL"):
+        try:
+            return int(v.id[:-2])
+        except ValueError:
+            return None
+    return None
+
+
 def type_name(cls: str) -> str:
     return "_k_T" + cls
 
@@ -226,6 +249,7 @@ class _Transformer(py.NodeTransformer):
         self.env, self.classes, self.locals, self.volatile = env, classes, locals_, volatile
         self.captured: set[str] = set()
         self.slots: set[tuple[str, str]] = set()
+        self.twins: set[str] = set()
         self.uses_now = False
 
     def _slot(self, target: py.expr, kind: Kind, attr: str, load: bool = False) -> list[py.expr] | None:
@@ -484,4 +508,26 @@ class _Transformer(py.NodeTransformer):
                 return _call("_k_imod", *vs), Int(-m if a.lo < 0 else 0, m if a.hi > 0 else 0)
         if name == "_fdiv" and n == 2 and all(k is not None and exact_float(k) for k in ks):
             return _call("_k_fdiv", *vs), FLOAT
+        if name in MATH_TWINS and n == 1 and ks[0] is not None and exact_float(ks[0]):
+            return self._twin(
+                name, _call("_k_m" + name, vs[0]), _call("_k_f64", _call(name, copy.deepcopy(vs[0])))
+            ), FLOAT
+        if name == "_int" and n == 1 and isinstance(ks[0], (Bool, Int)):  # BOOL_TO_DINT and the like
+            c = _call("_k_bool_int", vs[0]) if isinstance(ks[0], Bool) else vs[0]
+            k = Int(0, 1) if isinstance(ks[0], Bool) else ks[0]
+            return self._twin(name, c, _call("_k_i64", _call(name, copy.deepcopy(vs[0])))), k
+        if name == "_real_to_int" and n == 4 and ks[0] is not None and exact_float(ks[0]):
+            first, last = (v.value if isinstance(v, py.Constant) and type(v.value) is int else _ll(v) for v in vs[1:3])
+            if isinstance(first, int) and isinstance(last, int) and -_EXACT_INT <= first <= last <= _EXACT_INT:
+                # in range: computed in C; out of range (and another binding): the Python helper raises
+                self.twins.add(name)
+                self.captured.add(name)
+                flag = py.Name(twin_name(name), py.Load())
+                return _call("_k_rti", flag, vs[0], vs[1], vs[2], py.Name(name, py.Load()), vs[3]), Int(first, last)
         return None
+
+    def _twin(self, name: str, c: py.expr, python: py.expr) -> py.expr:
+        """`c` where the namespace binds the standard `name`, else `python` (a call of the binding)."""
+        self.twins.add(name)
+        self.captured.add(name)
+        return py.IfExp(py.Name(twin_name(name), py.Load()), c, python)
