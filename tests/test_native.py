@@ -479,3 +479,51 @@ def test_standard_functions_computed_in_c_agree_bit_for_bit(dialect):
     assert out[True][2] == 6  # BOOL_TO_DINT of TRUE, FALSE, TRUE
     r = out[True][0]
     assert r[48 + 10] == _bits(math.inf) and r[16 + 3] == _bits(-math.inf) and r[64 + 1] == _bits(math.nan)
+
+
+GRID = """\
+PROGRAM main
+VAR
+  m : ARRAY[1..3, 0..3] OF INT;
+  g : ARRAY[0..1, 0..1, 0..2] OF REAL;
+  on : ARRAY[0..2, 0..2] OF BOOL;
+  i : INT;
+  j : INT;
+  s : DINT;
+  f : REAL;
+END_VAR
+FOR i := 1 TO 3 DO
+  FOR j := 0 TO 3 DO
+    m[i, j] := m[i, j] + i * 10000 + j;  (* wraps past 32767 in the second scan *)
+    on[i - 1, j MOD 3] := NOT on[i - 1, j MOD 3];
+  END_FOR;
+END_FOR;
+g[1, 0, 2] := g[1, 0, 2] + 0.1;
+s := 0;
+FOR i := 1 TO 3 DO
+  s := s + m[i, 3] + BOOL_TO_DINT(on[i - 1, 0]);
+END_FOR;
+f := g[1, 0, 2] * 3.0;
+END_PROGRAM
+"""
+
+
+@needs_toolchain
+def test_multi_dimensional_arrays_are_flat_lists_read_in_c():
+    out = {}
+    for native in (False, True):
+        compiled = compile_text(GRID, "grid.st", native=native)
+        plc = PLC(compiled)
+        plc.scan(3)
+        out[native] = (plc["main.m"], plc["main.on"], plc["main.s"], plc["main.f"], plc["main.g"])
+    assert out[True] == out[False]
+    m, on, s, f, g = out[True]
+    assert m == [[30000, 30003, 30006, 30009], [-5536, -5533, -5530, -5527], [24464, 24467, 24470, 24473]]
+    assert on == [[False, True, True]] * 3
+    assert s == 30009 - 5527 + 24473
+    tenth = _f32(0.1)
+    assert g[1][0][2] == _f32(_f32(tenth + tenth) + tenth) and f == _f32(g[1][0][2] * 3.0)
+
+
+def _f32(v: float) -> float:
+    return struct.unpack("<f", struct.pack("<f", v))[0]

@@ -48,7 +48,7 @@ class Inst:
 
 @dataclass(frozen=True)
 class Arr:
-    """A one-dimensional ARRAY (a Python list) whose elements are of kind `elem`."""
+    """An ARRAY (a Python list, flat for any number of dimensions) whose elements are of kind `elem`."""
 
     elem: Int | Float | Bool
 
@@ -93,11 +93,12 @@ def of_type(t: T.Type | None) -> Kind:
 
 
 def element_kind(t: T.Type | None) -> Kind:
-    """The kind of an element of a one-dimensional ARRAY (a Python list), else None."""
+    """The kind of an element of an ARRAY (one Python list, a multi-dimensional one flattened in
+    row-major order), else None."""
     if t is None:
         return None
     t = T.unalias(t)
-    if isinstance(t, T.ArrayType) and len(t.dims) == 1 and t.dims[0][1] >= t.dims[0][0]:
+    if isinstance(t, T.ArrayType) and all(hi >= lo for lo, hi in t.dims):
         return of_type(t.element)
     return None
 
