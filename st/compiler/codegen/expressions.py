@@ -736,13 +736,8 @@ class ExprGen:
         args = []
         # settle each argument to its parameter's type (group or concrete)
         for i, a in enumerate(tgt.args):
-            p = sig.params[min(i, len(sig.params) - 1)]
             v = self.expr(a.value)
-            want = None
-            if p.group:
-                want = _group_type(tgt, sig, p.group)
-            else:
-                want = T.ELEMENTARY.get(p.constraint)
+            want = _param_type(tgt, sig, i)
             if (
                 want is not None
                 and (T.base_of(want).is_num)
@@ -752,6 +747,10 @@ class ExprGen:
                 v = self.coerce(v, a.value, want)
             elif want is T.REAL and not self.is_f32(a.value):
                 v = _call("_f32", v)  # a REAL parameter holds a single-precision value (rounded on store)
+            elif sig.typed_args is not None:
+                st = self._arg_store(a.value, want)
+                if st is not None and sig.typed_args(i, st):
+                    v = wrap(v, st)  # USINT_TO_DWORD(u - w) converts the USINT u - w
             args.append(v)
         if sig.emit is not None:
             try:
@@ -764,6 +763,16 @@ class ExprGen:
         if tgt.en is not None:
             node = py.IfExp(self.expr(tgt.en.value), node, _const(default_value(e.ty) if e.ty is not None else None))
         return node
+
+    def _arg_store(self, a, want) -> T.ElemType | None:
+        """The integer type a native function's argument of its parameter's own type (or of a generic
+        parameter) is wrapped to when its value can leave that type (an exact intermediate), else None."""
+        at = T.base_of(a.ty) if a.ty is not None else None
+        if not (isinstance(at, T.ElemType) and at.is_intlike):
+            return None
+        if want is not None and T.base_of(want) is not at:
+            return None
+        return None if self.in_range(a, at) else at
 
     def function_call(self, e: A.Call, tgt, fn=None, first=None) -> py.expr:
         pou: T.POUType = tgt.pou
