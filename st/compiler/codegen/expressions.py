@@ -302,8 +302,9 @@ class ExprGen:
         if isinstance(t, T.EnumType):
             vals = [v for _, v in t.members.values()] or [0]
             return (min(vals), max(vals))
-        sub = T.unalias(e.ty)
-        declared = (sub.lo, sub.hi) if isinstance(sub, T.SubrangeType) else ((t.lo, t.hi) if t.is_intlike else None)
+        # a subrange variable's interval is its base type's: a POINTER, a REFERENCE or a byte view
+        # writes it without the check (and codesys/twincat keep a value outside it)
+        declared = (t.lo, t.hi) if t.is_intlike else None
         if isinstance(e, A.Name) and e.sym in self.loop_ranges:
             return self.loop_ranges[e.sym]  # a FOR counter its body does not write: start..end
         if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit, A.AccessorCall)) or (
@@ -531,8 +532,6 @@ class ExprGen:
         if r is not None and lo <= r[0] and r[1] <= hi:
             return True
         t = T.base_of(i.ty) if i.ty is not None else None
-        if isinstance(t, T.SubrangeType):
-            return lo <= t.lo and t.hi <= hi
         if isinstance(t, T.ElemType) and t.is_intlike:
             return lo <= t.lo and t.hi <= hi
         return False
@@ -875,6 +874,12 @@ def _wrap_spec(t):
     if isinstance(b, T.StringType):
         return ("str", b.length)
     return None
+
+
+def _param_type(tgt, sig, i: int):
+    """The type argument i of a native function is passed as: its group's, its parameter's, or None (generic)."""
+    p = sig.params[min(i, len(sig.params) - 1)]
+    return _group_type(tgt, sig, p.group) if p.group else T.ELEMENTARY.get(p.constraint)
 
 
 def _group_type(tgt, sig, group):
