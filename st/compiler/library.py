@@ -42,6 +42,10 @@ class FuncSig:
     # ENO after a call that ran, from the argument count: (n_args) → callable(arg expressions) → expr;
     # None: TRUE (MatIEC's MUX: FALSE for a selector out of range)
     eno_ok: Callable | None = None
+    # (argument index, its integer type) → True: that argument, when it may leave its type (an exact
+    # intermediate, `u - w`), is wrapped to its type first, as a user FUNCTION's input is stored (a
+    # conversion converts a value of its source type); None: arguments are exact, as operands are
+    typed_args: Callable | None = None
 
 
 @dataclass

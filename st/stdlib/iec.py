@@ -561,7 +561,14 @@ def _conversion_sig(name, src, dst, src_bcd, dst_bcd, time_unit):
         name, [_p("IN", constraint)], dst.name if not isinstance(dst, T.StringType) else (lambda ts: dst), emit=emit
     )
     sig.exact = True
+    sig.typed_args = lambda i, t: not _wraps_itself(t, dst, src_bcd or dst_bcd)
     return sig
+
+
+def _wraps_itself(t, dst, bcd: bool) -> bool:
+    """Does converting an integer of type t to dst wrap to dst (to a type no wider that cannot hold
+    all of t's values), which keeps the low bits a wrap to t first would keep?"""
+    return not bcd and dst.is_intlike and t.bits >= dst.bits and not (dst.lo <= t.lo and t.hi <= dst.hi)
 
 
 def convert(node, s, d, src_bcd=False, dst_bcd=False, time_unit="ms", ctx=None):

@@ -32,8 +32,8 @@ class _prg_main(_FB):  # st:3
                 total = (total - 1 + 2147483648 & 4294967295) - 2147483648  # st:10
             else:
                 i = (i + _t1 + 2147483648 & 4294967295) - 2147483648  # st:9
-            k = 1  # st:12
             _t2 = 100  # st:12
+            k = 1  # st:12
             _t3 = True  # st:12
             while True:  # st:12
                 if _wd_armed:  # st:12

@@ -302,8 +302,9 @@ class ExprGen:
         if isinstance(t, T.EnumType):
             vals = [v for _, v in t.members.values()] or [0]
             return (min(vals), max(vals))
-        sub = T.unalias(e.ty)
-        declared = (sub.lo, sub.hi) if isinstance(sub, T.SubrangeType) else ((t.lo, t.hi) if t.is_intlike else None)
+        # a subrange variable's interval is its base type's: a POINTER, a REFERENCE or a byte view
+        # writes it without the check (and codesys/twincat keep a value outside it)
+        declared = (t.lo, t.hi) if t.is_intlike else None
         if isinstance(e, A.Name) and e.sym in self.loop_ranges:
             return self.loop_ranges[e.sym]  # a FOR counter its body does not write: start..end
         if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit, A.AccessorCall)) or (
@@ -531,8 +532,6 @@ class ExprGen:
         if r is not None and lo <= r[0] and r[1] <= hi:
             return True
         t = T.base_of(i.ty) if i.ty is not None else None
-        if isinstance(t, T.SubrangeType):
-            return lo <= t.lo and t.hi <= hi
         if isinstance(t, T.ElemType) and t.is_intlike:
             return lo <= t.lo and t.hi <= hi
         return False
@@ -736,13 +735,8 @@ class ExprGen:
         args = []
         # settle each argument to its parameter's type (group or concrete)
         for i, a in enumerate(tgt.args):
-            p = sig.params[min(i, len(sig.params) - 1)]
             v = self.expr(a.value)
-            want = None
-            if p.group:
-                want = _group_type(tgt, sig, p.group)
-            else:
-                want = T.ELEMENTARY.get(p.constraint)
+            want = _param_type(tgt, sig, i)
             if (
                 want is not None
                 and (T.base_of(want).is_num)
@@ -752,6 +746,10 @@ class ExprGen:
                 v = self.coerce(v, a.value, want)
             elif want is T.REAL and not self.is_f32(a.value):
                 v = _call("_f32", v)  # a REAL parameter holds a single-precision value (rounded on store)
+            elif sig.typed_args is not None:
+                st = self._arg_store(a.value, want)
+                if st is not None and sig.typed_args(i, st):
+                    v = wrap(v, st)  # USINT_TO_DWORD(u - w) converts the USINT u - w
             args.append(v)
         if sig.emit is not None:
             try:
@@ -764,6 +762,16 @@ class ExprGen:
         if tgt.en is not None:
             node = py.IfExp(self.expr(tgt.en.value), node, _const(default_value(e.ty) if e.ty is not None else None))
         return node
+
+    def _arg_store(self, a, want) -> T.ElemType | None:
+        """The integer type a native function's argument of its parameter's own type (or of a generic
+        parameter) is wrapped to when its value can leave that type (an exact intermediate), else None."""
+        at = T.base_of(a.ty) if a.ty is not None else None
+        if not (isinstance(at, T.ElemType) and at.is_intlike):
+            return None
+        if want is not None and T.base_of(want) is not at:
+            return None
+        return None if self.in_range(a, at) else at
 
     def function_call(self, e: A.Call, tgt, fn=None, first=None) -> py.expr:
         pou: T.POUType = tgt.pou
@@ -866,6 +874,12 @@ def _wrap_spec(t):
     if isinstance(b, T.StringType):
         return ("str", b.length)
     return None
+
+
+def _param_type(tgt, sig, i: int):
+    """The type argument i of a native function is passed as: its group's, its parameter's, or None (generic)."""
+    p = sig.params[min(i, len(sig.params) - 1)]
+    return _group_type(tgt, sig, p.group) if p.group else T.ELEMENTARY.get(p.constraint)
 
 
 def _group_type(tgt, sig, group):

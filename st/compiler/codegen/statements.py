@@ -435,6 +435,22 @@ class StmtGen(ExprGen):
             return self._for_while(s, start, end, step_c)
         step: py.expr
         stop: py.expr
+        # start, end and step are evaluated once, in that order, when the loop starts: the start
+        # is used twice below (the range and the counter's value if it runs no round), and the
+        # range is made after that value is set, so a bound that reads the counter is read before
+        sym = var.sym if isinstance(var, A.Name) and isinstance(var.sym, T.VarSym) else None
+        direct = (
+            sym is not None
+            and (sym in self.cached or self.self_name is None)
+            and sym not in self.boxed  # an addressed local of a function is a box
+            and not (sym.is_global or sym.section == "VAR_EXTERNAL")
+        )
+        counter = sym.pyname if sym is not None and direct else None
+        take_end = not isinstance(end, py.Constant) and (step_c is None or _reads(end, counter))
+        if not _plain(start) or _reads(start, counter) or (take_end and not isinstance(start, py.Constant)):
+            start = self._once(start, out)
+        if take_end:
+            end = self._once(end, out)
         if step_c is None:
             stp = self.new_tmp()
             out.append(py.Assign([_name(stp, py.Store())], self.expr(s.step)))
@@ -449,10 +465,10 @@ class StmtGen(ExprGen):
             )
         rng = _call("_range", start, stop, step) if step_c != 1 else _call("_range", start, stop)
         # the loop variable, or a Python local that mirrors it
-        sym = var.sym if isinstance(var, A.Name) and isinstance(var.sym, T.VarSym) else None
-        direct = sym is not None and (sym in self.cached or self.self_name is None) and not sym.is_global
         pre: list[py.stmt] = []
-        known = self._counter_range(s, step_c)
+        # the counter's interval holds only in a Python local, which nothing but the body (that
+        # does not write it) can change; a global or addressed one can change behind its back
+        known = self._counter_range(s, step_c) if direct else None
         if sym is not None and known is not None:
             self.loop_ranges[sym] = known  # index checks and wraps in the body can use it
         try:
@@ -475,6 +491,12 @@ class StmtGen(ExprGen):
             orelse += self.assign(var, _name(loopvar), None)
         return out + pre + [init, py.For(_name(loopvar, py.Store()), rng, body, orelse)]
 
+    def _once(self, value: py.expr, out: list) -> py.Name:
+        """`value` evaluated into a temporary (appended to `out`), read from there."""
+        tmp = self.new_tmp()
+        out.append(py.Assign([_name(tmp, py.Store())], value))
+        return _name(tmp)
+
     def _counter_range(self, s: A.CountedFor, step_c) -> tuple[int, int] | None:
         """The values a FOR counter takes in its body (range form: the body does not write it)."""
         a, b = self.value_range(s.start), self.value_range(s.end)
@@ -490,15 +512,26 @@ class StmtGen(ExprGen):
         """FOR whose body writes the loop variable: a faithful while loop."""
         var = s.var
         vt = T.base_of(var.ty)
-        out = self.assign(var, start, None)
+        out: list[py.stmt] = []
+        step_e = self.expr(s.step) if step_c is None else _const(step_c)
+        # start, end and step once and in that order, then the counter (a bound may read it): the
+        # start goes through a temporary unless the order cannot matter
+        if not (
+            isinstance(start, py.Constant)
+            or (_plain(start) and _plain(end) and _plain(step_e))
+            or (isinstance(end, py.Constant) and isinstance(step_e, py.Constant))
+        ):
+            start = self._once(start, out)
         endt = self.new_tmp()
         out.append(py.Assign([_name(endt, py.Store())], end))
         step: py.expr
         test: py.expr
         if step_c is None:
             stp = self.new_tmp()
-            out.append(py.Assign([_name(stp, py.Store())], self.expr(s.step)))
+            out.append(py.Assign([_name(stp, py.Store())], step_e))
             step = _name(stp)
+        out += self.assign(var, start, None)
+        if step_c is None:
             test = py.IfExp(
                 py.Compare(step, [py.Gt()], [_const(0)]),
                 py.Compare(self.expr(var), [py.LtE()], [_name(endt)]),
@@ -528,6 +561,20 @@ class _Typed:
     def __init__(self, ty):
         self.ty = ty
         self.const = None
+
+
+def _plain(node: py.expr) -> bool:
+    """An operand read twice at no cost and with no effect: a constant, a name, `self.x`, `-1`."""
+    if isinstance(node, py.UnaryOp) and isinstance(node.operand, py.Constant):
+        return True
+    if isinstance(node, py.Attribute):
+        node = node.value
+    return isinstance(node, (py.Name, py.Constant))
+
+
+def _reads(node: py.expr, name: str | None) -> bool:
+    """Does `node` read the Python local `name`?"""
+    return name is not None and any(isinstance(n, py.Name) and n.id == name for n in py.walk(node))
 
 
 def _label_text(e) -> str:
