@@ -113,7 +113,7 @@ _NATIVE = click.option(
 def _native_summary(result) -> None:
     """Which bodies the native tier compiled, and why the others stay Python."""
     names = {p.pyname: p.name for p in result.project.pous.values()}
-    done = [names.get(c, c) for m in result.native for c in m.classes]
+    done = [names.get(c, c) for m in result.native for c in (*m.functions, *m.classes)]
     click.echo("native: " + (", ".join(done) if done else "no body compiled"), err=True)
     for pou, why in sorted(result.native_skipped.items()):
         if pou not in {p.name for p in result.project.pous.values() if p.library}:

@@ -527,3 +527,76 @@ def test_multi_dimensional_arrays_are_flat_lists_read_in_c():
 
 def _f32(v: float) -> float:
     return struct.unpack("<f", struct.pack("<f", v))[0]
+
+
+# user FUNCTIONs compiled too: C parameters and result where their kinds have them, a VAR_OUTPUT
+# and a VAR_IN_OUT as references (objects), called in C from compiled bodies and from each other
+FUNCS = """\
+FUNCTION sq : DINT
+VAR_INPUT a : INT; END_VAR
+sq := INT_TO_DINT(a) * a;
+END_FUNCTION
+FUNCTION scale : REAL
+VAR_INPUT x : REAL; k : INT; END_VAR
+VAR i : INT; END_VAR
+scale := x;
+FOR i := 1 TO k DO
+  scale := scale * 1.5;
+END_FOR;
+END_FUNCTION
+FUNCTION pick : BOOL
+VAR_INPUT g : BOOL; d : DINT; END_VAR
+VAR_OUTPUT twice : DINT; END_VAR
+VAR_IN_OUT hits : DINT; END_VAR
+twice := d * 2;
+hits := hits + 1;
+pick := g AND d > 0;
+END_FUNCTION
+FUNCTION quot : DINT
+VAR_INPUT a : DINT; b : DINT; END_VAR
+quot := a / b;
+END_FUNCTION
+FUNCTION outer : DINT
+VAR_INPUT n : INT; END_VAR
+outer := sq(n) + sq(n + 1) + SEL(n > 2, 10, 20);
+END_FUNCTION
+PROGRAM main
+VAR n : INT; s : DINT; r : REAL; b : BOOL; t : DINT; hits : DINT; d : DINT := 1; q : DINT; END_VAR
+n := n + 1;
+s := s + outer(n) + sq(300);
+r := scale(1.0, n);
+b := pick(n MOD 2 = 0, s, twice => t, hits := hits);
+q := quot(100, d);
+END_PROGRAM
+"""
+
+
+@needs_toolchain
+def test_functions_are_compiled_and_called_in_c_with_the_same_results_and_faults():
+    out = {}
+    for native in (False, True):
+        compiled = compile_text(FUNCS, "funcs.st", native=native)
+        plc = PLC(compiled)
+        seen = []
+        for _ in range(3):
+            plc.scan(1)
+            seen.append(tuple(plc[f"main.{v}"] for v in ("s", "r", "b", "t", "hits", "q")))
+        plc["main.d"] = 0
+        with pytest.raises(PLCFaultError) as e:
+            plc.scan(1)
+        f = e.value.fault
+        out[native] = (seen, (f.kind, f.file, f.line, f.pou, f.message))
+    assert out[True] == out[False]
+    assert out[True][0] == [
+        (90015, 1.5, False, 180030, 1, 100),
+        (180038, 2.25, True, 360076, 2, 100),
+        (270083, 3.375, False, 540166, 3, 100),
+    ]
+    assert out[True][1] == ("DIV0", "funcs.st", 23, "quot", "division by zero")
+    assert compiled.native[0].functions == ("_fn_sq", "_fn_scale", "_fn_pick", "_fn_quot", "_fn_outer")
+    text = Path(compiled.native[0].path).with_name(compiled.native[0].pyx).read_text()
+    assert "cdef int64_t _k_impl_fn_sq(_k_Ctx _k_c, int64_t a) except? -1:" in text
+    assert (
+        "cdef bint _k_impl_fn_pick(_k_Ctx _k_c, bint g, int64_t d, object _r_twice, object _r_hits) except -1:" in text
+    )
+    assert "_k_impl_fn_sq(_k_c, n) if _k_c._k_own_fn_sq else _k_i64(_k_c._fn_sq(n))" in text

@@ -24,7 +24,7 @@ from ..diagnostics import Diagnostic
 from ..source import SourceFile
 from .program import Project
 
-FORMAT = 2
+FORMAT = 3
 _MAGIC = b"st-compiled\n"
 _HEADER = _MAGIC + FORMAT.to_bytes(2, "big") + importlib.util.MAGIC_NUMBER
 _LEAF = ("st.model.", "st.source", "st.diagnostics")
@@ -52,6 +52,7 @@ class NativeModule:
     pyx: str  # its source file's name, as its tracebacks name it
     classes: tuple[str, ...]  # the classes whose `_body` it replaces
     lines: dict[int, tuple[str, int, str]]
+    functions: tuple[str, ...] = ()  # the FUNCTIONs it compiles (called in C by its bodies)
 
 
 @dataclass

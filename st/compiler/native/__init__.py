@@ -18,13 +18,14 @@ import ast as py
 from typing import Any
 
 from ...diagnostics import DiagnosticSink
+from ...model import types as T
 from ...model.compiled import NativeModule
 from ...model.program import Project
 from ...source import Span
-from .kinds import of_type
+from .kinds import Inst, ctype, of_type
 from .pyx import module_text
 from .toolchain import ToolchainError, build, missing
-from .typer import ClassInfo, NotEligible, Typed, type_body
+from .typer import ClassInfo, FuncInfo, NotEligible, Typed, type_body
 
 # what the runtime rebinds in a namespace while the program runs (st.runtime)
 RUNTIME_VOLATILE = frozenset({"_now", "_wd_armed", "_plc_log", "_cov"})
@@ -41,20 +42,38 @@ def build_native(
         return [], {}
     volatile = RUNTIME_VOLATILE | _rebound_globals(modules)
     by_class = {p.pyname: p for p in project.pous.values() if p.pyname}
+    structs = {t.pyname: t for t in _struct_types(project)}
     classes: dict[str, ClassInfo] = {}
     found: list[tuple[str, py.ClassDef, Any]] = []
     for path, mod in modules:
         for node in mod.body:
             if not isinstance(node, py.ClassDef):
                 continue
+            st = structs.get(node.name)
+            if st is not None:  # its members read and written at their slots, as a block's variables
+                kinds = {m.pyname or m.name: of_type(m.type) for m in st.members.values()}
+                classes[node.name] = ClassInfo(_slots(node), {k: v for k, v in kinds.items() if v is not None})
+                continue
             pou = by_class.get(node.name)
             if pou is None or pou.pou_kind not in ("PROGRAM", "FUNCTION_BLOCK"):
                 continue
             kinds = {v.pyname: of_type(v.type) for v in pou.vars.values() if v.section in _SECTIONS and v.pyname}
+            # a VAR_IN_OUT block or STRUCT is the caller's instance itself (an elementary one is a reference)
+            kinds.update(
+                (v.pyname, k)
+                for v in pou.vars.values()
+                if v.section == "VAR_IN_OUT" and v.pyname and isinstance(k := of_type(v.type), Inst)
+            )
             classes[node.name] = ClassInfo(_slots(node), {k: v for k, v in kinds.items() if v is not None})
             found.append((path, node, pou))
+    funcs, fdefs = _functions(modules, project)
     bodies: list[tuple[str, str, str, Typed]] = []
     skipped: dict[str, str] = {}
+    for path, fdef, pou in fdefs:
+        try:
+            bodies.append((fdef.name, path, pou.name, type_body(fdef, fdef.name, classes, volatile, funcs)))
+        except NotEligible as e:
+            skipped[pou.name] = str(e)
     for path, node, pou in found:
         if pou.library:
             continue  # a library's bodies stay Python (most are small; the block calls into them are compiled)
@@ -62,7 +81,7 @@ def build_native(
         if fn is None:
             continue
         try:
-            bodies.append((node.name, path, pou.name, type_body(fn, node.name, classes, volatile)))
+            bodies.append((node.name, path, pou.name, type_body(fn, node.name, classes, volatile, funcs)))
         except NotEligible as e:
             skipped[pou.name] = str(e)
     if not bodies:
@@ -73,7 +92,36 @@ def build_native(
     except ToolchainError as e:
         sink.warning("W012", where, f"the native tier could not build this program: {e}", "the program runs as Python")
         return [], skipped
-    return [NativeModule(name, str(so), name + ".pyx", tuple(c for c, _, _, _ in bodies), lines)], skipped
+    blocks = tuple(c for c, _, _, t in bodies if t.function is None)
+    functions = tuple(c for c, _, _, t in bodies if t.function is not None)
+    return [NativeModule(name, str(so), name + ".pyx", blocks, lines, functions)], skipped
+
+
+def _functions(
+    modules: list[tuple[str, py.Module]], project: Project
+) -> tuple[dict[str, FuncInfo], list[tuple[str, py.FunctionDef, Any]]]:
+    """The user FUNCTIONs as the code generator printed them (module-level `def`s): {name: the
+    kinds of its parameters and result}, and [(file, def, POU)]. A parameter that is not a
+    VAR_INPUT of a C kind (a VAR_IN_OUT's or VAR_OUTPUT's reference) stays an object."""
+    by_name = {p.pyname: p for p in project.pous.values() if p.pyname and p.pou_kind == "FUNCTION" and not p.library}
+    infos: dict[str, FuncInfo] = {}
+    defs = []
+    for path, mod in modules:
+        for node in mod.body:
+            pou = by_name.get(node.name) if isinstance(node, py.FunctionDef) else None
+            if pou is None:
+                continue
+            assert isinstance(node, py.FunctionDef)
+            inputs = {v.pyname: v for v in pou.vars.values() if v.section == "VAR_INPUT" and v.pyname}
+            params = [of_type(inputs[a.arg].type) if a.arg in inputs else None for a in node.args.args]
+            infos[node.name] = FuncInfo([k if ctype(k) else None for k in params], of_type(pou.return_type))
+            defs.append((path, node, pou))
+    return infos, defs
+
+
+def _struct_types(project: Project) -> list[T.StructType]:
+    """The project's STRUCT types (a UNION, whose members share bytes, is not one)."""
+    return [t for t in project.types.values() if isinstance(t, T.StructType) and t.kind == "struct" and t.pyname]
 
 
 def _slots(cls: py.ClassDef) -> frozenset[str]:

@@ -74,6 +74,8 @@ def of_type(t: T.Type | None) -> Kind:
     t = T.unalias(t)
     if isinstance(t, T.POUType) and t.pou_kind in ("FUNCTION_BLOCK", "PROGRAM") and t.pyname:
         return Inst(t.pyname)
+    if isinstance(t, T.StructType) and t.kind == "struct" and t.pyname:
+        return Inst(t.pyname)  # a STRUCT's value: an instance of its slotted class
     if isinstance(t, T.ArrayType):
         elem = element_kind(t)
         return Arr(elem) if isinstance(elem, (Int, Float, Bool)) else None

@@ -10,10 +10,12 @@ be imported only once per process, and nothing per PLC lives in its globals.
 from __future__ import annotations
 
 import ast as py
+import copy
 import re
 
 from ..codegen.source import python_text
-from .typer import NS, Typed, offset_name, twin_name, type_name
+from .kinds import ctype
+from .typer import CAST, NS, Typed, offset_name, twin_name, type_name
 
 PRELUDE = """\
 # cython: language_level=3, binding=True, boundscheck=True, wraparound=True
@@ -190,6 +192,12 @@ def _k_generated(cls, str file):
     return code is not None and code.co_filename == file and code.co_name == "_body"
 
 
+def _k_generated_function(f, str file, str name):
+    # whether the namespace still binds the FUNCTION the code generator printed
+    code = getattr(f, "__code__", None)
+    return code is not None and code.co_filename == file and code.co_name == name
+
+
 cdef inline int64_t _k_i64(object o) except? -1:
     return o
 
@@ -225,6 +233,7 @@ TWINS = {name: (getattr(_k_fn, name),) for name in (
     "_std_sqrt", "_std_ln", "_std_log", "_std_exp", "_std_sin", "_std_cos", "_std_tan", "_std_asin", "_std_acos")}
 TWINS["_atan"] = (_k_fn.NAMESPACE["_atan"],)
 TWINS["_int"] = (int,)
+TWINS["_std_sel"] = (_k_fn._std_sel,)
 TWINS["_real_to_int"] = (_k_fn._real_to_int, _k_fn._real_to_int_matiec)
 
 
@@ -283,6 +292,18 @@ cdef inline double _k_m_std_acos(double x) noexcept:
 
 cdef inline double _k_m_atan(double x) noexcept:
     return atan(x)
+
+
+cdef inline int64_t _k_sel_i(bint g, int64_t a, int64_t b) noexcept:
+    return b if g else a
+
+
+cdef inline double _k_sel_f(bint g, double a, double b) noexcept:
+    return b if g else a
+
+
+cdef inline bint _k_sel_b(bint g, bint a, bint b) noexcept:
+    return b if g else a
 
 
 cdef inline int64_t _k_bool_int(bint b) noexcept:
@@ -392,6 +413,46 @@ def _direct(node, compiled: set[str]):
     return py.copy_location(py.IfExp(test, call, method), node)
 
 
+_EXCEPT = {"int64_t": " except? -1", "double": " except? -1.0", "bint": " except -1"}
+
+
+def _signature(name: str, typed: Typed) -> str:
+    """The C function's first line: a block's body (ctx, self), or a FUNCTION (ctx, parameters)."""
+    f = typed.function
+    if f is None:
+        return f"cdef object {impl_name(name)}(_k_Ctx {CTX}, object self):"
+    params = ", ".join(f"{ctype(k) or 'object'} {a.arg}" for a, k in zip(typed.fn.args.args, f.params, strict=True))
+    result = ctype(f.result)
+    head = f"cdef {result or 'object'} {impl_name(name)}(_k_Ctx {CTX}" + (f", {params}" if params else "") + ")"
+    return head + _EXCEPT.get(result or "", "") + ":"
+
+
+def _function_calls(fn: py.FunctionDef, functions: dict[str, Typed]) -> None:
+    """Each `_k_callf('name', 'ctype', args…)` of typer.py: the compiled FUNCTION in C while the
+    namespace binds the generated one, else (and when it is not compiled here) the Python call,
+    its result converted to the C type the caller was typed with."""
+    for node in py.walk(fn):
+        for name, value in py.iter_fields(node):
+            if isinstance(value, list):
+                value[:] = [_callf(v, functions) for v in value]
+            elif isinstance(value, py.AST):
+                setattr(node, name, _callf(value, functions))
+
+
+def _callf(node, functions: dict[str, Typed]):
+    if not (isinstance(node, py.Call) and isinstance(node.func, py.Name) and node.func.id == "_k_callf"):
+        return node
+    name, c = node.args[0].value, node.args[1].value  # type: ignore[attr-defined]
+    args = node.args[2:]
+    python: py.expr = py.Call(py.Name(name, py.Load()), [copy.deepcopy(a) for a in args], [])
+    if c:
+        python = py.Call(py.Name(CAST[c], py.Load()), [python], [])
+    if name not in functions:
+        return py.copy_location(python, node)
+    call = py.Call(py.Name(impl_name(name), py.Load()), [py.Name(CTX, py.Load()), *args], [])
+    return py.copy_location(py.IfExp(py.Name(own_name(name), py.Load()), call, python), node)
+
+
 class _ToContext(py.NodeTransformer):
     """The per-PLC names a body reads (helpers, classes, offsets, `_k_ns`) as fields of its context."""
 
@@ -406,16 +467,22 @@ class _ToContext(py.NodeTransformer):
 
 
 def module_text(bodies: list[tuple[str, str, str, Typed]]) -> tuple[str, dict[int, tuple[str, int, str]]]:
-    """`bodies`: [(class name, ST file, POU name, typed body)] → (pyx text, {pyx line: (file, ST line, POU)}).
+    """`bodies`: [(class or FUNCTION name, ST file, POU name, typed body)] → (pyx text, {pyx line:
+    (file, ST line, POU)}).
 
     Each body is a C function `_k_impl<class>(ctx, self)`; `ctx` (a `_k_Ctx`, one per PLC) holds
     what it reads from the PLC's namespace, bound once by make(), which returns thin Python
-    wrappers (the classes' `_body`). A compiled body calls another one in C."""
+    wrappers (the classes' `_body`). A compiled body calls another one in C. A FUNCTION is a C
+    function `_k_impl<name>(ctx, parameters…)` with C parameters and result where its kinds have
+    them; compiled bodies call it in C while the namespace still binds the generated function."""
+    functions = {name: t for name, _, _, t in bodies if t.function is not None}
+    bodies_only = [b for b in bodies if b[3].function is None]
     captured = sorted({name for _, _, _, t in bodies for name in t.captured})
     slots = sorted({slot for _, _, _, t in bodies for slot in t.slots})
-    compiled = {cls for cls, _, _, _ in bodies}
+    compiled = {cls for cls, _, _, _ in bodies_only}
     classes = sorted({c for c, _ in slots} | compiled)
     context = set(captured) | {type_name(c) for c in classes} | {own_name(c) for c in compiled} | {NS}
+    context |= {own_name(f) for f in functions}
     context |= {offset_name(c, a) for c, a in slots}
     twins = sorted({name for _, _, _, t in bodies for name in t.twins})
     context |= {twin_name(name) for name in twins}
@@ -423,19 +490,20 @@ def module_text(bodies: list[tuple[str, str, str, Typed]]) -> tuple[str, dict[in
     out += ["", "cdef class _k_Ctx:", "    # what the bodies of one PLC read from its namespace", "    cdef dict ns"]
     out += [f"    cdef object {name}" for name in captured]
     out += [f"    cdef object {type_name(c)}" for c in classes]
-    out += [f"    cdef bint {own_name(c)}" for c in sorted(compiled)]
+    out += [f"    cdef bint {own_name(c)}" for c in sorted(compiled | set(functions))]
     out += [f"    cdef Py_ssize_t {offset_name(c, a)}" for c, a in slots]
     out += [f"    cdef int {twin_name(name)}" for name in twins]
     where: dict[int, tuple[str, int, str]] = {}
     for cls, file, pou, typed in bodies:
         _direct_calls(typed.fn, compiled)
+        _function_calls(typed.fn, functions)
         fn = _ToContext(context).visit(typed.fn)
         text = python_text(py.Module(body=fn.body, type_ignores=[])).splitlines()
         line = getattr(typed.fn, "lineno", 1)
         decls: dict[str, list[str]] = {}
         for local, c in sorted(typed.decls.items()):
             decls.setdefault(c, []).append(local)
-        lines = [f"cdef object {impl_name(cls)}(_k_Ctx {CTX}, object self):  # st:{line}"]
+        lines = [_signature(cls, typed) + f"  # st:{line}"]
         lines += [f"    cdef {c} " + ", ".join(names) for c, names in sorted(decls.items())]
         lines.append("    cdef unsigned int _k_wd = 0")
         lines += ["    " + t for t in text]
@@ -453,12 +521,17 @@ def module_text(bodies: list[tuple[str, str, str, Typed]]) -> tuple[str, dict[in
     out.append(f"    {CTX}.ns = {NS}")
     out += [f"    {CTX}.{name} = {NS}[{name!r}]" for name in captured]
     out += [f"    {CTX}.{type_name(c)} = {NS}[{c!r}]" for c in classes]
-    out += [f"    {CTX}.{own_name(c)} = _k_generated({CTX}.{type_name(c)}, {f!r})" for c, f, _, _ in bodies]
+    out += [f"    {CTX}.{own_name(c)} = _k_generated({CTX}.{type_name(c)}, {f!r})" for c, f, _, _ in bodies_only]
+    out += [
+        f"    {CTX}.{own_name(c)} = _k_generated_function({NS}.get({c!r}), {f!r}, {c!r})"
+        for c, f, _, t in bodies
+        if t.function is not None
+    ]
     out += [f"    {CTX}.{offset_name(c, a)} = _k_off({CTX}.{type_name(c)}, {a!r})" for c, a in slots]
     out += [f"    {CTX}.{twin_name(name)} = _k_twin({NS}, {name!r})" for name in twins]
-    for cls, _, _, _ in bodies:
+    for cls, _, _, _ in bodies_only:
         out += [f"    def {function_name(cls)}(self):", f"        return {impl_name(cls)}({CTX}, self)"]
-    out.append("    bodies = {" + ", ".join(f"{cls!r}: {function_name(cls)}" for cls, _, _, _ in bodies) + "}")
-    owned = ", ".join(f"{cls!r}: {CTX}.{own_name(cls)}" for cls, _, _, _ in bodies)
+    out.append("    bodies = {" + ", ".join(f"{cls!r}: {function_name(cls)}" for cls, _, _, _ in bodies_only) + "}")
+    owned = ", ".join(f"{cls!r}: {CTX}.{own_name(cls)}" for cls, _, _, _ in bodies_only)
     out.append(f"    return {{cls: body for cls, body in bodies.items() if {{{owned}}}[cls]}}")
     return "\n".join(out) + "\n", where

@@ -41,7 +41,7 @@ _RESERVED = frozenset(
     "float double bint void size_t Py_ssize_t int64_t copysign NAN INFINITY DEF IF ELIF ELSE by new "
     "sqrt log log10 exp sin cos tan asin acos atan TWINS".split()
 )
-_CAST = {"int64_t": "_k_i64", "double": "_k_f64", "bint": "_k_b"}
+CAST = {"int64_t": "_k_i64", "double": "_k_f64", "bint": "_k_b"}
 # a slot read to a C value, and a C value stored in a slot (pyx.PRELUDE)
 _LOAD = {"int64_t": "_k_ldi", "double": "_k_ldf", "bint": "_k_ldb"}
 _STORE = {"int64_t": "_k_sti", "double": "_k_stf", "bint": "_k_stb"}
@@ -64,9 +64,19 @@ class Typed:
     captured: set[str] = field(default_factory=set)  # globals bound once per PLC
     slots: set[tuple[str, str]] = field(default_factory=set)  # (class, slot) read or written at its offset
     twins: set[str] = field(default_factory=set)  # helpers computed by their C twin (pyx.TWINS)
+    calls: set[str] = field(default_factory=set)  # FUNCTIONs called (pyx.py: in C where compiled too)
+    function: FuncInfo | None = None  # a FUNCTION's (fn is then the function itself, not a `_body`)
 
 
 _BOTTOM = object()  # a temporary whose kind is not known yet (no assignment seen)
+
+
+@dataclass
+class FuncInfo:
+    """A user FUNCTION: the kinds of its parameters (in order) and of its result."""
+
+    params: list[Kind]
+    result: Kind
 
 
 @dataclass
@@ -77,14 +87,31 @@ class ClassInfo:
     kinds: dict[str, Kind]
 
 
-def type_body(fn: py.FunctionDef, own: str, classes: dict[str, ClassInfo], volatile: frozenset[str]) -> Typed:
-    """The `_body` of class `own`; `classes`: every generated block class by name."""
+def type_body(
+    fn: py.FunctionDef,
+    own: str,
+    classes: dict[str, ClassInfo],
+    volatile: frozenset[str],
+    funcs: dict[str, FuncInfo] | None = None,
+) -> Typed:
+    """The `_body` of class `own`, or (with `own` a key of `funcs`) the FUNCTION `own` itself;
+    `classes`: every generated class (block or STRUCT) by name; `funcs`: every user FUNCTION."""
+    funcs = funcs or {}
+    function = funcs.get(own)
     fn = _unshared(copy.deepcopy(fn))
     _check_eligible(fn)
+    if function is not None and (
+        fn.args.vararg or fn.args.kwarg or fn.args.kwonlyargs or fn.args.defaults or fn.args.posonlyargs
+    ):
+        raise NotEligible("its parameters are not plain positional ones")
     stores = _stores(fn)
     params = {a.arg for a in fn.args.args}
     fields = classes[own].kinds if own in classes else {}
-    env: dict[str, Kind] = {"self": Inst(own)}
+    env: dict[str, Kind] = {"self": Inst(own)} if function is None else {}
+    if function is not None:
+        for a, k in zip(fn.args.args, function.params, strict=True):
+            if ctype(k) is not None:
+                env[a.arg] = k  # a C parameter: the caller passes a value of its type (codegen wraps it)
     for stmt in fn.body:
         if isinstance(stmt, py.Try):
             break
@@ -105,15 +132,15 @@ def type_body(fn: py.FunctionDef, own: str, classes: dict[str, ClassInfo], volat
         if name not in env and name not in params and all(v is not None for v in values)
     }
     locals_ = set(stores) | params
-    _infer_temps(temps, env, classes, locals_)
-    t = _Transformer(env, classes, locals_, volatile)
+    _infer_temps(temps, env, classes, locals_, funcs)
+    t = _Transformer(env, classes, locals_, volatile, funcs)
     t.generic_visit(fn)
     if t.uses_now:
         now = py.Assign([py.Name("_k_now", py.Store())], py.Subscript(py.Name(NS, py.Load()), py.Constant("_now")))
         fn.body.insert(0, py.copy_location(now, fn.body[0]))
     py.fix_missing_locations(fn)
-    decls = {name: c for name, k in env.items() if (c := ctype(k)) is not None}
-    return Typed(fn, decls, t.captured, t.slots, t.twins)
+    decls = {name: c for name, k in env.items() if (c := ctype(k)) is not None and name not in params}
+    return Typed(fn, decls, t.captured, t.slots, t.twins, t.calls, function)
 
 
 MAX_DEPTH = 100  # expression nesting Cython's recursive parser is given (it fails far beyond this)
@@ -190,7 +217,9 @@ def _stores(fn: py.FunctionDef) -> dict[str, list[py.expr | None]]:
     return out
 
 
-def _infer_temps(temps: dict[str, list], env: dict[str, Kind], classes: dict, locals_: set[str]) -> None:
+def _infer_temps(
+    temps: dict[str, list], env: dict[str, Kind], classes: dict, locals_: set[str], funcs: dict[str, FuncInfo]
+) -> None:
     """Kinds of the temporaries, to a fixed point (a few rounds; what does not settle stays an object)."""
     kinds: dict[str, object] = {name: _BOTTOM for name in temps}
     for _ in range(6):
@@ -199,7 +228,7 @@ def _infer_temps(temps: dict[str, list], env: dict[str, Kind], classes: dict, lo
             k: object = _BOTTOM
             for v in values:
                 known = {n: kk for n, kk in kinds.items() if kk is not _BOTTOM}
-                vk = _Transformer({**env, **known}, classes, locals_, frozenset()).expr(copy.deepcopy(v))[1]
+                vk = _Transformer({**env, **known}, classes, locals_, frozenset(), funcs).expr(copy.deepcopy(v))[1]
                 k = vk if k is _BOTTOM else join(k, vk)  # type: ignore[arg-type]
             if k != kinds[name]:
                 kinds[name], changed = k, True
@@ -245,8 +274,17 @@ def _obj(node: py.expr, kind: Kind) -> py.expr:
 
 
 class _Transformer(py.NodeTransformer):
-    def __init__(self, env: dict, classes: dict[str, ClassInfo], locals_: set[str], volatile: frozenset[str]):
+    def __init__(
+        self,
+        env: dict,
+        classes: dict[str, ClassInfo],
+        locals_: set[str],
+        volatile: frozenset[str],
+        funcs: dict[str, FuncInfo] | None = None,
+    ):
         self.env, self.classes, self.locals, self.volatile = env, classes, locals_, volatile
+        self.funcs = funcs or {}
+        self.calls: set[str] = set()
         self.captured: set[str] = set()
         self.slots: set[tuple[str, str]] = set()
         self.twins: set[str] = set()
@@ -362,7 +400,7 @@ class _Transformer(py.NodeTransformer):
         e.value, kind = self.expr(e.value)
         e.slice = self.expr(e.slice)[0]
         if isinstance(e.ctx, py.Load) and isinstance(kind, Arr):
-            return py.copy_location(_call(_CAST[ctype(kind.elem) or ""], e), e), kind.elem
+            return py.copy_location(_call(CAST[ctype(kind.elem) or ""], e), e), kind.elem
         return e, None
 
     def x_Attribute(self, e: py.Attribute):
@@ -462,6 +500,17 @@ class _Transformer(py.NodeTransformer):
         name = e.func.id if isinstance(e.func, py.Name) else None
         if name is not None and not e.keywords and name not in self.locals:
             parts = [self.expr(a) for a in e.args]
+            info = self.funcs.get(name)
+            if (
+                info is not None
+                and len(parts) == len(info.params)
+                and not any(isinstance(a, py.Starred) for a in e.args)
+            ):
+                # a user FUNCTION: pyx.py calls its compiled form in C where there is one
+                self.calls.add(name)
+                self.captured.add(name)
+                c = py.Constant(ctype(info.result) or "")
+                return py.copy_location(_call("_k_callf", py.Constant(name), c, *(v for v, _ in parts)), e), info.result
             out = self._helper(name, parts)
             if out is not None:
                 return py.copy_location(out[0], e), out[1]
@@ -512,6 +561,12 @@ class _Transformer(py.NodeTransformer):
             return self._twin(
                 name, _call("_k_m" + name, vs[0]), _call("_k_f64", _call(name, copy.deepcopy(vs[0])))
             ), FLOAT
+        if name == "_std_sel" and n == 3 and isinstance(ks[0], Bool):
+            k = join(ks[1], ks[2])
+            sel = {Int: "_k_sel_i", Float: "_k_sel_f", Bool: "_k_sel_b"}.get(type(k))
+            if sel is not None and isinstance(ks[1], type(ks[2])):
+                python = _call(CAST[ctype(k) or ""], _call(name, *copy.deepcopy(vs)))
+                return self._twin(name, _call(sel, *vs), python), k
         if name == "_int" and n == 1 and isinstance(ks[0], (Bool, Int)):  # BOOL_TO_DINT and the like
             c = _call("_k_bool_int", vs[0]) if isinstance(ks[0], Bool) else vs[0]
             k = Int(0, 1) if isinstance(ks[0], Bool) else ks[0]
