@@ -341,7 +341,7 @@ END_FUNCTION_BLOCK
 FUNCTION_BLOCK acc2 EXTENDS acc
 SUPER^();
 END_FUNCTION_BLOCK
-PROGRAM main
+PROGRAM slots
 VAR
   one : acc;
   two : acc2;
@@ -364,20 +364,19 @@ END_PROGRAM
 
 
 @needs_toolchain
-def test_typed_slot_access_agrees_with_python_beyond_its_fast_paths():
+def test_typed_slot_access_agrees_with_python_beyond_its_fast_paths(features):
     out = {}
-    for native in (False, True):
-        compiled = compile_text(SLOTS, "slots.st", native=native)
+    for native, compiled in features.items():
         assert bool(compiled.native) is native
         plc = PLC(compiled)
         seen = []
         for scan in range(5):
             if scan == 2:
-                main = plc.instances["main"][1]  # written past the API, which would convert them:
+                main = plc.instances["slots"][1]  # written past the API, which would convert them:
                 main.f = 3  # an int in a REAL slot
                 main.b = 1  # and 1 in a BOOL slot
             plc.scan(1)
-            seen.append(tuple(plc[f"main.{v}"] for v in ("big", "r", "q", "n", "one.big", "two.r", "one.q")))
+            seen.append(tuple(plc[f"slots.{v}"] for v in ("big", "r", "q", "n", "one.big", "two.r", "one.q")))
         out[native] = seen
     assert out[True] == out[False]
     # 600000000 * 4 wraps past DINT's top: -1894967296; one.big and two.big always agree
@@ -482,7 +481,7 @@ def test_standard_functions_computed_in_c_agree_bit_for_bit(dialect):
 
 
 GRID = """\
-PROGRAM main
+PROGRAM grid
 VAR
   m : ARRAY[1..3, 0..3] OF INT;
   g : ARRAY[0..1, 0..1, 0..2] OF REAL;
@@ -509,13 +508,12 @@ END_PROGRAM
 
 
 @needs_toolchain
-def test_multi_dimensional_arrays_are_flat_lists_read_in_c():
+def test_multi_dimensional_arrays_are_flat_lists_read_in_c(features):
     out = {}
-    for native in (False, True):
-        compiled = compile_text(GRID, "grid.st", native=native)
+    for native, compiled in features.items():
         plc = PLC(compiled)
         plc.scan(3)
-        out[native] = (plc["main.m"], plc["main.on"], plc["main.s"], plc["main.f"], plc["main.g"])
+        out[native] = (plc["grid.m"], plc["grid.on"], plc["grid.s"], plc["grid.f"], plc["grid.g"])
     assert out[True] == out[False]
     m, on, s, f, g = out[True]
     assert m == [[30000, 30003, 30006, 30009], [-5536, -5533, -5530, -5527], [24464, 24467, 24470, 24473]]
@@ -560,7 +558,7 @@ FUNCTION outer : DINT
 VAR_INPUT n : INT; END_VAR
 outer := sq(n) + sq(n + 1) + SEL(n > 2, 10, 20);
 END_FUNCTION
-PROGRAM main
+PROGRAM funcs
 VAR n : INT; s : DINT; r : REAL; b : BOOL; t : DINT; hits : DINT; d : DINT := 1; q : DINT; END_VAR
 n := n + 1;
 s := s + outer(n) + sq(300);
@@ -572,16 +570,15 @@ END_PROGRAM
 
 
 @needs_toolchain
-def test_functions_are_compiled_and_called_in_c_with_the_same_results_and_faults():
+def test_functions_are_compiled_and_called_in_c_with_the_same_results_and_faults(features):
     out = {}
-    for native in (False, True):
-        compiled = compile_text(FUNCS, "funcs.st", native=native)
+    for native, compiled in features.items():
         plc = PLC(compiled)
         seen = []
         for _ in range(3):
             plc.scan(1)
-            seen.append(tuple(plc[f"main.{v}"] for v in ("s", "r", "b", "t", "hits", "q")))
-        plc["main.d"] = 0
+            seen.append(tuple(plc[f"funcs.{v}"] for v in ("s", "r", "b", "t", "hits", "q")))
+        plc["funcs.d"] = 0
         with pytest.raises(PLCFaultError) as e:
             plc.scan(1)
         f = e.value.fault
@@ -592,7 +589,8 @@ def test_functions_are_compiled_and_called_in_c_with_the_same_results_and_faults
         (180038, 2.25, True, 360076, 2, 100),
         (270083, 3.375, False, 540166, 3, 100),
     ]
-    assert out[True][1] == ("DIV0", "funcs.st", 23, "quot", "division by zero")
+    line = FEATURES.splitlines().index("quot := a / b;") + 1
+    assert out[True][1] == ("DIV0", "features.st", line, "quot", "division by zero")
     assert compiled.native[0].functions == ("_fn_sq", "_fn_scale", "_fn_pick", "_fn_quot", "_fn_outer")
     text = Path(compiled.native[0].path).with_name(compiled.native[0].pyx).read_text()
     assert "cdef int64_t _k_impl_fn_sq(_k_Ctx _k_c, int64_t a) except? -1:" in text
@@ -600,3 +598,13 @@ def test_functions_are_compiled_and_called_in_c_with_the_same_results_and_faults
         "cdef bint _k_impl_fn_pick(_k_Ctx _k_c, bint g, int64_t d, object _r_twice, object _r_hits) except -1:" in text
     )
     assert "_k_impl_fn_sq(_k_c, n) if _k_c._k_own_fn_sq else _k_i64(_k_c._fn_sq(n))" in text
+
+
+# one program (one build) for the tests of slots, multi-dimensional arrays and FUNCTIONs
+FEATURES = SLOTS + GRID + FUNCS
+
+
+@pytest.fixture(scope="module")
+def features() -> dict[bool, CompiledProgram]:
+    """FEATURES compiled for the Python tier (False) and the native one (True)."""
+    return {native: compile_text(FEATURES, "features.st", native=native) for native in (False, True)}
