@@ -15,12 +15,15 @@ from .errors_doc import explain as explanation_of
 _DIALECT = None  # the --dialect of this command line (set by the @dialect decorator)
 
 
-def _compile(files, emit_python=False, time_unit="ms", f_trig_first_scan=False, use_cache=True, native=False):
+def _compile(
+    files, emit_python=False, time_unit="ms", f_trig_first_scan=False, use_cache=True, native=False, coverage=False
+):
     from .api import compile_paths
 
     return compile_paths(
         list(files),
         native=native,
+        coverage=coverage,
         emit_python=emit_python,
         time_unit=time_unit,
         f_trig_first_scan=f_trig_first_scan,
@@ -201,6 +204,22 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
     help="Value of an output in STOP and FAULT (default FALSE/0), e.g. %QX0.1=TRUE.",
 )
 @click.option(
+    "--web",
+    default=None,
+    is_flag=False,
+    flag_value="127.0.0.1:8080",
+    metavar="[HOST:]PORT",
+    help="Serve the online mode in a browser (default 127.0.0.1:8080; another address only when given). "
+    "The URL with its access token is printed at start (docs/web.md).",
+)
+@click.option("--web-read-only", is_flag=True, help="The page shows the PLC but changes nothing.")
+@click.option(
+    "--web-password",
+    default=None,
+    envvar="ST_WEB_PASSWORD",
+    help="A password that signs in too (besides the printed token); also $ST_WEB_PASSWORD.",
+)
+@click.option(
     "--modbus",
     default=None,
     metavar="[HOST:]PORT",
@@ -304,6 +323,9 @@ def run(
     cpu,
     sim_cost,
     safe_outputs,
+    web,
+    web_read_only,
+    web_password,
     modbus,
     modbus_map,
     modbus_read_only,
@@ -332,7 +354,11 @@ def run(
     from .app.watch import source_mtimes
 
     seen = source_mtimes(files)  # --watch compares with the files as they were compiled
-    result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan, native=native)
+    # --web marks the lines that ran in the last scan: line probes, on the Python tier only
+    flow = bool(web) and not native
+    result = _compile_or_exit(
+        files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan, native=native, coverage=flow
+    )
     if native and not quiet:
         _native_summary(result)
     opts = RunOptions(
@@ -357,6 +383,9 @@ def run(
         cpu=cpu,
         sim_cost=list(sim_cost),
         safe_outputs=list(safe_outputs),
+        web=web,
+        web_read_only=web_read_only,
+        web_password=web_password,
         modbus=modbus,
         modbus_map=modbus_map,
         modbus_read_only=modbus_read_only,

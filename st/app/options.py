@@ -28,6 +28,9 @@ class RunOptions:
     cpu: int | None = None
     sim_cost: list = field(default_factory=list)
     safe_outputs: list = field(default_factory=list)  # ["%QX0.1=TRUE", "%QW3=100"]
+    web: str | None = None  # "[HOST:]PORT" of the online mode's page
+    web_read_only: bool = False
+    web_password: str | None = None
     modbus: str | None = None  # "[HOST:]PORT"
     modbus_map: str | None = None
     modbus_read_only: bool = False

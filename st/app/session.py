@@ -124,6 +124,14 @@ def run_plc(compiled, o: RunOptions) -> int:
                 + (", read-only" if o.modbus_read_only else "")
                 + ")"
             )
+    web = None
+    if o.web:
+        web = _start_web(plc, o)
+        if web is None:
+            if slave is not None:
+                slave.stop()
+            plc.close()
+            return 2
     if retain and not o.quiet:
         err(f"retained data: {retain} ({'cold start' if o.cold else f'{plc.retain_restored} value(s) restored'})")
     stop = threading.Event()
@@ -145,10 +153,12 @@ def run_plc(compiled, o: RunOptions) -> int:
                 err(f"running in real time: {len(plc.tasks)} task(s), base tick {plc.tick / 1e6:g} ms; Ctrl-C stops")
                 if watcher is not None:
                     err(f"watching {len(o.files)} file(s): an edit is compiled and swapped in at a scan boundary")
-            code = _run_real(plc, o, stop, status, watcher)
+            code = _run_real(plc, o, stop, status, watcher, web)
     finally:
         if status is not None:
             status.close()
+        if web is not None:
+            web.stop()
         plc.close()
         if ecat is not None:
             ecat.close()
@@ -198,7 +208,34 @@ def _run_virtual(plc: PLC, o: RunOptions, stop) -> int:
     return 3 if plc.state == FAULT else 0
 
 
-def _run_real(plc: PLC, o: RunOptions, stop, status, watcher) -> int:
+def _start_web(plc: PLC, o: RunOptions):
+    """The online mode's server (st/web), its URL with the token printed; None when it cannot start."""
+    import secrets
+
+    from ..io.modbus import parse_endpoint
+    from ..web.link import WebLink
+
+    if o.virtual:
+        err("error: --web needs a run in real time (not --virtual)")
+        return None
+    try:
+        host, port = parse_endpoint(o.web or "")
+        token = secrets.token_urlsafe(18)
+        name = ", ".join(Path(f).name for f in o.files)
+        web = WebLink(plc, name, host, port, token, o.web_password or "", o.web_read_only).start()
+    except (ValueError, OSError) as e:
+        err(f"error: cannot start the web server: {e}")
+        return None
+    shown = f"[{host}]" if ":" in host else host
+    err(
+        f"web: http://{shown}:{web.port}/?token={token}"
+        + (" (read-only)" if o.web_read_only else "")
+        + ("" if host in ("127.0.0.1", "localhost", "::1") else "  -- listening beyond this machine")
+    )
+    return web
+
+
+def _run_real(plc: PLC, o: RunOptions, stop, status, watcher, web=None) -> int:
     end_time = None
     if o.duration is not None:
         end_time = plc.time + parse_duration_arg(o.duration)
@@ -217,15 +254,18 @@ def _run_real(plc: PLC, o: RunOptions, stop, status, watcher) -> int:
             status.update()
         if watcher is not None:
             watcher.poll()
+        if web is not None:
+            web.poll()
 
     while not stop.is_set():
         remaining = None if end_time is None else end_time - plc.time
         if remaining is not None and remaining <= 0:
             break
         try:
-            if plc.state == FAULT:  # stay alive with safe outputs until the run ends
-                _sleep_while_faulted(plc, stop, remaining, on_idle)
-                break
+            if plc.state == FAULT:  # stay alive with safe outputs until the run ends (or a reset)
+                if not _sleep_while_faulted(plc, stop, remaining, on_idle):
+                    break
+                continue
             plc.run_realtime(duration=remaining, on_idle=on_idle, stop=stop)
         except PLCFaultError as e:
             if status is not None:
@@ -250,11 +290,15 @@ def _restart(plc: PLC) -> bool:
     return True
 
 
-def _sleep_while_faulted(plc, stop, remaining, on_idle) -> None:
+def _sleep_while_faulted(plc, stop, remaining, on_idle) -> bool:
+    """Until the run ends (False), or the PLC leaves FAULT (True: a reset from the web page)."""
     t0 = time.monotonic()
     while not stop.is_set() and (remaining is None or (time.monotonic() - t0) * 1e9 < remaining):
         on_idle(plc)
-        time.sleep(0.1)
+        if plc.state != FAULT:
+            return True
+        time.sleep(0.05)
+    return False
 
 
 def _install_signals(stop: threading.Event, plc: PLC):

@@ -61,6 +61,7 @@ class Watcher:
                 time_unit=self.o.time_unit,
                 f_trig_first_scan=self.o.f_trig_first_scan,
                 native=self.o.native,
+                coverage=bool(self.o.web) and not self.o.native,  # --web's line marks (cli.run)
             )
             self.result = self.plc.prepare_change(compiled)
         except CompileError as e:

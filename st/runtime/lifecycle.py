@@ -71,11 +71,17 @@ def reset_fault(plc: PLC) -> None:
     plc._next_tick = reset_releases(plc.tasks, plc.tick, plc._time)
 
 
-def restart(plc: PLC) -> None:
+def restart(plc: PLC, cold: bool = False) -> None:
     """Warm restart: fresh instances, retained values restored; a program whose instances fault again
-    while being created stays in FAULT (PLCFaultError)."""
-    snapshot = retained_values(plc) if plc.retain_store is None else None
-    committed = plc.retain_store.load() if plc.retain_store is not None else snapshot
+    while being created stays in FAULT (PLCFaultError). Cold: retained values too start from their
+    initial values (and the retain file is cleared)."""
+    if cold:
+        committed = None
+        if plc.retain_store is not None:
+            plc.retain_store.clear()
+    else:
+        snapshot = retained_values(plc) if plc.retain_store is None else None
+        committed = plc.retain_store.load() if plc.retain_store is not None else snapshot
     try:
         b = build(
             plc.compiled, plc.image, cycle=plc.cycle, watchdog=plc.watchdog, policy=plc.policy_name, what="restart"

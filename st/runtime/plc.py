@@ -167,9 +167,10 @@ class PLC:
         """FAULT → RUN with the program's state as the fault left it."""
         lifecycle.reset_fault(self)
 
-    def restart(self) -> None:
-        """Warm restart after a fault (--on-fault restart): fresh instances, retained values restored."""
-        lifecycle.restart(self)
+    def restart(self, cold: bool = False) -> None:
+        """Warm restart (after a fault, --on-fault restart): fresh instances, retained values restored.
+        Cold: every variable, retained ones too, starts from its initial value."""
+        lifecycle.restart(self, cold)
 
     def close(self) -> None:
         """Clean shutdown: outputs safe, retained data committed and the store closed."""

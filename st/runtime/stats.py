@@ -36,6 +36,7 @@ class TaskStats:
         self.exec_sum = 0
         self.last_exec = 0
         self.latencies: deque[int] = deque(maxlen=keep)  # the latest `keep` samples (ns)
+        self.execs: deque[int] = deque(maxlen=keep)  # execution times of the same jobs (ns)
         self.periods: deque[int] = deque(maxlen=keep)  # start-to-start intervals (ns)
         self._last_start: int | None = None
         # the (m,k) window as the entries (jobs and skipped releases, numbered from 1) that missed:
@@ -60,6 +61,7 @@ class TaskStats:
         self.exec_sum += ex
         self.last_exec = ex
         self.latencies.append(lat)
+        self.execs.append(ex)
         last = self._last_start
         if last is not None:
             self.periods.append(start - last)

@@ -8,6 +8,7 @@ from typing import Any, NoReturn
 
 from ..model import types as T
 from ..model.literals import (
+    LiteralError,
     format_date,
     format_dt,
     format_duration,
@@ -15,6 +16,9 @@ from ..model.literals import (
     parse_date_literal,
     parse_dt_literal,
     parse_duration,
+    parse_int,
+    parse_real,
+    parse_string,
     parse_time_literal,
     parse_tod_literal,
 )
@@ -208,3 +212,28 @@ def parse_duration_arg(d: Any) -> int:
         return ns
     ns = parse_duration(s)
     return ns
+
+
+def from_st_text(text: str, t: T.Type, where: str = "") -> Any:
+    """What a person types for a variable of type t (an ST literal: TRUE, 16#FF, -1.5E3, T#2s,
+    'text', an enumerated value, INT#5) as a runtime value, checked as an API write is."""
+    s = text.strip()
+    bt: Any = T.base_of(t)
+    if not isinstance(T.unalias(t), T.EnumType) and "#" in s and s.split("#", 1)[0].isalpha():
+        prefix, rest = s.split("#", 1)
+        if T.ELEMENTARY.get(prefix.upper()) is not None and prefix.upper() not in ("T", "TIME"):
+            s = rest  # a typed literal: INT#5, REAL#1.5, BOOL#TRUE
+    v: Any = s
+    try:
+        if isinstance(bt, T.StringType):
+            v = parse_string(s, bt.wide) if len(s) >= 2 and s[0] == s[-1] and s[0] in "'\"" else s
+        elif getattr(bt, "kind", "") == "bool":
+            v = {"TRUE": True, "FALSE": False, "1": True, "0": False}.get(s.upper(), s)
+        elif getattr(bt, "kind", "") in ("int", "bit"):
+            sign = -1 if s.startswith("-") else 1
+            v = sign * parse_int(s.lstrip("+-"))
+        elif getattr(bt, "kind", "") == "real":
+            v = parse_real(s)
+    except (LiteralError, ValueError):
+        raise ValueError_(f"{where}: not a literal of {getattr(T.unalias(t), 'name', 'its type')}: {text!r}") from None
+    return from_python(v, t, where)

@@ -20,6 +20,8 @@ from __future__ import annotations
 import struct
 from multiprocessing import shared_memory
 
+from ..shm import MessageRing, SeqLock
+
 N = 65536
 COILS, DISCRETE, INPUT, HOLDING = 0, 1, 2, 3
 TABLE_NAMES = {COILS: "coils", DISCRETE: "discrete inputs", INPUT: "input registers", HOLDING: "holding registers"}
@@ -30,7 +32,7 @@ _RING = _HDR + 6 * N
 RING_SIZE = 1 << 16
 SIZE = _RING + RING_SIZE
 
-_MSG = struct.Struct("<HBHH")  # total length, table, address, count; then the values
+_MSG = struct.Struct("<BHH")  # table, address, count; then the values (one ring message)
 
 
 class Exchange:
@@ -51,68 +53,39 @@ class Exchange:
             HOLDING: buf[_OFF[HOLDING] : _OFF[HOLDING] + 2 * N].cast("H"),
         }
         self.ring = buf[_RING : _RING + RING_SIZE]
+        self.lock = SeqLock(self.seq)
+        self.writes = MessageRing(self.ring, self.ctl[0:2])
 
     # ---------------------------------------------------------------- snapshot (seqlock)
     def begin_write(self) -> None:
-        self.seq[0] += 1
+        self.lock.begin_write()
 
     def end_write(self) -> None:
-        self.seq[0] += 1
+        self.lock.end_write()
 
     def read(self, table: int, address: int, count: int, retries: int = 1000):
         """A consistent copy of `count` entries (list of ints), or None if the writer never settled."""
-        seq = self.seq
         src = self.bits[table] if table in (COILS, DISCRETE) else self.regs[table]
-        for _ in range(retries):
-            s1 = seq[0]
-            if s1 & 1:
-                continue
-            values = src[address : address + count].tolist()
-            if seq[0] == s1:
-                return values
-        return None
+        return self.lock.read(lambda: src[address : address + count].tolist(), retries)
 
     # ---------------------------------------------------------------- the write ring
     def put_write(self, table: int, address: int, values: list) -> bool:
         """Producer (server): queue one write; False when the ring is full."""
         payload = bytes(values) if table in (COILS, DISCRETE) else struct.pack(f"<{len(values)}H", *values)
-        msg = _MSG.pack(_MSG.size + len(payload), table, address, len(values)) + payload
-        head, tail = self.ctl[0], self.ctl[1]
-        if RING_SIZE - ((head - tail) & 0xFFFFFFFF) < len(msg):
-            return False
-        self._copy_in(head % RING_SIZE, msg)
-        self.ctl[0] = (head + len(msg)) & 0xFFFFFFFF  # publish after the bytes are in place
-        return True
+        return self.writes.put(_MSG.pack(table, address, len(values)) + payload)
 
     def pending(self) -> bool:
-        return self.ctl[0] != self.ctl[1]
+        return self.writes.pending()
 
     def take_writes(self) -> list:
         """Consumer (PLC): every queued write as (table, address, values)."""
         out = []
-        head, tail = self.ctl[0], self.ctl[1]
-        while tail != head:
-            hdr = self._copy_out(tail % RING_SIZE, _MSG.size)
-            total, table, address, count = _MSG.unpack(hdr)
-            body = self._copy_out((tail + _MSG.size) % RING_SIZE, total - _MSG.size)
+        for msg in self.writes.take():
+            table, address, count = _MSG.unpack_from(msg)
+            body = msg[_MSG.size :]
             values = list(body) if table in (COILS, DISCRETE) else list(struct.unpack(f"<{count}H", body))
             out.append((table, address, values))
-            tail = (tail + total) & 0xFFFFFFFF
-        self.ctl[1] = tail
         return out
-
-    def _copy_in(self, pos: int, data: bytes) -> None:
-        first = min(len(data), RING_SIZE - pos)
-        self.ring[pos : pos + first] = data[:first]
-        if first < len(data):
-            self.ring[0 : len(data) - first] = data[first:]
-
-    def _copy_out(self, pos: int, n: int) -> bytes:
-        first = min(n, RING_SIZE - pos)
-        data = bytes(self.ring[pos : pos + first])
-        if first < n:
-            data += bytes(self.ring[0 : n - first])
-        return data
 
     # ---------------------------------------------------------------- server state
     @property
@@ -131,7 +104,7 @@ class Exchange:
         self.ctl[3] = s
 
     def close(self, unlink: bool = False) -> None:
-        for mv in (self.seq, self.ctl, *self.bits.values(), *self.regs.values(), self.ring):
+        for mv in (self.seq, self.writes.ctl, self.ctl, *self.bits.values(), *self.regs.values(), self.ring):
             mv.release()
         self.shm.close()
         if unlink:

@@ -1,0 +1,91 @@
+"""Shared memory between the PLC process and a server process (Modbus, the web page), lock-free.
+
+Two pieces, used by st.io.modbus.exchange and st.web.channel:
+
+- `SeqLock`: a counter that is odd while the writer (the PLC) updates a region; a reader copies
+  the region and retries when the counter moved, so it never sees a torn value and the writer
+  never waits.
+- `MessageRing`: a single-producer single-consumer ring of length-prefixed messages (the server
+  produces, the PLC drains at a scan boundary). A full ring refuses a message instead of
+  blocking the producer.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Callable
+from typing import TypeVar
+
+T = TypeVar("T")
+
+_LEN = struct.Struct("<I")
+
+
+class SeqLock:
+    """Over one u64 (`seq`, a memoryview cast to "Q")."""
+
+    def __init__(self, seq: memoryview):
+        self.seq = seq
+
+    def begin_write(self) -> None:
+        self.seq[0] += 1
+
+    def end_write(self) -> None:
+        self.seq[0] += 1
+
+    def read(self, copy: Callable[[], T], retries: int = 1000) -> T | None:
+        """`copy()` of a consistent state, or None if the writer never settled."""
+        seq = self.seq
+        for _ in range(retries):
+            s1 = seq[0]
+            if s1 & 1:
+                continue
+            value = copy()
+            if seq[0] == s1:
+                return value
+        return None
+
+
+class MessageRing:
+    """Over `ring` (bytes) with `ctl[0]` the head (producer) and `ctl[1]` the tail (consumer),
+    both free-running u32 byte counters (a memoryview cast to "I")."""
+
+    def __init__(self, ring: memoryview, ctl: memoryview):
+        self.ring, self.ctl, self.size = ring, ctl, len(ring)
+
+    def put(self, payload: bytes) -> bool:
+        """Producer: queue one message; False when the ring has no room for it."""
+        msg = _LEN.pack(len(payload)) + payload
+        head, tail = self.ctl[0], self.ctl[1]
+        if self.size - ((head - tail) & 0xFFFFFFFF) < len(msg):
+            return False
+        self._copy_in(head % self.size, msg)
+        self.ctl[0] = (head + len(msg)) & 0xFFFFFFFF  # published after the bytes are in place
+        return True
+
+    def pending(self) -> bool:
+        return self.ctl[0] != self.ctl[1]
+
+    def take(self) -> list[bytes]:
+        """Consumer: every queued message, oldest first."""
+        out = []
+        head, tail = self.ctl[0], self.ctl[1]
+        while tail != head:
+            (n,) = _LEN.unpack(self._copy_out(tail % self.size, _LEN.size))
+            out.append(self._copy_out((tail + _LEN.size) % self.size, n))
+            tail = (tail + _LEN.size + n) & 0xFFFFFFFF
+        self.ctl[1] = tail
+        return out
+
+    def _copy_in(self, pos: int, data: bytes) -> None:
+        first = min(len(data), self.size - pos)
+        self.ring[pos : pos + first] = data[:first]
+        if first < len(data):
+            self.ring[0 : len(data) - first] = data[first:]
+
+    def _copy_out(self, pos: int, n: int) -> bytes:
+        first = min(n, self.size - pos)
+        data = bytes(self.ring[pos : pos + first])
+        if first < n:
+            data += bytes(self.ring[0 : n - first])
+        return data

@@ -1,0 +1,125 @@
+"""The shared memory between the PLC process and the web server process.
+
+The web server runs in its own process for the reason the Modbus server does (a server thread
+in the scan's process makes the scan wait for the interpreter lock). They exchange through one
+`multiprocessing.shared_memory` block and never wait for each other (st/io/shm.py):
+
+- **Snapshot** (PLC → server): the latest state as one JSON document, written by the PLC
+  between two jobs under a seqlock; the server copies it and retries if it moved.
+- **Request ring** (server → PLC): the pages' subscriptions and changes (JSON messages),
+  drained by the PLC between two jobs.
+- **Control words**: the server's port and state, and how many pages are connected (the PLC
+  builds no snapshot while none is).
+"""
+
+from __future__ import annotations
+
+import struct
+from multiprocessing import shared_memory
+
+from ..io.shm import MessageRing, SeqLock
+
+SNAPSHOT_SIZE = 8 << 20  # the largest snapshot (values of a few thousand variables fit easily)
+DESCRIPTION_SIZE = 16 << 20  # the program's description (its sources included)
+RING_SIZE = 1 << 18
+# seq u64 @0; ring head, tail u32 @8; port @16, state @20, pages @24, snapshot length @28,
+# description length @32, description version @36
+_HDR = 64
+_DESC = _HDR + SNAPSHOT_SIZE
+SIZE = _DESC + DESCRIPTION_SIZE + RING_SIZE
+STARTING, SERVING, FAILED = 0, 1, 2
+_LEN = struct.Struct("<I")
+
+
+class Channel:
+    """Both sides' view of the block; `create=True` on the PLC side (which owns and unlinks it)."""
+
+    def __init__(self, name: str | None = None, create: bool = False):
+        self.shm = shared_memory.SharedMemory(name=name, create=create, size=SIZE if create else 0)
+        buf = self.shm.buf
+        assert buf is not None  # None only once closed
+        if create:
+            buf[:_HDR] = bytes(_HDR)
+        self.name = self.shm.name
+        self._seq = buf[0:8].cast("Q")
+        self._ctl = buf[8:40].cast("I")  # head, tail, port, state, pages, lengths, version
+        self._snap = buf[_HDR : _HDR + SNAPSHOT_SIZE]
+        self._desc = buf[_DESC : _DESC + DESCRIPTION_SIZE]
+        self._ring = buf[_DESC + DESCRIPTION_SIZE : SIZE]
+        self.lock = SeqLock(self._seq)
+        self.requests = MessageRing(self._ring, self._ctl[0:2])
+
+    # ---------------------------------------------------------------- PLC side
+    def publish(self, doc: bytes) -> bool:
+        """The latest snapshot; False (nothing written) when it is larger than the block."""
+        if len(doc) > SNAPSHOT_SIZE:
+            return False
+        self.lock.begin_write()
+        try:
+            self._snap[: len(doc)] = doc
+            self._ctl[5] = len(doc)
+        finally:
+            self.lock.end_write()
+        return True
+
+    def describe(self, doc: bytes) -> None:
+        """The program's description (again after an online change: its version counts up)."""
+        if len(doc) > DESCRIPTION_SIZE:
+            raise ValueError(f"the program's description takes {len(doc)} bytes, more than {DESCRIPTION_SIZE}")
+        self.lock.begin_write()
+        try:
+            self._desc[: len(doc)] = doc
+            self._ctl[6] = len(doc)
+            self._ctl[7] += 1
+        finally:
+            self.lock.end_write()
+
+    # ---------------------------------------------------------------- server side
+    def latest(self) -> bytes | None:
+        """A consistent copy of the latest snapshot (None before the first, or if it never settled)."""
+        doc = self.lock.read(lambda: bytes(self._snap[: self._ctl[5]]))
+        return doc or None
+
+    @property
+    def description_version(self) -> int:
+        return self._ctl[7]
+
+    def description(self) -> tuple[int, bytes] | None:
+        """(version, a consistent copy of the description), None if it never settled."""
+        return self.lock.read(lambda: (self._ctl[7], bytes(self._desc[: self._ctl[6]])))
+
+    # ---------------------------------------------------------------- control words
+    @property
+    def port(self) -> int:
+        return self._ctl[2]
+
+    @port.setter
+    def port(self, value: int) -> None:
+        self._ctl[2] = value
+
+    @property
+    def state(self) -> int:
+        return self._ctl[3]
+
+    @state.setter
+    def state(self, value: int) -> None:
+        self._ctl[3] = value
+
+    @property
+    def pages(self) -> int:
+        """Pages connected (set by the server)."""
+        return self._ctl[4]
+
+    @pages.setter
+    def pages(self, value: int) -> None:
+        self._ctl[4] = value
+
+    def close(self, unlink: bool = False) -> None:
+        for mv in (self._seq, self.requests.ctl, self._ctl, self._snap, self._desc, self._ring):
+            mv.release()
+        self.shm.close()
+        if unlink:
+            try:
+                self.shm.unlink()
+            except FileNotFoundError:
+                pass

@@ -1,0 +1,402 @@
+"""The PLC's side of the online mode: the server process, the snapshots it reads, the requests
+it sends.
+
+Everything here runs between two jobs (`poll`, from `st run`'s idle hook), never inside one:
+requests (subscriptions, writes, forcing, RUN/STOP/reset) take effect at a scan boundary, and
+a snapshot is built only while a page is connected, only when the slack before the next
+release is larger than the last snapshot took, and at most every `period` seconds.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import pickle
+import subprocess
+import sys
+import time
+from bisect import bisect_right
+from itertools import islice
+from typing import Any
+
+from ..runtime.lifecycle import FAULT, RUN, STOP
+from ..runtime.values import from_st_text, to_st_literal
+from .channel import FAILED, SERVING, STARTING, Channel
+from .describe import describe
+
+# histogram bins: 1 µs to ~17 s, four per octave (ns edges)
+EDGES = [0] + [int(1000 * 2 ** (i / 4)) for i in range(0, 4 * 24 + 1)]
+RESULTS_KEPT = 64  # change results kept in the snapshot (the server forwards each once)
+LOG_KEPT = 200
+
+
+class WebConfig:
+    """What the server process needs (pickled to it on stdin)."""
+
+    def __init__(self, host: str, port: int, token: str, password: str, read_only: bool, channel: str, pid: int):
+        self.host, self.port, self.token, self.password = host, port, token, password
+        self.read_only, self.channel, self.pid = read_only, channel, pid
+
+
+class WebLink:
+    def __init__(
+        self,
+        plc: Any,
+        name: str,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        token: str = "",
+        password: str = "",
+        read_only: bool = False,
+        period: float = 0.1,
+        log_path: str | None = None,
+    ):
+        self.plc, self.name, self.read_only, self.period = plc, name, read_only, period
+        self.cfg = WebConfig(host, port, token, password, read_only, "", os.getpid())
+        self.log_path = log_path
+        self.ch: Channel | None = None
+        self.proc: subprocess.Popen[bytes] | None = None
+        self.paths: list[str] = []  # what the pages watch or view
+        self.views: list[str] = []  # POUs whose lines are marked
+        self._refs: dict[str, Any] = {}
+        self._compiled: Any = None
+        self._next = 0.0
+        self._cost = 0.0  # the last snapshot's cost (s)
+        self._armed_runs: int | None = None  # the jobs counted when the line probes were cleared
+        self._results: list[dict] = []
+        self._seq = 0
+        self._hist: dict[str, dict] = {}
+
+    # ------------------------------------------------------------------ life cycle
+    def start(self, timeout: float = 10.0) -> WebLink:
+        ch = self.ch = Channel(create=True)
+        self.cfg.channel = ch.name
+        self._describe()
+        log = open(self.log_path, "ab") if self.log_path else None
+        try:  # a fresh interpreter, as the Modbus server (st/io/modbus/slave.py says why)
+            proc = self.proc = subprocess.Popen(
+                [sys.executable, "-m", "st.web"], stdin=subprocess.PIPE, stderr=log, start_new_session=True
+            )
+        finally:
+            if log is not None:
+                log.close()
+        assert proc.stdin is not None
+        proc.stdin.write(pickle.dumps(self.cfg))
+        proc.stdin.close()
+        deadline = time.monotonic() + timeout
+        while ch.state == STARTING and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        if ch.state != SERVING:
+            why = "address in use?" if ch.state == FAILED else "the server did not start"
+            self.stop()
+            raise OSError(f"the web server could not listen on {self.cfg.host}:{self.cfg.port} ({why})")
+        return self
+
+    @property
+    def port(self) -> int:
+        return self.ch.port if self.ch is not None else 0
+
+    def stop(self) -> None:
+        if self.proc is not None:
+            if self.proc.poll() is None:
+                self.proc.terminate()
+            try:
+                self.proc.wait(5)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(1)
+            self.proc = None
+        if self.ch is not None:
+            self.ch.close(unlink=True)
+            self.ch = None
+
+    # ------------------------------------------------------------------ between two jobs
+    def poll(self, force: bool = False) -> None:
+        """Apply the pages' requests; publish a snapshot when one is due and there is time."""
+        ch = self.ch
+        if ch is None:
+            return
+        changed = False
+        if ch.requests.pending():
+            for raw in ch.requests.take():
+                changed |= self._request(raw)
+        if self.plc.compiled is not self._compiled:  # an online change: a new program to show
+            self._describe()
+        if not ch.pages and not force:
+            self._armed_runs = None
+            return
+        now = time.monotonic()
+        if now < self._next and not changed and not force:
+            return
+        if self.plc.clock.real and self.plc.state == RUN and not force:
+            if self.plc.idle_slack < 1.5 * self._cost * 1e9 and now < self._next + 1.0:
+                return  # not now: the next release is too close (at most a second late)
+        hits = self.plc.compiled.coverage_hits
+        if hits is not None and self.plc.state == RUN and not force:
+            # the lines of the last scan: clear the probes, publish after the next job
+            runs = sum(t.runs for t in self.plc.tasks)
+            if self._armed_runs is None:
+                hits[:] = bytes(len(hits))
+                self._armed_runs = runs
+                return
+            if runs == self._armed_runs:
+                return
+        t0 = time.perf_counter()
+        doc = json.dumps(self._snapshot(), separators=(",", ":"), allow_nan=False, default=str).encode()
+        ch.publish(doc)
+        self._armed_runs = None
+        self._cost = time.perf_counter() - t0
+        self._next = now + self.period
+
+    # ------------------------------------------------------------------ requests
+    def _request(self, raw: bytes) -> bool:
+        try:
+            msg = json.loads(raw)
+        except ValueError:
+            return False
+        kind = msg.get("type")
+        if kind == "subscribe":  # the server's union of every page's watch list and view
+            self.paths = [str(p) for p in msg.get("paths", [])][:5000]
+            self.views = [str(p) for p in msg.get("pous", [])][:64]
+            return True
+        if kind in ("write", "force", "unforce", "control"):
+            ok, error = self._change(msg)
+            self._seq += 1
+            self._results.append(
+                {"seq": self._seq, "client": msg.get("client"), "id": msg.get("id"), "ok": ok, "error": error}
+            )
+            del self._results[:-RESULTS_KEPT]
+            return True
+        return False
+
+    def _change(self, msg: dict) -> tuple[bool, str]:
+        plc = self.plc
+        origin = msg.get("origin", "?")
+        kind = msg["type"]
+        if self.read_only:
+            return False, "the online mode is read-only (--web-read-only)"
+        try:
+            if kind == "control":
+                action = msg.get("action")
+                if action == "stop":
+                    if plc.state != STOP:
+                        plc.stop()
+                elif action == "start":
+                    if plc.state == FAULT:
+                        plc.reset_fault()
+                    elif plc.state == STOP:
+                        plc.start()
+                elif action == "reset_warm":
+                    plc.restart()
+                elif action == "reset_cold":
+                    _reset_cold(plc)
+                else:
+                    return False, f"unknown action {action!r}"
+                what = f"{action} (now {plc.state})"
+            else:
+                path = str(msg.get("path") or "")
+                if kind == "unforce":
+                    plc.unforce(path or None)
+                    what = f"unforce {path or 'all'}"
+                else:
+                    ref = plc.ref(path)
+                    value = from_st_text(str(msg.get("value", "")), ref.type, path)
+                    if kind == "write":
+                        plc[path] = value
+                    else:
+                        plc.force(path, value)
+                    what = f"{kind} {path} := {to_st_literal(value, ref.type)}"
+        except Exception as e:  # noqa: BLE001 - any refusal is the page's answer, never the PLC's end
+            return False, str(e.args[0] if e.args else e) if not isinstance(e, KeyError) else str(e.args[0])
+        plc.log.add(plc.time, 0x01, f"web {origin}: {what}")
+        return True, ""
+
+    # ------------------------------------------------------------------ the snapshot
+    def _describe(self) -> None:
+        self._compiled = self.plc.compiled
+        self._refs.clear()
+        assert self.ch is not None
+        doc = describe(self.plc, self.name, self.read_only)
+        self._pou_files = {
+            name: (p["file"], p["first_line"], p["first_line"] + len(p["source"]) - 1)
+            for name, p in doc["pous"].items()
+        }
+        self.ch.describe(json.dumps(doc, separators=(",", ":"), default=str).encode())
+
+    def _snapshot(self) -> dict:
+        plc = self.plc
+        fault = plc.fault if plc.state == FAULT else None
+        values = {}
+        for path in self.paths:
+            values[path] = self._value(path)
+        log = [
+            {"time_ns": m.time, "kind": m.kind, "text": m.text} for m in plc.log.since(max(plc.log.total - LOG_KEPT, 0))
+        ]
+        return {
+            "type": "snapshot",
+            "time_ns": plc.time,
+            "state": plc.state,
+            "fault": None
+            if fault is None
+            else {k: getattr(fault, k) for k in ("kind", "message", "file", "line", "pou", "task")},
+            "scans": sum(t.runs for t in plc.tasks),
+            "tasks": [self._task(t) for t in plc.tasks],
+            "values": values,
+            "forced": plc.forced,
+            "lines": self._lines(),
+            "axes": _axes(plc),
+            "ethercat": _ethercat(plc),
+            "modbus": _modbus(plc),
+            "log": log,
+            "log_total": plc.log.total,
+            "results": self._results,
+        }
+
+    def _value(self, path: str) -> dict:
+        ref = self._refs.get(path)
+        try:
+            if ref is None:
+                ref = self._refs[path] = self.plc.ref(path)
+            v = ref.get()
+        except Exception as e:  # noqa: BLE001 - a path the program does not have (any more)
+            self._refs.pop(path, None)
+            return {"text": None, "num": None, "error": str(e.args[0] if e.args else e)}
+        num = float(v) if isinstance(v, (bool, int, float)) else None
+        if num is not None and (math.isnan(num) or math.isinf(num)):
+            num = None
+        return {"text": to_st_literal(v, ref.type), "num": num}
+
+    def _lines(self) -> dict | None:
+        c = self.plc.compiled
+        if c.coverage_hits is None or not self.views:
+            return None
+        hits, points = c.coverage_hits, c.coverage_points
+        out: dict[str, list[int]] = {}
+        for pou in self.views:
+            where = self._pou_files.get(pou)
+            if where is None or where[0] is None:
+                continue
+            file, first, last = where
+            out[pou] = sorted(
+                {p[1] for k, p in enumerate(points) if hits[k] and p[0] == file and first <= p[1] <= last}
+            )
+        return out
+
+    def _task(self, t: Any) -> dict:
+        s = t.stats
+        h = self._hist.setdefault(t.name, {"lat": [0] * (len(EDGES) - 1), "exec": [0] * (len(EDGES) - 1), "seen": 0})
+        execs = getattr(s, "execs", ())  # (a TaskStats subclass may keep no execution times)
+        new = min(s.jobs - h["seen"], len(s.latencies))
+        if new > 0:
+            for lat in islice(reversed(s.latencies), new):
+                h["lat"][_bin(lat)] += 1
+            for ex in islice(reversed(execs), min(new, len(execs))):
+                h["exec"][_bin(ex)] += 1
+        h["seen"] = s.jobs
+        jobs = s.jobs
+        return {
+            "name": t.name,
+            "jobs": jobs,
+            "overruns": s.overruns,
+            "skipped": s.skipped,
+            "latency_ns": {
+                "min": s.lat_min if jobs else 0,
+                "mean": s.lat_sum / jobs if jobs else 0,
+                "max": s.lat_max,
+                "p99": _pct(h["lat"], 0.99),
+            },
+            "exec_ns": {
+                "min": s.exec_min if jobs else 0,
+                "mean": s.exec_sum / jobs if jobs else 0,
+                "max": s.exec_max,
+                "last": s.last_exec,
+                "p99": _pct(h["exec"], 0.99),
+            },
+            "mk": {"m": s.m, "k": s.k, "met": s.utility >= s.m / s.k, "utility": round(s.utility, 4)},
+            "hist": {"exec": _hist(h["exec"]), "latency": _hist(h["lat"])},
+        }
+
+
+def _bin(v: float) -> int:
+    return min(max(bisect_right(EDGES, v) - 1, 0), len(EDGES) - 2)
+
+
+def _pct(counts: list[int], q: float) -> float:
+    """The upper edge of the bin holding quantile q (ns)."""
+    total = sum(counts)
+    if not total:
+        return 0
+    acc = 0
+    for i, c in enumerate(counts):
+        acc += c
+        if acc >= q * total:
+            return EDGES[i + 1]
+    return EDGES[-1]
+
+
+def _hist(counts: list[int]) -> dict:
+    """The bins from the first to the last used one."""
+    used = [i for i, c in enumerate(counts) if c]
+    if not used:
+        return {"edges_ns": [], "counts": []}
+    a, b = used[0], used[-1] + 1
+    return {"edges_ns": EDGES[a : b + 1], "counts": counts[a:b]}
+
+
+def _reset_cold(plc: Any) -> None:
+    """A cold restart: fresh instances with their initial values, retained ones too."""
+    plc.restart(cold=True)
+
+
+def _axes(plc: Any) -> list | None:
+    from ..stdlib.plcopen import registry
+
+    reg = registry(plc)
+    if reg is None or not reg.axes:
+        return None
+    out = []
+    for ax in sorted(reg.axes.values(), key=lambda a: getattr(a, "axis_no", 0)):
+        err = getattr(ax, "axis_error", 0)
+        out.append(
+            {
+                "no": getattr(ax, "axis_no", 0),
+                "state": ax.state,
+                "position": ax.act_pos,
+                "velocity": ax.act_vel,
+                "error": bool(err),
+                "error_id": err,
+                "error_text": _error_text(err),
+            }
+        )
+    return out
+
+
+def _error_text(code: int) -> str:
+    from ..stdlib.plcopen.errors import E
+
+    if not code:
+        return ""
+    try:
+        return E(code).name
+    except ValueError:
+        return f"16#{code:04X}"
+
+
+def _ethercat(plc: Any) -> dict | None:
+    for d in plc.io:
+        if hasattr(d, "master") and hasattr(d, "counters"):
+            c = d.counters
+            slaves = [
+                {"position": i + 1, "name": s.name, "state": s.state, "wkc_errors": c.get("wkc_errors", 0)}
+                for i, s in enumerate(d.master.slaves)
+            ]
+            return {"lost_frames": c.get("lost_frames", 0), "wkc_errors": c.get("wkc_errors", 0), "slaves": slaves}
+    return None
+
+
+def _modbus(plc: Any) -> dict | None:
+    for d in plc.io:
+        if hasattr(d, "ex") and hasattr(d, "cfg") and hasattr(d, "clients"):
+            return {"clients": d.clients()}
+    return None

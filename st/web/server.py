@@ -1,0 +1,338 @@
+"""The web server process: the page, its program description and a WebSocket per page.
+
+Runs as `python -m st.web` (st/web/link.py starts it), apart from the PLC: it reads the PLC's
+snapshots from the shared memory (channel.py) 10 times a second, sends each page what it
+watches, and queues the pages' requests for the PLC.
+
+Security: the server listens on loopback unless told otherwise. A browser gets in with the
+token printed at start (`/?token=…`, as Jupyter does) or the configured password; it then
+holds a random session cookie (HttpOnly, SameSite=Strict). Everything but the login page and
+the static files needs that session. The WebSocket also checks that its Origin is this
+server, so another site's page cannot drive it (the changes travel only over it). Each change
+carries its origin (the client's address) into the PLC's log.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import hmac
+import json
+import os
+import secrets
+from pathlib import Path
+from urllib.parse import urlsplit
+
+import uvicorn
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import HTMLResponse, JSONResponse, RedirectResponse, Response
+from starlette.routing import Mount, Route, WebSocketRoute
+from starlette.staticfiles import StaticFiles
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from .channel import FAILED, SERVING, Channel
+from .link import WebConfig
+
+STATIC = Path(__file__).with_name("static")
+COOKIE = "st_session"
+PERIOD = 0.1  # s between two updates of a page (10 Hz)
+_CHANGES = ("write", "force", "unforce", "control")
+
+LOGIN = """<!doctype html><html><head><meta charset="utf-8"><title>st online — sign in</title>
+<style>body{{font:15px system-ui,sans-serif;margin:15vh auto;max-width:26em;color:#222}}
+input{{font:inherit;padding:.4em;width:100%;box-sizing:border-box;margin:.5em 0}}
+button{{font:inherit;padding:.4em 1.2em}} .err{{color:#b00}}</style></head><body>
+<h2>st online mode</h2><p>Enter the token printed by <code>st run --web</code>{password}.</p>
+<form method="post" action="login"><input name="secret" type="password" autofocus data-testid="login-secret">
+<button type="submit" data-testid="login-submit">Sign in</button></form>{error}</body></html>"""
+
+
+class Client:
+    """One connected page: what it watches and views, what it has been sent."""
+
+    def __init__(self, ws: WebSocket, number: int):
+        self.ws, self.number = ws, number
+        peer = ws.client
+        self.origin = f"{peer.host}:{peer.port}" if peer else "?"
+        self.paths: list[str] = []
+        self.view: str | None = None  # an instance path
+        self.view_paths: list[str] = []
+        self.view_pou: str | None = None
+        self.result_seq = 0
+        self.log_total: int | None = None
+
+
+class Hub:
+    """The server's state: the channel, the sessions, the pages."""
+
+    def __init__(self, cfg: WebConfig):
+        self.cfg = cfg
+        self.ch = Channel(cfg.channel)
+        self.sessions: set[str] = set()
+        self.clients: dict[int, Client] = {}
+        self._numbers = 0
+        self.description: dict = {}
+        self.description_text = b"{}"
+        self.description_version = -1
+        self.subscribed: tuple[list[str], list[str]] | None = None
+        self.last_doc: bytes | None = None
+
+    # ------------------------------------------------------------------ sessions
+    def check_secret(self, secret: str) -> bool:
+        ok = bool(secret) and hmac.compare_digest(secret.encode(), self.cfg.token.encode())
+        if self.cfg.password and secret:
+            ok = ok or hmac.compare_digest(secret.encode(), self.cfg.password.encode())
+        return ok
+
+    def new_session(self) -> str:
+        sid = secrets.token_urlsafe(32)
+        self.sessions.add(sid)
+        return sid
+
+    def authed(self, cookies: dict) -> bool:
+        sid = cookies.get(COOKIE, "")
+        return any(hmac.compare_digest(sid, s) for s in self.sessions)
+
+    # ------------------------------------------------------------------ the program
+    def refresh_description(self) -> None:
+        if self.ch.description_version == self.description_version:
+            return
+        got = self.ch.description()
+        if got is None:
+            return
+        version, text = got
+        self.description_version, self.description_text = version, text
+        self.description = json.loads(text) if text else {}
+        for c in self.clients.values():
+            self.set_view(c, c.view)
+        self.subscribe()
+
+    def set_view(self, c: Client, instance: str | None) -> None:
+        """The paths of the viewed instance's variables, and those of the blocks inside it."""
+        c.view, c.view_paths, c.view_pou = instance, [], None
+        if not instance:
+            return
+        node = _find(self.description.get("instances", []), instance)
+        if node is None:
+            return
+        pous = self.description.get("pous", {})
+        c.view_pou = node["pou"]
+        kids = {ch["path"].rsplit(".", 1)[-1].lower(): ch for ch in node.get("children", [])}
+        for v in pous.get(node["pou"], {}).get("vars", []):
+            path = f"{instance}.{v['name']}"
+            if v["elementary"]:
+                c.view_paths.append(path)
+            elif v["name"].lower() in kids:
+                child = kids[v["name"].lower()]
+                c.view_paths += [
+                    f"{path}.{m['name']}" for m in pous.get(child["pou"], {}).get("vars", []) if m["elementary"]
+                ]
+
+    def subscribe(self) -> None:
+        """The union of every page's paths and views, to the PLC when it changed."""
+        paths = sorted({p for c in self.clients.values() for p in (*c.paths, *c.view_paths)})
+        pous = sorted({c.view_pou for c in self.clients.values() if c.view_pou})
+        if (paths, pous) != self.subscribed:
+            if self.ch.requests.put(json.dumps({"type": "subscribe", "paths": paths, "pous": pous}).encode()):
+                self.subscribed = (paths, pous)
+
+    # ------------------------------------------------------------------ pages
+    async def handle(self, c: Client, msg: dict) -> None:
+        kind = msg.get("type")
+        if kind == "view":
+            self.refresh_description()
+            self.set_view(c, str(msg.get("instance") or "") or None)
+            self.subscribe()
+        elif kind == "watch":
+            c.paths = [str(p) for p in msg.get("paths", []) if isinstance(p, str)][:2000]
+            self.subscribe()
+        elif kind in _CHANGES:
+            if self.cfg.read_only:
+                await self.reply(c, msg, False, "the online mode is read-only (--web-read-only)")
+                return
+            req = {k: msg.get(k) for k in ("type", "path", "value", "action", "id")}
+            req.update(client=c.number, origin=c.origin)
+            if not self.ch.requests.put(json.dumps(req).encode()):
+                await self.reply(c, msg, False, "the PLC is busy: too many requests queued")
+        else:
+            await self.reply(c, msg, False, f"unknown request {kind!r}")
+
+    async def reply(self, c: Client, msg: dict, ok: bool, error: str = "") -> None:
+        out = {"type": "result", "id": msg.get("id"), "ok": ok}
+        if error:
+            out["error"] = error
+        with contextlib.suppress(Exception):
+            await c.ws.send_text(json.dumps(out))
+
+    async def pump(self) -> None:
+        """Every PERIOD: the latest snapshot to every page, tailored."""
+        while True:
+            await asyncio.sleep(PERIOD)
+            self.ch.pages = len(self.clients)
+            if not self.clients:
+                continue
+            self.refresh_description()
+            doc = self.ch.latest()
+            if doc is None or doc == self.last_doc:
+                continue
+            self.last_doc = doc
+            snap = json.loads(doc)
+            for c in list(self.clients.values()):
+                with contextlib.suppress(Exception):
+                    await c.ws.send_text(json.dumps(self.for_client(c, snap), allow_nan=False))
+
+    def for_client(self, c: Client, snap: dict) -> dict:
+        values = snap.get("values", {})
+        out = {k: v for k, v in snap.items() if k not in ("values", "lines", "results", "log", "log_total")}
+        out["values"] = {p: values[p] for p in (*c.paths, *c.view_paths) if p in values}
+        lines = snap.get("lines")
+        out["lines"] = (
+            {"pou": c.view_pou, "hit": lines.get(c.view_pou, [])} if lines is not None and c.view_pou else None
+        )
+        total = snap.get("log_total", 0)
+        log = snap.get("log", [])
+        new = len(log) if c.log_total is None else max(0, min(len(log), total - c.log_total))
+        out["log"] = log[len(log) - new :] if new else []
+        c.log_total = total
+        results = [r for r in snap.get("results", []) if r["seq"] > c.result_seq]
+        if results:
+            c.result_seq = results[-1]["seq"]
+        out["results"] = [
+            {"type": "result", "id": r["id"], "ok": r["ok"], **({"error": r["error"]} if r["error"] else {})}
+            for r in results
+            if r["client"] == c.number
+        ]
+        return out
+
+
+def _find(nodes: list, path: str) -> dict | None:
+    for n in nodes:
+        if n["path"].lower() == path.lower():
+            return n
+        found = _find(n.get("children", []), path)
+        if found is not None:
+            return found
+    return None
+
+
+def _same_origin(ws: WebSocket) -> bool:
+    origin = ws.headers.get("origin")
+    if origin is None:
+        return True  # not a browser (browsers always send Origin on a WebSocket)
+    host = ws.headers.get("host", "")
+    return urlsplit(origin).netloc.lower() == host.lower()
+
+
+def make_app(hub: Hub) -> Starlette:
+    def login_page(error: str = "", status: int = 200) -> HTMLResponse:
+        password = " or the password" if hub.cfg.password else ""
+        err = f'<p class="err" data-testid="login-error">{error}</p>' if error else ""
+        return HTMLResponse(LOGIN.format(password=password, error=err), status_code=status)
+
+    def signed_in(location: str = "./") -> Response:
+        r = RedirectResponse(location, status_code=303)
+        r.set_cookie(COOKIE, hub.new_session(), httponly=True, samesite="strict", path="/")
+        return r
+
+    async def index(request: Request) -> Response:
+        token = request.query_params.get("token")
+        if token is not None:
+            if hub.check_secret(token):
+                return signed_in("./")
+            return login_page("That token is not this server's.", 401)
+        if not hub.authed(request.cookies):
+            return login_page()
+        return HTMLResponse((STATIC / "index.html").read_text(encoding="utf-8"), headers={"Cache-Control": "no-store"})
+
+    async def login(request: Request) -> Response:
+        form = await request.form()
+        if hub.check_secret(str(form.get("secret", ""))):
+            return signed_in("./")
+        await asyncio.sleep(0.5)  # a wrong secret costs time
+        return login_page("Wrong token or password.", 401)
+
+    async def program(request: Request) -> Response:
+        if not hub.authed(request.cookies):
+            return JSONResponse({"error": "sign in first"}, status_code=401)
+        hub.refresh_description()
+        return Response(hub.description_text, media_type="application/json", headers={"Cache-Control": "no-store"})
+
+    async def ws_endpoint(ws: WebSocket) -> None:
+        if not hub.authed(ws.cookies) or not _same_origin(ws):
+            await ws.close(code=4401 if not hub.authed(ws.cookies) else 4403)
+            return
+        await ws.accept()
+        hub._numbers += 1
+        c = hub.clients[hub._numbers] = Client(ws, hub._numbers)
+        hub.ch.pages = len(hub.clients)
+        try:
+            while True:
+                text = await ws.receive_text()
+                try:
+                    msg = json.loads(text)
+                except ValueError:
+                    continue
+                if isinstance(msg, dict):
+                    await hub.handle(c, msg)
+        except WebSocketDisconnect:
+            pass
+        finally:
+            hub.clients.pop(c.number, None)
+            hub.ch.pages = len(hub.clients)
+            hub.subscribe()
+
+    routes = [
+        Route("/", index),
+        Route("/login", login, methods=["POST"]),
+        Route("/api/program", program),
+        WebSocketRoute("/ws", ws_endpoint),
+        Mount("/static", StaticFiles(directory=STATIC), name="static"),
+    ]
+    return Starlette(routes=routes)
+
+
+async def _watch_parent(pid: int, server: uvicorn.Server) -> None:
+    """Ends the server when the PLC process is gone."""
+    while True:
+        await asyncio.sleep(1.0)
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            server.should_exit = True
+            return
+
+
+async def _serve(cfg: WebConfig) -> None:
+    hub = Hub(cfg)
+    config = uvicorn.Config(make_app(hub), host=cfg.host, port=cfg.port, log_level="warning", ws_max_size=1 << 20)
+    server = uvicorn.Server(config)
+    task = asyncio.create_task(server.serve())
+    while not server.started and not task.done():
+        await asyncio.sleep(0.01)
+    if not server.started:
+        hub.ch.state = FAILED
+        with contextlib.suppress(BaseException):
+            await task
+        return
+    sock = server.servers[0].sockets[0]
+    hub.ch.port = sock.getsockname()[1]
+    hub.ch.state = SERVING
+    pump = asyncio.create_task(hub.pump())
+    parent = asyncio.create_task(_watch_parent(cfg.pid, server))
+    try:
+        await task
+    finally:
+        pump.cancel()
+        parent.cancel()
+        hub.ch.close()
+
+
+def serve(cfg: WebConfig) -> None:
+    try:
+        asyncio.run(_serve(cfg))
+    except SystemExit:  # uvicorn could not bind
+        with contextlib.suppress(Exception):
+            ch = Channel(cfg.channel)
+            ch.state = FAILED
+            ch.close()
