@@ -67,6 +67,8 @@ class WebLink:
         self._results: list[dict] = []
         self._seq = 0
         self._hist: dict[str, dict] = {}
+        self._last_lines: dict | None = None
+        self._instances: Any = None
 
     # ------------------------------------------------------------------ life cycle
     def start(self, timeout: float = 10.0) -> WebLink:
@@ -133,7 +135,8 @@ class WebLink:
             if self.plc.idle_slack < 1.5 * self._cost * 1e9 and now < self._next + 1.0:
                 return  # not now: the next release is too close (at most a second late)
         hits = self.plc.compiled.coverage_hits
-        if hits is not None and self.plc.state == RUN and not force:
+        measured = False
+        if hits is not None and self.plc.state == RUN and not force and not changed:
             # the lines of the last scan: clear the probes, publish after the next job
             runs = sum(t.runs for t in self.plc.tasks)
             if self._armed_runs is None:
@@ -142,7 +145,10 @@ class WebLink:
                 return
             if runs == self._armed_runs:
                 return
+            measured = True
         t0 = time.perf_counter()
+        if measured:
+            self._last_lines = self._lines()
         doc = json.dumps(self._snapshot(), separators=(",", ":"), allow_nan=False, default=str).encode()
         ch.publish(doc)
         self._armed_runs = None
@@ -226,6 +232,9 @@ class WebLink:
 
     def _snapshot(self) -> dict:
         plc = self.plc
+        if plc.instances is not self._instances:  # a restart or an online change: new objects
+            self._refs.clear()
+            self._instances = plc.instances
         fault = plc.fault if plc.state == FAULT else None
         values = {}
         for path in self.paths:
@@ -244,7 +253,7 @@ class WebLink:
             "tasks": [self._task(t) for t in plc.tasks],
             "values": values,
             "forced": plc.forced,
-            "lines": self._lines(),
+            "lines": self._last_lines,  # (measured after one job; the last measure otherwise)
             "axes": _axes(plc),
             "ethercat": _ethercat(plc),
             "modbus": _modbus(plc),

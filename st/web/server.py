@@ -21,7 +21,7 @@ import json
 import os
 import secrets
 from pathlib import Path
-from urllib.parse import urlsplit
+from urllib.parse import parse_qs, urlsplit
 
 import uvicorn
 from starlette.applications import Starlette
@@ -246,8 +246,9 @@ def make_app(hub: Hub) -> Starlette:
         return HTMLResponse((STATIC / "index.html").read_text(encoding="utf-8"), headers={"Cache-Control": "no-store"})
 
     async def login(request: Request) -> Response:
-        form = await request.form()
-        if hub.check_secret(str(form.get("secret", ""))):
+        body = (await request.body())[:4096].decode("utf-8", "replace")  # a urlencoded form of one field
+        secret = parse_qs(body).get("secret", [""])[0]
+        if hub.check_secret(secret):
             return signed_in("./")
         await asyncio.sleep(0.5)  # a wrong secret costs time
         return login_page("Wrong token or password.", 401)
@@ -259,10 +260,10 @@ def make_app(hub: Hub) -> Starlette:
         return Response(hub.description_text, media_type="application/json", headers={"Cache-Control": "no-store"})
 
     async def ws_endpoint(ws: WebSocket) -> None:
-        if not hub.authed(ws.cookies) or not _same_origin(ws):
+        await ws.accept()
+        if not hub.authed(ws.cookies) or not _same_origin(ws):  # closed before anything is sent
             await ws.close(code=4401 if not hub.authed(ws.cookies) else 4403)
             return
-        await ws.accept()
         hub._numbers += 1
         c = hub.clients[hub._numbers] = Client(ws, hub._numbers)
         hub.ch.pages = len(hub.clients)
