@@ -678,3 +678,19 @@ def test_online_change_rebinds_the_served_cells(plc, slave, tmp_path):
     assert (plc["main.extra"], plc["main.setpoint"]) == (101, 3)
     assert tcp.send_message(tcp.read_holding_registers(1, 0, 6), s) == [3, 0, 0, 0, 0, 101]
     s.close()
+
+
+def test_the_slave_reports_its_connected_clients(plc, slave):
+    s = connect(slave)
+    raw(s, bytes([0x03, 0, 0, 0, 1]))  # one request: read a holding register
+    raw(s, bytes([0x03, 0, 0, 0, 1]))
+    peer = f"127.0.0.1:{s.getsockname()[1]}"
+    deadline = time.monotonic() + 5
+    while time.monotonic() < deadline and not slave.clients():
+        time.sleep(0.05)
+    assert slave.clients() == [{"peer": peer, "requests": 2, "regular": False}]
+    s.close()
+    deadline = time.monotonic() + 5
+    while time.monotonic() < deadline and slave.clients():
+        time.sleep(0.05)
+    assert slave.clients() == []

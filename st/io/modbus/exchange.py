@@ -26,11 +26,15 @@ N = 65536
 COILS, DISCRETE, INPUT, HOLDING = 0, 1, 2, 3
 TABLE_NAMES = {COILS: "coils", DISCRETE: "discrete inputs", INPUT: "input registers", HOLDING: "holding registers"}
 
-_HDR = 64  # seq u64 @0, ring head u32 @8, ring tail u32 @12, port u32 @16, state u32 @20
+# seq u64 @0, ring head u32 @8, ring tail u32 @12, port u32 @16, state u32 @20, status length
+# u32 @24, status seq u64 @32
+_HDR = 64
 _OFF = {COILS: _HDR, DISCRETE: _HDR + N, INPUT: _HDR + 2 * N, HOLDING: _HDR + 4 * N}
 _RING = _HDR + 6 * N
 RING_SIZE = 1 << 16
-SIZE = _RING + RING_SIZE
+_STATUS = _RING + RING_SIZE
+STATUS_SIZE = 1 << 14  # the server's status (its connected clients, JSON), written once a second
+SIZE = _STATUS + STATUS_SIZE
 
 _MSG = struct.Struct("<BHH")  # table, address, count; then the values (one ring message)
 
@@ -46,7 +50,10 @@ class Exchange:
             buf[:SIZE] = bytes(SIZE)
         self.name = self.shm.name
         self.seq = buf[0:8].cast("Q")
-        self.ctl = buf[8:24].cast("I")  # head, tail, port, state
+        self.ctl = buf[8:28].cast("I")  # head, tail, port, state, status length
+        self.status_seq = buf[32:40].cast("Q")
+        self.status_buf = buf[_STATUS : _STATUS + STATUS_SIZE]
+        self.status_lock = SeqLock(self.status_seq)
         self.bits = {COILS: buf[_OFF[COILS] : _OFF[COILS] + N], DISCRETE: buf[_OFF[DISCRETE] : _OFF[DISCRETE] + N]}
         self.regs = {
             INPUT: buf[_OFF[INPUT] : _OFF[INPUT] + 2 * N].cast("H"),
@@ -87,6 +94,21 @@ class Exchange:
             out.append((table, address, values))
         return out
 
+    # ---------------------------------------------------------------- the server's status
+    def set_status(self, doc: bytes) -> None:
+        """Server: its status document (cut to the block's size)."""
+        doc = doc[:STATUS_SIZE]
+        self.status_lock.begin_write()
+        try:
+            self.status_buf[: len(doc)] = doc
+            self.ctl[4] = len(doc)
+        finally:
+            self.status_lock.end_write()
+
+    def status(self) -> bytes:
+        """PLC: the server's latest status document (b"" before the first, or if it never settled)."""
+        return self.status_lock.read(lambda: bytes(self.status_buf[: self.ctl[4]])) or b""
+
     # ---------------------------------------------------------------- server state
     @property
     def port(self) -> int:
@@ -104,7 +126,16 @@ class Exchange:
         self.ctl[3] = s
 
     def close(self, unlink: bool = False) -> None:
-        for mv in (self.seq, self.writes.ctl, self.ctl, *self.bits.values(), *self.regs.values(), self.ring):
+        for mv in (
+            self.seq,
+            self.writes.ctl,
+            self.ctl,
+            self.status_seq,
+            self.status_buf,
+            *self.bits.values(),
+            *self.regs.values(),
+            self.ring,
+        ):
             mv.release()
         self.shm.close()
         if unlink:

@@ -29,6 +29,7 @@ refusals are logged at most once per REFUSAL_LOG_INTERVAL, with their count.
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 import os
 import signal
@@ -318,6 +319,15 @@ class Server:
                     log.info("%s idle for %.1f s: closing", c.peer, now - c.last_activity)
                     c.close()
             self.report_refusals(now)
+            self.publish_status()
+
+    def publish_status(self) -> None:
+        """The connected clients, for the PLC's side (`ModbusSlave.clients`, the web page)."""
+        clients = [
+            {"peer": c.peer, "requests": c.requests, "regular": c.regular}
+            for c in sorted(self.conns, key=lambda c: c.seq)[:100]
+        ]
+        self.ex.set_status(json.dumps({"clients": clients, "served": self.served}).encode())
 
 
 class Connection(asyncio.Protocol):

@@ -9,6 +9,7 @@ comparison when there are none.
 
 from __future__ import annotations
 
+import json
 import os
 import pickle
 import subprocess
@@ -172,6 +173,14 @@ class ModbusSlave(IODriverBase):
         if self.ex is not None:
             self.ex.close(unlink=True)
             self.ex = None
+
+    def clients(self) -> list[dict]:
+        """The connected clients as the server last reported them (within a second):
+        [{"peer": "host:port", "requests": n, "regular": bool}]."""
+        if self.ex is None:
+            return []
+        doc = self.ex.status()
+        return json.loads(doc).get("clients", []) if doc else []
 
     def __enter__(self):
         return self.start()
