@@ -28,7 +28,8 @@ ALLOWED: dict[str, set[str]] = {
     "io": {"source", "diagnostics", "model", "runtime", "stdlib"},
     "api": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib"},
     "testing": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api"},
-    "app": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api"},
+    "web": {"source", "diagnostics", "model", "runtime", "stdlib", "io"},
+    "app": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "web"},
     "experiments": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "app"},
     "cli": {
         "source",

@@ -70,8 +70,9 @@ def _ws(link, cookie: str | None, origin: str | None = None):
     return connect(f"ws://127.0.0.1:{link.port}/ws", additional_headers=headers, open_timeout=5)
 
 
-def _until(plc, link, ws, want, scans: int = 1, timeout: float = 8.0) -> dict:
-    """Scan and serve until the page receives a snapshot for which `want(snapshot)` holds."""
+def _until(plc, link, ws, want, scans: int = 1, timeout: float = 8.0, results: list | None = None) -> dict:
+    """Scan and serve until the page receives a snapshot for which `want(snapshot)` holds (the
+    result messages that come meanwhile are added to `results`)."""
     end = time.monotonic() + timeout
     while time.monotonic() < end:
         link.poll()
@@ -84,6 +85,10 @@ def _until(plc, link, ws, want, scans: int = 1, timeout: float = 8.0) -> dict:
         try:
             msg = json.loads(ws.recv(timeout=0.05))
         except TimeoutError:
+            continue
+        if msg["type"] == "result":
+            if results is not None:
+                results.append(msg)
             continue
         if want(msg):
             return msg
@@ -163,8 +168,9 @@ def test_writes_forcing_and_stop_start_from_a_page_are_applied_and_logged(web):
         ws.send(json.dumps({"type": "write", "path": "line.count", "value": "16#64", "id": 1}))
         ws.send(json.dumps({"type": "write", "path": "line.speed", "value": "fast", "id": 2}))
         ws.send(json.dumps({"type": "force", "path": "line.motor", "value": "TRUE", "id": 3}))
-        snap = _until(plc, link, ws, lambda m: len(m["results"]) >= 3, scans=0)
-        results = {r["id"]: r for r in snap["results"]}
+        got: list[dict] = []
+        snap = _until(plc, link, ws, lambda m: len(got) >= 3, scans=0, results=got)
+        results = {r["id"]: r for r in got}
         assert results[1] == {"type": "result", "id": 1, "ok": True}
         assert results[2] == {
             "type": "result",

@@ -23,7 +23,7 @@ SNAPSHOT_SIZE = 8 << 20  # the largest snapshot (values of a few thousand variab
 DESCRIPTION_SIZE = 16 << 20  # the program's description (its sources included)
 RING_SIZE = 1 << 18
 # seq u64 @0; ring head, tail u32 @8; port @16, state @20, pages @24, snapshot length @28,
-# description length @32, description version @36
+# description length @32, description version @36, the number of the last snapshot read @40
 _HDR = 64
 _DESC = _HDR + SNAPSHOT_SIZE
 SIZE = _DESC + DESCRIPTION_SIZE + RING_SIZE
@@ -42,7 +42,7 @@ class Channel:
             buf[:_HDR] = bytes(_HDR)
         self.name = self.shm.name
         self._seq = buf[0:8].cast("Q")
-        self._ctl = buf[8:40].cast("I")  # head, tail, port, state, pages, lengths, version
+        self._ctl = buf[8:44].cast("I")  # head, tail, port, state, pages, lengths, version, read
         self._snap = buf[_HDR : _HDR + SNAPSHOT_SIZE]
         self._desc = buf[_DESC : _DESC + DESCRIPTION_SIZE]
         self._ring = buf[_DESC + DESCRIPTION_SIZE : SIZE]
@@ -113,6 +113,15 @@ class Channel:
     @pages.setter
     def pages(self, value: int) -> None:
         self._ctl[4] = value
+
+    @property
+    def consumed(self) -> int:
+        """The number of the last snapshot the server read (set by the server)."""
+        return self._ctl[8]
+
+    @consumed.setter
+    def consumed(self, value: int) -> None:
+        self._ctl[8] = value & 0xFFFFFFFF
 
     def close(self, unlink: bool = False) -> None:
         for mv in (self._seq, self.requests.ctl, self._ctl, self._snap, self._desc, self._ring):

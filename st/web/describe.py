@@ -27,7 +27,8 @@ def describe(plc: Any, name: str, read_only: bool) -> dict:
     for key, (display, _obj, pou) in plc.instances.items():
         instances.append(_instance(display, pou, pous, compiled, task_of.get(key)))
     reg = registry(plc)
-    axes = sorted({getattr(a, "axis_no", 0) for a in reg.axes.values()}) if reg is not None else []
+    # the configured axes and those already in use (an axis registers when a block first uses it)
+    axes = sorted(set(reg.configs) | {getattr(a, "axis_no", 0) for a in reg.axes.values()}) if reg is not None else []
     return {
         "name": name,
         "read_only": read_only,

@@ -10,23 +10,23 @@ release is larger than the last snapshot took, and at most every `period` second
 from __future__ import annotations
 
 import json
-import math
+import marshal
 import os
 import pickle
 import subprocess
 import sys
 import time
-from bisect import bisect_right
 from itertools import islice
 from typing import Any
 
+from ..model import types as T
 from ..runtime.lifecycle import FAULT, RUN, STOP
 from ..runtime.values import from_st_text, to_st_literal
 from .channel import FAILED, SERVING, STARTING, Channel
 from .describe import describe
 
-# histogram bins: 1 µs to ~17 s, four per octave (ns edges)
-EDGES = [0] + [int(1000 * 2 ** (i / 4)) for i in range(0, 4 * 24 + 1)]
+_PLAIN = (bool, int, float, str)  # what marshal takes as it is (bool before int: a bool is an int)
+SAMPLES_KEPT = 5000  # a task's latencies and execution times handed over per snapshot, at most
 RESULTS_KEPT = 64  # change results kept in the snapshot (the server forwards each once)
 LOG_KEPT = 200
 
@@ -66,7 +66,9 @@ class WebLink:
         self._armed_runs: int | None = None  # the jobs counted when the line probes were cleared
         self._results: list[dict] = []
         self._seq = 0
-        self._hist: dict[str, dict] = {}
+        self._number = 0  # snapshots published
+        self._failed = False  # a poll failed (reported once in the PLC's log)
+        self._jobs_at: dict[int, dict[str, int]] = {}  # snapshot number → each task's jobs then
         self._last_lines: dict | None = None
         self._instances: Any = None
 
@@ -115,7 +117,16 @@ class WebLink:
 
     # ------------------------------------------------------------------ between two jobs
     def poll(self, force: bool = False) -> None:
-        """Apply the pages' requests; publish a snapshot when one is due and there is time."""
+        """Apply the pages' requests; publish a snapshot when one is due and there is time. Never
+        raises: whatever goes wrong here is the page's problem, not the PLC's (the log says it)."""
+        try:
+            self._poll(force)
+        except Exception as e:  # noqa: BLE001 - the online mode must never stop the scan
+            if not self._failed:
+                self._failed = True
+                self.plc.log.add(self.plc.time, 0x04, f"web: {type(e).__name__}: {e} (snapshots may be missing)")
+
+    def _poll(self, force: bool) -> None:
         ch = self.ch
         if ch is None:
             return
@@ -149,11 +160,17 @@ class WebLink:
         t0 = time.perf_counter()
         if measured:
             self._last_lines = self._lines()
-        doc = json.dumps(self._snapshot(), separators=(",", ":"), allow_nan=False, default=str).encode()
-        ch.publish(doc)
+        self._number += 1
+        doc = self._snapshot()
+        ch.publish(marshal.dumps(doc))
+        self._jobs_at[self._number] = {t["name"]: t["jobs"] for t in doc["tasks"]}
+        for old in [n for n in self._jobs_at if n < ch.consumed]:
+            del self._jobs_at[old]  # read already: only the newest read one is needed
         self._armed_runs = None
         self._cost = time.perf_counter() - t0
-        self._next = now + self.period
+        if os.environ.get("ST_WEB_DEBUG"):
+            print(f"web snapshot {self._cost * 1e3:.3f} ms, slack {self.plc.idle_slack / 1e6:.3f} ms", file=sys.stderr)
+        self._next = max(self._next + self.period, now - self.period)  # 10 Hz on average, not drifting
 
     # ------------------------------------------------------------------ requests
     def _request(self, raw: bytes) -> bool:
@@ -231,19 +248,20 @@ class WebLink:
         self.ch.describe(json.dumps(doc, separators=(",", ":"), default=str).encode())
 
     def _snapshot(self) -> dict:
+        """The state as plain values (marshal): raw variable values, formatted by the server."""
         plc = self.plc
         if plc.instances is not self._instances:  # a restart or an online change: new objects
             self._refs.clear()
             self._instances = plc.instances
-        fault = plc.fault if plc.state == FAULT else None
-        values = {}
+        types, values = [], []
         for path in self.paths:
-            values[path] = self._value(path)
-        log = [
-            {"time_ns": m.time, "kind": m.kind, "text": m.text} for m in plc.log.since(max(plc.log.total - LOG_KEPT, 0))
-        ]
+            t, v = self._value(path)
+            types.append(t)
+            values.append(v)
+        fault = plc.fault if plc.state == FAULT else None
+        log = [(m.time, m.kind, m.text) for m in plc.log.since(max(plc.log.total - LOG_KEPT, 0))]
         return {
-            "type": "snapshot",
+            "number": self._number,
             "time_ns": plc.time,
             "state": plc.state,
             "fault": None
@@ -251,6 +269,8 @@ class WebLink:
             else {k: getattr(fault, k) for k in ("kind", "message", "file", "line", "pou", "task")},
             "scans": sum(t.runs for t in plc.tasks),
             "tasks": [self._task(t) for t in plc.tasks],
+            "paths": list(self.paths),
+            "types": types,
             "values": values,
             "forced": plc.forced,
             "lines": self._last_lines,  # (measured after one job; the last measure otherwise)
@@ -259,22 +279,31 @@ class WebLink:
             "modbus": _modbus(plc),
             "log": log,
             "log_total": plc.log.total,
-            "results": self._results,
+            "results": list(self._results),
         }
 
-    def _value(self, path: str) -> dict:
-        ref = self._refs.get(path)
+    def _value(self, path: str) -> tuple[str, Any]:
+        """(how the server formats it, the value): an elementary type's name and the raw value;
+        "=" and the text for anything else (formatted here); "!" and why for a path that fails."""
+        entry = self._refs.get(path)
         try:
-            if ref is None:
-                ref = self._refs[path] = self.plc.ref(path)
+            if entry is None:
+                ref = self.plc.ref(path)
+                bt = T.base_of(ref.type)
+                name = getattr(bt, "name", "")
+                elementary = T.ELEMENTARY.get(name) is bt and not isinstance(T.unalias(ref.type), T.EnumType)
+                entry = self._refs[path] = (ref, name if elementary else "=")
+            ref, kind = entry
             v = ref.get()
         except Exception as e:  # noqa: BLE001 - a path the program does not have (any more)
             self._refs.pop(path, None)
-            return {"text": None, "num": None, "error": str(e.args[0] if e.args else e)}
-        num = float(v) if isinstance(v, (bool, int, float)) else None
-        if num is not None and (math.isnan(num) or math.isinf(num)):
-            num = None
-        return {"text": to_st_literal(v, ref.type), "num": num}
+            return "!", str(e.args[0] if e.args else e)
+        if kind != "=" and type(v) in _PLAIN:
+            return kind, v
+        if kind != "=" and isinstance(v, _PLAIN):  # an int subclass (an IntEnum), …: its plain value
+            base: Any = next(p for p in _PLAIN if isinstance(v, p))
+            return kind, base(v)
+        return "=", to_st_literal(v, ref.type)
 
     def _lines(self) -> dict | None:
         c = self.plc.compiled
@@ -293,64 +322,29 @@ class WebLink:
         return out
 
     def _task(self, t: Any) -> dict:
+        """A task's statistics, with its jobs' latencies and execution times since the last
+        snapshot the server read (newest first, at most SAMPLES_KEPT; the server bins them)."""
         s = t.stats
-        h = self._hist.setdefault(t.name, {"lat": [0] * (len(EDGES) - 1), "exec": [0] * (len(EDGES) - 1), "seen": 0})
         execs = getattr(s, "execs", ())  # (a TaskStats subclass may keep no execution times)
-        new = min(s.jobs - h["seen"], len(s.latencies))
-        if new > 0:
-            for lat in islice(reversed(s.latencies), new):
-                h["lat"][_bin(lat)] += 1
-            for ex in islice(reversed(execs), min(new, len(execs))):
-                h["exec"][_bin(ex)] += 1
-        h["seen"] = s.jobs
+        read = self._jobs_at.get(self.ch.consumed if self.ch is not None else 0, {})
+        new = min(s.jobs - read.get(t.name, 0), len(s.latencies), SAMPLES_KEPT)
         jobs = s.jobs
         return {
             "name": t.name,
             "jobs": jobs,
             "overruns": s.overruns,
             "skipped": s.skipped,
-            "latency_ns": {
-                "min": s.lat_min if jobs else 0,
-                "mean": s.lat_sum / jobs if jobs else 0,
-                "max": s.lat_max,
-                "p99": _pct(h["lat"], 0.99),
-            },
+            "latency_ns": {"min": s.lat_min if jobs else 0, "mean": s.lat_sum / jobs if jobs else 0, "max": s.lat_max},
             "exec_ns": {
                 "min": s.exec_min if jobs else 0,
                 "mean": s.exec_sum / jobs if jobs else 0,
                 "max": s.exec_max,
                 "last": s.last_exec,
-                "p99": _pct(h["exec"], 0.99),
             },
             "mk": {"m": s.m, "k": s.k, "met": s.utility >= s.m / s.k, "utility": round(s.utility, 4)},
-            "hist": {"exec": _hist(h["exec"]), "latency": _hist(h["lat"])},
+            "new_latency": list(islice(reversed(s.latencies), new)),
+            "new_exec": list(islice(reversed(execs), min(new, len(execs)))),
         }
-
-
-def _bin(v: float) -> int:
-    return min(max(bisect_right(EDGES, v) - 1, 0), len(EDGES) - 2)
-
-
-def _pct(counts: list[int], q: float) -> float:
-    """The upper edge of the bin holding quantile q (ns)."""
-    total = sum(counts)
-    if not total:
-        return 0
-    acc = 0
-    for i, c in enumerate(counts):
-        acc += c
-        if acc >= q * total:
-            return EDGES[i + 1]
-    return EDGES[-1]
-
-
-def _hist(counts: list[int]) -> dict:
-    """The bins from the first to the last used one."""
-    used = [i for i, c in enumerate(counts) if c]
-    if not used:
-        return {"edges_ns": [], "counts": []}
-    a, b = used[0], used[-1] + 1
-    return {"edges_ns": EDGES[a : b + 1], "counts": counts[a:b]}
 
 
 def _reset_cold(plc: Any) -> None:
@@ -370,11 +364,11 @@ def _axes(plc: Any) -> list | None:
         out.append(
             {
                 "no": getattr(ax, "axis_no", 0),
-                "state": ax.state,
-                "position": ax.act_pos,
-                "velocity": ax.act_vel,
+                "state": str(ax.state),
+                "position": float(ax.act_pos),
+                "velocity": float(ax.act_vel),
                 "error": bool(err),
-                "error_id": err,
+                "error_id": int(err),
                 "error_text": _error_text(err),
             }
         )

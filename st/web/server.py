@@ -18,9 +18,13 @@ import asyncio
 import contextlib
 import hmac
 import json
+import marshal
+import math
 import os
 import secrets
+from bisect import bisect_right
 from pathlib import Path
+from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 import uvicorn
@@ -31,6 +35,8 @@ from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from ..model import types as T
+from ..runtime.values import to_st_literal
 from .channel import FAILED, SERVING, Channel
 from .link import WebConfig
 
@@ -77,6 +83,7 @@ class Hub:
         self.description_version = -1
         self.subscribed: tuple[list[str], list[str]] | None = None
         self.last_doc: bytes | None = None
+        self.hist: dict[str, dict] = {}  # task → the histograms of its latencies and execution times
 
     # ------------------------------------------------------------------ sessions
     def check_secret(self, secret: str) -> bool:
@@ -177,15 +184,46 @@ class Hub:
             if doc is None or doc == self.last_doc:
                 continue
             self.last_doc = doc
-            snap = json.loads(doc)
+            snap = marshal.loads(doc)
+            self.ch.consumed = snap["number"]  # the PLC's next samples start after this one's
+            for t in snap["tasks"]:
+                empty = [0] * (len(EDGES) - 1)
+                h = self.hist.setdefault(t["name"], {"latency": list(empty), "exec": list(empty), "jobs": 0})
+                fresh = max(t["jobs"] - h["jobs"], 0)  # (samples binned already may come again)
+                h["jobs"] = t["jobs"]
+                for key in ("latency", "exec"):
+                    counts = h[key]
+                    for v in t.pop("new_" + key)[:fresh]:
+                        counts[_bin(v)] += 1
             for c in list(self.clients.values()):
+                out = self.for_client(c, snap)
                 with contextlib.suppress(Exception):
-                    await c.ws.send_text(json.dumps(self.for_client(c, snap), allow_nan=False))
+                    for result in out.pop("results"):  # the answers to this page's changes first
+                        await c.ws.send_text(json.dumps(result))
+                    await c.ws.send_text(json.dumps(out, allow_nan=False))
+
+    def task_view(self, t: dict) -> dict:
+        """A task's statistics with its histograms and the p99 they give."""
+        h = self.hist.get(t["name"])
+        if h is None:
+            return t
+        t = dict(t)
+        t["latency_ns"] = {**t["latency_ns"], "p99": _pct(h["latency"], 0.99)}
+        t["exec_ns"] = {**t["exec_ns"], "p99": _pct(h["exec"], 0.99)}
+        t["hist"] = {"exec": _hist(h["exec"]), "latency": _hist(h["latency"])}
+        return t
 
     def for_client(self, c: Client, snap: dict) -> dict:
-        values = snap.get("values", {})
-        out = {k: v for k, v in snap.items() if k not in ("values", "lines", "results", "log", "log_total")}
-        out["values"] = {p: values[p] for p in (*c.paths, *c.view_paths) if p in values}
+        """The snapshot a page gets: its values formatted, its lines, its results, its new log."""
+        index = snap.setdefault("_index", {p: i for i, p in enumerate(snap["paths"])})
+        skip = ("paths", "types", "values", "lines", "results", "log", "log_total", "_index", "number")
+        out = {k: v for k, v in snap.items() if k not in skip}
+        out["type"] = "snapshot"
+        out["tasks"] = [self.task_view(t) for t in snap["tasks"]]
+        types, raw = snap["types"], snap["values"]
+        out["values"] = {
+            p: format_value(types[index[p]], raw[index[p]]) for p in (*c.paths, *c.view_paths) if p in index
+        }
         lines = snap.get("lines")
         out["lines"] = (
             {"pou": c.view_pou, "hit": lines.get(c.view_pou, [])} if lines is not None and c.view_pou else None
@@ -193,7 +231,7 @@ class Hub:
         total = snap.get("log_total", 0)
         log = snap.get("log", [])
         new = len(log) if c.log_total is None else max(0, min(len(log), total - c.log_total))
-        out["log"] = log[len(log) - new :] if new else []
+        out["log"] = [{"time_ns": t, "kind": k, "text": x} for t, k, x in log[len(log) - new :]] if new else []
         c.log_total = total
         results = [r for r in snap.get("results", []) if r["seq"] > c.result_seq]
         if results:
@@ -204,6 +242,48 @@ class Hub:
             if r["client"] == c.number
         ]
         return out
+
+
+# histogram bins: 1 µs to ~17 s, four per octave (ns edges)
+EDGES = [0] + [int(1000 * 2 ** (i / 4)) for i in range(0, 4 * 24 + 1)]
+
+
+def _bin(v: float) -> int:
+    return min(max(bisect_right(EDGES, v) - 1, 0), len(EDGES) - 2)
+
+
+def _pct(counts: list[int], q: float) -> float:
+    """The upper edge of the bin holding quantile q (ns)."""
+    total = sum(counts)
+    if not total:
+        return 0
+    acc = 0
+    for i, c in enumerate(counts):
+        acc += c
+        if acc >= q * total:
+            return EDGES[i + 1]
+    return EDGES[-1]
+
+
+def _hist(counts: list[int]) -> dict:
+    """The bins from the first to the last used one."""
+    used = [i for i, c in enumerate(counts) if c]
+    if not used:
+        return {"edges_ns": [], "counts": []}
+    a, b = used[0], used[-1] + 1
+    return {"edges_ns": EDGES[a : b + 1], "counts": counts[a:b]}
+
+
+def format_value(kind: str, v: Any) -> dict:
+    """A value as the page shows it: its ST text and a number for charts (see link._value)."""
+    if kind == "!":
+        return {"text": None, "num": None, "error": v}
+    if kind == "=":
+        return {"text": v, "num": None}
+    num = float(v) if isinstance(v, (bool, int, float)) else None
+    if num is not None and (math.isnan(num) or math.isinf(num)):
+        num = None
+    return {"text": to_st_literal(v, T.ELEMENTARY[kind]), "num": num}
 
 
 def _find(nodes: list, path: str) -> dict | None:

@@ -1,0 +1,241 @@
+"""The online mode in a real browser: Playwright driving Debian's Chromium against `st run --web`.
+
+Values update, a write and a force reach the PLC and show, a fault shows its banner and a reset
+clears it, the token is required. Every view is photographed; `ST_SCREENSHOTS=docs/img` keeps
+the pictures docs/web.md shows (otherwise they go to the test's temporary directory).
+Skipped, with the reason, where Chromium or Playwright is missing (.ci/run installs both).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+LINE = ROOT / "tests" / "data" / "web" / "line.st"
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright for Python is not installed")
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (apt-get install chromium)"),
+]
+
+
+def _start(args: list[str], rt: bool = False) -> tuple[subprocess.Popen, str]:
+    """`st run … --web 127.0.0.1:0`; (the process, the URL it printed, with the token). `rt`: with
+    SCHED_FIFO, for a program that must keep its 1 ms beside a busy browser (the axes' following
+    error would stop them)."""
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "st",
+            "run",
+            *args,
+            "--web",
+            "127.0.0.1:0",
+            "--rt" if rt else "--no-rt",
+            "--duration",
+            "300s",
+        ],
+        cwd=ROOT,
+        stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        text=True,
+    )
+    assert proc.stderr is not None
+    end = time.monotonic() + 30
+    while time.monotonic() < end:
+        line = proc.stderr.readline()
+        m = re.match(r"web: (http://\S+)", line)
+        if m:
+            threading.Thread(target=proc.stderr.read, daemon=True).start()  # (a full pipe would block it)
+            return proc, m.group(1)
+        if not line and proc.poll() is not None:
+            break
+    proc.kill()
+    raise AssertionError("st run --web printed no URL")
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    proc.terminate()
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+
+
+@pytest.fixture(scope="module")
+def shots(tmp_path_factory) -> Path:
+    where = os.environ.get("ST_SCREENSHOTS")
+    out = Path(where) if where else tmp_path_factory.mktemp("screenshots")
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"])
+        yield b
+        b.close()
+
+
+@pytest.fixture(scope="module")
+def line_run():
+    proc, url = _start([str(LINE)])
+    yield url
+    _stop(proc)
+
+
+def _page(browser, url: str):
+    page = browser.new_page(viewport={"width": 1280, "height": 800})
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.goto(url)
+    page.get_by_test_id("state").wait_for()
+    return page, errors
+
+
+def _text(page, selector: str) -> str:
+    return page.locator(selector).first.inner_text().strip()
+
+
+def test_the_token_is_required(browser, line_run):
+    base = line_run.split("/?")[0]
+    page = browser.new_page()
+    page.goto(base + "/")
+    assert page.get_by_test_id("login-secret").is_visible()
+    assert page.request.get(base + "/api/program").status == 401
+    page.get_by_test_id("login-secret").fill("not-the-token")
+    page.get_by_test_id("login-submit").click()
+    assert page.get_by_test_id("login-error").inner_text() == "Wrong token or password."
+    page.get_by_test_id("login-secret").fill(line_run.split("token=")[1])
+    page.get_by_test_id("login-submit").click()
+    sync_api.expect(page.get_by_test_id("state")).to_have_text("RUN", timeout=10000)
+    page.close()
+
+
+def test_values_update_and_the_lines_of_the_last_scan_are_marked(browser, line_run, shots):
+    page, errors = _page(browser, line_run)
+    page.locator('[data-testid="tree-item"][data-path="line"]').click()
+    count = page.locator('.val[data-path="line.count"]').first
+    sync_api.expect(count).to_have_text(re.compile(r"^\d+$"), timeout=10000)
+    first = int(count.inner_text())
+    sync_api.expect(count).not_to_have_text(str(first), timeout=10000)
+    assert int(count.inner_text()) > first
+    sync_api.expect(page.locator(".hit").first).to_be_visible(timeout=10000)
+    page.screenshot(path=str(shots / "web-code.png"))
+    assert errors == []
+    page.close()
+
+
+def test_a_write_and_a_force_reach_the_plc_and_show(browser, line_run, shots):
+    page, errors = _page(browser, line_run)
+    page.get_by_test_id("tab-watch").click()
+    for path in ("line.count", "line.motor", "line.speed", "line.dwell"):
+        page.get_by_test_id("watch-add-input").fill(path)
+        page.get_by_test_id("watch-add-btn").click()
+    row = page.locator('[data-testid="watch-row"][data-path="line.count"]')
+    row.get_by_test_id("new-value").fill("1000000")
+    row.get_by_test_id("btn-write").click()
+    sync_api.expect(row.locator(".value")).to_have_text(re.compile(r"^10000\d\d$"), timeout=10000)
+    motor = page.locator('[data-testid="watch-row"][data-path="line.motor"]')
+    motor.get_by_test_id("new-value").fill("TRUE")
+    motor.get_by_test_id("btn-force").click()
+    dialog = page.get_by_test_id("confirm-dialog")
+    sync_api.expect(dialog).to_be_visible()
+    assert "%QX0.0" in dialog.inner_text()  # forcing an output: named, with its address
+    page.get_by_test_id("confirm-yes").click()
+    sync_api.expect(motor.locator(".forced")).to_have_text("FORCED", timeout=10000)
+    sync_api.expect(motor.locator(".value")).to_have_text("TRUE")
+    page.screenshot(path=str(shots / "web-watch.png"))
+    motor.get_by_test_id("btn-unforce").click()
+    sync_api.expect(motor.locator(".forced")).to_have_count(0, timeout=10000)
+    sync_api.expect(motor.locator(".value")).to_have_text("FALSE", timeout=10000)  # the program's value again
+    speed = page.locator('[data-testid="watch-row"][data-path="line.speed"]')
+    speed.get_by_test_id("new-value").fill("fast")
+    speed.get_by_test_id("btn-write").click()
+    sync_api.expect(page.get_by_test_id("toast")).to_contain_text("not a literal of REAL: 'fast'", timeout=10000)
+    for path in ("line.count", "line.speed"):
+        page.locator(f'[data-testid="watch-row"][data-path="{path}"]').get_by_test_id("trend-check").check()
+    page.get_by_test_id("tab-trends").click()
+    time.sleep(2.5)  # a few seconds of history on the chart
+    page.screenshot(path=str(shots / "web-trends.png"))
+    page.get_by_test_id("tab-tasks").click()
+    time.sleep(0.5)
+    page.screenshot(path=str(shots / "web-tasks.png"))
+    assert errors == []
+    page.close()
+
+
+def test_a_fault_shows_its_banner_and_a_reset_clears_it(browser, line_run, shots):
+    page, errors = _page(browser, line_run)
+    page.get_by_test_id("tab-watch").click()
+    page.get_by_test_id("watch-add-input").fill("line.divisor")
+    page.get_by_test_id("watch-add-btn").click()
+    row = page.locator('[data-testid="watch-row"][data-path="line.divisor"]')
+    row.get_by_test_id("new-value").fill("0")
+    row.get_by_test_id("btn-write").click()
+    banner = page.get_by_test_id("fault-banner")
+    sync_api.expect(banner).to_be_visible(timeout=10000)
+    text = banner.inner_text()
+    assert text.startswith("FAULT DIV0: division by zero") and "line.st:24, POU line, task main" in text
+    sync_api.expect(page.get_by_test_id("state")).to_have_text("FAULT")
+    page.get_by_test_id("tab-code").click()
+    page.screenshot(path=str(shots / "web-fault.png"))
+    page.get_by_test_id("btn-reset-warm").click()
+    sync_api.expect(page.get_by_test_id("state")).to_have_text("RUN", timeout=10000)
+    sync_api.expect(banner).to_be_hidden()
+    assert errors == []
+    page.close()
+
+
+def test_motion_ethercat_and_modbus_views(browser, shots):
+    with socket.socket() as s:  # a free port for the Modbus slave, to poll it as an HMI would
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    programs = ROOT / "programs"
+    proc, url = _start(
+        [
+            str(programs / "gantry.st"),
+            "--ethercat",
+            str(programs / "gantry.segment.toml"),
+            "--axes",
+            str(programs / "gantry.axes.toml"),
+            "--modbus",
+            f"127.0.0.1:{port}",
+        ],
+        rt=True,
+    )
+    hmi = socket.create_connection(("127.0.0.1", port), timeout=5)
+    try:
+        hmi.sendall(bytes([0, 1, 0, 0, 0, 6, 1, 3, 0, 0, 0, 1]))  # read holding register 0
+        hmi.recv(64)
+        page, errors = _page(browser, url)
+        page.get_by_test_id("tab-motion").click()
+        sync_api.expect(page.get_by_test_id("view-motion")).to_contain_text("Axis 1", timeout=10000)
+        time.sleep(3)  # the axes move: a few seconds on the charts
+        page.screenshot(path=str(shots / "web-motion.png"))
+        page.get_by_test_id("tab-ethercat").click()
+        sync_api.expect(page.get_by_test_id("view-ethercat")).to_contain_text("OP", timeout=10000)
+        page.screenshot(path=str(shots / "web-ethercat.png"))
+        page.get_by_test_id("tab-modbus").click()
+        peer = f"127.0.0.1:{hmi.getsockname()[1]}"
+        sync_api.expect(page.get_by_test_id("view-modbus")).to_contain_text(peer, timeout=10000)
+        page.screenshot(path=str(shots / "web-modbus.png"))
+        assert errors == []
+        page.close()
+    finally:
+        hmi.close()
+        _stop(proc)
