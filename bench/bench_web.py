@@ -37,6 +37,7 @@ PROGRAM = ["programs/gantry.st", "--ethercat", "programs/gantry.segment.toml", "
 
 def page(url: str, stop: threading.Event, counts: list) -> None:
     """A page: sign in with the printed URL, view the first instance, watch 10 variables, read."""
+    from websockets.exceptions import ConnectionClosed
     from websockets.sync.client import connect
 
     jar = http.cookiejar.CookieJar()
@@ -56,6 +57,8 @@ def page(url: str, stop: threading.Event, counts: list) -> None:
                     counts.append(time.monotonic())
             except TimeoutError:
                 continue
+            except ConnectionClosed:  # the run ended
+                return
 
 
 def run(mode: str, seconds: float, tmp: Path) -> dict:

@@ -390,8 +390,9 @@ def _ethercat(plc: Any) -> dict | None:
     for d in plc.io:
         if hasattr(d, "master") and hasattr(d, "counters"):
             c = d.counters
+            # one LRW datagram serves every slave: a working-counter error belongs to the segment
             slaves = [
-                {"position": i + 1, "name": s.name, "state": s.state, "wkc_errors": c.get("wkc_errors", 0)}
+                {"position": i + 1, "name": s.name, "state": s.state, "wkc_errors": None}
                 for i, s in enumerate(d.master.slaves)
             ]
             return {"lost_frames": c.get("lost_frames", 0), "wkc_errors": c.get("wkc_errors", 0), "slaves": slaves}

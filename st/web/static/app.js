@@ -811,6 +811,12 @@
   // ------------------------------------------------------------------ charts (uPlot helpers)
   const AXIS = { stroke: '#555', grid: { stroke: '#eceff3', width: 1 }, ticks: { stroke: '#d6dae0', width: 1 }, font: '11px system-ui, sans-serif' };
 
+  // a y axis as wide as its longest label (uPlot calls it with the labels it will draw)
+  function labelSize(u, values) {
+    if (!values || !values.length) return 40;
+    return Math.max(40, Math.max(...values.map((v) => String(v).length)) * 7 + 16);
+  }
+
   function chartSize(box, height) {
     return { width: Math.max(200, box.clientWidth), height };
   }
@@ -854,7 +860,7 @@
       });
     });
     const axes = [{ ...AXIS, values: (u, ticks) => ticks.map((v) => +v.toFixed(1) + ' s') }];
-    if (anyNum) axes.push({ ...AXIS, scale: 'y', size: 60 });
+    if (anyNum) axes.push({ ...AXIS, scale: 'y', size: labelSize });
     if (anyBool) {
       axes.push({ ...AXIS, scale: 'bool', side: anyNum ? 1 : 3, size: 50, grid: { show: !anyNum },
         splits: () => [0, 1], values: (u, ticks) => ticks.map((v) => (v === 1 ? 'TRUE' : v === 0 ? 'FALSE' : '')) });
@@ -940,7 +946,7 @@
       legend: { show: false },
       cursor: { drag: { x: false, y: false }, points: { show: false } },
       scales: { x: { time: false, range: [edges[0] / 1000, edges[edges.length - 1] / 1000] }, y: { range: (u, lo, hi) => [0, Math.max(1, hi * 1.05)] } },
-      axes: [{ ...AXIS, values: (u, ticks) => ticks.map((v) => +v.toFixed(2)) }, { ...AXIS, size: 50 }],
+      axes: [{ ...AXIS, values: (u, ticks) => ticks.map((v) => +v.toFixed(2)) }, { ...AXIS, size: labelSize }],
       series: [{}, { label: 'count', fill: color + '99', stroke: color, width: 1, paths: uPlot.paths.bars({ size: [0.92, 80], align: 0 }), points: { show: false } }],
     };
     const chart = new uPlot(opts, [[], []], box);
@@ -1002,7 +1008,7 @@
       legend: { show: false },
       cursor: { drag: { x: false, y: false } },
       scales: { x: { time: false, range: () => { const e = Hist.t.length ? Hist.t[Hist.t.length - 1] : 0; return [e - trendWindow(), e]; } } },
-      axes: [{ ...AXIS, values: (u, ticks) => ticks.map((v) => +v.toFixed(1) + ' s') }, { ...AXIS, size: 55 }],
+      axes: [{ ...AXIS, values: (u, ticks) => ticks.map((v) => +v.toFixed(1) + ' s') }, { ...AXIS, size: labelSize }],
       series: [{}, { label, stroke: color, width: 1.5, points: { show: false } }],
     }, histData([key], trendWindow()).data, box);
     observeSize(box, () => (box.isConnected ? chart : null), 120);
@@ -1085,7 +1091,7 @@
     setText($('ecat-summary'), `Lost frames: ${e.lost_frames} · WKC errors: ${e.wkc_errors} · Slaves: ${(e.slaves || []).length}`);
     $('ecat-summary').classList.toggle('warn', e.lost_frames > 0 || e.wkc_errors > 0);
     syncRows($('ecat-body'), Keyed.ecat, e.slaves || [], (s) => s.position, (s) => [
-      [s.position, 'num'], s.name, [s.state, s.state === 'OP' ? 'ok' : 'bad'], [s.wkc_errors, s.wkc_errors ? 'num warn' : 'num']]);
+      [s.position, 'num'], s.name, [s.state, s.state === 'OP' ? 'ok' : 'bad'], [s.wkc_errors ?? '—', s.wkc_errors ? 'num warn' : 'num']]);
   }
 
   function updateModbus(snap) {
