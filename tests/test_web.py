@@ -95,6 +95,7 @@ def _until(plc, link, ws, want, scans: int = 1, timeout: float = 8.0, results: l
     raise AssertionError("no such snapshot came")
 
 
+@pytest.mark.slow  # (the server process)
 def test_everything_but_the_sign_in_page_needs_the_token_or_the_password(web):
     plc, link = web
     opener, jar = _opener()
@@ -113,6 +114,7 @@ def test_everything_but_the_sign_in_page_needs_the_token_or_the_password(web):
         assert e.value.rcvd is not None and e.value.rcvd.code == code
 
 
+@pytest.mark.slow  # (the server process)
 def test_the_program_description_has_the_instance_tree_and_the_source(web):
     plc, link = web
     opener, _ = _opener()
@@ -137,6 +139,7 @@ def test_the_program_description_has_the_instance_tree_and_the_source(web):
     assert doc["pous"]["TON"]["source"] == [] and doc["pous"]["TON"]["library"] is True
 
 
+@pytest.mark.slow  # (the server process)
 def test_a_page_gets_what_it_watches_and_the_lines_of_the_last_scan(web):
     plc, link = web
     with _ws(link, _session(link)) as ws:
@@ -160,6 +163,7 @@ def test_a_page_gets_what_it_watches_and_the_lines_of_the_last_scan(web):
         assert snap["lines"]["hit"] == [17, 18, 19, 20, 21, 22, 24]
 
 
+@pytest.mark.slow  # (the server process)
 def test_writes_forcing_and_stop_start_from_a_page_are_applied_and_logged(web):
     plc, link = web
     with _ws(link, _session(link)) as ws:
@@ -193,6 +197,7 @@ def test_writes_forcing_and_stop_start_from_a_page_are_applied_and_logged(web):
         _until(plc, link, ws, lambda m: m["state"] == "RUN", scans=0)
 
 
+@pytest.mark.slow  # (the server process)
 def test_a_fault_reaches_the_page_and_a_warm_or_cold_reset_clears_it(web):
     plc, link = web
     with _ws(link, _session(link)) as ws:
@@ -212,6 +217,7 @@ def test_a_fault_reaches_the_page_and_a_warm_or_cold_reset_clears_it(web):
         _until(plc, link, ws, lambda m: m["state"] == "RUN" and m["values"]["line.kept"]["text"] == "0", scans=0)
 
 
+@pytest.mark.slow  # (the server process)
 def test_a_read_only_server_refuses_every_change():
     plc = PLC(compile_paths([str(LINE)]))
     link = WebLink(plc, "line.st", "127.0.0.1", 0, token=TOKEN, read_only=True, period=0.0).start()

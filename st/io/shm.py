@@ -1,7 +1,9 @@
 """Shared memory between the PLC process and a server process (Modbus, the web page), lock-free.
 
-Two pieces, used by st.io.modbus.exchange and st.web.channel:
+Three pieces, used by st.io.modbus.exchange and st.web.channel:
 
+- `SharedBlock`: one named block and the views cut from it (the PLC's side creates, clears and
+  finally unlinks it; the server's side attaches by name).
 - `SeqLock`: a counter that is odd while the writer (the PLC) updates a region; a reader copies
   the region and retries when the counter moved, so it never sees a torn value and the writer
   never waits.
@@ -14,11 +16,45 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Callable
+from multiprocessing import shared_memory
 from typing import TypeVar
 
 T = TypeVar("T")
 
 _LEN = struct.Struct("<I")
+
+
+class SharedBlock:
+    """`size` bytes of shared memory: created (and zeroed) when `create`, else attached by `name`."""
+
+    def __init__(self, size: int, name: str | None = None, create: bool = False):
+        self.shm = shared_memory.SharedMemory(name=name, create=create, size=size if create else 0)
+        buf = self.shm.buf
+        assert buf is not None  # None only once closed
+        if create:
+            buf[:size] = bytes(size)
+        self.name = self.shm.name
+        self._buf = buf
+        self._views: list[memoryview] = []
+
+    def view(self, start: int, end: int, fmt: str = "") -> memoryview:
+        """Bytes start..end of the block (cast to `fmt`: "Q", "I", "H"), released by close()."""
+        mv = self._buf[start:end]
+        if fmt:
+            mv = mv.cast(fmt)  # type: ignore[call-overload]  # (a format chosen by the caller)
+        self._views.append(mv)
+        return mv
+
+    def close(self, unlink: bool = False) -> None:
+        for mv in self._views:
+            mv.release()
+        self._views.clear()
+        self.shm.close()
+        if unlink:
+            try:
+                self.shm.unlink()
+            except FileNotFoundError:
+                pass
 
 
 class SeqLock:

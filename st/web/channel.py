@@ -15,9 +15,8 @@ in the scan's process makes the scan wait for the interpreter lock). They exchan
 from __future__ import annotations
 
 import struct
-from multiprocessing import shared_memory
 
-from ..io.shm import MessageRing, SeqLock
+from ..io.shm import MessageRing, SeqLock, SharedBlock
 
 SNAPSHOT_SIZE = 8 << 20  # the largest snapshot (values of a few thousand variables fit easily)
 DESCRIPTION_SIZE = 16 << 20  # the program's description (its sources included)
@@ -31,23 +30,18 @@ STARTING, SERVING, FAILED = 0, 1, 2
 _LEN = struct.Struct("<I")
 
 
-class Channel:
+class Channel(SharedBlock):
     """Both sides' view of the block; `create=True` on the PLC side (which owns and unlinks it)."""
 
     def __init__(self, name: str | None = None, create: bool = False):
-        self.shm = shared_memory.SharedMemory(name=name, create=create, size=SIZE if create else 0)
-        buf = self.shm.buf
-        assert buf is not None  # None only once closed
-        if create:
-            buf[:_HDR] = bytes(_HDR)
-        self.name = self.shm.name
-        self._seq = buf[0:8].cast("Q")
-        self._ctl = buf[8:44].cast("I")  # head, tail, port, state, pages, lengths, version, read
-        self._snap = buf[_HDR : _HDR + SNAPSHOT_SIZE]
-        self._desc = buf[_DESC : _DESC + DESCRIPTION_SIZE]
-        self._ring = buf[_DESC + DESCRIPTION_SIZE : SIZE]
+        super().__init__(SIZE, name, create)
+        self._seq = self.view(0, 8, "Q")
+        self._ctl = self.view(8, 44, "I")  # head, tail, port, state, pages, lengths, version, read
+        self._snap = self.view(_HDR, _HDR + SNAPSHOT_SIZE)
+        self._desc = self.view(_DESC, _DESC + DESCRIPTION_SIZE)
+        self._ring = self.view(_DESC + DESCRIPTION_SIZE, SIZE)
         self.lock = SeqLock(self._seq)
-        self.requests = MessageRing(self._ring, self._ctl[0:2])
+        self.requests = MessageRing(self._ring, self.view(8, 16, "I"))
 
     # ---------------------------------------------------------------- PLC side
     def publish(self, doc: bytes) -> bool:
@@ -122,13 +116,3 @@ class Channel:
     @consumed.setter
     def consumed(self, value: int) -> None:
         self._ctl[8] = value & 0xFFFFFFFF
-
-    def close(self, unlink: bool = False) -> None:
-        for mv in (self._seq, self.requests.ctl, self._ctl, self._snap, self._desc, self._ring):
-            mv.release()
-        self.shm.close()
-        if unlink:
-            try:
-                self.shm.unlink()
-            except FileNotFoundError:
-                pass

@@ -12,13 +12,13 @@ from __future__ import annotations
 import json
 import marshal
 import os
-import pickle
 import subprocess
 import sys
 import time
 from itertools import islice
 from typing import Any
 
+from ..io import server_process
 from ..model import types as T
 from ..runtime.lifecycle import FAULT, RUN, STOP
 from ..runtime.values import from_st_text, to_st_literal
@@ -77,17 +77,7 @@ class WebLink:
         ch = self.ch = Channel(create=True)
         self.cfg.channel = ch.name
         self._describe()
-        log = open(self.log_path, "ab") if self.log_path else None
-        try:  # a fresh interpreter, as the Modbus server (st/io/modbus/slave.py says why)
-            proc = self.proc = subprocess.Popen(
-                [sys.executable, "-m", "st.web"], stdin=subprocess.PIPE, stderr=log, start_new_session=True
-            )
-        finally:
-            if log is not None:
-                log.close()
-        assert proc.stdin is not None
-        proc.stdin.write(pickle.dumps(self.cfg))
-        proc.stdin.close()
+        proc = self.proc = server_process.spawn("st.web", self.cfg, self.log_path)
         deadline = time.monotonic() + timeout
         while ch.state == STARTING and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.01)
@@ -102,15 +92,8 @@ class WebLink:
         return self.ch.port if self.ch is not None else 0
 
     def stop(self) -> None:
-        if self.proc is not None:
-            if self.proc.poll() is None:
-                self.proc.terminate()
-            try:
-                self.proc.wait(5)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(1)
-            self.proc = None
+        server_process.stop(self.proc)
+        self.proc = None
         if self.ch is not None:
             self.ch.close(unlink=True)
             self.ch = None

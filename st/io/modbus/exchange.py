@@ -18,9 +18,8 @@ for the interpreter lock under load: ../shared/notes/realtime.md). The two excha
 from __future__ import annotations
 
 import struct
-from multiprocessing import shared_memory
 
-from ..shm import MessageRing, SeqLock
+from ..shm import MessageRing, SeqLock, SharedBlock
 
 N = 65536
 COILS, DISCRETE, INPUT, HOLDING = 0, 1, 2, 3
@@ -39,29 +38,27 @@ SIZE = _STATUS + STATUS_SIZE
 _MSG = struct.Struct("<BHH")  # table, address, count; then the values (one ring message)
 
 
-class Exchange:
+class Exchange(SharedBlock):
     """Both sides' view of the block; `create=True` on the PLC side (which owns and unlinks it)."""
 
     def __init__(self, name: str | None = None, create: bool = False):
-        self.shm = shared_memory.SharedMemory(name=name, create=create, size=SIZE if create else 0)
-        buf = self.shm.buf
-        assert buf is not None  # None only once closed
-        if create:
-            buf[:SIZE] = bytes(SIZE)
-        self.name = self.shm.name
-        self.seq = buf[0:8].cast("Q")
-        self.ctl = buf[8:28].cast("I")  # head, tail, port, state, status length
-        self.status_seq = buf[32:40].cast("Q")
-        self.status_buf = buf[_STATUS : _STATUS + STATUS_SIZE]
+        super().__init__(SIZE, name, create)
+        self.seq = self.view(0, 8, "Q")
+        self.ctl = self.view(8, 28, "I")  # head, tail, port, state, status length
+        self.status_seq = self.view(32, 40, "Q")
+        self.status_buf = self.view(_STATUS, _STATUS + STATUS_SIZE)
         self.status_lock = SeqLock(self.status_seq)
-        self.bits = {COILS: buf[_OFF[COILS] : _OFF[COILS] + N], DISCRETE: buf[_OFF[DISCRETE] : _OFF[DISCRETE] + N]}
-        self.regs = {
-            INPUT: buf[_OFF[INPUT] : _OFF[INPUT] + 2 * N].cast("H"),
-            HOLDING: buf[_OFF[HOLDING] : _OFF[HOLDING] + 2 * N].cast("H"),
+        self.bits = {
+            COILS: self.view(_OFF[COILS], _OFF[COILS] + N),
+            DISCRETE: self.view(_OFF[DISCRETE], _OFF[DISCRETE] + N),
         }
-        self.ring = buf[_RING : _RING + RING_SIZE]
+        self.regs = {
+            INPUT: self.view(_OFF[INPUT], _OFF[INPUT] + 2 * N, "H"),
+            HOLDING: self.view(_OFF[HOLDING], _OFF[HOLDING] + 2 * N, "H"),
+        }
+        self.ring = self.view(_RING, _RING + RING_SIZE)
         self.lock = SeqLock(self.seq)
-        self.writes = MessageRing(self.ring, self.ctl[0:2])
+        self.writes = MessageRing(self.ring, self.view(8, 16, "I"))
 
     # ---------------------------------------------------------------- snapshot (seqlock)
     def begin_write(self) -> None:
@@ -124,22 +121,3 @@ class Exchange:
 
     def set_state(self, s: int) -> None:
         self.ctl[3] = s
-
-    def close(self, unlink: bool = False) -> None:
-        for mv in (
-            self.seq,
-            self.writes.ctl,
-            self.ctl,
-            self.status_seq,
-            self.status_buf,
-            *self.bits.values(),
-            *self.regs.values(),
-            self.ring,
-        ):
-            mv.release()
-        self.shm.close()
-        if unlink:
-            try:
-                self.shm.unlink()
-            except FileNotFoundError:
-                pass

@@ -11,14 +11,13 @@ from __future__ import annotations
 
 import json
 import os
-import pickle
 import subprocess
-import sys
 import time
 
 from ...runtime.iodriver import IODriverBase
 from ...runtime.scheduler import Task
 from ...runtime.values import from_python
+from .. import server_process
 from .addressmap import OPENPLC_LIMIT, TABLES, Encoding, effective_map, load_map, located_cells
 from .exchange import COILS, DISCRETE, HOLDING, INPUT, Exchange
 from .server import ServerConfig
@@ -128,19 +127,7 @@ class ModbusSlave(IODriverBase):
         ex = self.ex = Exchange(create=True)
         self.rebind()
         self._set_ranges()
-        # a fresh interpreter (not fork: the PLC's heap and real-time settings stay here; not
-        # multiprocessing's spawn: it would re-run the user's main module)
-        log = open(self.log_path, "ab") if self.log_path else None
-        try:
-            proc = self.proc = subprocess.Popen(
-                [sys.executable, "-m", "st.io.modbus"], stdin=subprocess.PIPE, stderr=log, start_new_session=True
-            )
-        finally:
-            if log is not None:
-                log.close()
-        assert proc.stdin is not None  # stdin=PIPE
-        proc.stdin.write(pickle.dumps((self.cfg, ex.name, os.getpid())))
-        proc.stdin.close()
+        proc = self.proc = server_process.spawn("st.io.modbus", (self.cfg, ex.name, os.getpid()), self.log_path)
         deadline = time.monotonic() + timeout
         while ex.state == 0 and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.01)
@@ -161,15 +148,8 @@ class ModbusSlave(IODriverBase):
     def stop(self) -> None:
         if self in self.plc.io:
             self.plc.io.remove(self)
-        if self.proc is not None:
-            if self.proc.poll() is None:
-                self.proc.terminate()
-            try:
-                self.proc.wait(5)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(1)
-            self.proc = None
+        server_process.stop(self.proc)
+        self.proc = None
         if self.ex is not None:
             self.ex.close(unlink=True)
             self.ex = None
