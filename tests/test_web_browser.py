@@ -170,7 +170,7 @@ def test_a_write_and_a_force_reach_the_plc_and_show(browser, line_run, shots):
     for path in ("line.count", "line.speed"):
         page.locator(f'[data-testid="watch-row"][data-path="{path}"]').get_by_test_id("trend-check").check()
     page.get_by_test_id("tab-trends").click()
-    time.sleep(2.5)  # a few seconds of history on the chart
+    time.sleep(1.0)  # a second of history on the chart
     page.screenshot(path=str(shots / "web-trends.png"))
     page.get_by_test_id("tab-tasks").click()
     time.sleep(0.5)
@@ -225,7 +225,7 @@ def test_motion_ethercat_and_modbus_views(browser, shots):
         page, errors = _page(browser, url)
         page.get_by_test_id("tab-motion").click()
         sync_api.expect(page.get_by_test_id("view-motion")).to_contain_text("Axis 1", timeout=10000)
-        time.sleep(3)  # the axes move: a few seconds on the charts
+        time.sleep(1.5)  # the axes move: some history on the charts
         page.screenshot(path=str(shots / "web-motion.png"))
         page.get_by_test_id("tab-ethercat").click()
         sync_api.expect(page.get_by_test_id("view-ethercat")).to_contain_text("OP", timeout=10000)

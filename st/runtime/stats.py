@@ -36,7 +36,8 @@ class TaskStats:
         self.exec_sum = 0
         self.last_exec = 0
         self.latencies: deque[int] = deque(maxlen=keep)  # the latest `keep` samples (ns)
-        self.execs: deque[int] = deque(maxlen=keep)  # execution times of the same jobs (ns)
+        # execution times of the same jobs (ns), kept once someone asks (keep_execs: the web page)
+        self.execs: deque[int] | None = None
         self.periods: deque[int] = deque(maxlen=keep)  # start-to-start intervals (ns)
         self._last_start: int | None = None
         # the (m,k) window as the entries (jobs and skipped releases, numbered from 1) that missed:
@@ -44,6 +45,12 @@ class TaskStats:
         self._skip_entries = 0  # entries of skipped releases (entries = jobs + these)
         self._miss_at: deque[int] = deque()
         self.mk_violations = 0  # windows (after the first k jobs) with U < m/k
+
+    def keep_execs(self) -> deque[int]:
+        """From now on, keep each job's execution time beside its latency (`execs`)."""
+        if self.execs is None:
+            self.execs = deque(maxlen=self.keep)
+        return self.execs
 
     def record(self, release: int, start: int, end: int) -> None:
         lat = start - release
@@ -61,7 +68,8 @@ class TaskStats:
         self.exec_sum += ex
         self.last_exec = ex
         self.latencies.append(lat)
-        self.execs.append(ex)
+        if self.execs is not None:
+            self.execs.append(ex)
         last = self._last_start
         if last is not None:
             self.periods.append(start - last)

@@ -76,6 +76,10 @@ class WebLink:
     def start(self, timeout: float = 10.0) -> WebLink:
         ch = self.ch = Channel(create=True)
         self.cfg.channel = ch.name
+        for t in self.plc.tasks:  # execution times for the histograms, from now on
+            keep = getattr(t.stats, "keep_execs", None)
+            if keep is not None:
+                keep()
         self._describe()
         proc = self.proc = server_process.spawn("st.web", self.cfg, self.log_path)
         deadline = time.monotonic() + timeout
@@ -308,7 +312,8 @@ class WebLink:
         """A task's statistics, with its jobs' latencies and execution times since the last
         snapshot the server read (newest first, at most SAMPLES_KEPT; the server bins them)."""
         s = t.stats
-        execs = getattr(s, "execs", ())  # (a TaskStats subclass may keep no execution times)
+        keep = getattr(s, "keep_execs", None)  # (a stand-in for TaskStats may keep none)
+        execs = keep() if keep is not None else ()
         read = self._jobs_at.get(self.ch.consumed if self.ch is not None else 0, {})
         new = min(s.jobs - read.get(t.name, 0), len(s.latencies), SAMPLES_KEPT)
         jobs = s.jobs

@@ -322,7 +322,8 @@ class Server:
             self.publish_status()
 
     def publish_status(self) -> None:
-        """The connected clients, for the PLC's side (`ModbusSlave.clients`, the web page)."""
+        """The connected clients, for the PLC's side (`ModbusSlave.clients`, the web page): when
+        one comes or goes, and once a second for their request counts."""
         clients = [
             {"peer": c.peer, "requests": c.requests, "regular": c.regular}
             for c in sorted(self.conns, key=lambda c: c.seq)[:100]
@@ -355,10 +356,12 @@ class Connection(asyncio.Protocol):
         transport.set_write_buffer_limits(high=64 * 1024)
         self.server.conns.add(self)
         self.server.admit(self)
+        self.server.publish_status()
 
     def connection_lost(self, exc) -> None:
         self.server.conns.discard(self)
         self.buf.clear()
+        self.server.publish_status()
 
     def close(self) -> None:
         self.server.conns.discard(self)  # at once: connection_lost comes a loop turn later
