@@ -70,7 +70,7 @@ def _ws(link, cookie: str | None, origin: str | None = None):
     return connect(f"ws://127.0.0.1:{link.port}/ws", additional_headers=headers, open_timeout=5)
 
 
-def _until(plc, link, ws, want, scans: int = 1, timeout: float = 8.0, results: list | None = None) -> dict:
+def _until(plc, link, ws, want, scans: int = 1, timeout: float = 20.0, results: list | None = None) -> dict:
     """Scan and serve until the page receives a snapshot for which `want(snapshot)` holds (the
     result messages that come meanwhile are added to `results`)."""
     end = time.monotonic() + timeout

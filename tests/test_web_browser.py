@@ -122,7 +122,7 @@ def test_the_token_is_required(browser, line_run):
     assert page.get_by_test_id("login-error").inner_text() == "Wrong token or password."
     page.get_by_test_id("login-secret").fill(line_run.split("token=")[1])
     page.get_by_test_id("login-submit").click()
-    sync_api.expect(page.get_by_test_id("state")).to_have_text("RUN", timeout=10000)
+    sync_api.expect(page.get_by_test_id("state")).to_have_text("RUN", timeout=20000)
     page.close()
 
 
@@ -130,11 +130,11 @@ def test_values_update_and_the_lines_of_the_last_scan_are_marked(browser, line_r
     page, errors = _page(browser, line_run)
     page.locator('[data-testid="tree-item"][data-path="line"]').click()
     count = page.locator('.val[data-path="line.count"]').first
-    sync_api.expect(count).to_have_text(re.compile(r"^\d+$"), timeout=10000)
+    sync_api.expect(count).to_have_text(re.compile(r"^\d+$"), timeout=20000)
     first = int(count.inner_text())
-    sync_api.expect(count).not_to_have_text(str(first), timeout=10000)
+    sync_api.expect(count).not_to_have_text(str(first), timeout=20000)
     assert int(count.inner_text()) > first
-    sync_api.expect(page.locator(".hit").first).to_be_visible(timeout=10000)
+    sync_api.expect(page.locator(".hit").first).to_be_visible(timeout=20000)
     page.screenshot(path=str(shots / "web-code.png"))
     assert errors == []
     page.close()
@@ -149,7 +149,7 @@ def test_a_write_and_a_force_reach_the_plc_and_show(browser, line_run, shots):
     row = page.locator('[data-testid="watch-row"][data-path="line.count"]')
     row.get_by_test_id("new-value").fill("1000000")
     row.get_by_test_id("btn-write").click()
-    sync_api.expect(row.locator(".value")).to_have_text(re.compile(r"^10000\d\d$"), timeout=10000)
+    sync_api.expect(row.locator(".value")).to_have_text(re.compile(r"^10000\d\d$"), timeout=20000)
     motor = page.locator('[data-testid="watch-row"][data-path="line.motor"]')
     motor.get_by_test_id("new-value").fill("TRUE")
     motor.get_by_test_id("btn-force").click()
@@ -157,16 +157,16 @@ def test_a_write_and_a_force_reach_the_plc_and_show(browser, line_run, shots):
     sync_api.expect(dialog).to_be_visible()
     assert "%QX0.0" in dialog.inner_text()  # forcing an output: named, with its address
     page.get_by_test_id("confirm-yes").click()
-    sync_api.expect(motor.locator(".forced")).to_have_text("FORCED", timeout=10000)
+    sync_api.expect(motor.locator(".forced")).to_have_text("FORCED", timeout=20000)
     sync_api.expect(motor.locator(".value")).to_have_text("TRUE")
     page.screenshot(path=str(shots / "web-watch.png"))
     motor.get_by_test_id("btn-unforce").click()
-    sync_api.expect(motor.locator(".forced")).to_have_count(0, timeout=10000)
-    sync_api.expect(motor.locator(".value")).to_have_text("FALSE", timeout=10000)  # the program's value again
+    sync_api.expect(motor.locator(".forced")).to_have_count(0, timeout=20000)
+    sync_api.expect(motor.locator(".value")).to_have_text("FALSE", timeout=20000)  # the program's value again
     speed = page.locator('[data-testid="watch-row"][data-path="line.speed"]')
     speed.get_by_test_id("new-value").fill("fast")
     speed.get_by_test_id("btn-write").click()
-    sync_api.expect(page.get_by_test_id("toast")).to_contain_text("not a literal of REAL: 'fast'", timeout=10000)
+    sync_api.expect(page.get_by_test_id("toast")).to_contain_text("not a literal of REAL: 'fast'", timeout=20000)
     for path in ("line.count", "line.speed"):
         page.locator(f'[data-testid="watch-row"][data-path="{path}"]').get_by_test_id("trend-check").check()
     page.get_by_test_id("tab-trends").click()
@@ -188,14 +188,14 @@ def test_a_fault_shows_its_banner_and_a_reset_clears_it(browser, line_run, shots
     row.get_by_test_id("new-value").fill("0")
     row.get_by_test_id("btn-write").click()
     banner = page.get_by_test_id("fault-banner")
-    sync_api.expect(banner).to_be_visible(timeout=10000)
+    sync_api.expect(banner).to_be_visible(timeout=20000)
     text = banner.inner_text()
     assert text.startswith("FAULT DIV0: division by zero") and "line.st:24, POU line, task main" in text
     sync_api.expect(page.get_by_test_id("state")).to_have_text("FAULT")
     page.get_by_test_id("tab-code").click()
     page.screenshot(path=str(shots / "web-fault.png"))
     page.get_by_test_id("btn-reset-warm").click()
-    sync_api.expect(page.get_by_test_id("state")).to_have_text("RUN", timeout=10000)
+    sync_api.expect(page.get_by_test_id("state")).to_have_text("RUN", timeout=20000)
     sync_api.expect(banner).to_be_hidden()
     assert errors == []
     page.close()
@@ -224,15 +224,15 @@ def test_motion_ethercat_and_modbus_views(browser, shots):
         hmi.recv(64)
         page, errors = _page(browser, url)
         page.get_by_test_id("tab-motion").click()
-        sync_api.expect(page.get_by_test_id("view-motion")).to_contain_text("Axis 1", timeout=10000)
+        sync_api.expect(page.get_by_test_id("view-motion")).to_contain_text("Axis 1", timeout=20000)
         time.sleep(1.5)  # the axes move: some history on the charts
         page.screenshot(path=str(shots / "web-motion.png"))
         page.get_by_test_id("tab-ethercat").click()
-        sync_api.expect(page.get_by_test_id("view-ethercat")).to_contain_text("OP", timeout=10000)
+        sync_api.expect(page.get_by_test_id("view-ethercat")).to_contain_text("OP", timeout=20000)
         page.screenshot(path=str(shots / "web-ethercat.png"))
         page.get_by_test_id("tab-modbus").click()
         peer = f"127.0.0.1:{hmi.getsockname()[1]}"
-        sync_api.expect(page.get_by_test_id("view-modbus")).to_contain_text(peer, timeout=10000)
+        sync_api.expect(page.get_by_test_id("view-modbus")).to_contain_text(peer, timeout=20000)
         page.screenshot(path=str(shots / "web-modbus.png"))
         assert errors == []
         page.close()
