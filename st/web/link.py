@@ -13,7 +13,6 @@ import json
 import marshal
 import os
 import subprocess
-import sys
 import time
 from itertools import islice
 from typing import Any
@@ -151,12 +150,10 @@ class WebLink:
         doc = self._snapshot()
         ch.publish(marshal.dumps(doc))
         self._jobs_at[self._number] = {t["name"]: t["jobs"] for t in doc["tasks"]}
-        for old in [n for n in self._jobs_at if n < ch.consumed]:
-            del self._jobs_at[old]  # read already: only the newest read one is needed
+        for old in [n for n in self._jobs_at if n < ch.consumed or n <= self._number - 100]:
+            del self._jobs_at[old]  # read already (only the newest read one is needed), or long ago
         self._armed_runs = None
         self._cost = time.perf_counter() - t0
-        if os.environ.get("ST_WEB_DEBUG"):
-            print(f"web snapshot {self._cost * 1e3:.3f} ms, slack {self.plc.idle_slack / 1e6:.3f} ms", file=sys.stderr)
         self._next = max(self._next + self.period, now - self.period)  # 10 Hz on average, not drifting
 
     # ------------------------------------------------------------------ requests
@@ -199,8 +196,8 @@ class WebLink:
                         plc.start()
                 elif action == "reset_warm":
                     plc.restart()
-                elif action == "reset_cold":
-                    _reset_cold(plc)
+                elif action == "reset_cold":  # retained values too start from their initial values
+                    plc.restart(cold=True)
                 else:
                     return False, f"unknown action {action!r}"
                 what = f"{action} (now {plc.state})"
@@ -218,7 +215,7 @@ class WebLink:
                         plc.force(path, value)
                     what = f"{kind} {path} := {to_st_literal(value, ref.type)}"
         except Exception as e:  # noqa: BLE001 - any refusal is the page's answer, never the PLC's end
-            return False, str(e.args[0] if e.args else e) if not isinstance(e, KeyError) else str(e.args[0])
+            return False, str(e.args[0]) if e.args else type(e).__name__
         plc.log.add(plc.time, 0x01, f"web {origin}: {what}")
         return True, ""
 
@@ -333,11 +330,6 @@ class WebLink:
             "new_latency": list(islice(reversed(s.latencies), new)),
             "new_exec": list(islice(reversed(execs), min(new, len(execs)))),
         }
-
-
-def _reset_cold(plc: Any) -> None:
-    """A cold restart: fresh instances with their initial values, retained ones too."""
-    plc.restart(cold=True)
 
 
 def _axes(plc: Any) -> list | None:

@@ -1,4 +1,5 @@
-"""One generated `_body` made ready for Cython: C types where they are exact, the rest unchanged.
+"""One generated `_body` (or user FUNCTION) made ready for Cython: C types where they are exact,
+the rest unchanged.
 
 Input: the body's Python AST as the code generator printed it, the kinds of the instance's
 variables (kinds.py) and the names that may change between calls (globals). Output: the same
