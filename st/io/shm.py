@@ -6,7 +6,7 @@ Three pieces, used by st.io.modbus.exchange and st.web.channel:
   finally unlinks it; the server's side attaches by name).
 - `SeqLock`: a counter that is odd while the writer (the PLC) updates a region; a reader copies
   the region and retries when the counter moved, so it never sees a torn value and the writer
-  never waits.
+  never waits. `Document`: one variable-length document in a region under a seqlock.
 - `MessageRing`: a single-producer single-consumer ring of length-prefixed messages (the server
   produces, the PLC drains at a scan boundary). A full ring refuses a message instead of
   blocking the producer.
@@ -80,6 +80,32 @@ class SeqLock:
             if seq[0] == s1:
                 return value
         return None
+
+
+class Document:
+    """A document of up to len(`region`) bytes; its length is `words[index]` (and, with
+    `version`, words[version] counts its writes). The writer replaces it, a reader copies it whole."""
+
+    def __init__(self, lock: SeqLock, region: memoryview, words: memoryview, index: int, version: int = -1):
+        self.lock, self.region, self.words, self.index, self.version = lock, region, words, index, version
+
+    def write(self, doc: bytes) -> bool:
+        """False (nothing written) when `doc` is larger than the region."""
+        if len(doc) > len(self.region):
+            return False
+        self.lock.begin_write()
+        try:
+            self.region[: len(doc)] = doc
+            self.words[self.index] = len(doc)
+            if self.version >= 0:
+                self.words[self.version] += 1
+        finally:
+            self.lock.end_write()
+        return True
+
+    def read(self) -> bytes | None:
+        """A consistent copy (b"" before the first write), None if the writer never settled."""
+        return self.lock.read(lambda: bytes(self.region[: self.words[self.index]]))
 
 
 class MessageRing:

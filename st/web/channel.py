@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import struct
 
-from ..io.shm import MessageRing, SeqLock, SharedBlock
+from ..io.shm import Document, MessageRing, SeqLock, SharedBlock
 
 SNAPSHOT_SIZE = 8 << 20  # the largest snapshot (values of a few thousand variables fit easily)
 DESCRIPTION_SIZE = 16 << 20  # the program's description (its sources included)
@@ -42,37 +42,23 @@ class Channel(SharedBlock):
         self._ring = self.view(_DESC + DESCRIPTION_SIZE, SIZE)
         self.lock = SeqLock(self._seq)
         self.requests = MessageRing(self._ring, self.view(8, 16, "I"))
+        self._snapshot = Document(self.lock, self._snap, self._ctl, 5)
+        self._description = Document(self.lock, self._desc, self._ctl, 6, version=7)
 
     # ---------------------------------------------------------------- PLC side
     def publish(self, doc: bytes) -> bool:
         """The latest snapshot; False (nothing written) when it is larger than the block."""
-        if len(doc) > SNAPSHOT_SIZE:
-            return False
-        self.lock.begin_write()
-        try:
-            self._snap[: len(doc)] = doc
-            self._ctl[5] = len(doc)
-        finally:
-            self.lock.end_write()
-        return True
+        return self._snapshot.write(doc)
 
     def describe(self, doc: bytes) -> None:
         """The program's description (again after an online change: its version counts up)."""
-        if len(doc) > DESCRIPTION_SIZE:
+        if not self._description.write(doc):
             raise ValueError(f"the program's description takes {len(doc)} bytes, more than {DESCRIPTION_SIZE}")
-        self.lock.begin_write()
-        try:
-            self._desc[: len(doc)] = doc
-            self._ctl[6] = len(doc)
-            self._ctl[7] += 1
-        finally:
-            self.lock.end_write()
 
     # ---------------------------------------------------------------- server side
     def latest(self) -> bytes | None:
         """A consistent copy of the latest snapshot (None before the first, or if it never settled)."""
-        doc = self.lock.read(lambda: bytes(self._snap[: self._ctl[5]]))
-        return doc or None
+        return self._snapshot.read() or None
 
     @property
     def description_version(self) -> int:

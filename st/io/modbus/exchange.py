@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import struct
 
-from ..shm import MessageRing, SeqLock, SharedBlock
+from ..shm import Document, MessageRing, SeqLock, SharedBlock
 
 N = 65536
 COILS, DISCRETE, INPUT, HOLDING = 0, 1, 2, 3
@@ -47,7 +47,7 @@ class Exchange(SharedBlock):
         self.ctl = self.view(8, 28, "I")  # head, tail, port, state, status length
         self.status_seq = self.view(32, 40, "Q")
         self.status_buf = self.view(_STATUS, _STATUS + STATUS_SIZE)
-        self.status_lock = SeqLock(self.status_seq)
+        self._status = Document(SeqLock(self.status_seq), self.status_buf, self.ctl, 4)
         self.bits = {
             COILS: self.view(_OFF[COILS], _OFF[COILS] + N),
             DISCRETE: self.view(_OFF[DISCRETE], _OFF[DISCRETE] + N),
@@ -94,17 +94,11 @@ class Exchange(SharedBlock):
     # ---------------------------------------------------------------- the server's status
     def set_status(self, doc: bytes) -> None:
         """Server: its status document (cut to the block's size)."""
-        doc = doc[:STATUS_SIZE]
-        self.status_lock.begin_write()
-        try:
-            self.status_buf[: len(doc)] = doc
-            self.ctl[4] = len(doc)
-        finally:
-            self.status_lock.end_write()
+        self._status.write(doc[:STATUS_SIZE])
 
     def status(self) -> bytes:
         """PLC: the server's latest status document (b"" before the first, or if it never settled)."""
-        return self.status_lock.read(lambda: bytes(self.status_buf[: self.ctl[4]])) or b""
+        return self._status.read() or b""
 
     # ---------------------------------------------------------------- server state
     @property
