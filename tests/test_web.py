@@ -20,7 +20,7 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from st import PLC
-from st.api import compile_paths
+from st.api import compile_paths, compile_text
 from st.cli import main
 from st.io.shm import MessageRing
 from st.runtime.faults import PLCFaultError
@@ -259,3 +259,20 @@ def test_web_needs_a_real_time_run():
     r = CliRunner().invoke(main, ["run", str(LINE), "--web", "--virtual", "--scans", "3"])
     assert r.exit_code == 2
     assert "error: --web needs a run in real time (not --virtual)" in r.output
+
+
+@pytest.mark.slow  # (the server process)
+def test_an_online_change_sends_the_pages_the_new_program(web):
+    plc, link = web
+    with _ws(link, _session(link)) as ws:
+        ws.send(json.dumps({"type": "watch", "paths": ["line.count"]}))
+        _until(plc, link, ws, lambda m: "line.count" in m.get("values", {}))
+        changed = LINE.read_text().replace("count := count + 1;", "count := count + 1000;")
+        plc.online_change(compile_text(changed, str(LINE), coverage=True))
+        note = _until(plc, link, ws, lambda m: m["type"] == "program")
+        assert note["version"] == 2
+        before = plc["line.count"]
+        snap = _until(
+            plc, link, ws, lambda m: m["type"] == "snapshot" and int(m["values"]["line.count"]["text"]) > before
+        )
+        assert int(snap["values"]["line.count"]["text"]) >= before + 1000  # the new body runs, the value kept

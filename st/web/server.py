@@ -67,6 +67,7 @@ class Client:
         self.view_pou: str | None = None
         self.result_seq = 0
         self.log_total: int | None = None
+        self.pending: list[dict] = []  # messages for this page, sent before its next snapshot
 
 
 class Hub:
@@ -109,11 +110,15 @@ class Hub:
         if got is None:
             return
         version, text = got
+        changed = self.description_version >= 0  # not the first: an online change
         self.description_version, self.description_text = version, text
         self.description = json.loads(text) if text else {}
         for c in self.clients.values():
             self.set_view(c, c.view)
         self.subscribe()
+        if changed:  # the pages load the new program
+            for c in list(self.clients.values()):
+                c.pending.append({"type": "program", "version": version})
 
     def set_view(self, c: Client, instance: str | None) -> None:
         """The paths of the viewed instance's variables, and those of the blocks inside it."""
@@ -198,6 +203,9 @@ class Hub:
             for c in list(self.clients.values()):
                 out = self.for_client(c, snap)
                 with contextlib.suppress(Exception):
+                    for note in c.pending:
+                        await c.ws.send_text(json.dumps(note))
+                    c.pending.clear()
                     for result in out.pop("results"):  # the answers to this page's changes first
                         await c.ws.send_text(json.dumps(result))
                     await c.ws.send_text(json.dumps(out, allow_nan=False))

@@ -185,6 +185,7 @@
       try { msg = JSON.parse(ev.data); } catch (_) { return; }
       if (msg.type === 'snapshot') onSnapshot(msg);
       else if (msg.type === 'result') onResult(msg);
+      else if (msg.type === 'program') location.reload();  // an online change: the new program (the watch list stays)
     };
     ws.onclose = () => {
       if (C.ws !== ws) return;
