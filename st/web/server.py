@@ -99,8 +99,8 @@ class Hub:
         return sid
 
     def authed(self, cookies: dict) -> bool:
-        sid = cookies.get(COOKIE, "")
-        return any(hmac.compare_digest(sid, s) for s in self.sessions)
+        sid = cookies.get(COOKIE, "").encode()  # (bytes: a cookie may hold any character)
+        return bool(sid) and any(hmac.compare_digest(sid, s.encode()) for s in self.sessions)
 
     # ------------------------------------------------------------------ the program
     def refresh_description(self) -> None:
