@@ -176,15 +176,11 @@ def test_lost_frames_put_the_axes_in_errorstop_and_the_segment_recovers():
     drv.segment.drop_frames(150)  # 150 ms: the drives' SyncManager watchdog fires too
     plc.scan(4)  # the third lost frame; the read blocks see it in the next scan
     assert axis_of(plc, "main.a1").state == "ErrorStop" and axis_of(plc, "main.a2").state == "ErrorStop"
-    # nothing can be read from the drive now: the read blocks say so
-    assert (plc["main.st1.Valid"], plc["main.st1.Error"], plc["main.st1.ErrorID"]) == (
-        False,
-        True,
-        E.COMMUNICATION_LOST,
-    )
-    assert (plc["main.err1.Valid"], plc["main.err1.ErrorID"]) == (False, E.COMMUNICATION_LOST)
+    # the axis's state and error are the controller's: readable through the outage
+    assert (plc["main.st1.Valid"], plc["main.st1.Error"], plc["main.st1.ErrorStop"]) == (True, False, True)
+    assert (plc["main.err1.Valid"], plc["main.err1.AxisErrorID"]) == (True, E.COMMUNICATION_LOST)
     plc.scan(200)
-    # back in OP: valid again, and the axis error is the lost communication
+    # back in OP: the axis error is still the lost communication, until MC_Reset
     assert (plc["main.st1.Valid"], plc["main.st1.ErrorStop"]) == (True, True)
     assert (plc["main.err1.AxisErrorID"], plc["main.err1.StAxisErrorID"]) == (
         E.COMMUNICATION_LOST,

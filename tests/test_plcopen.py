@@ -7,7 +7,7 @@ import pytest
 
 from st import PLC
 from st.api import compile_text
-from st.stdlib.plcopen import E, axis_of, configure_axes
+from st.stdlib.plcopen import E, axis_of, configure_axes, registry
 
 PROGRAM = """
 PROGRAM main
@@ -601,3 +601,42 @@ def test_online_change_keeps_the_axes_and_the_running_move():
     assert axis_of(plc, "main.ax").set_pos == pytest.approx(37.5)
     n = scans_until(plc, lambda: plc["main.abs1.Done"])
     assert n == 1501 and axis_of(plc, "main.ax").set_pos == 100.0  # Done in cycle n + 2500
+
+
+HANDLES = """
+PROGRAM main
+  VAR
+    bad : AXIS_REF := (Handle := -1);
+    bad1 : AXIS_REF := (AxisNo := 1, Handle := 12345);
+    v : AXIS_REF; v_copy : AXIS_REF; a1 : AXIS_REF := (AxisNo := 1);
+    pw_bad : MC_Power; rs_bad : MC_ReadStatus; mv_bad : MC_MoveAbsolute; pw_bad1 : MC_Power;
+    pw_v : MC_Power; rs_copy : MC_ReadStatus; pw_a1 : MC_Power; scribble : BOOL;
+  END_VAR
+  IF scribble THEN a1.Handle := 77; END_IF
+  pw_bad(Axis := bad, Enable := TRUE);
+  rs_bad(Axis := bad, Enable := TRUE);
+  mv_bad(Axis := bad, Execute := TRUE, Position := 1.0, Velocity := 1.0, Acceleration := 1.0, Deceleration := 1.0);
+  pw_bad1(Axis := bad1, Enable := TRUE);
+  pw_v(Axis := v, Enable := TRUE);
+  v_copy := v;
+  rs_copy(Axis := v_copy, Enable := TRUE);
+  pw_a1(Axis := a1, Enable := TRUE);
+END_PROGRAM
+"""
+
+
+def test_an_axis_ref_whose_handle_the_library_never_issued_is_invalid():
+    plc = PLC(compile_text(HANDLES, "handles.st", use_cache=False))
+    plc.scan(2)
+    for fb, on in (("pw_bad", "Status"), ("rs_bad", "Valid"), ("mv_bad", "Busy"), ("pw_bad1", "Status")):
+        assert (plc[f"main.{fb}.Error"], plc[f"main.{fb}.ErrorID"], plc[f"main.{fb}.{on}"]) == (
+            True,
+            E.INVALID_AXIS_REF,
+            False,
+        )
+    assert plc["main.rs_copy.Standstill"]  # a copy of an issued handle is the same (virtual) axis
+    assert (plc["main.a1.Handle"], plc["main.pw_a1.Status"]) == (1, True)  # AxisNo n's handle is n
+    plc["main.scribble"] = True  # the program overwrites the handle with one never issued
+    plc.scan()
+    assert (plc["main.pw_a1.Error"], plc["main.pw_a1.ErrorID"]) == (True, E.INVALID_AXIS_REF)
+    assert len(registry(plc).axes) == 2  # axis 1 and the virtual one: nothing made up

@@ -27,7 +27,7 @@ PROGRAM main
     set, home, go : BOOL;
     pos : LREAL := 1000.0;
     rel : BOOL;
-    mode : MC_EXECUTION_MODE := mcImmediate;
+    mode : MC_EXECUTION_MODE := mcImmediately;
     target : LREAL := 1090.0;
   END_VAR
   pw(Axis := a1, Enable := en);
@@ -127,8 +127,10 @@ def test_set_position_queued_waits_for_the_move_and_immediate_is_refused_in_moti
     assert abs(ax.act_pos - 1000.0) < 0.003 and abs(d1.position - (start + CPR // 4)) <= 64
 
 
-def test_set_position_immediate_during_a_move_shifts_the_running_trajectory_too():
-    plc, drv, d1 = make()
+def test_set_position_immediate_during_a_move_keeps_the_trajectory_when_configured_so():
+    """CODESYS SM3's choice (set_position_in_motion = "keep_trajectory"): the drive gets what it
+    would have got without the shift."""
+    plc, drv, d1 = make(set_position_in_motion="keep_trajectory")
     enabled(plc)
     start = d1.position
     plc["main.target"], plc["main.go"] = 90.0, True
@@ -145,6 +147,28 @@ def test_set_position_immediate_during_a_move_shifts_the_running_trajectory_too(
     plc.scan(100)
     # the move ends where it would have: 90° of motor turn, 1090 in the shifted coordinates
     assert abs(d1.position - (start + CPR // 4)) <= 64 and abs(ax.act_pos - 1090.0) < 0.003
+
+
+def test_set_position_immediate_during_a_move_keeps_its_commanded_position_in_the_new_coordinates():
+    """PLCopen (the default): the absolute move still goes to 90, now in the shifted coordinates;
+    the drive's target does not jump, the rest of the move is planned from where the axis is."""
+    plc, drv, d1 = make()
+    enabled(plc)
+    start = d1.position
+    plc["main.target"], plc["main.go"] = 90.0, True
+    plc.scan(150)  # moving
+    targets = [d1.od[0x607A]]
+    plc["main.rel"], plc["main.pos"], plc["main.set"] = True, 30.0, True
+    for _ in range(400):
+        plc.scan()
+        targets.append(d1.od[0x607A])
+    ax = axis_of(plc, "main.a1")
+    assert plc["main.sp.Done"] and plc["main.mv.Done"] and not plc["main.mv.Error"]
+    step = 360.0 / 360.0 * CPR / 1000
+    assert max(abs(b - a) for a, b in zip(targets, targets[1:])) <= step * 1.01  # no jump
+    plc.scan(100)
+    # at 90 in the new coordinates: the motor turned 30° less than 90°
+    assert abs(ax.act_pos - 90.0) < 0.003 and abs(d1.position - (start + CPR // 6)) <= 64
 
 
 def test_set_position_is_refused_in_errorstop():

@@ -150,7 +150,11 @@ class DriveLink:
         elif faulted:
             cw = 0x00
         elif not self.want:
-            cw = 0x06 if st in ("READY_TO_SWITCH_ON", "SWITCHED_ON", "OPERATION_ENABLED") else 0x00
+            # Shutdown (power stage off, ready) from the enabled side; Disable Voltage otherwise, and
+            # once sent it stays until an enable request: the statusword is a cycle old, so deciding
+            # on it alone could toggle a drive between Switch On Disabled and Ready To Switch On
+            off = st in ("READY_TO_SWITCH_ON", "SWITCHED_ON", "OPERATION_ENABLED") and self.out_values[self.i_cw] != 0
+            cw = 0x06 if off else 0x00
         elif st == "SWITCH_ON_DISABLED" or st == "NOT_READY_TO_SWITCH_ON":
             cw = 0x06
         elif st == "READY_TO_SWITCH_ON":
@@ -191,13 +195,13 @@ class DriveLink:
             return
         enabled = state == "OPERATION_ENABLED"
         if state == "FAULT" or state == "FAULT_REACTION_ACTIVE":  # faulted
-            ax.power_on = False
-            if ax.state != "ErrorStop":  # statusword bit 13 in CSP: the drive's following error
-                ax.error_stop(E.FOLLOWING_ERROR if status & 0x2000 else E.DRIVE_FAULT)
+            # statusword bit 13 in CSP: the drive's following error
+            ax.lose_power(E.FOLLOWING_ERROR if status & 0x2000 else E.DRIVE_FAULT)
         elif self.was_enabled and not enabled and self.want and ax.power_on:
-            ax.power_on = False
-            ax.error_stop(E.POWER_STAGE_LOST)
+            ax.lose_power(E.POWER_STAGE_LOST)  # Safe Torque Off, or the drive switched itself off
         self.was_enabled = enabled
+        if ax.reset_cmd is not None:  # MC_Reset: done in the exchange that shows the drive out of Fault
+            ax.reset_progress()
 
 
 class EtherCATDriver(IODriverBase):
@@ -400,8 +404,7 @@ class EtherCATDriver(IODriverBase):
                     link.readable = False
                     ax = link.axis
                     if ax is not None:
-                        ax.power_on = False
-                        ax.error_stop(E.COMMUNICATION_LOST)
+                        ax.lose_power(E.COMMUNICATION_LOST)
         self._cycles += 1
 
     def _outputs_with_io(self, m: Master) -> None:

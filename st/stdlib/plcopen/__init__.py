@@ -75,6 +75,11 @@ def configure_axes(plc, axes) -> None:
             cfg = _axis_config(no, dict(cfg), where or "configure_axes: ")
         if cfg.homing not in ("current", "switch"):
             raise ValueError(f"{where}axis {no}: homing must be 'current' or 'switch', not {cfg.homing!r}")
+        if cfg.set_position_in_motion not in ("keep_target", "keep_trajectory"):
+            raise ValueError(
+                f"{where}axis {no}: set_position_in_motion must be 'keep_target' or 'keep_trajectory', "
+                f"not {cfg.set_position_in_motion!r}"
+            )
         reg.configs[int(no)] = cfg
         reg.signals.pop(int(no), None)
         if cfg.home_switch:

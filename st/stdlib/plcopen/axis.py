@@ -30,6 +30,7 @@ DISABLED, STANDSTILL, HOMING, DISCRETE, CONTINUOUS, STOPPING, ERRORSTOP = (
 )
 
 ABORTING, BUFFERED, BLEND_LOW, BLEND_PREVIOUS, BLEND_NEXT, BLEND_HIGH = range(6)
+IMMEDIATE_MODE, DELAYED_MODE, QUEUED_MODE = range(3)  # MC_EXECUTION_MODE
 POSITIVE, SHORTEST, NEGATIVE, CURRENT = range(4)
 
 QUEUED, ACTIVE, DONE, ABORTED, ERROR = "queued", "active", "done", "aborted", "error"
@@ -82,6 +83,11 @@ class AxisConfig:
     reset_timeout: float = 1.0  # s: MC_Reset on a drive waits this long for it to leave Fault
     enable_delay: float = 0.0  # simulated drive: seconds until the power stage is on (inf: never)
     buffer_size: int = 8
+    # MC_SetPosition during a motion: "keep_target" (PLCopen: the commanded position of an absolute
+    # move is kept, now in the shifted coordinates, and the rest of the move is planned from where
+    # the axis is) or "keep_trajectory" (CODESYS SM3: the drive is sent what it would have been sent
+    # without the shift; the absolute target moves with the coordinate)
+    set_position_in_motion: str = "keep_target"
     # MC_Home: "current" references at the current position; "switch" moves at home_velocity in
     # home_direction (+1/-1) until a reference switch changes, latches there, brakes and shifts
     # the coordinates so that the switch edge is at MC_Home.Position. The switch is a BOOL variable
@@ -181,6 +187,7 @@ class Axis:
         self.last_seen: tuple | None = None  # the view's fields at the end of the last job that commanded it
         self.reset_cmd: Command | None = None  # MC_Reset waiting for the drive to leave Fault
         self.reset_wait = 0.0
+        self.delayed: list = []  # MC_SetPosition mcDelayed: (command, the motion it waits for)
 
     # ------------------------------------------------------------------ helpers
     def new_command(self, kind: str, params: dict, buffer_mode: int = ABORTING) -> Command:
@@ -244,7 +251,10 @@ class Axis:
 
     # ------------------------------------------------------------------ power, reset, errors
     def power(self, fb_id: int, enable: bool):
-        """MC_Power, every call: returns (status, error_id)."""
+        """MC_Power, every call: returns (status, error_id). In ErrorStop the power stage is kept if
+        it is on but never switched on: after a loss of the power stage (a drive fault, Safe Torque
+        Off, the drive dropping out of Operation Enabled, lost communication) it comes back only
+        once MC_Reset has left ErrorStop and Enable is (still or again) TRUE."""
         if self.power_owner and self.power_owner != fb_id:
             return False, E.POWER_ALREADY_ACTIVE if enable else 0
         if not enable:
@@ -265,6 +275,8 @@ class Axis:
             return self._power_status(), 0
         self.power_owner = fb_id
         if self.state == ERRORSTOP:
+            if self.drive is not None:
+                self.drive.request_enable(self.power_on)  # held if on, never switched on
             return self._power_status(), 0
         if self.drive is not None:
             self.drive.request_enable(True)
@@ -294,8 +306,14 @@ class Axis:
         if self.stop_cmd is not None and self.stop_cmd.status in (ACTIVE, DONE):
             self._fail(self.stop_cmd, E.AXIS_ERRORSTOP)  # decelerating, or held with Done showing
         self.stop_cmd = None
+        for sp, _motion in self.delayed:  # a SetPosition waiting for the motion's end: not applied
+            self._fail(sp, E.AXIS_ERRORSTOP)
+        self.delayed = []
         self.axis_error = code
         self.state = ERRORSTOP
+        self.power_request = False  # a power stage lost now is switched on again only after MC_Reset
+        if self.drive is not None and not self.power_on:
+            self.drive.request_enable(False)
         dec = self.cfg.stop_deceleration or (
             self.cfg.max_deceleration if math.isfinite(self.cfg.max_deceleration) else 0.0
         )
@@ -303,6 +321,15 @@ class Axis:
         self._ramp_t = 0.0
         if not self._ramp:
             self.set_vel = self.set_acc = 0.0
+
+    def lose_power(self, code: int) -> None:
+        """The power stage is gone (a drive fault, Safe Torque Off, the drive out of Operation
+        Enabled, lost communication): ErrorStop with `code` (kept if already in ErrorStop), and
+        the drive is told to stay off until MC_Reset."""
+        self.power_on = False
+        if self.drive is not None:
+            self.drive.request_enable(False)
+        self.error_stop(code)
 
     def reset(self, cmd: Command) -> Command:
         """MC_Reset. A virtual axis leaves ErrorStop at once; on a drive the fault reset goes out in
@@ -317,7 +344,7 @@ class Axis:
             self.drive.fault_reset()
             cmd.status = ACTIVE
             self.reset_cmd, self.reset_wait = cmd, 0.0
-            self._reset_progress()
+            self.reset_progress()
             return cmd
         self._leave_errorstop()
         cmd.status = DONE
@@ -329,12 +356,12 @@ class Axis:
         self.set_vel = self.set_acc = 0.0
         if self.drive is not None and not self.drive.enabled:
             self.power_on = False
-        self.state = STANDSTILL if (self.power_on and self.power_request) else DISABLED
-        if self.state == DISABLED:
-            self.power_on = False
+        self.state = STANDSTILL if self.power_on else DISABLED
 
-    def _reset_progress(self) -> None:
-        """A pending MC_Reset on a drive: done when the drive has left Fault, failed at the timeout."""
+    def reset_progress(self) -> None:
+        """A pending MC_Reset on a drive: Done as soon as an exchange shows the drive out of Fault
+        (the drive link calls this when it has read the statusword, so the program sees the axis
+        Disabled in the scan whose inputs show Switch On Disabled), failed at the timeout."""
         cmd, drive = self.reset_cmd, self.drive
         if cmd is None or cmd.terminal or drive is None:
             self.reset_cmd = None
@@ -367,15 +394,20 @@ class Axis:
             self._activate(cmd)
             return cmd
         if cmd.kind == "set_pos":
+            if st not in (DISABLED, STANDSTILL, DISCRETE, CONTINUOUS, STOPPING):
+                return self._fail(cmd, E.INVALID_STATE)  # not while homing, not in ErrorStop
+            mode = cmd.params["mode"]
             moving = self.active is not None or bool(self.queue)
-            if cmd.params.get("queued") and moving and st in (DISCRETE, CONTINUOUS):
+            if mode == QUEUED_MODE and moving and st in (DISCRETE, CONTINUOUS):
                 cmd.buffer_mode = BUFFERED  # mcQueued: when the motion commanded before has ended
                 if len(self.queue) >= self.cfg.buffer_size:
                     return self._fail(cmd, E.BUFFER_FULL)
                 self.queue.append(cmd)
                 return cmd
-            if st not in (DISABLED, STANDSTILL, DISCRETE, CONTINUOUS, STOPPING):
-                return self._fail(cmd, E.INVALID_STATE)  # not while homing, not in ErrorStop
+            ongoing = self.stop_cmd if st == STOPPING else self.active
+            if mode == DELAYED_MODE and ongoing is not None and not ongoing.terminal:
+                self.delayed.append((cmd, ongoing))  # mcDelayed: when the ongoing motion ends
+                return cmd
             self._set_position(cmd)
             return cmd
         blocked = {
@@ -438,21 +470,54 @@ class Axis:
     def shift_coordinates(self, delta: float) -> None:
         """Move the axis's coordinate system by `delta` units: set and actual positions change
         together and a drive only changes the offset between its increments and the axis's
-        units, so its target and its position do not jump and nothing moves."""
+        units, so its target and its position do not jump. A motion under way goes on from where
+        the axis is: an absolute move to its commanded position, now in the new coordinates
+        (PLCopen; re-planned from the set state, so nothing jumps), unless the axis is configured
+        `set_position_in_motion = "keep_trajectory"` (CODESYS SM3: the same trajectory, moved with
+        the coordinate); every other motion keeps its trajectory (a relative move its distance)."""
         if not delta:
             return
         self.set_pos += delta
         self.act_pos += delta
         if self.drive is not None:
             self.drive.shift(delta)
-        for cmd in (self.active, self.stop_cmd):  # a motion under way: the same trajectory, moved
+        keep_target = self.cfg.set_position_in_motion != "keep_trajectory"
+        for cmd in (self.active, self.stop_cmd):
             if cmd is None or cmd.terminal or cmd.profile is None:
+                continue
+            if keep_target and cmd.kind == "move_abs":
+                self._replan_to_target(cmd)
                 continue
             cmd.profile = _Shifted(cmd.profile, delta)
             if cmd.kind in ("move_abs", "move_rel"):
                 cmd.target += delta
                 if "_start" in cmd.params:
                     cmd.params["_start"] += delta
+
+    def _replan_to_target(self, cmd: Command) -> None:
+        """An active absolute move planned again from the set state to its commanded position (on a
+        modulo axis: the way its Direction says, from where the axis is now)."""
+        cmd.target = self._target(cmd, self.set_pos)
+        vmax, acc, dec, jerk = self._limits(cmd)
+        if cmd.end_v:  # blending into a successor: the hand-over speed stays
+            vmax = max(vmax, abs(cmd.end_v))
+        cmd.profile = self._plan_position(cmd.target, vmax, acc, dec, jerk, cmd.end_v)
+        cmd.end_v = cmd.profile.end_velocity
+        cmd.steps = 0
+        cmd.total_steps = self._steps(cmd.profile.duration)
+
+    def _apply_delayed(self) -> None:
+        """MC_SetPosition mcDelayed: applied once the motion it waits for has ended (Done, or
+        aborted by another command or by Enable FALSE); ErrorStop fails it (error_stop)."""
+        if not self.delayed:
+            return
+        waiting = []
+        for sp, motion in self.delayed:
+            if motion.terminal:
+                self._set_position(sp)
+            else:
+                waiting.append((sp, motion))
+        self.delayed = waiting
 
     def _validate(self, cmd: Command) -> int:
         p = cmd.params
@@ -478,6 +543,8 @@ class Axis:
             return E.INVALID_DIRECTION
         if not 0 <= cmd.buffer_mode <= 5:
             return E.INVALID_BUFFER_MODE
+        if cmd.kind == "set_pos" and p["mode"] not in (IMMEDIATE_MODE, DELAYED_MODE, QUEUED_MODE):
+            return E.INVALID_EXECUTION_MODE
         if cmd.kind == "home":
             if not math.isfinite(p["pos"]):
                 return E.INVALID_POSITION
@@ -530,6 +597,8 @@ class Axis:
 
     def _activate(self, cmd: Command, end_v: float = 0.0) -> None:
         """Plan `cmd` from the current set state and make it the active command."""
+        if self.delayed:  # the motion before has ended: a delayed SetPosition first
+            self._apply_delayed()
         cmd.status = ACTIVE
         cmd.steps = 0
         vmax, acc, dec, jerk = self._limits(cmd)
@@ -680,7 +749,7 @@ class Axis:
             self.power_wait += dt
         if self.reset_cmd is not None:
             self.reset_wait += dt
-            self._reset_progress()
+            self.reset_progress()
         if self.state == ERRORSTOP:
             ramp = getattr(self, "_ramp", None)
             if ramp is not None:
@@ -718,6 +787,8 @@ class Axis:
             self._next()
         elif self.state == STOPPING and self.stop_cmd is None:
             self.state = STANDSTILL
+        if self.delayed:
+            self._apply_delayed()
         self._check_limits()
         self._follow()
 

@@ -28,6 +28,7 @@ class E(IntEnum):
     SW_LIMIT_TARGET = 0x2008  # the target lies outside the software limits (rejected up front)
     INVALID_AXIS_REF = 0x2009
     HOMING_NOT_CONFIGURED = 0x200A  # MC_Home with homing = "switch" but no switch configured
+    INVALID_EXECUTION_MODE = 0x200B  # MC_SetPosition: an ExecutionMode outside MC_EXECUTION_MODE
     DRIVE_FAULT = 0x3001
     COMMUNICATION_LOST = 0x3002
     POWER_STAGE_LOST = 0x3003

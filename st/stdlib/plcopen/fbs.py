@@ -30,6 +30,7 @@ from .axis import (
 from .errors import E
 
 DEFAULT_CYCLE_S = 0.001
+VIRTUAL_HANDLES = 1 << 16  # the handles of virtual axes (AxisNo 0) start here, above every UINT AxisNo
 
 
 class MotionRegistry(IODriverBase):
@@ -52,34 +53,50 @@ class MotionRegistry(IODriverBase):
         return self.plc.job_task if self.plc is not None else None
 
     def axis(self, ref) -> Axis | None:
-        """The Axis behind an AXIS_REF value, created on first use: one per AxisNo (every AXIS_REF
-        naming AxisNo n is the same axis), and one per AXIS_REF with AxisNo 0 (a virtual axis).
-        Once axes are configured (configure_axes, a drive claiming one), an AxisNo that names
-        none is None: the blocks report INVALID_AXIS_REF rather than make an axis up."""
-        h = ref.Handle
-        ax = self.axes.get(h)
-        if ax is None and ref.AxisNo:
-            ax = next((a for a in self.axes.values() if a.axis_no == ref.AxisNo), None)
-            if ax is not None:
-                ref.Handle = ax.handle
-            elif (self.configs or self.drives) and ref.AxisNo not in self.configs and ref.AxisNo not in self.drives:
+        """The Axis behind an AXIS_REF value, created on first use. Every AXIS_REF naming AxisNo n
+        is the same axis (its Handle is n); an AXIS_REF with AxisNo 0 is a virtual axis of its
+        own (its Handle one the registry issues above the AxisNo range). None, for which the
+        blocks report INVALID_AXIS_REF, when the Handle is one the library never issued (-1, a
+        value a program wrote, a virtual axis's handle from an earlier run), or when axes are
+        configured (configure_axes, a drive claiming one) and AxisNo names none of them."""
+        h, no = ref.Handle, ref.AxisNo
+        if no:
+            if h != no and h != 0 and h not in self.axes:
                 return None
-        if ax is None:
-            h = h or (max(self.axes, default=0) + 1)
-            ax = Axis(h, self.configs.get(ref.AxisNo) or AxisConfig(name=f"axis{ref.AxisNo or h}"))
-            ax.axis_no = ref.AxisNo
-            ax.home_signal = self.signals.get(ref.AxisNo)
-            self.axes[h] = ax
-            self.wake()
-            link = self.drives.get(ref.AxisNo)
-            if link is not None:
-                link.attach(ax)
-            ref.Handle = h
+            ax = self.axes.get(no)
+            if ax is None:
+                if (self.configs or self.drives) and no not in self.configs and no not in self.drives:
+                    return None
+                ax = self._new_axis(no, no)
+            if h != no:
+                ref.Handle = no
+        elif h == 0:
+            ax = self._new_axis(max([VIRTUAL_HANDLES - 1, *self.axes]) + 1, 0)
+            ref.Handle = ax.handle
+        else:
+            ax = self.axes.get(h)
+            if ax is None:
+                return None
+            if ax.axis_no:  # the AXIS_REF was aimed at another AxisNo before: a virtual axis of its own
+                ax = self._new_axis(max([VIRTUAL_HANDLES - 1, *self.axes]) + 1, 0)
+                ref.Handle = ax.handle
         if ax.task is None and self.task is not None:
             ax.task = self.task
             ax.cycle = (self.task.interval or 0) / 1e9 or DEFAULT_CYCLE_S
         elif not ax.cycle:
             ax.cycle = DEFAULT_CYCLE_S
+        return ax
+
+    def _new_axis(self, handle: int, no: int) -> Axis:
+        name = f"axis{no}" if no else f"virtual{handle - VIRTUAL_HANDLES + 1}"
+        ax = Axis(handle, self.configs.get(no) or AxisConfig(name=name))
+        ax.axis_no = no
+        ax.home_signal = self.signals.get(no)
+        self.axes[handle] = ax
+        self.wake()
+        link = self.drives.get(no)
+        if link is not None:
+            link.attach(ax)
         return ax
 
     def add_drive(self, link: Drive) -> None:
@@ -275,7 +292,7 @@ def _p_home(fb):
 
 
 def _p_setpos(fb):
-    return {"position": float(fb.Position), "relative": bool(fb.Relative), "queued": int(fb.ExecutionMode) == 2}
+    return {"position": float(fb.Position), "relative": bool(fb.Relative), "mode": int(fb.ExecutionMode)}
 
 
 def _power_body(self):
@@ -318,15 +335,16 @@ def _invalid_axis_ref(fb, shown: bool = True) -> None:
     fb.ErrorID = int(E.INVALID_AXIS_REF) if shown else 0
 
 
-def _read_outputs(self, ax: Axis | None) -> bool:
-    """Valid/Busy/Error/ErrorID of a read block; TRUE when its values may be read now. Not while
-    the axis's drive cannot be read (communication lost, out of OP): Error COMMUNICATION_LOST,
-    Valid FALSE, Valid again once the values come back."""
+def _read_outputs(self, ax: Axis | None, from_drive: bool) -> bool:
+    """Valid/Busy/Error/ErrorID of a read block; TRUE when its values may be read now. The axis's
+    state and its errors belong to the controller and are always known; what the drive reports
+    (`from_drive`: actual position, velocity) is not while the drive cannot be read (communication
+    lost, out of OP): Error COMMUNICATION_LOST, Valid FALSE, Valid again once the values come back."""
     en = bool(self.Enable)
     code = 0
     if en and ax is None:
         code = E.INVALID_AXIS_REF
-    elif en and ax is not None and ax.drive is not None and not ax.drive.readable:
+    elif en and from_drive and ax is not None and ax.drive is not None and not ax.drive.readable:
         code = E.COMMUNICATION_LOST
     self.Busy = en
     self.Valid = en and not code
@@ -336,7 +354,7 @@ def _read_outputs(self, ax: Axis | None) -> bool:
 
 def _read_status_body(self):
     ax = self._motion.axis(self.Axis)
-    st = ax.state if _read_outputs(self, ax) and ax is not None else None
+    st = ax.state if _read_outputs(self, ax, False) and ax is not None else None
     self.ErrorStop, self.Disabled, self.Stopping = st == ERRORSTOP, st == DISABLED, st == STOPPING
     self.Homing, self.Standstill = st == HOMING, st == STANDSTILL
     self.DiscreteMotion, self.ContinuousMotion, self.SynchronizedMotion = st == DISCRETE, st == CONTINUOUS, False
@@ -344,7 +362,7 @@ def _read_status_body(self):
 
 def _read_position_body(self):
     ax = self._motion.axis(self.Axis)
-    if _read_outputs(self, ax) and ax is not None:
+    if _read_outputs(self, ax, True) and ax is not None:
         self.Position = ax.actual_position()
     elif not self.Enable:
         self.Position = 0.0
@@ -352,7 +370,7 @@ def _read_position_body(self):
 
 def _read_velocity_body(self):
     ax = self._motion.axis(self.Axis)
-    if _read_outputs(self, ax) and ax is not None:
+    if _read_outputs(self, ax, True) and ax is not None:
         self.Velocity = ax.act_vel
     elif not self.Enable:
         self.Velocity = 0.0
@@ -360,11 +378,12 @@ def _read_velocity_body(self):
 
 def _read_axis_error_body(self):
     """AxisErrorID: the drive's own code (0x603F) when the axis error came from a drive that
-    reports one, else st's; StAxisErrorID: st's ErrorID of the axis error."""
+    reports one and the drive can be read, else st's; StAxisErrorID: st's ErrorID of the axis error."""
     ax = self._motion.axis(self.Axis)
-    if _read_outputs(self, ax) and ax is not None:
+    if _read_outputs(self, ax, False) and ax is not None:
         own = int(ax.axis_error)
-        drive_code = ax.drive.error_code if ax.drive is not None and own in (E.DRIVE_FAULT, E.FOLLOWING_ERROR) else 0
+        d = ax.drive
+        drive_code = d.error_code if d is not None and d.readable and own in (E.DRIVE_FAULT, E.FOLLOWING_ERROR) else 0
         self.AxisErrorID, self.StAxisErrorID = drive_code or own, own
     elif not self.Enable:
         self.AxisErrorID = self.StAxisErrorID = 0
