@@ -190,6 +190,16 @@ class Code(str, Enum):
             "it does not know, an SFC connection to nothing)."
         ),
     )
+    FOR_COUNTER_WRITTEN = (
+        "E052",
+        (
+            "A FOR loop's control variable is written inside its body (assigned, the counter of a nested FOR, "
+            "an output or VAR_IN_OUT argument, its address or a reference taken) under the iec or openplc "
+            "dialect: IEC 61131-3 and MatIEC forbid it. CODESYS and TwinCAT allow it, and so do their dialects "
+            "and the default: the loop then tests the value the body left. Count in another variable, or use "
+            "WHILE."
+        ),
+    )
     INTERNAL = "E099", ("An internal compiler error (a bug in st): please report it with the source file.")
     IGNORED_PRAGMA = "W001", ("A pragma { ... } is ignored.")
     UNUSED_VARIABLE = "W002", ("A variable is declared but never used.")

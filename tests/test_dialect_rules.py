@@ -1333,3 +1333,30 @@ def test_real_arithmetic_elsewhere_is_double_rounded_on_store_and_a_real_argumen
     plc = run(SINGLE, 1, dialect)
     assert plc["main.r"] == _f32(a * b - 1000.0) == 205.92593383789062
     assert plc["main.w"] == _f32(a * 3.1) != a * 3.1  # the REAL parameter holds a single value
+
+
+WRITES_FOR_COUNTER = """
+FUNCTION_BLOCK AddTen
+VAR_IN_OUT v : INT; END_VAR
+v := v + 10;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR i, n : INT; b : AddTen; END_VAR
+n := 0;
+FOR i := 1 TO 30 DO n := n + 1; b(v := i); END_FOR;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "codesys", "twincat"])
+def test_a_for_counter_written_by_its_body_is_tested_again_as_codesys_does(dialect):
+    plc = run(WRITES_FOR_COUNTER, 1, dialect)
+    assert (plc["main.n"], plc["main.i"]) == (3, 34)
+
+
+@pytest.mark.parametrize("dialect", ["iec", "openplc"])
+def test_iec_and_matiec_refuse_a_for_counter_written_by_its_body(dialect):
+    assert (
+        "t.st:9:40: error[E052]: 'i' is the control variable of the FOR on line 9: passed to VAR_IN_OUT 'v' in its body"
+        in errors(WRITES_FOR_COUNTER, dialect)
+    )

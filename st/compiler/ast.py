@@ -522,3 +522,24 @@ class Unit:
     path: str
     items: list  # TypeBlock, POU, Configuration, VarBlock, TestBlock
     pragmas: list = field(default_factory=list)
+
+
+_NOT_CHILDREN = frozenset(("span", "name_span", "end_span", "ty", "const", "sym", "pou"))
+
+
+def walk_nodes(body):
+    """Every node (statement, expression, argument, CASE branch) under a statement list or a node,
+    depth first, each once; not into what the checker attached (types, symbols, Call.target)."""
+    stack = [body]
+    seen: set = set()
+    while stack:
+        x = stack.pop()
+        if isinstance(x, (list, tuple)):
+            stack.extend(reversed(x))
+            continue
+        if type(x).__module__ != __name__ or id(x) in seen:  # a syntax node, not a type or symbol
+            continue
+        seen.add(id(x))
+        yield x
+        kids = [getattr(x, f, None) for f in x.__dataclass_fields__ if f not in _NOT_CHILDREN]
+        stack.extend(reversed([k for k in kids if isinstance(k, (list, tuple)) or type(k).__module__ == __name__]))

@@ -2,9 +2,10 @@
 
     openplc   what MatIEC (OpenPLC v3) accepts: TIME_TO_<int> counts seconds, F_TRIG pulses on the
               first scan; a POU may assign its own inputs (MatIEC forbids only writing a block's
-              outputs from outside, FOR variables and constants); no object-oriented ST and no
-              vendor extensions
-    iec       IEC 61131-3 3rd edition, strict: object-oriented ST, REF_TO/REF()/NULL; no vendor
+              outputs from outside, FOR variables and constants); a FOR's body may not write its
+              control variable (E052); no object-oriented ST and no vendor extensions
+    iec       IEC 61131-3 3rd edition, strict: object-oriented ST, REF_TO/REF()/NULL; a FOR's body
+              may not write its control variable (E052); no vendor
               extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
               __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of programs)
     codesys   the 3rd edition plus CODESYS's extensions; {attribute '…'} pragmas accepted silently;
@@ -45,6 +46,9 @@ class Dialect:
     # generated check functions give the nearest limit), "store" (CODESYS and TwinCAT check only
     # with CheckRange functions in the project: the value is kept, wrapped to the base type)
     subranges: str = "fault"
+    # the body of a FOR may write its control variable (CODESYS, TwinCAT: the loop tests what it
+    # left); IEC 61131-3 and MatIEC forbid it (E052)
+    writable_for_counter: bool = True
 
 
 PRESETS = {
@@ -57,8 +61,9 @@ PRESETS = {
         writable_inputs=True,
         nested_comments=False,
         subranges="clamp",
+        writable_for_counter=False,
     ),
-    "iec": Dialect("iec", vendor_extensions=False),
+    "iec": Dialect("iec", vendor_extensions=False, writable_for_counter=False),
     "codesys": Dialect(
         "codesys",
         attribute_pragmas=True,

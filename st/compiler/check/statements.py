@@ -9,6 +9,7 @@ from ...source import Span
 from .. import ast as A
 from .common import _NULL, STEP, Scope, same_type, take_address
 from .expressions import _null_at, _zero_pointer
+from .for_counter import counter_writes, root_sym
 from .part import Part
 
 
@@ -166,6 +167,7 @@ class Statements(Part):
             scope.loop_depth += 1
             self.stmt_list(s.body, scope)
             scope.loop_depth -= 1
+            self._for_counter_written(s, scope)
         elif isinstance(s, A.While):
             self.condition(s.cond, scope, "WHILE")
             scope.loop_depth += 1
@@ -187,6 +189,21 @@ class Statements(Part):
             self.tests.mock_function(s, scope)
         else:  # pragma: no cover
             raise AssertionError(s)
+
+    def _for_counter_written(self, s: A.For, scope: Scope) -> None:
+        """E052 under a dialect that forbids writing a FOR's control variable in its body (st's own
+        libraries are written for every dialect)."""
+        d = self.ctx.dialect
+        sym = root_sym(s.var)
+        if d is None or d.writable_for_counter or sym is None or scope.library:
+            return
+        for span, how in counter_writes(s.body, sym):
+            self.err(
+                "E052",
+                span,
+                f"'{sym.name}' is the control variable of the FOR on line {s.span.line}: {how} in its body",
+                f"IEC 61131-3 and MatIEC forbid it (the {d.name} dialect); count in another variable, or use WHILE",
+            )
 
     def condition(self, e: A.Expr, scope: Scope, what: str) -> None:
         t = self.exprs.expr(e, scope, T.BOOL)

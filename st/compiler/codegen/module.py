@@ -20,6 +20,7 @@ class ModuleGen:
     def __init__(self, program: LoweredProgram, sink, coverage: bool = False, inline_files: frozenset = frozenset()):
         self.p = program.project
         self.blocks = program.blocks
+        self.writes = program.writes
         self.sink = sink
         self.tmp = 0
         self.coverage = coverage

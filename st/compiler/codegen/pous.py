@@ -40,11 +40,14 @@ class FuncGen(StmtGen):
             and not T.unalias(v.type).is_aggregate
         }
         # an in-out whose address is taken (REF=, REF, ADR) is used through the caller's reference
-        # itself (it works as the one-element box), so a reference made here outlives the call
+        # itself (it works as the one-element box), so a reference made here outlives the call; so
+        # is every in-out when the variable behind it may be written another way meanwhile
+        # (lower/writes.py), as CODESYS's references see such a write
+        aliased = self.mod.writes.in_outs_aliased(pou)
         through = {
             p
             for p in pou.params()
-            if p.section == "VAR_IN_OUT" and p.address_taken and not T.unalias(p.type).is_aggregate
+            if p.section == "VAR_IN_OUT" and (p.address_taken or aliased) and not T.unalias(p.type).is_aggregate
         }
         self.boxed |= through
         self.through = through
@@ -201,10 +204,16 @@ class BodyGen(StmtGen):
         ]
         if pou.library:  # a library's own block (a project's block of the same name keeps its own body)
             members.insert(2, py.Assign([_name("_from_library", py.Store())], _const(True)))
-        # caching policy: with actions, methods, THIS or SFC other code touches the variables during
-        # the body: keep them attributes
+        # caching policy: with actions, methods, THIS or SFC, or when code the body calls may reach
+        # the instance another way (lower/writes.py), other code touches the variables during the
+        # body: keep them attributes
         can_cache = (
-            not pou.actions and sfc is None and not pou.methods and not pou.properties and not _mentions_this(d.body)
+            not pou.actions
+            and sfc is None
+            and not pou.methods
+            and not pou.properties
+            and not _mentions_this(d.body)
+            and not self.mod.writes.shared(d.body, pou)
         )
         if sfc is not None:
             run = py.Expr(_call(_attr(_attr(_name("self"), "_sfc"), "run"), _name("self"), _name("_now")))

@@ -6,6 +6,8 @@ and rewrites the bodies in place (the checked project is built for one compilati
 - qualified.py: `GVL_Main.x` (a named global variable list's variable) → the global's name;
 - properties.py: property reads and writes → `AccessorCall` (GET, or SET as a target);
 - loops.py: FOR → `CountedFor` (its form decided), a `LoopGuard` first in every loop;
+- writes.py: who else may write an instance's variables while its body runs (a FOR's form and
+  codegen's cached variables depend on it);
 - inheritance.py: each block's flattened member set and what its instances are (`Block`),
   with fb_init.py's explicit constructor for its FB_init chain; which implementation each
   method or block call runs (SUPER^ calls are the base's).
@@ -18,6 +20,7 @@ from dataclasses import dataclass
 from ...model.program import Project
 from . import inheritance, loops, properties, qualified
 from .walk import bodies, rewrite_exprs, rewrite_outside_bodies
+from .writes import Writes
 
 
 @dataclass(slots=True)
@@ -27,22 +30,27 @@ class LowerOptions:
 
 @dataclass(slots=True)
 class LoweredProgram:
-    """What code generation prints: the project with lowered bodies, and each block's class."""
+    """What code generation prints: the project with lowered bodies, each block's class, and who
+    else may write an instance's variables while its body runs (writes.py)."""
 
     project: Project
     blocks: dict  # POUType → inheritance.Block
+    writes: Writes
 
 
 def lower(project: Project, options: LowerOptions | None = None) -> LoweredProgram:
     options = options or LowerOptions()
-    for body in bodies(project):
+    listed = list(bodies(project))
+    for body, _block in listed:
         properties.property_targets(body)
         rewrite_exprs(body, _expression)
-        loops.count_fors(body)
+    writes = Writes(project)  # on the rewritten bodies: property uses are accessor calls now
+    for body, block in listed:
+        loops.count_fors(body, writes, block)
         if options.loop_guards:
             loops.guard_loops(body)
     rewrite_outside_bodies(project, _expression)  # SFC conditions, configuration arguments
-    return LoweredProgram(project, inheritance.blocks(project))
+    return LoweredProgram(project, inheritance.blocks(project), writes)
 
 
 def _expression(e):

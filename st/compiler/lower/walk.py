@@ -4,33 +4,36 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 
+from ...model import types as T
 from ...model.program import Project
 from .. import ast as A
 from ..check import CallTarget
 
 
-def bodies(project: Project) -> Iterator[list]:
-    """Every statement list of a checked project: POU bodies, actions, methods, property
-    accessors (a block's inherited ones are the base's own lists, so a list may come twice)
-    and the unit tests' SETUP, TEST and TEARDOWN statements."""
+def bodies(project: Project) -> Iterator[tuple[list, T.POUType | None]]:
+    """(statements, block) for every statement list of a checked project: POU bodies, actions,
+    methods, property accessors (a block's inherited ones are the base's own lists, so a list may
+    come twice) and the unit tests' SETUP, TEST and TEARDOWN statements. `block`: the function
+    block or program whose instance the statements run on (None for a FUNCTION and a test)."""
     for pou in project.pous.values():
         if pou.decl is None:
             continue
-        yield getattr(pou.decl, "body", None) or []
+        block = pou if pou.pou_kind in ("FUNCTION_BLOCK", "PROGRAM") else None
+        yield getattr(pou.decl, "body", None) or [], block
         for act in pou.actions.values():
             if act is not None:
-                yield act.body
+                yield act.body, block
         for mt in pou.methods.values():
             if mt.decl is not None:
-                yield mt.decl.body
+                yield mt.decl.body, mt.owner_fb or block
         for ps in pou.properties.values():
             for acc in (ps.get, ps.set):
                 if acc is not None and acc.decl is not None:
-                    yield acc.decl.body
+                    yield acc.decl.body, ps.owner or block
     for test in project.tests:
-        yield test.setup
-        yield test.body
-        yield test.teardown
+        yield test.setup, None
+        yield test.body, None
+        yield test.teardown, None
 
 
 def inner_bodies(s) -> Iterator[list]:
