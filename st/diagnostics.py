@@ -45,9 +45,9 @@ class Code(str, Enum):
     MALFORMED_LITERAL = (
         "E004",
         (
-            "A literal or address is malformed (e.g. T#5x, D#2024-13-01, %QX0.), an integer literal has more than"
-            " 128 digits, or an address is outside the process image (1024 entries per table and size; bits "
-            "%IX0.0..%IX1023.7)."
+            "A literal or address is malformed (e.g. T#5x, D#2024-13-01, %QX0.; 1__0 or 1_: a '_' stands alone"
+            " between two digits), an integer literal has more than 128 digits, or an address is outside the"
+            " process image (1024 entries per table and size; bits %IX0.0..%IX1023.7)."
         ),
     )
     UNDECLARED = "E010", ("An identifier is used but never declared (or a VAR_EXTERNAL has no VAR_GLOBAL).")
@@ -80,7 +80,13 @@ class Code(str, Enum):
     )
     BAD_CASE_LABEL = "E019", ("A CASE label has the wrong type, or repeats / overlaps an earlier label.")
     NOT_CALLABLE = "E020", ("Something that is not callable is called (e.g. an FB type instead of an instance).")
-    OUT_OF_RANGE = "E021", ("A literal does not fit the range of its type.")
+    OUT_OF_RANGE = (
+        "E021",
+        (
+            "A literal does not fit the range of its type (an integer's; a REAL beyond ±3.4028235E38, an LREAL"
+            " beyond ±1.7976931348623157E308; a TIME, LTIME, DATE or DT beyond 64-bit ns)."
+        ),
+    )
     INDEX_OUT_OF_BOUNDS = "E022", ("A constant array index (or bit number) is outside the bounds.")
     BAD_ACCESS = "E023", ("A field, index or bit access on a value that has no such field, is not an array, ...")
     EXIT_OUTSIDE_LOOP = "E024", ("EXIT or CONTINUE outside a loop.")
@@ -97,7 +103,15 @@ class Code(str, Enum):
     NOT_CONSTANT = "E029", ("A constant expression is required (array bounds, CASE labels, string lengths, ...).")
     SFC = "E030", ("An SFC error: unknown step or action, missing INITIAL_STEP, a bad qualifier.")
     NOT_A_VARIABLE = "E031", ("An output (=>) or VAR_IN_OUT argument must be a variable.")
-    RECURSION = "E032", ("A POU calls itself, directly or through others: IEC 61131-3 does not allow recursion.")
+    RECURSION = (
+        "E032",
+        (
+            "A POU (a FUNCTION, METHOD, property accessor, ACTION or block body) calls itself, directly or through"
+            " others, where the declarations show which body each call runs, under the iec or openplc dialect: "
+            "IEC 61131-3 and MatIEC do not allow recursion. The codesys and twincat dialects and the default warn "
+            "instead (W013)."
+        ),
+    )
     TEST_STATEMENT_OUTSIDE_TEST = (
         "E033",
         (
@@ -257,6 +271,14 @@ class Code(str, Enum):
             "The native tier (--native) could not compile this program's loop bodies to C: Cython, a C compiler "
             "or Python's C headers is missing, or the build failed (the message gives the tool's last lines). "
             "The program compiles and runs on the Python tier, with the same results, only slower."
+        ),
+    )
+    RECURSIVE_CALL = (
+        "W013",
+        (
+            "A POU calls itself, directly or through others (as E032), under the codesys or twincat dialect or "
+            "the default: CODESYS and TwinCAT allow it with a warning (C0561, C0298 for methods), IEC 61131-3 "
+            "does not. It runs; a recursion that goes too deep faults with RECURSION at the call."
         ),
     )
 

@@ -192,13 +192,14 @@ def test_no_traceback_for_garbage():
 
 def test_recursion_and_self_containing_types_are_errors():
     src = (
+        "{dialect 'iec'}\n"  # CODESYS, TwinCAT and the default warn of recursion (W013) and run it
         "TYPE S : STRUCT a : INT; s : ARRAY[1..2] OF S; END_STRUCT; END_TYPE\n"
         "FUNCTION_BLOCK FB\nVAR inner : FB; END_VAR\nEND_FUNCTION_BLOCK\n"
         "FUNCTION F : INT\nVAR_INPUT n : INT; END_VAR\nF := G(n);\nEND_FUNCTION\n"
         "FUNCTION G : INT\nVAR_INPUT n : INT; END_VAR\nG := F(n - 1);\nEND_FUNCTION\n"
     )
     e = diags(src)
-    assert sorted(codes(e)) == [("E032", 7, 6), ("E032", 11, 6), ("E046", 1, 6), ("E046", 2, 16)]
+    assert sorted(codes(e)) == [("E032", 8, 6), ("E032", 12, 6), ("E046", 2, 6), ("E046", 3, 16)]
 
 
 def test_initial_values_must_be_constants():

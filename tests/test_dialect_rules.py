@@ -1360,3 +1360,36 @@ def test_iec_and_matiec_refuse_a_for_counter_written_by_its_body(dialect):
         "t.st:9:40: error[E052]: 'i' is the control variable of the FOR on line 9: passed to VAR_IN_OUT 'v' in its body"
         in errors(WRITES_FOR_COUNTER, dialect)
     )
+
+
+LITERALS_NO_TYPE_HOLDS = """
+PROGRAM main
+VAR i : DINT; r : REAL; l : LREAL; t : TIME; d : DATE; END_VAR
+i := 1__0;
+r := 1E39;
+l := 1E309;
+t := T#106752d;
+d := D#2262-04-12;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", [None, "iec", "openplc", "codesys", "twincat"])
+def test_every_preset_refuses_a_doubled_underscore_and_a_literal_its_type_cannot_hold(dialect):
+    # issue 32: IEC's '_' rule is E004 everywhere; a REAL beyond REAL (MatIEC: no REAL candidate;
+    # CODESYS/TwinCAT: C0001), an LREAL beyond LREAL, a TIME or DATE beyond st's 64-bit ns: E021
+    assert diagnostics(LITERALS_NO_TYPE_HOLDS, dialect=dialect) == [
+        ("E004", 4, 6),
+        ("E021", 5, 6),
+        ("E021", 6, 6),
+        ("E021", 7, 6),
+        ("E021", 8, 6),
+    ]
+
+
+@pytest.mark.parametrize("dialect", [None, "iec", "openplc", "codesys", "twincat"])
+def test_a_time_beyond_codesys_32_bit_ms_is_kept_exactly_in_every_preset(dialect):
+    # CODESYS and TwinCAT hold TIME as 32-bit ms (T#49d17h2m47s295ms at most); st's TIME is 64-bit
+    # ns in every preset, literals and arithmetic alike (docs/semantics.md, "Values and types")
+    plc = run("PROGRAM main\nVAR t : TIME := T#50d; u : TIME; END_VAR\nu := t + T#50d;\nEND_PROGRAM\n", 1, dialect)
+    assert (plc["main.t"], plc["main.u"]) == (50 * 86400 * 10**9, 100 * 86400 * 10**9)

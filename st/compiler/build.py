@@ -12,13 +12,14 @@ from lark import Token, Transformer
 
 from ..model.literals import (
     LiteralError,
-    parse_date_literal,
-    parse_dt_literal,
-    parse_int,
-    parse_real,
+    LiteralRangeError,
+    date_literal,
+    dt_literal,
+    int_literal,
     parse_string,
-    parse_time_literal,
-    parse_tod_literal,
+    real_literal,
+    time_literal,
+    tod_literal,
 )
 from ..source import Span
 from . import ast as A
@@ -109,12 +110,21 @@ class AstBuilder(Transformer):
             return self.sp(x[0])
         return Span(self.path, 0, 0)
 
-    def _lit(self, fn, tok, *args):
+    def _lit(self, fn, tok, *args, at=None, shown: str = ""):
+        """The value of a literal token, or "" / 0 after a located error: E004 for a malformed
+        literal, E021 for one its type cannot hold. `at`: where the whole literal starts (a typed
+        literal's prefix) and `shown`: its whole text, when they differ from the token's."""
         try:
             return fn(str(tok), *args)
+        except LiteralRangeError as e:
+            self.errors.append(BuildError(self.sp(at if at is not None else tok), f"{shown or tok} {e}", "E021"))
+            return 0
         except (LiteralError, ValueError, OverflowError) as e:
-            text = str(tok) if len(tok) <= 60 else f"{str(tok)[:40]}…"
-            self.errors.append(BuildError(self.sp(tok), f"invalid literal {text!r}: {e}", "E004"))
+            full = shown or str(tok)
+            text = full if len(full) <= 60 else f"{full[:40]}…"
+            self.errors.append(
+                BuildError(self.sp(at if at is not None else tok), f"invalid literal {text!r}: {e}", "E004")
+            )
             return "" if fn is parse_string else 0
 
     # ---------------------------------------------------------------- file
@@ -311,7 +321,7 @@ class AstBuilder(Transformer):
         return A.ArrayInit(self.sp(c[0]), list(c))
 
     def repeat_init(self, c):
-        return A.RepeatInit(self.sp(c[0]), parse_int(str(c[0])), list(c[1:]))
+        return A.RepeatInit(self.sp(c[0]), self._lit(int_literal, c[0]), list(c[1:]))
 
     def struct_init(self, c):
         return A.StructInit(c[0][1], list(c))
@@ -700,18 +710,18 @@ class AstBuilder(Transformer):
     def signed_int(self, c):
         neg = len(c) == 2
         tok = c[-1]
-        v = self._lit(parse_int, tok)
+        v = self._lit(int_literal, tok)
         return A.Literal(self.sp(c[0]), "int", -v if neg else v, "", ("-" if neg else "") + str(tok))
 
     def case_real(self, c):
         neg = len(c) == 2
-        v = self._lit(parse_real, c[-1])
+        v = self._lit(real_literal, c[-1])
         return A.Literal(self.sp(c[0]), "real", -v if neg else v, "", str(c[-1]))
 
     def case_other(self, c):
         t = c[0]
         if t.type == "TIME_LIT":
-            return self._prefixed("time", parse_time_literal, t)
+            return self._prefixed("time", time_literal, t)
         if t.type in ("TRUE", "FALSE"):
             return A.Literal(self.sp(t), "bool", t.type == "TRUE", "", str(t))
         wide = t.type == "WSTRING_LIT"
@@ -802,7 +812,7 @@ class AstBuilder(Transformer):
         return A.Field(c[0].span, c[0], str(c[1]), self.sp(c[1]))
 
     def var_bit(self, c):
-        return A.Bit(c[0].span, c[0], int(str(c[1]).replace("_", "")), "X")
+        return A.Bit(c[0].span, c[0], self._lit(int_literal, c[1]), "X")
 
     def var_partial(self, c):
         t = str(c[1]).upper()
@@ -817,11 +827,11 @@ class AstBuilder(Transformer):
     # ---------------------------------------------------------------- literals
     def lit_int(self, c):
         t = c[0]
-        return A.Literal(self.sp(t), "int", self._lit(parse_int, t), "", str(t))
+        return A.Literal(self.sp(t), "int", self._lit(int_literal, t), "", str(t))
 
     def lit_real(self, c):
         t = c[0]
-        return A.Literal(self.sp(t), "real", self._lit(parse_real, t), "", str(t))
+        return A.Literal(self.sp(t), "real", self._lit(real_literal, t), "", str(t))
 
     def lit_true(self, c):
         return A.Literal(self.sp(c[0]), "bool", True, "", "TRUE")
@@ -841,28 +851,28 @@ class AstBuilder(Transformer):
         return A.Literal(self.sp(tok), kind, self._lit(fn, tok), prefix, t)
 
     def lit_time(self, c):
-        return self._prefixed("time", parse_time_literal, c[0])
+        return self._prefixed("time", time_literal, c[0])
 
     def lit_date(self, c):
-        return self._prefixed("date", parse_date_literal, c[0])
+        return self._prefixed("date", date_literal, c[0])
 
     def lit_tod(self, c):
-        return self._prefixed("tod", parse_tod_literal, c[0])
+        return self._prefixed("tod", tod_literal, c[0])
 
     def lit_dt(self, c):
-        return self._prefixed("dt", parse_dt_literal, c[0])
+        return self._prefixed("dt", dt_literal, c[0])
 
     def lit_typed_num(self, c):
         prefix = str(c[0])[:-1]
         neg = len(c) == 3
         tok = c[-1]
+        text = str(c[0]) + ("-" if neg else "") + str(tok)
         if tok.type == "REAL_LIT":
-            kind, v = "real", self._lit(parse_real, tok)
+            bits = 32 if prefix.upper() == "REAL" else 64
+            kind, v = "real", self._lit(real_literal, tok, bits, at=c[0], shown=text)
         else:
-            kind, v = "int", self._lit(parse_int, tok)
-        return A.Literal(
-            self.sp(c[0]), kind, -v if neg else v, prefix.upper(), str(c[0]) + ("-" if neg else "") + str(tok)
-        )
+            kind, v = "int", self._lit(int_literal, tok, at=c[0], shown=text)
+        return A.Literal(self.sp(c[0]), kind, -v if neg else v, prefix.upper(), text)
 
     def lit_typed_bool(self, c):
         prefix = str(c[0])[:-1]

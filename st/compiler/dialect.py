@@ -49,6 +49,8 @@ class Dialect:
     # the body of a FOR may write its control variable (CODESYS, TwinCAT: the loop tests what it
     # left); IEC 61131-3 and MatIEC forbid it (E052)
     writable_for_counter: bool = True
+    # a POU that calls itself: E032 (IEC 61131-3, MatIEC), or W013 as CODESYS and TwinCAT warn and run it
+    recursion_allowed: bool = True
 
 
 PRESETS = {
@@ -62,8 +64,9 @@ PRESETS = {
         nested_comments=False,
         subranges="clamp",
         writable_for_counter=False,
+        recursion_allowed=False,
     ),
-    "iec": Dialect("iec", vendor_extensions=False, writable_for_counter=False),
+    "iec": Dialect("iec", vendor_extensions=False, writable_for_counter=False, recursion_allowed=False),
     "codesys": Dialect(
         "codesys",
         attribute_pragmas=True,

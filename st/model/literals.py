@@ -6,7 +6,9 @@ TOD: ns since midnight.  These are also the runtime representations.
 
 from __future__ import annotations
 
+import math
 import re
+import struct
 from datetime import UTC, date, datetime
 
 NS = 1
@@ -26,6 +28,16 @@ class LiteralError(ValueError):
     pass
 
 
+class LiteralRangeError(LiteralError):
+    """A well-formed literal whose value its type cannot hold (E021, where LiteralError is E004).
+    The message reads after the literal: "does not fit in TIME (…)"."""
+
+
+# TIME, LTIME, DATE, DT, TOD (and the other L- types) are 64-bit signed counts of ns in st's type
+# model (types.py); a literal outside this range does not fit its type in any preset
+NS_MIN, NS_MAX = -(1 << 63), (1 << 63) - 1
+
+
 MAX_INT_DIGITS = 128  # far beyond ULINT (20 decimal digits); longer is a slip, not a number
 
 
@@ -41,6 +53,95 @@ def parse_int(text: str) -> int:
 
 def parse_real(text: str) -> float:
     return float(text.replace("_", ""))
+
+
+# --------------------------------------------------------------------------- literals in source text
+# The parsers above are lenient (STRING_TO_INT, values typed into the API); a literal in a program
+# goes through the functions below, which also apply IEC 61131-3's rules for '_' and the ranges.
+
+_F32 = struct.Struct("<f")
+_HEX = frozenset("0123456789abcdefABCDEF")
+_DEC = frozenset("0123456789")
+_LETTERS = re.compile(r"[A-Za-z]+")
+_UNDERSCORE_RULE = "IEC 61131-3 allows a single '_' only between two digits"
+
+
+def underscore_problem(text: str, *, based: bool = False, duration: bool = False) -> str | None:
+    """What is wrong with the '_' in a number's text, or None. IEC 61131-3: a single '_' between
+    two digits (1_000, 16#FF_FF); a based number may also have one right after its '#' (the 3rd
+    edition's `16#_FF`); a duration one after a unit, before the next number (T#1d_2h)."""
+    digits = _HEX if based else _DEC
+    n = len(text)
+    for i, ch in enumerate(text):
+        if ch != "_":
+            continue
+        before = text[i - 1] if i else ""
+        after = text[i + 1] if i + 1 < n else ""
+        if after == "_":
+            return f"two '_' in a row; {_UNDERSCORE_RULE}"
+        if after in digits and after:
+            if before in digits and before:
+                continue
+            if based and before == "#":
+                continue
+            if duration and before.isalpha():
+                continue
+        if not after:
+            return f"'_' at its end; {_UNDERSCORE_RULE}"
+        if after not in digits:
+            word = _LETTERS.match(text, i + 1)
+            return f"'_' before '{word.group(0) if word else after}'; {_UNDERSCORE_RULE}"
+        return f"'_' after '{before}'; {_UNDERSCORE_RULE}"
+    return None
+
+
+def _check_underscores(text: str, **kind: bool) -> None:
+    problem = underscore_problem(text, **kind)
+    if problem:
+        raise LiteralError(problem)
+
+
+def int_literal(text: str) -> int:
+    """An integer literal of a program (1_000, 16#FF_FF, 2#1010): '_' checked, then its value."""
+    _check_underscores(text, based="#" in text)
+    return parse_int(text)
+
+
+REAL_MAX = 3.4028234663852886e38  # the largest finite IEEE single (REAL)
+LREAL_MAX = 1.7976931348623157e308  # the largest finite IEEE double (LREAL)
+
+
+def real_text(v: float) -> str:
+    """A REAL/LREAL limit as ST writes it: 3.4028234663852886E38."""
+    return repr(v).upper().replace("E+", "E")
+
+
+def real_range_text(bits: int) -> str:
+    top = real_text(REAL_MAX if bits == 32 else LREAL_MAX)
+    return f"-{top}..{top}"
+
+
+def fits_real(v: float, bits: int) -> bool:
+    """Does a number stay finite as a REAL (bits 32) or LREAL (64)? Rounding to 0 or to the
+    largest value is fine: only a value that would become inf does not fit."""
+    try:
+        f = float(v)
+        if bits == 32:
+            _F32.pack(f)
+    except OverflowError:
+        return False
+    return not math.isinf(f) or math.isinf(v)
+
+
+def real_literal(text: str, bits: int = 64) -> float:
+    """A REAL/LREAL literal of a program: '_' checked; a value beyond LREAL's range (which float()
+    would turn into inf) does not fit any real type (bits: 32 names REAL in the message, for
+    REAL#…). Values that only round (1E-400 → 0) are fine; REAL's own range needs the context."""
+    _check_underscores(text)
+    v = parse_real(text)
+    if math.isinf(v):
+        raise LiteralRangeError(f"does not fit in {'REAL' if bits == 32 else 'LREAL'} ({real_range_text(bits)})")
+    return v
 
 
 def parse_duration(body: str) -> int:
@@ -73,6 +174,62 @@ def parse_duration(body: str) -> int:
 
 def parse_time_literal(text: str) -> int:
     return parse_duration(text.split("#", 1)[1])
+
+
+def _time_type(prefix: str) -> str:
+    return "LTIME" if prefix.upper() in ("LT", "LTIME") else "TIME"
+
+
+def time_range_text(type_name: str = "TIME") -> str:
+    p = "LT#" if type_name == "LTIME" else "T#"
+    return f"{format_duration(NS_MIN, p)}..{format_duration(NS_MAX, p)}"
+
+
+def time_literal(text: str) -> int:
+    """A TIME/LTIME literal of a program: '_' checked in its numbers, the value within 64-bit ns."""
+    prefix, body = text.split("#", 1)
+    _check_underscores(body.lstrip("+-"), duration=True)
+    ns = parse_duration(body)
+    if not NS_MIN <= ns <= NS_MAX:
+        t = _time_type(prefix)
+        raise LiteralRangeError(f"does not fit in {t} ({time_range_text(t)})")
+    return ns
+
+
+_DATE_NAMES = {"date": ("DATE", "LDATE"), "dt": ("DATE_AND_TIME", "LDATE_AND_TIME"), "tod": ("TOD", "LTOD")}
+
+
+def _date_type(kind: str, prefix: str) -> str:
+    short, long = _DATE_NAMES[kind]
+    return long if prefix.upper().startswith("L") else short
+
+
+def date_range_text(kind: str) -> str:
+    if kind == "date":  # whole days within the range
+        return f"{format_date(-(-NS_MIN // DAY) * DAY)}..{format_date(NS_MAX // DAY * DAY)}"
+    return f"{format_dt(NS_MIN)}..{format_dt(NS_MAX)}"
+
+
+def _checked_date(kind: str, text: str, ns: int) -> int:
+    if not NS_MIN <= ns <= NS_MAX:
+        t = _date_type(kind, text.split("#", 1)[0])
+        raise LiteralRangeError(f"does not fit in {t} ({date_range_text(kind)})")
+    return ns
+
+
+def date_literal(text: str) -> int:
+    """A DATE/LDATE literal of a program: a real date whose midnight is within 64-bit ns of 1970."""
+    return _checked_date("date", text, parse_date_literal(text))
+
+
+def dt_literal(text: str) -> int:
+    """A DT/LDT literal of a program: a real date and time within 64-bit ns of 1970."""
+    return _checked_date("dt", text, parse_dt_literal(text))
+
+
+def tod_literal(text: str) -> int:
+    """A TOD/LTOD literal of a program (its fields in range: always within 0..24 h)."""
+    return parse_tod_literal(text)
 
 
 def _date_ns(y: int, mo: int, d: int) -> int:

@@ -336,8 +336,6 @@ class Calls(Part):
         return mt.return_type
 
     def _function_call(self, c: A.Call, pou: T.POUType, scope: Scope):
-        if scope.pou is not None:
-            self.ctx.calls.setdefault(scope.pou.name.lower(), []).append((pou.name.lower(), c.span))
         bind = self._bind_args(c, pou, scope, is_fb=False)
         c.target = CallTarget("function", pou=pou, bind=bind)
         return pou.return_type

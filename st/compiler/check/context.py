@@ -42,8 +42,6 @@ class CheckContext:
     """Initial values of POU variables met before the globals are declared (they may name global
     constants: `h : HANDLE := RTS_INVALID_HANDLE`), checked right after; (declaration, type, scope)."""
     globals_declared: bool = False
-    calls: dict[str, list[tuple[str, Span]]] = field(default_factory=dict)
-    """The call graph: caller lower name → [(callee lower name, span)], for the recursion check."""
     configs: list[A.Configuration] = field(default_factory=list)
     """CONFIGURATION declarations collected, checked after the bodies."""
     global_blocks: list[tuple[str, A.VarBlock]] = field(default_factory=list)

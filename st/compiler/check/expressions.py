@@ -6,6 +6,7 @@ from typing import cast
 
 from ...model import types as T
 from ...model.addresses import canonical
+from ...model.literals import fits_real, real_range_text
 from .. import ast as A
 from .common import (
     _CMP,
@@ -170,7 +171,8 @@ class Expressions(Part):
                         self.err("E021", e.span, f"{e.text} is not a BOOL value")
                     e.value = bool(e.value)
                 elif b.is_real:
-                    e.value = float(e.value)
+                    self._real_fits(e, b)
+                    e.value = float(e.value) if fits_real(e.value, 64) else 0.0
                 elif b.is_intlike:
                     if not T.literal_fits(e.value, t):
                         self.err("E021", e.span, f"{e.text} does not fit in {t}")
@@ -178,6 +180,8 @@ class Expressions(Part):
                     self.err("E013", e.span, f"{e.text}: an integer is not a {t}")
             elif k == "real" and not b.is_real:
                 self.err("E013", e.span, f"{e.text}: a real number is not a {t}")
+            elif k == "real":
+                self._real_fits(e, b)
             elif k == "bool" and not (b.is_bool or b.is_intlike):
                 self.err("E013", e.span, f"{e.text}: a BOOL is not a {t}")
             elif k in ("string", "wstring") and not (b.is_string or b.kind == "char"):
@@ -185,6 +189,8 @@ class Expressions(Part):
             if k == "bool" and b.is_intlike:
                 e.value = int(e.value)
             return t
+        if k in ("int", "real") and expected is not None and T.base_of(expected) is T.REAL:
+            self._real_fits(e, T.REAL)  # a number the context makes a REAL: r := 1E39; r * 1E39
         if k == "int":
             return T.LIT_INT
         if k == "real":
@@ -198,6 +204,15 @@ class Expressions(Part):
         if k == "wstring":
             return T.StringType(max(1, len(e.value)), True)
         return T.ELEMENTARY.get(k.upper(), T.TIME)
+
+    def _real_fits(self, e: A.Literal, b) -> bool:
+        """A number that becomes a REAL or LREAL must stay finite there (E021): 1E39 is no REAL,
+        1E309 no LREAL (the builder reports that one); a value that only rounds (1E-50) is fine."""
+        bits = cast(T.ElemType, b).bits
+        if fits_real(e.value, bits):
+            return True
+        self.err("E021", e.span, f"{e.text} does not fit in {b.name} ({real_range_text(bits)})")
+        return False
 
     def lookup(self, key: str, scope: Scope):
         sym = scope.vars.get(key)

@@ -1,5 +1,5 @@
 """Bodies: every POU's statements, its methods' and property accessors', its actions and its SFC
-network, typed and checked; the call graph (`ctx.calls`) is filled on the way."""
+network, typed and checked (the recursion check, passes/cycles.py, reads the calls' targets after)."""
 
 from __future__ import annotations
 
