@@ -9,6 +9,23 @@ import time
 
 import click
 
+from .app.params import (
+    COUNT,
+    CPU,
+    DURATION,
+    ENDPOINT,
+    INPUT_FILE,
+    INTEGER,
+    OUTPUT_DIR,
+    OUTPUT_FILE,
+    Count,
+    InputFile,
+    ModbusRanges,
+    Number,
+    SafeOutput,
+    TaskCost,
+    UnitIds,
+)
 from .diagnostics import Code, CompileError, render_all
 from .errors_doc import explain as explanation_of
 
@@ -90,14 +107,53 @@ def dialect(f):
     return with_dialect
 
 
-@click.group()
+def _usage_error_text(e: click.UsageError) -> str:
+    """One line for a refused command line: `--duration 10: a duration needs a unit, e.g. 10s`."""
+    from .app.params import OptionValueError
+
+    bad_value = isinstance(e, click.BadParameter) and not isinstance(e, click.MissingParameter)
+    msg = e.message if bad_value else e.format_message()
+    if bad_value and isinstance(e, click.BadParameter) and e.param is not None:
+        if isinstance(e.param, click.Option):
+            name = max((o for o in e.param.opts if o.startswith("--")), key=len, default=e.param.opts[0])
+            msg = f"{name} {msg}" if isinstance(e, OptionValueError) else f"{name}: {msg}"
+        elif not isinstance(e, OptionValueError):
+            msg = f"{e.param.human_readable_name}: {msg}"
+    msg = msg.strip().rstrip(".")
+    if msg[:1].isupper() and msg[1:2].islower():
+        msg = msg[0].lower() + msg[1:]
+    return msg
+
+
+class _Main(click.Group):
+    """The `st` group: a refused command line (a bad value, an unknown option, a missing argument)
+    is one `error: …` line on stderr and exit status 2, never a usage block or a traceback."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):  # type: ignore[override]
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.UsageError as e:
+            click.echo(f"error: {_usage_error_text(e)}", err=True)
+            sys.exit(2)
+        except click.ClickException as e:
+            e.show()
+            sys.exit(e.exit_code)
+        except click.Abort:
+            click.echo("Aborted!", err=True)
+            sys.exit(1)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+@click.group(cls=_Main)
 @click.version_option(package_name="st-plc")
 def main():
     """st: compile, check and run IEC 61131-3 Structured Text."""
 
 
 @main.command()
-@click.argument("files", nargs=-1, required=True, type=click.Path())
+@click.argument("files", nargs=-1, required=True, type=INPUT_FILE)
 @dialect
 def check(files, time_unit, f_trig_first_scan):
     """Check ST files and report every error and warning."""
@@ -124,7 +180,7 @@ def _native_summary(result) -> None:
 
 
 @main.command()
-@click.argument("files", nargs=-1, required=True, type=click.Path())
+@click.argument("files", nargs=-1, required=True, type=INPUT_FILE)
 @click.option("--emit", type=click.Choice(["python"]), default=None, help="Print the generated code.")
 @_NATIVE
 @dialect
@@ -151,10 +207,12 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
 
 
 @main.command()
-@click.argument("files", nargs=-1, required=True, type=click.Path())
-@click.option("--scans", type=int, default=None, help="Stop after N base ticks.")
-@click.option("--duration", default=None, help="Stop after this much PLC time (e.g. 5s).")
-@click.option("--cycle", default=None, help="Task cycle for a program without CONFIGURATION (default 10ms).")
+@click.argument("files", nargs=-1, required=True, type=INPUT_FILE)
+@click.option("--scans", type=COUNT, default=None, metavar="N", help="Stop after N base ticks.")
+@click.option("--duration", type=DURATION, default=None, help="Stop after this much PLC time (e.g. 5s).")
+@click.option(
+    "--cycle", type=DURATION, default=None, help="Task cycle for a program without CONFIGURATION (default 10ms)."
+)
 @click.option("--virtual", is_flag=True, help="Run on virtual time, as fast as the CPU allows (default: real time).")
 @click.option(
     "--policy",
@@ -163,9 +221,20 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
     show_default=True,
     help="Scheduling policy (docs/runtime.md).",
 )
-@click.option("--dump-json", is_flag=True, help="After the run, print every variable as one JSON object.")
-@click.option("--stats-json", type=click.Path(), default=None, help="Write per-task statistics to this JSON file.")
-@click.option("--stats-plot", type=click.Path(), default=None, help="Draw the wake-up latency histogram (PNG).")
+@click.option(
+    "--dump-json",
+    is_flag=True,
+    help="After the run, print the variables as one JSON object (function block instances: their "
+    "inputs, outputs and in-outs; --all: everything).",
+)
+@click.option(
+    "--all",
+    "dump_all",
+    is_flag=True,
+    help="With --dump-json: every variable of every block instance, its internal state too.",
+)
+@click.option("--stats-json", type=OUTPUT_FILE, default=None, help="Write per-task statistics to this JSON file.")
+@click.option("--stats-plot", type=OUTPUT_FILE, default=None, help="Draw the wake-up latency histogram (PNG).")
 @click.option(
     "--on-fault",
     type=click.Choice(["stop", "restart"]),
@@ -173,25 +242,36 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
     show_default=True,
     help="After a fault: stay in FAULT with safe outputs, or restart warm.",
 )
-@click.option("--watchdog", default=None, help="Watchdog budget per task (default 10 x its interval).")
+@click.option("--watchdog", type=DURATION, default=None, help="Watchdog budget per task (default 10 x its interval).")
 @click.option(
     "--retain",
     "retain_file",
-    type=click.Path(),
+    type=OUTPUT_FILE,
     default=None,
-    help="SQLite file for RETAIN/PERSISTENT variables (default: <program>.retain.db when there are any).",
+    help="SQLite file for RETAIN/PERSISTENT variables. Default, when the program has any, in real time: "
+    "a file of the project in $XDG_DATA_HOME/st/retain/ (~/.local/share/st/retain/); none for --virtual.",
 )
 @click.option("--no-retain", is_flag=True, help="Do not keep retained variables.")
-@click.option("--retain-interval", default="1s", show_default=True, help="How often retained data is committed.")
+@click.option(
+    "--retain-interval", type=DURATION, default="1s", show_default=True, help="How often retained data is committed."
+)
 @click.option("--cold", is_flag=True, help="Cold start: clear retained data first.")
 @click.option("--watch", is_flag=True, help="Online change: recompile when a file changes and swap at a scan boundary.")
 @click.option(
     "--rt/--no-rt", default=True, help="Real time: ask for SCHED_FIFO, mlockall, cpu_dma_latency (default on)."
 )
-@click.option("--rt-priority", type=int, default=30, show_default=True, help="SCHED_FIFO priority.")
-@click.option("--cpu", type=int, default=None, help="Pin the scan to this CPU.")
+@click.option(
+    "--rt-priority",
+    type=Count(1, 99),
+    metavar="1-99",
+    default=30,
+    show_default=True,
+    help="SCHED_FIFO priority (1-99).",
+)
+@click.option("--cpu", type=CPU(), default=None, help="Pin the scan to this CPU.")
 @click.option(
     "--sim-cost",
+    type=TaskCost(),
     multiple=True,
     metavar="TASK=DURATION",
     help="Virtual time: simulated execution time of a task's job (overload studies).",
@@ -199,12 +279,14 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
 @click.option(
     "--safe-output",
     "safe_outputs",
+    type=SafeOutput(),
     multiple=True,
     metavar="ADDR=VALUE",
     help="Value of an output in STOP and FAULT (default FALSE/0), e.g. %QX0.1=TRUE.",
 )
 @click.option(
     "--web",
+    type=ENDPOINT,
     default=None,
     is_flag=False,
     flag_value="127.0.0.1:8080",
@@ -221,49 +303,61 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
 )
 @click.option(
     "--modbus",
+    type=ENDPOINT,
     default=None,
     metavar="[HOST:]PORT",
-    help="Serve a Modbus TCP slave (OpenPLC's map), e.g. 127.0.0.1:5020; port 502 needs root.",
+    help="Serve a Modbus TCP slave (OpenPLC's map), e.g. 127.0.0.1:5020; port 502 needs root. No "
+    "authentication: another address than loopback lets the network write (see --modbus-read-only).",
 )
 @click.option(
     "--modbus-map",
-    type=click.Path(exists=True),
+    type=INPUT_FILE,
     default=None,
     help="TOML file mapping any variable to a Modbus table and address.",
 )
-@click.option("--modbus-read-only", is_flag=True, help="Refuse every Modbus write (exception 02).")
+@click.option(
+    "--modbus-read-only",
+    is_flag=True,
+    help="Refuse every Modbus write function (exception 01, illegal function); reads are served.",
+)
 @click.option(
     "--modbus-writable",
+    type=ModbusRanges(),
     default=None,
     metavar="RANGES",
     help="Only these are writable, e.g. holding:0-99,coil:0-15 (a write elsewhere gets 02).",
 )
 @click.option(
     "--modbus-max-connections",
-    type=int,
+    type=COUNT,
+    metavar="N",
     default=16,
     show_default=True,
     help="Most simultaneous connections. When full, a new one closes one that is not regular (one "
     "without a request yet, else the newest of the busiest address); regular clients (requests "
     "at least 1 s apart) are never closed: the new connection is refused instead.",
 )
-@click.option("--modbus-idle-timeout", type=float, default=60.0, show_default=True, help="Seconds.")
+@click.option(
+    "--modbus-idle-timeout", type=Number(), metavar="SECONDS", default=60.0, show_default=True, help="Seconds."
+)
 @click.option(
     "--modbus-rate",
-    type=float,
+    type=Number(zero=True),
+    metavar="R",
     default=1000.0,
     show_default=True,
     help="Requests per second per connection (0: unbounded).",
 )
 @click.option(
     "--modbus-unit-ids",
+    type=UnitIds(),
     default=None,
     metavar="IDS",
     help="Answer only these unit ids, e.g. 1,255 (others: exception 0x0B). Default: all.",
 )
 @click.option(
     "--axes",
-    type=click.Path(exists=True),
+    type=INPUT_FILE,
     default=None,
     help="Axis configuration (TOML, [[axis]] tables by AxisNo): modulo, limits, …",
 )
@@ -273,13 +367,16 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
     metavar="AXIS_REF",
     help="Record an axis every cycle, e.g. main.axis1 (repeatable); written as CSV at the end.",
 )
-@click.option("--trace-plot", type=click.Path(), default=None, help="Draw the traced axes (PNG).")
+@click.option("--trace-plot", type=OUTPUT_FILE, default=None, help="Draw the traced axes (PNG).")
 @click.option(
-    "--trace-csv", type=click.Path(), default=None, help="Where the trace CSV goes (default beside the plot)."
+    "--trace-csv",
+    type=OUTPUT_FILE,
+    default=None,
+    help="Where the trace CSV goes (default beside the plot, else trace.csv).",
 )
 @click.option(
     "--ethercat",
-    type=click.Path(exists=True),
+    type=INPUT_FILE,
     default=None,
     metavar="SEGMENT.TOML",
     help="Exchange process data with an EtherCAT segment every scan; drives move their axes.",
@@ -294,7 +391,7 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
 @click.option("--ethercat-iface", default=None, help="Network interface of the soem backend (root).")
 @click.option(
     "--ethercat-capture",
-    type=click.Path(),
+    type=OUTPUT_FILE,
     default=None,
     help="sim backend: write every frame to a pcap file (Wireshark/tshark).",
 )
@@ -309,6 +406,7 @@ def run(
     virtual,
     policy,
     dump_json,
+    dump_all,
     stats_json,
     stats_plot,
     on_fault,
@@ -353,6 +451,7 @@ def run(
     from .app.session import run_plc
     from .app.watch import source_mtimes
 
+    _check_run_options(click.get_current_context())
     seen = source_mtimes(files)  # --watch compares with the files as they were compiled
     # --web marks the lines that ran in the last scan: line probes, on the Python tier only
     flow = bool(web) and not native
@@ -369,6 +468,7 @@ def run(
         virtual=virtual,
         policy=policy,
         dump_json=dump_json,
+        dump_all=dump_all,
         stats_json=stats_json,
         stats_plot=stats_plot,
         on_fault=on_fault,
@@ -411,14 +511,82 @@ def run(
     sys.exit(run_plc(result, opts))
 
 
+# an option of `st run` → the option it is a part of (given alone, it would change nothing)
+_RUN_NEEDS = {
+    "dump_all": "dump_json",
+    "web_read_only": "web",
+    "web_password": "web",
+    "modbus_map": "modbus",
+    "modbus_read_only": "modbus",
+    "modbus_writable": "modbus",
+    "modbus_max_connections": "modbus",
+    "modbus_idle_timeout": "modbus",
+    "modbus_rate": "modbus",
+    "modbus_unit_ids": "modbus",
+    "ethercat_backend": "ethercat",
+    "ethercat_iface": "ethercat",
+    "ethercat_capture": "ethercat",
+    "trace_plot": "trace",
+    "trace_csv": "trace",
+}
+
+
+def _check_run_options(ctx: click.Context) -> None:
+    """What no single option's type can see: options that need or exclude each other. Refused
+    before anything is compiled, built or restored (click.UsageError: `error: …`, exit 2)."""
+    import importlib.util
+
+    from click.core import ParameterSource
+
+    from .app.params import writable_file
+
+    p = ctx.params
+    flag = {o.name: max(o.opts, key=len) for o in ctx.command.params if isinstance(o, click.Option)}
+    for name, needed in _RUN_NEEDS.items():
+        if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE and not p[needed]:
+            raise click.UsageError(f"{flag[name]} needs {flag[needed]}")
+    if p["virtual"]:
+        if p["duration"] is None and p["scans"] is None:
+            raise click.UsageError(
+                "--virtual needs --duration or --scans (virtual time runs as fast as the CPU allows)"
+            )
+        for name in ("web", "watch"):
+            if p[name]:
+                raise click.UsageError(f"{flag[name]} needs a run in real time (not --virtual)")
+    if p["retain_file"] and p["no_retain"]:
+        raise click.UsageError("--retain and --no-retain exclude each other")
+    if p["ethercat"] and p["ethercat_backend"] == "soem" and not p["ethercat_iface"]:
+        raise click.UsageError("--ethercat-backend soem needs --ethercat-iface (a network interface)")
+    if p["ethercat_capture"] and p["ethercat_backend"] != "sim":
+        raise click.UsageError("--ethercat-capture needs --ethercat-backend sim (the emulated segment)")
+    for name in ("stats_plot", "trace_plot"):
+        if p[name] and importlib.util.find_spec("matplotlib") is None:
+            raise click.UsageError(f"{flag[name]} needs matplotlib: pip install 'st-plc[plot]'")
+    if p["trace"] and not p["trace_csv"]:
+        from .app.report import trace_csv_path
+
+        csv = trace_csv_path(p["trace_plot"])
+        problem = writable_file(csv)
+        if problem:
+            raise click.UsageError(f"the trace's CSV file {csv}: {problem} (choose another with --trace-csv)")
+
+
 @main.command("test")
-@click.argument("files", nargs=-1, required=True, type=click.Path(exists=True))
+@click.argument("files", nargs=-1, required=True, type=InputFile(dirs=True))
 @click.option("-k", "keyword", default="", help="Run only tests whose name contains this text (or matches a glob).")
 @click.option("-x", "--exitfirst", is_flag=True, help="Stop at the first failing test.")
 @click.option("-q", "--quiet", is_flag=True, help="Print failing tests and the summary only.")
-@click.option("--timeout", default="10s", show_default=True, help="Watchdog per test (an endless loop fails the test).")
+@click.option(
+    "--timeout",
+    type=DURATION,
+    default="10s",
+    show_default=True,
+    help="Watchdog per test (an endless loop fails the test).",
+)
 @click.option("--cov", "cov", is_flag=True, help="Measure which ST lines and branches ran; print a table.")
-@click.option("--cov-html", default=None, metavar="DIR", help="Also write the coverage report as HTML into DIR.")
+@click.option(
+    "--cov-html", type=OUTPUT_DIR, default=None, metavar="DIR", help="Also write the coverage report as HTML into DIR."
+)
 @dialect
 def test_cmd(files, keyword, exitfirst, quiet, timeout, cov, cov_html, time_unit, f_trig_first_scan):
     """Run the TEST blocks of ST files (STruC++ syntax). A file test_X.st is compiled with X.st beside it.
@@ -482,8 +650,7 @@ def explain(code):
     """Explain a diagnostic code, e.g. `st explain E013`."""
     text = explanation_of(code)
     if text is None:
-        click.echo(f"unknown code {code}; codes: {', '.join(sorted(c.value for c in Code))}", err=True)
-        sys.exit(1)
+        raise click.UsageError(f"unknown code {code}; codes: {', '.join(sorted(c.value for c in Code))}")
     click.echo(f"{code.upper()}: {text}")
 
 
@@ -493,15 +660,24 @@ def modbus():
 
 
 @modbus.command("map")
-@click.argument("files", nargs=-1, required=True, type=click.Path())
-@click.option("--map", "map_file", type=click.Path(exists=True), default=None, help="A TOML map file to add.")
+@click.argument("files", nargs=-1, required=True, type=INPUT_FILE)
+@click.option(
+    "--modbus-map", "map_file", type=INPUT_FILE, default=None, help="A TOML map file to add (as on `st run`)."
+)
+@click.option("--map", "old_map_file", type=INPUT_FILE, default=None, hidden=True)  # the old name: deprecated
 @dialect
-def modbus_map(files, map_file, time_unit, f_trig_first_scan):
-    """Print the effective Modbus map of a program: OpenPLC's located variables plus the map file."""
+def modbus_map(files, map_file, old_map_file, time_unit, f_trig_first_scan):
+    """Print the effective Modbus map of a program: OpenPLC's located variables (each with its
+    variable's path and IEC type) plus the map file."""
     from .io.modbus import MapError, effective_map, load_map
     from .io.modbus.exchange import TABLE_NAMES
     from .runtime.plc import PLC
 
+    if old_map_file is not None:
+        if map_file is not None:
+            raise click.UsageError("--map is the old name of --modbus-map: give one of them")
+        click.echo("warning: --map is deprecated, use --modbus-map", err=True)
+        map_file = old_map_file
     result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
     try:
         plc = PLC(result)
@@ -513,11 +689,12 @@ def modbus_map(files, map_file, time_unit, f_trig_first_scan):
         click.echo(f"error: {e}", err=True)
         sys.exit(2)
     rows = effective_map(plc, entries)
-    head = ("table", "addresses", "variable", "type", "encoding", "access")
+    head = ("table", "addresses", "location", "variable", "type", "encoding", "access")
     body = [
         (
             TABLE_NAMES[r.table],
             str(r.first) if r.first == r.last else f"{r.first}-{r.last}",
+            r.location or "-",
             r.source,
             r.type_name,
             r.encoding,
@@ -539,12 +716,12 @@ def modbus_map(files, map_file, time_unit, f_trig_first_scan):
 @click.option(
     "--out",
     "out_dir",
-    type=click.Path(),
+    type=OUTPUT_DIR,
     default=None,
     help="Where the CSV, PNG and summary.md go (default: experiments/NAME).",
 )
 @click.option("--quick", is_flag=True, help="A shortened run (fewer cycles, shorter holds) for a first look.")
-@click.option("--seed", type=int, default=1, show_default=True)
+@click.option("--seed", type=INTEGER, default=1, show_default=True)
 def experiment(name, out_dir, quick, seed):
     """Run one of the thesis's experiments (programs/thesis/README.md); without NAME, list them."""
     from .experiments import EXPERIMENTS
@@ -555,9 +732,14 @@ def experiment(name, out_dir, quick, seed):
             click.echo(f"{key:<12}  {what}")
         return
     if name not in EXPERIMENTS:
-        click.echo(f"error: unknown experiment '{name}' (known: {', '.join(EXPERIMENTS)})", err=True)
-        sys.exit(2)
+        raise click.UsageError(f"unknown experiment '{name}' (known: {', '.join(EXPERIMENTS)})")
     out = out_dir or os.path.join("experiments", name)
+    if out_dir is None:
+        from .app.params import writable_dir
+
+        problem = writable_dir(out)
+        if problem:
+            raise click.UsageError(f"{out}: {problem} (choose another folder with --out)")
     t0 = time.monotonic()
     try:
         rep = run_experiment(name, out, quick=quick, seed=seed)
@@ -590,7 +772,7 @@ def _segment_config_or_exit(path):
 @click.option(
     "--config",
     "config_path",
-    type=click.Path(exists=True),
+    type=INPUT_FILE,
     default=None,
     help="sim: the segment configuration to emulate.",
 )
@@ -600,11 +782,12 @@ def ethercat_scan(config_path, backend, iface):
     """List the slaves a master finds, with their identity, state and process-data sizes."""
     from .io.ethercat.master import FrameMaster, MasterError
 
+    if backend == "sim" and not config_path:
+        raise click.UsageError("the sim backend needs --config segment.toml")
+    if backend == "soem" and not iface:
+        raise click.UsageError("the soem backend needs --iface")
     try:
         if backend == "sim":
-            if not config_path:
-                click.echo("error: the sim backend needs --config segment.toml", err=True)
-                sys.exit(2)
             from .io.ethercat.config import build_segment
 
             seg = build_segment(_segment_config_or_exit(config_path))
@@ -618,9 +801,6 @@ def ethercat_scan(config_path, backend, iface):
         else:
             from .io.ethercat.soem import SoemMaster
 
-            if not iface:
-                click.echo("error: the soem backend needs --iface", err=True)
-                sys.exit(2)
             m = SoemMaster(iface)
         m.open()
         slaves = m.scan()
@@ -636,17 +816,17 @@ def ethercat_scan(config_path, backend, iface):
 
 
 @ethercat.command("plan")
-@click.argument("config_path", type=click.Path(exists=True))
-@click.option("--cycle", default=None, help="Cycle time to check, e.g. 1ms (default: the file's).")
+@click.argument("config_path", type=INPUT_FILE)
+@click.option("--cycle", type=DURATION, default=None, help="Cycle time to check, e.g. 1ms (default: the file's).")
 def ethercat_plan(config_path, cycle):
     """Frame bytes, wire time at 100 Mbit/s, per-slave and end-to-end delays, and whether the cycle fits."""
-    from .io.ethercat.config import ConfigError, build_devices, parse_duration
+    from .io.ethercat.config import ConfigError, build_devices
     from .io.ethercat.plan import SegmentTiming, SlaveTiming, format_plan, plan
 
     cfg = _segment_config_or_exit(config_path)
     try:
         devices = build_devices(cfg)
-        cyc = parse_duration(cycle, "--cycle") if cycle else (cfg.cycle_s or 0.001)
+        cyc = cycle / 1e9 if cycle else (cfg.cycle_s or 0.001)
     except ConfigError as e:
         click.echo(str(e), err=True)
         sys.exit(2)
@@ -668,10 +848,12 @@ def ethercat_plan(config_path, cycle):
 
 @ethercat.command("serve")
 @click.option("--iface", required=True, help="The interface to answer on (e.g. one end of a veth pair).")
-@click.option("--config", "config_path", type=click.Path(exists=True), required=True)
-@click.option("--ready-file", type=click.Path(), default=None, help="Created once the socket is bound.")
-@click.option("--capture", type=click.Path(), default=None, help="Write every frame to a pcap file.")
-@click.option("--duration", type=float, default=0.0, help="Stop after this many seconds (0: until SIGTERM).")
+@click.option("--config", "config_path", type=INPUT_FILE, required=True)
+@click.option("--ready-file", type=OUTPUT_FILE, default=None, help="Created once the socket is bound.")
+@click.option("--capture", type=OUTPUT_FILE, default=None, help="Write every frame to a pcap file.")
+@click.option(
+    "--duration", type=DURATION, default=None, help="Stop after this much time, e.g. 10s (default: at SIGTERM)."
+)
 def ethercat_serve(iface, config_path, ready_file, capture, duration):
     """Serve the emulated segment on a network interface for a real master (SOEM)."""
     from .io.ethercat.config import build_segment
@@ -681,7 +863,13 @@ def ethercat_serve(iface, config_path, ready_file, capture, duration):
     if capture:
         seg.open_capture(capture)
     try:
-        n = serve(iface, seg, ready_file=ready_file, announce=lambda m: click.echo(m, err=True), duration=duration)
+        n = serve(
+            iface,
+            seg,
+            ready_file=ready_file,
+            announce=lambda m: click.echo(m, err=True),
+            duration=duration / 1e9 if duration else 0.0,
+        )
     except PermissionError:
         click.echo(f"error: opening a raw socket on {iface} needs root or CAP_NET_RAW", err=True)
         sys.exit(2)

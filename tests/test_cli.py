@@ -56,9 +56,8 @@ def test_check_ok(tmp_path):
 @pytest.mark.slow
 def test_missing_file_is_a_clean_error(tmp_path):
     r = st("check", str(tmp_path / "nope.st"))
-    assert r.returncode == 1
-    assert "cannot read file" in r.stderr
-    assert "Traceback" not in r.stderr
+    assert r.returncode == 2  # a bad argument, refused before compiling (exit 1: compile errors)
+    assert r.stderr == f"error: {tmp_path / 'nope.st'}: no such file\n"
 
 
 @pytest.mark.slow

@@ -434,6 +434,7 @@ def test_st_run_watch_survives_a_faulting_fb_init_and_keeps_the_old_program(tmp_
         "10ms",
         "--watch",
         "--dump-json",
+        "--all",  # main.c's internal counters
         "--stats-json",
         str(stats),
     )

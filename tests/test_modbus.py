@@ -211,7 +211,7 @@ def test_st_modbus_map_prints_the_effective_map(tmp_path):
     (tmp_path / "main.st").write_text(PROGRAM)
     (tmp_path / "map.toml").write_text(MAP)
     out = subprocess.run(
-        ["st", "modbus", "map", str(tmp_path / "main.st"), "--map", str(tmp_path / "map.toml")],
+        ["st", "modbus", "map", str(tmp_path / "main.st"), "--modbus-map", str(tmp_path / "map.toml")],
         capture_output=True,
         text=True,
     )
@@ -222,8 +222,8 @@ def test_st_modbus_map_prints_the_effective_map(tmp_path):
         ["coils", "4", "%QX0.4"],
         ["coils", "8", "%QX1.0"],
     ]
-    assert ["holding", "registers", "2050-2051", "%MD1", "DINT"] == lines[-3][:5]
-    assert ["holding", "registers", "10000-10001", "main.temp", "REAL"] == lines[-1][:5]
+    assert ["holding", "registers", "2050-2051", "%MD1", "main.total", "DINT"] == lines[-3][:6]
+    assert ["holding", "registers", "10000-10001", "-", "main.temp", "REAL"] == lines[-1][:6]
 
 
 # ---------------------------------------------------------------------------- protocol
@@ -296,7 +296,7 @@ def test_unit_id_policy(plc):
 def test_read_only_and_writable_ranges(plc):
     with ModbusSlave(plc, port=0, read_only=True) as slave:
         s = connect(slave)
-        assert raw(s, bytes([6, 0, 0, 0, 1])) == bytes([0x86, 0x02])
+        assert raw(s, bytes([6, 0, 0, 0, 1])) == bytes([0x86, 0x01])  # read-only: illegal function
         assert raw(s, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 0])
         s.close()
     with ModbusSlave(plc, port=0, writable="holding:0-9,coil:3-3") as slave:
@@ -694,3 +694,142 @@ def test_the_slave_reports_its_connected_clients(plc, slave):
     while time.monotonic() < deadline and slave.clients():
         time.sleep(0.05)
     assert slave.clients() == []
+
+
+# ---------------------------------------------------------------------------- read-only, the warning, the map's names
+
+
+@pytest.mark.slow
+def test_a_read_only_server_answers_every_write_function_with_illegal_function(plc):
+    plc["main.setpoint"] = 7
+    plc.scan()
+    with ModbusSlave(plc, port=0, read_only=True) as slave:
+        s = connect(slave)
+        writes = [
+            bytes([5, 0, 3, 0xFF, 0]),  # FC 5: coil 3 (main.valve) on
+            bytes([6, 0, 0, 0, 9]),  # FC 6: holding 0 (main.setpoint)
+            bytes([15, 0, 3, 0, 2, 1, 3]),  # FC 15: coils 3-4
+            bytes([16, 0, 0, 0, 1, 2, 0, 9]),  # FC 16: holding 0
+            bytes([23, 0, 0, 0, 1, 0, 0, 0, 1, 2, 0, 9]),  # FC 23: read and write holding 0
+            bytes([6, 0x23, 0x28, 0, 1]),  # a write outside the map: 01 too, the function comes first
+            bytes([16, 0, 0, 0, 200, 2, 0, 9]),  # a malformed quantity: 01 too
+        ]
+        for pdu in writes:
+            assert raw(s, pdu) == bytes([pdu[0] | 0x80, 0x01]), pdu
+        assert raw(s, bytes([3, 0, 0, 0, 1])) == bytes([3, 2, 0, 7])  # reads are served
+        assert raw(s, bytes([1, 0, 3, 0, 2])) == bytes([1, 1, 0])
+        assert raw(s, bytes([4, 0, 3, 0, 1])) == bytes([4, 2, 0, 0])
+        assert raw(s, bytes([0x2B, 0x0E, 4, 0]))[6:] == bytes([1, 0, 2]) + b"st"
+        s.close()
+        plc.scan()
+    assert (plc["main.setpoint"], plc["main.valve"], plc["main.flap"]) == (7, False, False)
+
+
+def _serve_on_all_interfaces(tmp_path, *extra):
+    """`st run --modbus 0.0.0.0:0` for a moment: its stderr."""
+    (tmp_path / "main.st").write_text(PROGRAM)
+    out = subprocess.run(
+        ["st", "run", str(tmp_path / "main.st"), "--no-rt", "--duration", "300ms", "--modbus", "0.0.0.0:0", *extra],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 0, out.stderr
+    return out.stderr
+
+
+@pytest.mark.slow
+def test_a_server_beyond_loopback_is_announced_with_a_warning(tmp_path):
+    err = _serve_on_all_interfaces(tmp_path, "-q")  # printed even with -q (after the compiler's warnings)
+    port = err.split("0.0.0.0:")[1].split(" ")[0]
+    assert err.split("0 error(s), 2 warning(s)\n")[1] == (
+        f"warning: the Modbus server on 0.0.0.0:{port} is reachable from other machines, without authentication, "
+        "and accepts writes to the PLC (--modbus-read-only refuses them)\n"
+    )
+    err = _serve_on_all_interfaces(tmp_path, "--modbus-read-only")
+    port = err.split("serving on 0.0.0.0:")[1].split(" ")[0]
+    assert (
+        f"modbus: serving on 0.0.0.0:{port} (OpenPLC map, read-only)\n"
+        f"warning: the Modbus server on 0.0.0.0:{port} is reachable from other machines, without authentication "
+        "(read-only: writes are refused)\n"
+    ) in err
+
+
+def test_loopback_addresses_get_no_warning():
+    from st.app.params import is_loopback
+    from st.app.session import modbus_warning
+
+    assert all(is_loopback(h) for h in ("127.0.0.1", "127.0.0.2", "::1", "[::1]", "localhost"))
+    assert not any(is_loopback(h) for h in ("0.0.0.0", "::", "192.168.1.5", "plc.example.com"))
+    assert modbus_warning("::", 502, False).startswith("warning: the Modbus server on [::]:502 is reachable")
+
+
+MAP_LINES = [
+    "table              addresses    location  variable       type    encoding                        access",
+    "coils              3            %QX0.3    main.valve     BOOL    bit                             read/write",
+    "coils              4            %QX0.4    main.flap      BOOL    bit                             read/write",
+    "coils              8            %QX1.0    main.lamp      BOOL    bit                             read/write",
+    "discrete inputs    2            %IX0.2    main.button    BOOL    bit                             read",
+    "input registers    3            %IW3      main.level     INT     16-bit                          read",
+    "input registers    2000-2004    -         main.name      STRING  5 registers, 2 characters each  read",
+    "input registers    2010-2011    -         main.count     DINT    2 registers, little word order  read",
+    "holding registers  0            %QW0      main.setpoint  INT     16-bit                          read/write",
+    "holding registers  1026         %MW2      main.speed     UINT    16-bit                          read/write",
+    "holding registers  2050-2051    %MD1      main.total     DINT    32-bit, high word first         read/write",
+    "holding registers  4096-4099    %ML0      main.big       LINT    64-bit, high word first         read/write",
+    "holding registers  10000-10001  -         main.temp      REAL    2 registers, big word order     read/write",
+    "other addresses in OpenPLC's ranges (coils and discrete inputs 0-8191, input registers 0-1023, holding "
+    "registers 0-8191) read 0 and keep what is written; beyond them: exception 02",
+]
+
+
+def test_st_modbus_map_names_each_located_variable_by_path_and_type(tmp_path):
+    from click.testing import CliRunner
+
+    from st.cli import main
+
+    (tmp_path / "main.st").write_text(PROGRAM)
+    (tmp_path / "map.toml").write_text(MAP)
+    r = CliRunner().invoke(
+        main, ["modbus", "map", str(tmp_path / "main.st"), "--modbus-map", str(tmp_path / "map.toml")]
+    )
+    assert r.exit_code == 0, r.output
+    assert r.stdout.splitlines() == MAP_LINES
+    # the old name still works, with a deprecation warning
+    r = CliRunner().invoke(main, ["modbus", "map", str(tmp_path / "main.st"), "--map", str(tmp_path / "map.toml")])
+    assert r.exit_code == 0, r.output
+    assert r.stdout.splitlines() == MAP_LINES
+    assert r.stderr.startswith("warning: --map is deprecated, use --modbus-map\n")
+    assert "--map" not in CliRunner().invoke(main, ["modbus", "map", "--help"]).stdout.replace("--modbus-map", "")
+
+
+SHARED = textwrap.dedent("""
+    PROGRAM P
+      VAR out AT %QX0.0 : BOOL; END_VAR
+      out := NOT out;
+    END_PROGRAM
+    CONFIGURATION c
+      VAR_GLOBAL alarm AT %QX0.1 : BOOL; level AT %IW0 : INT; END_VAR
+      RESOURCE r ON PLC
+        TASK t (INTERVAL := T#10ms);
+        PROGRAM p1 WITH t : P;
+        PROGRAM p2 WITH t : P;
+      END_RESOURCE
+    END_CONFIGURATION
+""")
+
+
+def test_st_modbus_map_names_globals_and_every_instance_at_one_address(tmp_path):
+    from click.testing import CliRunner
+
+    from st.cli import main
+
+    (tmp_path / "c.st").write_text(SHARED)
+    r = CliRunner().invoke(main, ["modbus", "map", str(tmp_path / "c.st")])
+    assert r.exit_code == 0, r.output
+    assert r.stdout.splitlines()[:4] == [
+        "table            addresses  location  variable        type  encoding  access",
+        "coils            0          %QX0.0    p1.out, p2.out  BOOL  bit       read/write",
+        "coils            1          %QX0.1    alarm           BOOL  bit       read/write",
+        "input registers  0          %IW0      level           INT   16-bit    read",
+    ]

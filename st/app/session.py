@@ -8,6 +8,9 @@ process alive until the run ends) or, with --on-fault restart, restarts it warm.
 
 from __future__ import annotations
 
+import hashlib
+import os
+import re
 import signal
 import threading
 import time
@@ -17,11 +20,13 @@ from ..runtime.faults import PLCFaultError
 from ..runtime.lifecycle import FAULT
 from ..runtime.plc import PLC
 from ..runtime.realtime import RealtimeSetup
+from ..runtime.retain import RetainError
 from ..runtime.values import parse_duration_arg
 from ..stdlib.plcopen import configure_axes
 from ..stdlib.plcopen.trace import start_traces
-from .options import RunOptions, safe_values
+from .options import RunOptions, safe_values, unit_ids
 from .output import err
+from .params import is_loopback
 from .report import report, write_traces
 from .status import StatusLine
 from .watch import Watcher
@@ -34,11 +39,49 @@ def _has_retained(compiled) -> bool:
     ) or any(g.retain or g.persistent for g in p.globals.values())
 
 
+def default_retain_path(files) -> Path:
+    """Where a project's retained data is kept unless --retain says otherwise: a per-user data folder,
+    `$XDG_DATA_HOME/st/retain/<name>-<hash>.db` (`~/.local/share/st/retain/…` when XDG_DATA_HOME is
+    unset or not absolute), named after the project's first source file and keyed by a hash of the
+    absolute paths of all of them, in any order: never a file beside the sources."""
+    base = os.environ.get("XDG_DATA_HOME", "")
+    root = Path(base) if base and os.path.isabs(base) else Path.home() / ".local" / "share"
+    paths = sorted(str(Path(f).resolve()) for f in files)
+    digest = hashlib.sha256("\n".join(paths).encode()).hexdigest()[:12]
+    name = re.sub(r"[^A-Za-z0-9._-]", "_", Path(paths[0]).stem) if paths else "st"
+    return root / "st" / "retain" / f"{name}-{digest}.db"
+
+
+def retain_path(compiled, o: RunOptions) -> str | None:
+    """The retained data file of this run, or None: only a program with RETAIN or PERSISTENT variables
+    keeps any; --retain PATH chooses the file, else a --virtual run keeps none (a simulation must not
+    change a plant's retained data) and a run in real time uses default_retain_path."""
+    if o.no_retain or not _has_retained(compiled):
+        return None
+    if o.retain_file:
+        return o.retain_file
+    if o.virtual:
+        return None
+    return str(default_retain_path(o.files))
+
+
 def run_plc(compiled, o: RunOptions) -> int:
-    """Returns the exit code: 0 after a clean stop, 3 when the run ended in FAULT, 2 when it could not start."""
-    retain = None
-    if not o.no_retain and (o.retain_file or _has_retained(compiled)):
-        retain = o.retain_file or str(Path(o.files[0]).with_suffix(".retain.db"))
+    """Returns the exit code: 0 after a clean stop, 3 when the run ended in FAULT, 2 when it could not
+    start (or a file it was asked to write could not be written)."""
+    if o.virtual and o.scans is None and o.duration is None:  # (the command line refuses these first)
+        err("error: --virtual needs --duration or --scans (virtual time runs as fast as the CPU allows)")
+        return 2
+    if o.virtual and o.web:
+        err("error: --web needs a run in real time (not --virtual)")
+        return 2
+    retain = retain_path(compiled, o)
+    if retain is not None and not o.retain_file:
+        folder = Path(retain).parent
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            err(f"error: cannot create the folder for retained data {folder}: {e.strerror or e}")
+            return 2
     try:
         plc = PLC(
             compiled,
@@ -51,8 +94,14 @@ def run_plc(compiled, o: RunOptions) -> int:
             safe_outputs=safe_values(o.safe_outputs),
         )
         for spec in o.sim_cost:
-            name, _, cost = spec.partition("=")
-            plc.set_cost(name.strip(), cost.strip())
+            if isinstance(spec, tuple):  # (task, ns): checked by the command line
+                plc.set_cost(*spec)
+            else:
+                name, _, cost = spec.partition("=")
+                plc.set_cost(name.strip(), cost.strip())
+    except RetainError as e:
+        err(f"error: {e}")
+        return 2
     except (ValueError, KeyError, MemoryError) as e:  # PLCStartError: the reason, located
         err(f"error: cannot start the PLC: {e or type(e).__name__}")
         return 2
@@ -96,7 +145,7 @@ def run_plc(compiled, o: RunOptions) -> int:
 
         try:
             host, port = parse_endpoint(o.modbus)
-            units = None if not o.modbus_unit_ids else [int(u) for u in o.modbus_unit_ids.split(",")]
+            units = unit_ids(o.modbus_unit_ids)
             slave = ModbusSlave(
                 plc,
                 host,
@@ -124,6 +173,8 @@ def run_plc(compiled, o: RunOptions) -> int:
                 + (", read-only" if o.modbus_read_only else "")
                 + ")"
             )
+        if not is_loopback(host):  # printed even with -q
+            err(modbus_warning(host, slave.port, o.modbus_read_only))
     web = None
     if o.web:
         web = _start_web(plc, o)
@@ -132,8 +183,11 @@ def run_plc(compiled, o: RunOptions) -> int:
                 slave.stop()
             plc.close()
             return 2
-    if retain and not o.quiet:
-        err(f"retained data: {retain} ({'cold start' if o.cold else f'{plc.retain_restored} value(s) restored'})")
+    if not o.quiet:
+        if retain:
+            err(f"retained data: {retain} ({'cold start' if o.cold else f'{plc.retain_restored} value(s) restored'})")
+        elif o.retain_file and not o.no_retain:
+            err("retained data: none (the program has no RETAIN or PERSISTENT variable)")
     stop = threading.Event()
     old_handlers = _install_signals(stop, plc)
     status = None if o.quiet or o.virtual else StatusLine(plc)
@@ -167,10 +221,24 @@ def run_plc(compiled, o: RunOptions) -> int:
         if rt_setup is not None:
             rt_setup.release()
         _restore_signals(old_handlers)
-    report(plc, o)
+    written = report(plc, o)
     if traces:
-        write_traces(traces, o)
-    return code
+        written = write_traces(traces, o) and written
+    return code if written or code else 2
+
+
+def modbus_warning(host: str, port: int, read_only: bool) -> str:
+    """The warning for a Modbus server that other machines reach: it has no authentication."""
+    where = f"[{host}]" if ":" in host else host
+    if read_only:
+        return (
+            f"warning: the Modbus server on {where}:{port} is reachable from other machines, without "
+            "authentication (read-only: writes are refused)"
+        )
+    return (
+        f"warning: the Modbus server on {where}:{port} is reachable from other machines, without "
+        "authentication, and accepts writes to the PLC (--modbus-read-only refuses them)"
+    )
 
 
 class _LogPrinter:
@@ -189,9 +257,6 @@ class _LogPrinter:
 def _run_virtual(plc: PLC, o: RunOptions, stop) -> int:
     show = _LogPrinter(plc)
     try:
-        if o.scans is None and o.duration is None:
-            err("--virtual needs --scans or --duration")
-            return 2
         end = plc.time + (o.scans * plc.tick if o.scans is not None else parse_duration_arg(o.duration))
         while plc.time < end and not stop.is_set():
             try:
@@ -215,9 +280,6 @@ def _start_web(plc: PLC, o: RunOptions):
     from ..io.modbus import parse_endpoint
     from ..web.link import WebLink
 
-    if o.virtual:
-        err("error: --web needs a run in real time (not --virtual)")
-        return None
     try:
         host, port = parse_endpoint(o.web or "")
         token = secrets.token_urlsafe(18)
@@ -230,7 +292,7 @@ def _start_web(plc: PLC, o: RunOptions):
     err(
         f"web: http://{shown}:{web.port}/?token={token}"
         + (" (read-only)" if o.web_read_only else "")
-        + ("" if host in ("127.0.0.1", "localhost", "::1") else "  -- listening beyond this machine")
+        + ("" if is_loopback(host) else "  -- listening beyond this machine")
     )
     return web
 

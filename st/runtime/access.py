@@ -12,9 +12,10 @@ from typing import TYPE_CHECKING, Any
 
 from ..model import types as T
 from . import refnames
+from .helpers import _AttrRef, _ItemRef
 from .paths import norm_addr, read, resolve, write
 from .process_image import AddressError, from_raw, parse_address, to_raw
-from .values import ValueError_, from_python, to_json, to_python
+from .values import ValueError_, _nest, from_python, to_json, to_python
 from .varref import VarRef
 
 if TYPE_CHECKING:
@@ -161,20 +162,61 @@ def _flatten(v: Any, depth: int) -> list[Any]:
     return [x for row in v for x in _flatten(row, depth - 1)]
 
 
-def variables(plc: PLC) -> dict[str, Any]:
-    """Every variable of every program instance, as JSON values keyed "instance.var"."""
+def variables(plc: PLC, all: bool = False) -> dict[str, Any]:
+    """Every variable of every program instance, as JSON values keyed "instance.var". A function
+    block instance shows its interface only (VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT), not the state a
+    block keeps inside (a TON's START_TIME); all=True shows every variable of every instance."""
     out = {}
     ref = refnames.namer(plc)
+    dump = to_json if all else _public_json
     for _lname, (name, obj, pou) in plc.instances.items():
         for sym in pou.vars.values():
             if sym.section == "VAR_TEMP":
                 continue
             if sym.section == "VAR_EXTERNAL":
                 if sym.global_ref is not None:
-                    out[f"{name}.{sym.name}"] = to_json(plc.ns[sym.global_ref.pyname], sym.global_ref.type, ref)
+                    out[f"{name}.{sym.name}"] = dump(plc.ns[sym.global_ref.pyname], sym.global_ref.type, ref)
                 continue
-            out[f"{name}.{sym.name}"] = to_json(getattr(obj, sym.pyname), sym.type, ref)
+            out[f"{name}.{sym.name}"] = dump(getattr(obj, sym.pyname), sym.type, ref)
     return out
+
+
+_INTERFACE = ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")
+
+
+def _public_json(v: Any, t: T.Type, ref: Any) -> Any:
+    """to_json, with every function block instance inside `v` shown by its interface only."""
+    ut = T.unalias(t)
+    if not _holds_blocks(ut):
+        return to_json(v, t, ref)
+    if v is None:
+        return None
+    if isinstance(ut, T.POUType):
+        out = {}
+        for s in ut.vars.values():
+            if s.section in _INTERFACE:
+                x = getattr(v, s.pyname, None)
+                if s.section == "VAR_IN_OUT" and isinstance(x, (_AttrRef, _ItemRef)):
+                    x = x.get()  # an in-out whose address is taken holds the caller's reference
+                out[s.name] = None if x is None else _public_json(x, s.type, ref)
+        return out
+    if isinstance(ut, T.ArrayType):
+        return _nest([_public_json(x, ut.element, ref) for x in v], ut.dims)
+    assert isinstance(ut, T.StructType)
+    return {m.name: _public_json(getattr(v, m.pyname), m.type, ref) for m in ut.members.values()}
+
+
+def _holds_blocks(t: Any, seen: frozenset[int] = frozenset()) -> bool:
+    """True when values of the (unaliased) type t are or contain function block instances."""
+    if isinstance(t, T.POUType):
+        return t.pou_kind == "FUNCTION_BLOCK"
+    if id(t) in seen:
+        return False
+    if isinstance(t, T.ArrayType):
+        return _holds_blocks(T.unalias(t.element), seen | {id(t)})
+    if isinstance(t, T.StructType):
+        return any(_holds_blocks(T.unalias(m.type), seen | {id(t)}) for m in t.members.values())
+    return False
 
 
 def globals_(plc: PLC) -> dict[str, Any]:

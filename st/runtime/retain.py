@@ -5,6 +5,10 @@ process killed at any moment (kill -9) leaves the last committed snapshot whole:
 either applied the transaction or rolls it back on the next open. Values are stored as JSON
 (to_python form: TIME as ns, enums by name, arrays as lists, structs as objects) together
 with the variable's type, and restored only into a variable of the same path and type.
+
+A file that cannot be opened (a missing or read-only folder, a file that is not SQLite) raises
+RetainError naming it. While the store is open SQLite keeps `FILE-wal` and `FILE-shm` beside it;
+a clean close removes them, a killed process leaves them (the next open recovers from them).
 """
 
 from __future__ import annotations
@@ -15,16 +19,27 @@ import time
 from typing import Any
 
 
+class RetainError(OSError):
+    """The retained data file cannot be opened or used; the message names it."""
+
+
 class RetainStore:
     def __init__(self, path: str):
         self.path = path
-        self.db = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
-        self.db.execute("PRAGMA journal_mode=WAL")
-        self.db.execute("PRAGMA synchronous=NORMAL")
-        self.db.execute(
-            "CREATE TABLE IF NOT EXISTS retain (path TEXT PRIMARY KEY, type TEXT NOT NULL, value TEXT NOT NULL)"
-        )
-        self.db.execute("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT)")
+        db = None
+        try:
+            db = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+            db.execute("PRAGMA journal_mode=WAL")
+            db.execute("PRAGMA synchronous=NORMAL")
+            db.execute(
+                "CREATE TABLE IF NOT EXISTS retain (path TEXT PRIMARY KEY, type TEXT NOT NULL, value TEXT NOT NULL)"
+            )
+            db.execute("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT)")
+        except sqlite3.Error as e:
+            if db is not None:
+                db.close()
+            raise RetainError(f"cannot open the retained data file {path}: {e}") from None
+        self.db = db
         self.commits = 0
 
     def load(self) -> dict[str, tuple[str, Any]]:

@@ -302,10 +302,58 @@ class Row:
     table: int
     first: int
     last: int
-    source: str
-    type_name: str
+    source: str  # the variable's path ("main.lamp", a global's name; several joined by ", ")
+    type_name: str  # its IEC type
     encoding: str
     writable: bool
+    location: str = ""  # a located variable's address ("%QX1.0"); "" for a map file's entry
+
+
+def variable_paths(plc) -> dict[tuple[int, object], str]:
+    """(id(container), key) → the path of the variable stored there, for every variable of the
+    program instances (and the block instances, arrays and structures inside them) and the globals:
+    how a located variable's binding is named."""
+    from ...model import types as T
+
+    out: dict[tuple[int, object], str] = {}
+    seen: set[int] = set()
+
+    def walk(v, t, path: str) -> None:
+        u = T.unalias(t)
+        if v is None or id(v) in seen:
+            return
+        if isinstance(u, T.ArrayType):
+            seen.add(id(v))
+            for i, x in enumerate(v):
+                sub = _subscript(u.dims, i)
+                out[(id(v), i)] = path + sub
+                walk(x, u.element, path + sub)
+        elif isinstance(u, (T.StructType, T.POUType)) and getattr(u, "pou_kind", "") != "INTERFACE":
+            seen.add(id(v))
+            members = u.members.values() if isinstance(u, T.StructType) else u.vars.values()
+            for m in members:
+                if getattr(m, "section", "") in ("VAR_EXTERNAL", "VAR_IN_OUT", "VAR_TEMP", "VAR_STAT"):
+                    continue
+                out[(id(v), m.pyname)] = f"{path}.{m.name}"
+                walk(getattr(v, m.pyname, None), m.type, f"{path}.{m.name}")
+
+    for name, obj, pou in plc.instances.values():
+        walk(obj, pou, name)
+    for g in plc.project.globals.values():
+        if g.pyname in plc.ns:
+            out[(id(plc.ns), g.pyname)] = g.name
+            walk(plc.ns[g.pyname], g.type, g.name)
+    return out
+
+
+def _subscript(dims, flat: int) -> str:
+    """The ST index of a flat array position: '[3]', '[1, 2]'."""
+    idx = []
+    for lo, hi in reversed(dims):
+        n = hi - lo + 1
+        idx.append(lo + flat % n)
+        flat //= n
+    return "[" + ", ".join(str(i) for i in reversed(idx)) + "]"
 
 
 def located_cells(plc, entries: list | None = None):
@@ -323,12 +371,20 @@ def located_cells(plc, entries: list | None = None):
 
 
 def effective_map(plc, entries: list | None = None) -> list:
-    """Every served range: OpenPLC's located variables, then the map file's entries."""
+    """Every served range: OpenPLC's located variables (named by their paths), then the map file's
+    entries."""
+    from ...model.addresses import canonical
+
     rows = []
+    paths = variable_paths(plc)
     for binds, table, first, n in located_cells(plc, entries):
         b = binds[0]
         enc = "bit" if n == 1 and b.size == "X" else ("16-bit" if n == 1 else f"{16 * n}-bit, high word first")
-        rows.append(Row(table, first, first + n - 1, b.addr.upper(), str(b.type), enc, table in (COILS, HOLDING)))
+        names = [paths.get((id(x.container), x.key)) for x in binds]
+        source = ", ".join(dict.fromkeys(p for p in names if p)) or "-"  # "-": a directly used %address
+        rows.append(
+            Row(table, first, first + n - 1, source, str(b.type), enc, table in (COILS, HOLDING), canonical(b.addr))
+        )
     for e in entries or []:
         enc = e.encoding
         desc = (

@@ -9,9 +9,10 @@ request validation and the access rules live here, around pymodbus's PDU classes
 
 - every complete frame in the buffer is answered, in order; a frame with a protocol id other than
   0 or a length outside 2..254 closes that connection (the stream cannot be resynchronised);
-- exceptions: 01 unsupported function (echoed + 0x80), 02 address outside the map or not
-  writable, 03 illegal quantity / byte count / FC5 value, 06 busy (the PLC has not taken the
-  queued writes), 0x0B for a unit id the policy does not serve;
+- exceptions: 01 unsupported function (echoed + 0x80), and every write function (5, 6, 15, 16,
+  23) of a read-only server, before its request is looked at; 02 address outside the map or
+  outside the writable ranges, 03 illegal quantity / byte count / FC5 value, 06 busy (the PLC has
+  not taken the queued writes), 0x0B for a unit id the policy does not serve;
 - at most `max_connections`, an idle timeout, a per-connection request rate (excess requests wait:
   reading pauses), and flow control: a client that does not read its replies stops being read.
 
@@ -45,6 +46,7 @@ MAX_BITS_READ, MAX_REGS_READ = 2000, 125
 MAX_BITS_WRITE, MAX_REGS_WRITE, MAX_REGS_RW_WRITE = 1968, 123, 121
 ILLEGAL_FUNCTION, ILLEGAL_ADDRESS, ILLEGAL_VALUE, SERVER_FAILURE, BUSY, GATEWAY_NO_RESPONSE = 1, 2, 3, 4, 6, 0x0B
 READ_TABLE = {1: COILS, 2: DISCRETE, 3: HOLDING, 4: INPUT}
+WRITE_FUNCTIONS = frozenset((5, 6, 15, 16, 23))  # a read-only server answers these with 01
 REGULAR_AFTER = 1.0  # s between a connection's first and latest request: it polls, never evicted
 REFUSAL_LOG_INTERVAL = 10.0  # s: refused connections are logged at most this often, with their count
 
@@ -70,7 +72,7 @@ class ServerConfig:
         self.valid = valid or {}  # table → sorted [(first, end)] addresses that exist
         self.owned = owned or {}  # table → [(first, end)] cells the PLC owns (writes queued)
         self.writable = writable  # None (everything writable) or table → [(first, end)]
-        self.read_only = read_only
+        self.read_only = read_only  # every write function answers 01 (illegal function)
         self.max_connections = max_connections
         self.idle_timeout = idle_timeout
         self.max_rate = max_rate
@@ -120,6 +122,10 @@ class Handler:
         from pymodbus.pdu import register_message as R
 
         n = len(pdu)
+        if self.cfg.read_only and fc in WRITE_FUNCTIONS:
+            # the function itself is not allowed on this server, whatever its address or values:
+            # 01, as the Modbus application protocol says for a function the server does not take
+            raise _Exc(ILLEGAL_FUNCTION)
         if fc in (1, 2, 3, 4):
             if n != 5:
                 raise _Exc(ILLEGAL_VALUE)
@@ -202,8 +208,8 @@ class Handler:
         if end > 65536 or not _covers(self.cfg.valid.get(table, ()), address, end):
             raise _Exc(ILLEGAL_ADDRESS)
         if write:
-            if self.cfg.read_only:
-                raise _Exc(ILLEGAL_ADDRESS)
+            if self.cfg.read_only:  # (refused with 01 before: a write never gets here)
+                raise _Exc(ILLEGAL_FUNCTION)
             w = self.cfg.writable
             if w is not None and not _covers(w.get(table, ()), address, end):
                 raise _Exc(ILLEGAL_ADDRESS)

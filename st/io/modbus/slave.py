@@ -34,10 +34,12 @@ DEFAULT_IDENTITY = {
 
 
 def parse_endpoint(text: str, default_host: str = "127.0.0.1"):
-    """'[HOST:]PORT' → (host, port)."""
+    """'[HOST:]PORT' → (host, port); an IPv6 host may be written in brackets ('[::1]:5020')."""
     host, sep, port = str(text).rpartition(":")
     if not sep:
         host = default_host
+    if host.startswith("[") and host.endswith("]"):
+        host = host[1:-1]
     try:
         p = int(port)
     except ValueError:
@@ -78,7 +80,8 @@ class ModbusSlave(IODriverBase):
     """`st run --modbus`: a Modbus TCP slave for `plc` in its own process.
 
     host/port: where to listen (port 0 picks a free one: see `.port`); map_file: a TOML map of
-    non-located variables; read_only; writable: '{table: [(first, end)]}' or 'holding:0-99,…';
+    non-located variables; read_only: every write function (5, 6, 15, 16, 23) answers exception 01
+    (illegal function), reads are served; writable: '{table: [(first, end)]}' or 'holding:0-99,…';
     max_connections, idle_timeout (s), max_rate (requests/s per connection, 0 = unbounded);
     unit_ids: the unit ids answered (None = all; others get exception 0x0B); log_path: append the
     server's log there instead of to stderr."""
