@@ -158,7 +158,7 @@ SELF_CALL = (
         (PROGRAM.format("w := SHL(w, d - 1);"), "fault:RANGE"),
         (PROGRAM.format("FOR x := 0 TO 10 BY d DO END_FOR;"), "fault:LOOP"),
         (RECURSIVE, "fault:RECURSION"),
-        (SELF_CALL, "diagnostics"),  # E032
+        (SELF_CALL, "fault:RECURSION"),  # W013: it runs, as in CODESYS, until it goes too deep
         ("PROGRAM main\nVAR x : DINT; END_VAR\nx := 1;\n", "diagnostics"),  # cut short
     ],
 )
@@ -230,9 +230,14 @@ def test_a_worker_that_dies_is_a_crash_and_is_replaced():
     try:
         assert worker.classify(PROGRAM.format("x := 2;")).cls == "ok"
         proc = worker.proc
-        threading.Timer(1.0, proc.kill).start()  # dies in the endless scan
+        assert proc is not None
+
+        def kill_in_the_scan(phase):  # once the worker says it scans: no fixed wait for it to get there
+            if phase == "scan":
+                proc.kill()
+
         t0 = time.monotonic()
-        o = worker.classify(PROGRAM.format("WHILE TRUE DO x := x + 1; END_WHILE;"))
+        o = worker.classify(PROGRAM.format("WHILE TRUE DO x := x + 1; END_WHILE;"), on_phase=kill_in_the_scan)
         assert (o.cls, o.signature) == ("crash", "worker died in scan (exit -9)")
         assert time.monotonic() - t0 < 20
         assert worker.classify(PROGRAM.format("x := x / d;")).cls == "fault:DIV0"

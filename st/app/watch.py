@@ -8,8 +8,7 @@ import time
 
 from ..api import compile_paths
 from ..diagnostics import CompileError
-from ..runtime.build import Build
-from ..runtime.online_change import OnlineChangeRefused
+from ..runtime.online_change import Change, OnlineChangeRefused, beside_the_scan
 from ..runtime.plc import PLC
 from .options import RunOptions
 from .output import err
@@ -28,16 +27,17 @@ def source_mtimes(files) -> dict[str, int | None]:
 
 
 class Watcher:
-    """--watch: when a source changes, compile it and build the new program (namespace, instances,
-    FB_init) in a background thread while the old one keeps scanning; carry the state over and swap
-    at a scan boundary. Whatever fails leaves the old program running and says why."""
+    """--watch: when a source changes, compile it, build the new program (namespace, instances,
+    FB_init) and plan how its state is carried over, in a background thread while the old one keeps
+    scanning; carry the state over and swap at a scan boundary (runtime/online_change.py). Whatever
+    fails leaves the old program running and says why."""
 
     def __init__(self, plc: PLC, o: RunOptions):
         self.plc = plc
         self.o = o
         self.mtimes = o.compiled_mtimes if o.compiled_mtimes is not None else source_mtimes(o.files)
         self.last_poll = 0.0
-        self.result: Build | None = None  # a change built by the background thread, swapped in by poll()
+        self.result: Change | None = None  # a change built by the background thread, swapped in by poll()
         self.busy = False
 
     def poll(self) -> None:
@@ -55,6 +55,10 @@ class Watcher:
             threading.Thread(target=self._prepare, daemon=True).start()
 
     def _prepare(self) -> None:
+        with beside_the_scan():
+            self._prepare_change()
+
+    def _prepare_change(self) -> None:
         try:
             compiled = compile_paths(
                 self.o.files,

@@ -458,6 +458,20 @@ def _deref_null() -> NoReturn:
     raise PLCFault("dereference of a NULL reference", "NULL")
 
 
+FILL_CHUNK = 1 << 16  # elements: a large array is built this many at a time
+
+
+def _fill(value: Any, n: int, head: list[Any] | None = None) -> list[Any]:
+    """`head + [value] * (n - len(head))` for a large array, built a chunk at a time: between two
+    chunks the interpreter may hand over to the scan, so a program built beside the running one (an
+    online change) does not hold it for the whole array (a 10-million-element list in one piece
+    takes about 60 ms)."""
+    out = list(head) if head else []
+    while len(out) < n:
+        out += [value] * min(FILL_CHUNK, n - len(out))
+    return out
+
+
 BASE_NAMESPACE: dict[str, Any] = {
     "_f32": round_f32,
     "_idiv": _idiv,
@@ -478,6 +492,7 @@ BASE_NAMESPACE: dict[str, Any] = {
     "_copy": _copy,
     "_assign": _assign,
     "_init_fields": _init_fields,
+    "_fill": _fill,
     "_AttrRef": _AttrRef,
     "_ObjRef": _ObjRef,
     "_query_itf": _query_itf,

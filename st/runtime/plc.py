@@ -15,12 +15,13 @@ from typing import Any
 
 from ..model.compiled import CompiledProgram
 from . import access, engine, lifecycle, online_change
-from .build import Build, build, install
+from .build import build, install
 from .clock import VirtualClock
 from .faults import FaultInfo
 from .iodriver import IODriver
 from .lifecycle import RUN
 from .messages import MessageLog
+from .online_change import Change
 from .process_image import Binding, ProcessImage, parse_address
 from .retain import RetainStore
 from .retained import commit_retained, restore_retained
@@ -189,14 +190,16 @@ class PLC:
         cannot be carried over."""
         return self.apply_change(self.prepare_change(compiled))
 
-    def prepare_change(self, compiled: CompiledProgram) -> Build:
-        """The part of an online change that may run in another thread while the old program scans:
-        the checks, and the new namespace and instances with their FB_init."""
+    def prepare_change(self, compiled: CompiledProgram) -> Change:
+        """The part of an online change that runs in another thread while the old program scans:
+        the checks, the new namespace and instances with their FB_init, and the plan that carries
+        the state over (from the types: it reads no value)."""
         return online_change.prepare_change(self, compiled)
 
-    def apply_change(self, b: Build) -> str:
-        """The part of an online change done at a scan boundary: carry the old state over, swap."""
-        return online_change.apply_change(self, b)
+    def apply_change(self, change: Change) -> str:
+        """The part of an online change done at a scan boundary: carry the state over by the plan
+        (per variable; an unchanged array of elementary values is moved, not copied), swap."""
+        return online_change.apply_change(self, change)
 
     # ------------------------------------------------------------------ statistics
     def stats(self) -> list[dict[str, Any]]:
@@ -237,9 +240,10 @@ class PLC:
     def forced(self) -> list[str]:
         return sorted({k[0] for k in self._forced})
 
-    def variables(self) -> dict[str, Any]:
-        """Every variable of every program instance, as JSON values keyed "instance.var"."""
-        return access.variables(self)
+    def variables(self, all: bool = False) -> dict[str, Any]:
+        """Every variable of every program instance, as JSON values keyed "instance.var"; a function
+        block instance by its interface (inputs, outputs, in-outs) unless all=True."""
+        return access.variables(self, all=all)
 
     def globals(self) -> dict[str, Any]:
         """Global variables, and static ones (VAR_STAT) as 'POU.name' or 'FB.Method.name'."""

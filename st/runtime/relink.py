@@ -31,7 +31,8 @@ def _walk(
     seen: set[int],
     pairs: dict[int, Any],
 ) -> None:
-    """Visit (old, new) values of types (ot, nt); aggregates are paired in `pairs` and recursed."""
+    """Visit (old, new) values of types (ot, nt); aggregates are paired in `pairs` and recursed. An
+    array of elementary values is paired, not walked (nothing in it can point anywhere)."""
     ou: Any = T.unalias(ot)
     nu: Any = T.unalias(nt)
     if old is None or new is None or str(ou) != str(nu):
@@ -40,8 +41,8 @@ def _walk(
         if not isinstance(old, list) or not isinstance(new, list) or len(old) != len(new):
             return
         pairs[id(old)] = new
-        if id(new) in seen:
-            return
+        if id(new) in seen or old is new or _plain(nu.element):
+            return  # elementary values, or moved whole (an online change moves no array with links inside)
         seen.add(id(new))
         for i in range(len(new)):
             if _is_link(nu.element):
@@ -56,14 +57,23 @@ def _walk(
         om = _members(ou)
         for k, m in _members(nu).items():
             o = om.get(k)
-            if o is None or str(T.unalias(o.type)) != str(T.unalias(m.type)):
+            if not hasattr(new, m.pyname):
                 continue
-            if not hasattr(old, o.pyname) or not hasattr(new, m.pyname):
+            if o is None or str(T.unalias(o.type)) != str(T.unalias(m.type)) or not hasattr(old, o.pyname):
+                if _is_link(m.type):  # a reference of the new program's own: may point at a replaced list
+                    visit_leaf(None, _Attr(new, m.pyname), None, m.type)
                 continue
             if _is_link(m.type):
                 visit_leaf(_Attr(old, o.pyname), _Attr(new, m.pyname), None, m.type)
             else:
                 _walk(getattr(old, o.pyname), getattr(new, m.pyname), o.type, m.type, visit_leaf, seen, pairs)
+
+
+def _plain(t: Any) -> bool:
+    u = T.unalias(t)
+    if isinstance(u, T.ArrayType):
+        return _plain(u.element)
+    return not u.is_aggregate and not _is_link(u)
 
 
 def _is_link(t: Any) -> bool:
@@ -114,15 +124,26 @@ def relink(
     globals_: list[tuple[str, str, Any, Any]],
     old_ns: dict[str, Any],
     new_ns: dict[str, Any],
+    replaced: dict[int, Any] | None = None,
+    kept: Callable[[Any], bool] | None = None,
+    still_used: set[int] | None = None,
 ) -> int:
     """instances: (old object, new object, old type, new type) of every program instance;
-    globals_: (old pyname, new pyname, old type, new type). Returns how many references now
-    point at new objects."""
+    globals_: (old pyname, new pyname, old type, new type); replaced: the new build's objects that
+    the online change replaced by the old ones, by id of the old one (a reference the new program
+    made to one of them is aimed at the old one); kept: whether an old object the new program took
+    over whole (an element of a moved array) is the target (the reference stays); still_used:
+    filled with the ids of old objects a reference keeps pointing at (values of their own, made by
+    __NEW), which must not be freed. Returns how many references now point at new objects."""
     pairs: dict[int, Any] = {id(old_ns): new_ns}
     leaves: list[tuple[Any, Any, Any, Any]] = []
+    own: list[Any] = []  # references that only the new program has
 
     def collect(oc: Any, nc: Any, key: Any, t: Any) -> None:
-        leaves.append((oc, nc, key, t))
+        if oc is None:
+            own.append(nc)
+        else:
+            leaves.append((oc, nc, key, t))
 
     seen: set[int] = set()
     for old, new, ot, nt in instances:
@@ -138,10 +159,26 @@ def relink(
     for oc, nc, key, _t in leaves:
         v = _read(oc, key)
         nv = _moved(v, pairs)
+        if nv is None and v is not None and kept is not None and kept(getattr(v, "obj", v)):
+            nv = v  # its target went into the new program as it is
+        if nv is v and v is not None and still_used is not None:
+            still_used.add(id(getattr(v, "obj", v)))
         if nv is not None:
             moved += 1
         _write(nc, key, nv)
+    if replaced:
+        back = {id(new): old for old_id, new in replaced.items() for old in (pairs.get(old_id),) if old is not None}
+        for nc in own:
+            v = _read(nc, None)
+            nv = _moved(v, back) if v is not None and _points_into(v, back) else None
+            if nv is not None:
+                _write(nc, None, nv)
     return moved
+
+
+def _points_into(v: Any, objects: dict[int, Any]) -> bool:
+    obj = getattr(v, "obj", v)
+    return id(obj) in objects
 
 
 def _moved(v: Any, pairs: dict[int, Any]) -> Any:

@@ -837,7 +837,9 @@ class Worker:
         (n,) = struct.unpack("<I", _read_exact(fd, 4))
         return pickle.loads(_read_exact(fd, n))
 
-    def classify(self, source: str, name: str = "fuzz.st") -> Outcome:
+    def classify(self, source: str, name: str = "fuzz.st", on_phase: Callable[[str], None] | None = None) -> Outcome:
+        """The mutant's outcome; `on_phase(phase)` is told each phase the worker enters (compile,
+        start, scan) as it reports it."""
         if self.proc is not None and self.proc.poll() is not None:
             self._replace()
         if self.proc is None:
@@ -863,6 +865,8 @@ class Worker:
             tag, value = msg
             if tag == "phase":
                 phase = value
+                if on_phase is not None:
+                    on_phase(phase)
                 continue
             return value
 

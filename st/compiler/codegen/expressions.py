@@ -13,6 +13,10 @@ if TYPE_CHECKING:
     from .module import ModuleGen
 from .pyast import DAY_NS, Unsupported, _args, _attr, _call, _const, _name, default_value, f32
 
+# an array of more elements than this is built by the runtime's `_fill`, a chunk at a time (so that
+# building a program beside the running one, an online change, does not hold the interpreter)
+BIG_ARRAY = 1 << 16
+
 
 class InitGen:
     """Initial values: for declarations (constant initializers and defaults)."""
@@ -113,10 +117,14 @@ class InitGen:
             return py.List(elts, py.Load())
         d = default_value(elem)
         if not values:
+            if n > BIG_ARRAY:
+                return _call("_fill", _const(d), _const(n))
             return py.BinOp(py.List([_const(d)], py.Load()), py.Mult(), _const(n))
         elts = [self.initial(elem, v) for v in values]
         rest = n - len(values)
         lst = py.List(elts, py.Load())
+        if rest > BIG_ARRAY:
+            return _call("_fill", _const(d), _const(n), lst)
         if rest:
             return py.BinOp(lst, py.Add(), py.BinOp(py.List([_const(d)], py.Load()), py.Mult(), _const(rest)))
         return lst
