@@ -5,8 +5,6 @@ the background. The timings are in bench/bench_online_change.py; these tests che
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from st import PLC
@@ -67,15 +65,6 @@ def change(plc, **kw):
     return plc.online_change(compile_text(source(**kw), "carry.st", use_cache=False))
 
 
-def until(cond, timeout=20.0):
-    """Wait for the background work to show (polling a condition, not sleeping a fixed time)."""
-    end = time.monotonic() + timeout
-    while not cond():
-        if time.monotonic() > end:
-            raise AssertionError("the background work never finished")
-        time.sleep(0.01)
-
-
 def test_an_unchanged_array_of_elementary_values_is_moved_not_copied():
     plc = make()
     old = plc.instances["main"][1]
@@ -94,7 +83,8 @@ def test_an_array_of_unchanged_structures_is_moved_and_given_the_new_classes_in_
     change(plc, constant="2.0")
     new_cls = plc.ns["_st_Rec"]
     assert plc.instances["main"][1].recs is recs and type(recs[0]) is not new_cls  # moved as they are
-    until(lambda: all(type(r) is new_cls for r in recs) and type(recs[7].inner) is plc.ns["_st_Pair"])
+    assert releaser().flush()  # the background work handed over so far is done
+    assert all(type(r) is new_cls for r in recs) and type(recs[7].inner) is plc.ns["_st_Pair"]
     assert (plc["main.recs[11].a"], plc["main.recs[7].inner.y"]) == (11, 77)
 
 
@@ -150,7 +140,7 @@ def test_a_removed_array_is_freed_in_the_background():
     # and the pointer into it (a pointer the new program keeps would keep the array alive)
     smaller = smaller.replace("    pk : POINTER TO LREAL;\n", "").replace("  IF pk <> 0 THEN vp := pk^; END_IF;\n", "")
     plc.online_change(compile_text(smaller, "carry.st", use_cache=False))
-    until(lambda: len(left_behind) == 0)  # emptied a chunk at a time, not at the swap
+    assert releaser().flush() and len(left_behind) == 0  # emptied a chunk at a time, not at the swap
     plc.scan()
     assert plc["main.x"] == 2.0
 

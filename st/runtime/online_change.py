@@ -359,7 +359,10 @@ def _reclass(arr: list[Any], plan: tuple[Any, list[tuple[str, Any]]]) -> None:
             stack.extend((e, (cls, inner)) for e in x)
             continue
         if type(x) is not cls:
-            x.__class__ = cls
+            try:
+                x.__class__ = cls
+            except TypeError:  # a layout Python will not swap: the old class serves as well, by name
+                pass
         for name, sub in inner:
             stack.append((getattr(x, name), sub))
         n += 1
@@ -440,8 +443,11 @@ class _Releaser:
             if isinstance(job, threading.Event):
                 job.set()
                 continue
-            with beside_the_scan():
-                _release(*job)
+            try:
+                with beside_the_scan():
+                    _release(*job)
+            except Exception:  # noqa: BLE001 - what is left is then freed the ordinary way; the thread goes on
+                continue
 
     def flush(self, timeout: float = 30.0) -> bool:
         """Wait until what was handed over so far is released (tests, an orderly exit)."""
