@@ -16,7 +16,7 @@ from ...model.program import Project
 from .. import ast as A
 from ..library import Library
 from ..options import CompileOptions
-from .common import _NULL, STEP, CallTarget, Scope, StepType
+from .common import _NULL, STEP, Scope, StepType
 from .context import CheckContext
 from .limits import check_storage_limits
 from .passes.bodies import check_bodies
@@ -30,8 +30,48 @@ from .passes.tests import check_tests
 from .passes.types import resolve_types
 from .passes.unused import warn_unused
 from .semantics import Semantics
+from .targets import (
+    BODY_CALLS,
+    ActionCall,
+    Binding,
+    BoundCall,
+    CallTarget,
+    DeleteCall,
+    FbCall,
+    FunctionCall,
+    IsValidRefCall,
+    MethodCall,
+    NativeCall,
+    NewCall,
+    QueryItfCall,
+    RefCall,
+    SizeofCall,
+    TestCall,
+)
 
-__all__ = ["Checker", "CallTarget", "STEP", "StepType", "Scope", "_NULL"]
+__all__ = [
+    "Checker",
+    "STEP",
+    "StepType",
+    "Scope",
+    "_NULL",
+    "BODY_CALLS",
+    "ActionCall",
+    "Binding",
+    "BoundCall",
+    "CallTarget",
+    "DeleteCall",
+    "FbCall",
+    "FunctionCall",
+    "IsValidRefCall",
+    "MethodCall",
+    "NativeCall",
+    "NewCall",
+    "QueryItfCall",
+    "RefCall",
+    "SizeofCall",
+    "TestCall",
+]
 
 
 class Checker:

@@ -8,8 +8,23 @@ from typing import cast
 from ...model import types as T
 from .. import ast as A
 from ..library import FuncSig
-from .common import _SECTIONS_PARAM, Binding, CallTarget, Scope, _satisfies, method_of, same_type, take_address
+from .common import _SECTIONS_PARAM, Scope, _satisfies, method_of, same_type, take_address
 from .part import Part
+from .targets import (
+    ActionCall,
+    Binding,
+    BoundCall,
+    DeleteCall,
+    FbCall,
+    FunctionCall,
+    IsValidRefCall,
+    MethodCall,
+    NativeCall,
+    NewCall,
+    QueryItfCall,
+    RefCall,
+    SizeofCall,
+)
 from .tests import TEST_CALLS
 
 
@@ -77,7 +92,7 @@ class Calls(Part):
                 if not is_ref and not isinstance(T.unalias(t) if t is not None else None, T.RefType):
                     self.err("E013", arg.span, f"__ISVALIDREF needs a reference, not {t}")
                     return T.BOOL
-                c.target = CallTarget("isvalidref", arg=arg)
+                c.target = IsValidRefCall(arg)
                 return T.BOOL
             if key == "__queryinterface" and sym is None:
                 return self._query_interface(c, scope)
@@ -90,7 +105,7 @@ class Calls(Part):
             ):  # from a method too
                 if c.args:
                     self.err("E017", c.span, "an action takes no arguments")
-                c.target = CallTarget("action", name=key)
+                c.target = ActionCall(key)
                 return None
             pou = self.p.pous.get(key)
             if pou is not None:
@@ -129,12 +144,10 @@ class Calls(Part):
                 if callee.name.lower() in b.actions and b.pou_kind == "FUNCTION_BLOCK":
                     # inst.Action(): CODESYS and TwinCAT call actions so; TwinCAT also passes the
                     # block's inputs and reads its outputs there, as in a call of the instance
-                    c.target = CallTarget("action", name=callee.name.lower(), inst=callee.base)
+                    c.target = ActionCall(callee.name.lower(), callee.base)
                     if c.args:
                         self.feature("vendor", c.span, "an action call with arguments")
-                        c.target.pou = b
-                        c.target.bind = self._bind_args(c, b, scope, True)
-                        c.target.nonvirtual = None
+                        c.target = ActionCall(callee.name.lower(), callee.base, b, self._bind_args(c, b, scope, True))
                     return None
                 key = callee.name.lower()
                 if key not in b.vars and key not in b.properties:
@@ -170,7 +183,7 @@ class Calls(Part):
             return T.DINT
         lo, hi = u.dims[dim - 1]
         value = None if T.is_conformant(u) else (hi if key == "upper_bound" else lo)
-        c.target = CallTarget("bound", arg=c.args[0].value, dim=dim, upper=key == "upper_bound", value=value)
+        c.target = BoundCall(c.args[0].value, dim, key == "upper_bound", value)
         return T.DINT
 
     def check_access(self, mods, owner, what: str, scope: Scope, span) -> None:
@@ -204,7 +217,7 @@ class Calls(Part):
             u = T.unalias(t) if t is not None else None
             if t is not None and not (isinstance(u, T.RefType) and u.ref_kind == "POINTER"):
                 self.err("E013", arg.span, f"__DELETE needs a POINTER, not {t}")
-            c.target = CallTarget("delete", arg=arg)
+            c.target = DeleteCall(arg)
             return None
         name = arg.name if isinstance(arg, A.Name) else ""
         t = (
@@ -228,7 +241,7 @@ class Calls(Part):
             ct = self.exprs.expr(count, scope, T.DINT)
             if ct is not None and not (T.base_of(ct).is_int or T.base_of(ct) is T.LIT_INT):
                 self.err("E013", count.span, f"the count of __NEW must be an integer, not {ct}")
-        c.target = CallTarget("new", type=t, arg=count)
+        c.target = NewCall(t, count)
         return T.RefType(t, "POINTER")
 
     def _sizeof(self, c: A.Call, scope: Scope):
@@ -252,7 +265,7 @@ class Calls(Part):
         if t is None:
             return T.LIT_INT
         size, _align = T.size_of(t)
-        c.target = CallTarget("sizeof", value=size)
+        c.target = SizeofCall(size)
         c.const = size
         return T.LIT_INT
 
@@ -274,7 +287,7 @@ class Calls(Part):
         if not (isinstance(d, T.POUType) and d.pou_kind == "INTERFACE"):
             self.err("E013", c.args[1].span, f"__QUERYINTERFACE needs an interface variable to fill, not {dt}")
             return T.BOOL
-        c.target = CallTarget("queryitf", src=c.args[0].value, dst=c.args[1].value, itf=d)
+        c.target = QueryItfCall(c.args[0].value, c.args[1].value, d)
         return T.BOOL
 
     def _ref_call(self, c: A.Call, scope: Scope):
@@ -290,7 +303,7 @@ class Calls(Part):
         take_address(arg)
         if isinstance(arg, A.Name) and isinstance(arg.sym, T.POUType):  # ADR(F) inside F: its result
             arg.sym.result_address_taken = True
-        c.target = CallTarget("ref", arg=arg)
+        c.target = RefCall(arg)
         return T.RefType(t) if t is not None else None
 
     def _fb_call(self, c: A.Call, t: T.Type, scope: Scope, statement: bool):
@@ -316,7 +329,7 @@ class Calls(Part):
                 "call it, then read its outputs, e.g. inst(...); x := inst.Q;",
             )
         bind = self._bind_args(c, fb, scope, is_fb=True)
-        c.target = CallTarget("fb", pou=fb, bind=bind)
+        c.target = FbCall(fb, bind)
         return None
 
     def _method_call(self, c: A.Call, mt: T.POUType, scope: Scope, obj):
@@ -332,12 +345,12 @@ class Calls(Part):
                 "E043", c.span, f"method {mt.name} of {mt.owner_fb.name} is ABSTRACT: it has no implementation to call"
             )
         bind = self._bind_args(c, mt, scope, is_fb=False)
-        c.target = CallTarget("method", pou=mt, bind=bind, obj=obj)
+        c.target = MethodCall(mt, bind, obj)
         return mt.return_type
 
     def _function_call(self, c: A.Call, pou: T.POUType, scope: Scope):
         bind = self._bind_args(c, pou, scope, is_fb=False)
-        c.target = CallTarget("function", pou=pou, bind=bind)
+        c.target = FunctionCall(pou, bind)
         return pou.return_type
 
     def _bind_args(self, c: A.Call, pou: T.POUType, scope: Scope, is_fb: bool) -> Binding:
@@ -651,7 +664,7 @@ class Calls(Part):
             self.exprs.expr(en.value, scope, T.BOOL)
         if eno is not None:
             self.stmts.lvalue(eno.value, scope)
-        c.target = CallTarget("native", sig=sig, args=args, arg_types=arg_types, en=en, eno=eno)
+        c.target = NativeCall(sig, args, arg_types, en, eno)
         return rt
 
 

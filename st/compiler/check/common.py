@@ -1,15 +1,14 @@
-"""Shared pieces of the checker: call targets, scopes, the STEP and NULL pseudo-types, generic constraints."""
+"""Shared pieces of the checker: scopes, the STEP and NULL pseudo-types, generic constraints (call
+targets: targets.py)."""
 
 from __future__ import annotations
 
 import re
-from typing import Any, TypedDict
 
 from ...model import types as T
 from ...model.addresses import AddressError, parse_address
-from ...model.program import AssertInfo
 from .. import ast as A
-from ..library import FuncSig
+from .targets import CallTarget
 
 _SECTIONS_PARAM = ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT")
 _LOGIC = {"AND", "OR", "XOR", "AND_THEN", "OR_ELSE"}
@@ -46,50 +45,6 @@ def image_problem(addr: str):
     except AddressError as e:
         return str(e)
     return None
-
-
-class Binding(TypedDict):
-    """A call's arguments matched to the callee's parameters."""
-
-    params: dict[str, A.Arg]  # lower-case parameter name → argument
-    en: A.Arg | None
-    eno: A.Arg | None
-
-
-class CallTarget:
-    """What a call resolved to (kept on `Call.target` for code generation).
-
-    Each kind sets only the attributes it needs (the annotations below list them all, with
-    the kinds that set them); an attribute a kind does not set is absent, not None."""
-
-    kind: str  # fb, function, method, native, action, bound, new, delete, ref, isvalidref, sizeof, queryitf, test
-    pou: T.POUType  # fb, function, method
-    bind: Binding  # fb, function, method
-    nonvirtual: T.POUType | None  # fb, method, after lowering: the body to run non-virtually (SUPER^)
-    obj: A.Expr | None  # method: the instance, None for this one
-    name: str  # action
-    inst: A.Expr  # action of another instance
-    arg: A.Expr  # bound, delete, ref, isvalidref; new: the count of __NEW(T, n) or None
-    dim: int  # bound
-    upper: bool  # bound
-    value: Any  # bound (None for ARRAY[*]), sizeof
-    type: T.Type  # new
-    src: A.Expr  # queryitf
-    dst: A.Expr  # queryitf
-    itf: T.POUType  # queryitf
-    sig: FuncSig  # native
-    args: list[A.Arg]  # native
-    arg_types: list[T.Type]  # native
-    en: A.Arg | None  # native
-    eno: A.Arg | None  # native
-    op: str  # test
-    info: AssertInfo  # test
-    operands: list[A.Expr]  # test
-    msg: A.Expr | None  # test
-
-    def __init__(self, kind: str, **kw: Any):
-        self.kind = kind  # fb, function, native, action, conversion
-        self.__dict__.update(kw)
 
 
 class StepType(T.Type):

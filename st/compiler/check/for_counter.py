@@ -12,7 +12,7 @@ from __future__ import annotations
 from ...model import types as T
 from ...source import Span
 from .. import ast as A
-from .common import CallTarget
+from .targets import CallTarget, FbCall, FunctionCall, MethodCall, NativeCall, QueryItfCall, RefCall
 
 
 def root_sym(e):
@@ -42,32 +42,33 @@ def counter_writes(body: list, sym: T.VarSym) -> list[tuple[Span, str]]:
 
 def _call_writes(call: A.Call, t: CallTarget, sym: T.VarSym) -> list[tuple[Span, str]]:
     out: list[tuple[Span, str]] = []
-    if t.kind in ("fb", "function", "method"):
-        for key, a in t.bind["params"].items():
-            if root_sym(a.value) is not sym:
-                continue
-            p = t.pou.vars.get(key)
-            if a.output or (p is not None and p.section == "VAR_OUTPUT"):
-                out.append((a.value.span, "an output argument"))
-            elif p is not None and p.section == "VAR_IN_OUT":
-                out.append((a.value.span, f"passed to VAR_IN_OUT '{p.name}'"))
-            elif p is not None and T.is_reference(p.type):
-                out.append((a.value.span, f"bound to REFERENCE TO input '{p.name}'"))
-            elif p is not None and p.any_input:
-                out.append((a.value.span, f"passed by address to '{p.name}'"))
-        eno = t.bind.get("eno")
-        if eno is not None and root_sym(eno.value) is sym:
-            out.append((eno.value.span, "an output argument (ENO)"))
-    elif t.kind == "native":
-        taking = t.sig.name.upper() in ("ADR", "REF")
-        for a in t.args:
-            if root_sym(a.value) is sym and (a.output or taking):
-                out.append((a.value.span, "its address is taken" if taking else "an output argument"))
-        for flag in (t.en, t.eno):
-            if flag is not None and flag.output and root_sym(flag.value) is sym:
-                out.append((flag.value.span, "an output argument"))
-    elif t.kind == "ref" and root_sym(t.arg) is sym:
-        out.append((t.arg.span, "a reference to it is taken"))
-    elif t.kind == "queryitf" and root_sym(t.dst) is sym:
-        out.append((t.dst.span, "assigned by __QUERYINTERFACE"))
+    match t:
+        case FbCall(pou=pou, bind=bind) | FunctionCall(pou=pou, bind=bind) | MethodCall(pou=pou, bind=bind):
+            for key, a in bind["params"].items():
+                if root_sym(a.value) is not sym:
+                    continue
+                p = pou.vars.get(key)
+                if a.output or (p is not None and p.section == "VAR_OUTPUT"):
+                    out.append((a.value.span, "an output argument"))
+                elif p is not None and p.section == "VAR_IN_OUT":
+                    out.append((a.value.span, f"passed to VAR_IN_OUT '{p.name}'"))
+                elif p is not None and T.is_reference(p.type):
+                    out.append((a.value.span, f"bound to REFERENCE TO input '{p.name}'"))
+                elif p is not None and p.any_input:
+                    out.append((a.value.span, f"passed by address to '{p.name}'"))
+            eno = bind.get("eno")
+            if eno is not None and root_sym(eno.value) is sym:
+                out.append((eno.value.span, "an output argument (ENO)"))
+        case NativeCall(sig=sig, args=args, en=en, eno=eno):
+            taking = sig.name.upper() in ("ADR", "REF")
+            for a in args:
+                if root_sym(a.value) is sym and (a.output or taking):
+                    out.append((a.value.span, "its address is taken" if taking else "an output argument"))
+            for flag in (en, eno):
+                if flag is not None and flag.output and root_sym(flag.value) is sym:
+                    out.append((flag.value.span, "an output argument"))
+        case RefCall(arg=arg) if root_sym(arg) is sym:
+            out.append((arg.span, "a reference to it is taken"))
+        case QueryItfCall(dst=dst) if root_sym(dst) is sym:
+            out.append((dst.span, "assigned by __QUERYINTERFACE"))
     return out

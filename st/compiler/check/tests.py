@@ -14,8 +14,9 @@ from typing import cast
 from ...model import types as T
 from ...model.program import AssertInfo
 from .. import ast as A
-from .common import CallTarget, Scope
+from .common import Scope
 from .part import Part
+from .targets import TestCall
 
 # name → (minimum, maximum) number of arguments, the message included
 TEST_CALLS = {
@@ -125,7 +126,7 @@ class TestStatements(Part):
         if ok:
             info.index = len(self.p.test_asserts)
             self.p.test_asserts.append(info)
-            c.target = CallTarget("test", op=key, info=info, operands=values, msg=msg)
+            c.target = TestCall(key, info, values, msg)
         return None
 
     def _check_assert(self, key, name, values, scope, info) -> bool:

@@ -7,7 +7,18 @@ from typing import TYPE_CHECKING, cast
 
 from ...model import types as T
 from .. import ast as A
-from ..check import STEP, CallTarget
+from ..check import (
+    STEP,
+    BoundCall,
+    FunctionCall,
+    IsValidRefCall,
+    MethodCall,
+    NativeCall,
+    NewCall,
+    QueryItfCall,
+    RefCall,
+    SizeofCall,
+)
 
 if TYPE_CHECKING:
     from .module import ModuleGen
@@ -285,7 +296,7 @@ class ExprGen:
             return T.base_of(e.ty) is T.REAL if e.ty is not None else False
         if isinstance(e, A.Literal):
             return True
-        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method"):
+        if isinstance(e, A.Call) and isinstance(e.target, (FunctionCall, MethodCall)):
             return T.base_of(e.ty) is T.REAL if e.ty is not None else False
         return False
 
@@ -316,7 +327,7 @@ class ExprGen:
         if isinstance(e, A.Name) and e.sym in self.loop_ranges:
             return self.loop_ranges[e.sym]  # a FOR counter its body does not write: start..end
         if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit, A.AccessorCall)) or (
-            isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method")
+            isinstance(e, A.Call) and isinstance(e.target, (FunctionCall, MethodCall))
         ):
             return declared
         if isinstance(e, A.Binary):
@@ -359,7 +370,7 @@ class ExprGen:
             if e.op == "NOT":
                 # ~x on a signed value stays in its type; unsigned NOT is masked
                 return declared if declared is not None and declared[0] <= v[0] and v[1] <= declared[1] else None
-        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "native":
+        if isinstance(e, A.Call) and isinstance(e.target, NativeCall):
             sig = e.target.sig
             if getattr(sig, "exact", False):
                 return declared
@@ -688,49 +699,50 @@ class ExprGen:
                 return _call(_attr(self.x_Call(e), "get"))
             finally:
                 e.deref = True
-        tgt = e.target
-        if not isinstance(tgt, CallTarget):
-            raise Unsupported(e.span, "unresolved call")
-        if tgt.kind == "function":
-            return self.function_call(e, tgt)
-        if tgt.kind == "native":
-            return self.native_call(e, tgt)
-        if tgt.kind == "ref":
-            return self.ref_to(tgt.arg)
-        if tgt.kind == "method":
-            return self.method_call(e, tgt)
-        if tgt.kind == "sizeof":
-            return _const(tgt.value)
-        if tgt.kind == "bound":  # LOWER_BOUND / UPPER_BOUND
-            if tgt.value is not None:
-                return _const(tgt.value)
-            dims = _attr(self.expr(tgt.arg), "dims")
-            return py.Subscript(
-                py.Subscript(dims, _const(tgt.dim - 1), py.Load()), _const(1 if tgt.upper else 0), py.Load()
-            )
-        if tgt.kind == "new" and tgt.arg is not None:  # __NEW(T, n): n fresh values, a pointer to the first
-            make = py.Lambda(_args([]), InitGen(self.mod).initial(tgt.type, None))
-            return _call("_new_items", make, self.expr(tgt.arg), _const(_wrap_spec(tgt.type)))
-        if tgt.kind == "new":  # a one-element box the pointer refers to
-            return _call(
-                "_ItemRef",
-                py.List([InitGen(self.mod).initial(tgt.type, None)], py.Load()),
-                _const(0),
-                _const(_wrap_spec(tgt.type)),
-            )
-        if tgt.kind == "isvalidref":
-            a = tgt.arg
-            raw = (
-                self.var_load(a.sym)
-                if isinstance(a, A.Name) and isinstance(a.sym, T.VarSym) and T.is_reference(a.sym.type)
-                else self.expr(a)
-            )
-            return py.Compare(raw, [py.IsNot()], [_const(None)])
-        if tgt.kind == "queryitf":
-            return _call("_query_itf", self.expr(tgt.src), _const(tgt.itf.name.lower()), self.ref_to(tgt.dst))
+        match e.target:
+            case FunctionCall() as tgt:
+                return self.function_call(e, tgt)
+            case NativeCall() as tgt:
+                return self.native_call(e, tgt)
+            case RefCall(arg=arg):
+                return self.ref_to(arg)
+            case MethodCall() as tgt:
+                return self.method_call(e, tgt)
+            case SizeofCall(value=value):
+                return _const(value)
+            case BoundCall(value=value) if value is not None:  # LOWER_BOUND / UPPER_BOUND of a fixed array
+                return _const(value)
+            case BoundCall(arg=arg, dim=dim, upper=upper):  # of an ARRAY[*]: from the caller's bounds
+                dims = _attr(self.expr(arg), "dims")
+                return py.Subscript(
+                    py.Subscript(dims, _const(dim - 1), py.Load()), _const(1 if upper else 0), py.Load()
+                )
+            case NewCall(type=t, count=count) if (
+                count is not None
+            ):  # __NEW(T, n): n fresh values, a pointer to the first
+                make = py.Lambda(_args([]), InitGen(self.mod).initial(t, None))
+                return _call("_new_items", make, self.expr(count), _const(_wrap_spec(t)))
+            case NewCall(type=t):  # a one-element box the pointer refers to
+                return _call(
+                    "_ItemRef",
+                    py.List([InitGen(self.mod).initial(t, None)], py.Load()),
+                    _const(0),
+                    _const(_wrap_spec(t)),
+                )
+            case IsValidRefCall(arg=a):
+                raw = (
+                    self.var_load(a.sym)
+                    if isinstance(a, A.Name) and isinstance(a.sym, T.VarSym) and T.is_reference(a.sym.type)
+                    else self.expr(a)
+                )
+                return py.Compare(raw, [py.IsNot()], [_const(None)])
+            case QueryItfCall(src=src, dst=dst, itf=itf):
+                return _call("_query_itf", self.expr(src), _const(itf.name.lower()), self.ref_to(dst))
+            case None:
+                raise Unsupported(e.span, "unresolved call")
         raise Unsupported(e.span, "a function block call has no value")
 
-    def method_call(self, e: A.Call, tgt) -> py.expr:
+    def method_call(self, e: A.Call, tgt: MethodCall) -> py.expr:
         """inst.M(...): a Python method call on the instance, so a derived block's override runs;
         SUPER^.M(...): the base block's method on this instance (not virtual)."""
         if tgt.nonvirtual is not None:
@@ -738,7 +750,7 @@ class ExprGen:
         obj = self.this() if tgt.obj is None else self.expr(tgt.obj)
         return self.function_call(e, tgt, fn=_attr(obj, tgt.pou.pyname))
 
-    def native_call(self, e: A.Call, tgt) -> py.expr:
+    def native_call(self, e: A.Call, tgt: NativeCall) -> py.expr:
         sig = tgt.sig
         args = []
         # settle each argument to its parameter's type (group or concrete)

@@ -4,11 +4,22 @@ from __future__ import annotations
 
 import ast as py
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import cast
 
 from ...model import types as T
 from .. import ast as A
-from ..check import CallTarget
+from ..check import (
+    ActionCall,
+    CallTarget,
+    DeleteCall,
+    FbCall,
+    FunctionCall,
+    MethodCall,
+    NativeCall,
+    QueryItfCall,
+    TestCall,
+)
 from ..lower.walk import walk_stmts
 from .expressions import ExprGen, index_key, wrap
 from .inline import exact_instance, inline_body
@@ -123,23 +134,19 @@ class StmtGen(ExprGen):
             )
         # a call with EN: assign only when enabled
         v = s.value
-        if (
-            isinstance(v, A.Call)
-            and isinstance(v.target, CallTarget)
-            and v.target.kind in ("function", "method")
-            and (v.target.bind.get("en") is not None or v.target.bind.get("eno") is not None)
-        ):
-            return self._en_call_assign(s, v)
-        if (
-            isinstance(v, A.Call)
-            and isinstance(v.target, CallTarget)
-            and v.target.kind == "native"
-            and (v.target.en is not None or v.target.eno is not None)
-        ):
-            en, eno = v.target.en, v.target.eno
-            v.target.en = None
-            body = self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
-            return self._en_wrap(en, eno, body, ok=self._native_eno(v.target, eno))
+        if isinstance(v, A.Call):
+            match v.target:
+                case FunctionCall(bind=bind) | MethodCall(bind=bind) if (
+                    bind.get("en") is not None or bind.get("eno") is not None
+                ):
+                    return self._en_call_assign(s, v)
+                case NativeCall(en=en, eno=eno) as native if en is not None or eno is not None:
+                    v.target = replace(native, en=None)  # the value, called: EN decides around it
+                    try:
+                        body = self.assign(tgt, self.coerce(self.expr(v), v, tt), v)
+                    finally:
+                        v.target = native
+                    return self._en_wrap(en, eno, body, ok=self._native_eno(native, eno))
         ut = T.unalias(tt) if tt is not None else None
         if ut is not None and ut.is_aggregate:
             return [py.Expr(_call("_assign", self.expr(tgt), self.expr(v)))]
@@ -244,41 +251,41 @@ class StmtGen(ExprGen):
 
     def s_CallStmt(self, s: A.CallStmt) -> list:
         c = s.call
-        tgt = c.target
-        if not isinstance(tgt, CallTarget):
-            raise Unsupported(s.span, "unresolved call")
-        if tgt.kind == "fb":
-            return self.fb_call(c, tgt)
-        if tgt.kind == "action" and getattr(tgt, "bind", None) is not None:  # inst.A(in := ...) (TwinCAT)
-            return self.fb_call(c, tgt, run="_act_" + tgt.name)
-        if tgt.kind == "action":
-            inst = self.expr(tgt.inst) if getattr(tgt, "inst", None) is not None else self.this()
-            return [py.Expr(_call(_attr(inst, "_act_" + tgt.name)))]
-        if tgt.kind in ("function", "method"):
-            en, eno = tgt.bind.get("en"), tgt.bind.get("eno")
-            tgt.bind["en"] = None
-            call = self.method_call(c, tgt) if tgt.kind == "method" else self.function_call(c, tgt)
-            body = [py.Expr(call)]
-            tgt.bind["en"] = en
-            return self._en_wrap(en, eno, body, "eno" in tgt.bind["params"])
-        if tgt.kind == "delete":
-            return self.assign(tgt.arg, _const(None), None)
-        if tgt.kind == "test":
-            return self.test_call(tgt)
-        if tgt.kind == "native":
-            en, eno = tgt.en, tgt.eno
-            tgt.en = None
-            body = [py.Expr(self.native_call(c, tgt))]
-            tgt.en = en
-            return self._en_wrap(en, eno, body, ok=self._native_eno(tgt, eno))
+        match c.target:
+            case FbCall() as tgt:
+                return self.fb_call(c, tgt)
+            case ActionCall(bind=bind, name=name) as tgt if bind is not None:  # inst.A(in := ...) (TwinCAT)
+                return self.fb_call(c, tgt, run="_act_" + name)
+            case ActionCall(inst=inst, name=name):
+                owner = self.expr(inst) if inst is not None else self.this()
+                return [py.Expr(_call(_attr(owner, "_act_" + name)))]
+            case FunctionCall(bind=bind) | MethodCall(bind=bind) as tgt:
+                en, eno = bind.get("en"), bind.get("eno")
+                bind["en"] = None
+                call = self.method_call(c, tgt) if isinstance(tgt, MethodCall) else self.function_call(c, tgt)
+                body = [py.Expr(call)]
+                bind["en"] = en
+                return self._en_wrap(en, eno, body, "eno" in bind["params"])
+            case DeleteCall(arg=arg):
+                return self.assign(arg, _const(None), None)
+            case TestCall() as tgt:
+                return self.test_call(tgt)
+            case NativeCall(en=en, eno=eno) as tgt:
+                body = [py.Expr(self.native_call(c, replace(tgt, en=None)))]
+                return self._en_wrap(en, eno, body, ok=self._native_eno(tgt, eno))
+            case None:
+                raise Unsupported(s.span, "unresolved call")
         raise Unsupported(s.span, "cannot call this")
 
-    def fb_call(self, c: A.Call, tgt, run: str = "_body") -> list:
+    def fb_call(self, c: A.Call, tgt: FbCall | ActionCall, run: str = "_body") -> list:
         """An instance call: inputs in, the body (or, `run`, one of its actions), outputs out."""
-        fb: T.POUType = tgt.pou
-        bind = tgt.bind["params"]
+        if isinstance(tgt, ActionCall):  # TwinCAT's inst.A(in := ...): the block's inputs and outputs
+            assert tgt.block is not None and tgt.bind is not None and tgt.inst is not None  # the checker's
+            fb, binding, callee, nonvirtual = tgt.block, tgt.bind, tgt.inst, None
+        else:
+            fb, binding, callee, nonvirtual = tgt.pou, tgt.bind, c.callee, tgt.nonvirtual
+        bind = binding["params"]
         out: list[py.stmt] = []
-        callee = tgt.inst if run != "_body" else c.callee
         inst = self.expr(callee)
         if not isinstance(inst, py.Name):
             tmp = self.new_tmp()
@@ -316,9 +323,9 @@ class StmtGen(ExprGen):
         own = fb.vars.get("eno")
         if own is not None:  # IEC: a call that runs starts with ENO TRUE; the body may clear it
             out.append(py.Assign([_attr(inst, own.pyname, py.Store())], _const(True)))
-        inline_fn = self.mod.inline_body_of(fb) if run == "_body" and tgt.nonvirtual is None else None
-        if run == "_body" and tgt.nonvirtual is not None:  # SUPER^(): the base block's body on this instance
-            out.append(py.Expr(_call(_attr(_name(tgt.nonvirtual.pyname), "_body"), inst)))
+        inline_fn = self.mod.inline_body_of(fb) if run == "_body" and nonvirtual is None else None
+        if run == "_body" and nonvirtual is not None:  # SUPER^(): the base block's body on this instance
+            out.append(py.Expr(_call(_attr(_name(nonvirtual.pyname), "_body"), inst)))
         elif inline_fn is not None and isinstance(inst, py.Name) and exact_instance(callee):
             out.extend(inline_body(inline_fn, inst.id, self.new_tmp() + "_", c.span.line))
         else:
@@ -336,7 +343,7 @@ class StmtGen(ExprGen):
             else:
                 out.extend(self.assign(a.value, self.coerce(val, _Typed(p.type), a.value.ty), None))
         own_eno = _attr(self.expr(callee), own.pyname, py.Store()) if own is not None else None
-        return self._en_wrap(tgt.bind.get("en"), tgt.bind.get("eno"), out, "eno" in bind, own_eno)
+        return self._en_wrap(binding.get("en"), binding.get("eno"), out, "eno" in bind, own_eno)
 
     def s_If(self, s: A.If) -> list:
         # arms first, in source order (coverage probes are numbered in that order)
@@ -721,33 +728,25 @@ def _walk_exprs_in(body):
 def _by_ref_names(body) -> set:
     """Variables passed to functions as outputs / in-outs: they must stay attributes."""
     names = set()
+
+    def root_of(e):
+        while isinstance(e, (A.Field, A.Index, A.Bit)):
+            e = e.base
+        if isinstance(e, A.Name) and isinstance(e.sym, T.VarSym):
+            names.add(e.sym)
+
     for e in _walk_exprs_in(body):
-        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind in ("function", "method"):
-            pou = e.target.pou
-            for key, a in e.target.bind["params"].items():
-                p = pou.vars[key]
-                if p.section == "VAR_OUTPUT" or (p.section == "VAR_IN_OUT" and not T.unalias(p.type).is_aggregate):
-                    root = a.value
-                    while isinstance(root, (A.Field, A.Index, A.Bit)):
-                        root = root.base
-                    if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
-                        names.add(root.sym)
-        if isinstance(e, A.Call) and isinstance(e.target, CallTarget) and e.target.kind == "queryitf":
-            root = e.target.dst
-            while isinstance(root, (A.Field, A.Index, A.Bit)):
-                root = root.base
-            if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
-                names.add(root.sym)
-        if (
-            isinstance(e, A.Call)
-            and isinstance(e.target, CallTarget)
-            and e.target.kind == "native"
-            and e.target.sig.name.upper() in ("REF", "ADR")
-        ):
-            for a in e.target.args:
-                root = a.value
-                while isinstance(root, (A.Field, A.Index, A.Bit)):
-                    root = root.base
-                if isinstance(root, A.Name) and isinstance(root.sym, T.VarSym):
-                    names.add(root.sym)
+        if not isinstance(e, A.Call):
+            continue
+        match e.target:
+            case FunctionCall(pou=pou, bind=bind) | MethodCall(pou=pou, bind=bind):
+                for key, a in bind["params"].items():
+                    p = pou.vars[key]
+                    if p.section == "VAR_OUTPUT" or (p.section == "VAR_IN_OUT" and not T.unalias(p.type).is_aggregate):
+                        root_of(a.value)
+            case QueryItfCall(dst=dst):
+                root_of(dst)
+            case NativeCall(sig=sig, args=args) if sig.name.upper() in ("REF", "ADR"):
+                for a in args:
+                    root_of(a.value)
     return names

@@ -13,11 +13,11 @@ or body runs on this instance: the base, for SUPER^.M(…) and SUPER^().
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ...model import types as T
 from .. import ast as A
-from ..check import CallTarget
+from ..check import FbCall, MethodCall
 from .fb_init import Constructor, constructor
 from .walk import is_super
 
@@ -56,12 +56,12 @@ def blocks(project) -> dict:
 def dispatch(e):
     """The rewrite of one expression: for a method or block call, which implementation runs (a
     SUPER^ call runs the base's, not the most derived one)."""
-    if isinstance(e, A.Call) and isinstance(e.target, CallTarget):
-        tgt = e.target
-        if tgt.kind == "method":
-            tgt.nonvirtual = tgt.obj.base.ty.target if is_super(tgt.obj) else None
-        elif tgt.kind == "fb":
-            tgt.nonvirtual = tgt.pou if is_super(e.callee) else None
+    if isinstance(e, A.Call):
+        match e.target:
+            case MethodCall(obj=obj) as tgt:
+                e.target = replace(tgt, nonvirtual=obj.base.ty.target if is_super(obj) else None)
+            case FbCall(pou=pou) as tgt:
+                e.target = replace(tgt, nonvirtual=pou if is_super(e.callee) else None)
     return e
 
 

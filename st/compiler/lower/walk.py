@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from dataclasses import fields as dataclass_fields
+from dataclasses import replace
 
 from ...model import types as T
 from ...model.program import Project
 from .. import ast as A
 from ..check import CallTarget
+
+# fields of a call target that are declarations (a POU, a type, a signature), never rewritten
+_TARGET_DECLS = frozenset(("pou", "nonvirtual", "block", "sig", "type", "itf", "info", "arg_types", "value"))
 
 
 def bodies(project: Project) -> Iterator[tuple[list, T.POUType | None]]:
@@ -112,10 +117,16 @@ def rewrite_exprs(body: list, fn: Callable) -> None:
                 v[k] = value(v[k])
         elif isinstance(v, (A.Stmt, A.Arg, A.CaseBranch)):
             fields(v)
-        elif isinstance(v, CallTarget):
-            for k, x in v.__dict__.items():
-                if k != "pou":
-                    v.__dict__[k] = value(x)
+        elif isinstance(v, CallTarget):  # frozen: a target whose expressions changed is made anew
+            changed = {}
+            for f in dataclass_fields(v):
+                if f.name in _TARGET_DECLS:
+                    continue
+                x = getattr(v, f.name)
+                y = value(x)
+                if y is not x:
+                    changed[f.name] = y
+            return replace(v, **changed) if changed else v
         return v
 
     def fields(node):

@@ -20,7 +20,7 @@ from __future__ import annotations
 from ...model import types as T
 from ...model.program import Project
 from .. import ast as A
-from ..check import CallTarget
+from ..check import ActionCall, FbCall, FunctionCall, MethodCall
 
 
 class Writes:
@@ -221,16 +221,16 @@ class _Facts:
                     programs.add(id(sym))
             elif isinstance(n, A.Deref):
                 direct = True
-            elif isinstance(n, A.Call) and isinstance(n.target, CallTarget):
-                t = n.target
-                if t.kind in ("fb", "function"):
-                    callees.add(id(t.pou))
-                elif t.kind == "method":
-                    callees |= by_name.get(("method", t.pou.name.lower()), set())
-                    own = own or t.obj is None
-                elif t.kind == "action":
-                    callees |= by_name.get(("action", t.name.lower()), set())
-                    own = own or getattr(t, "inst", None) is None
+            elif isinstance(n, A.Call):
+                match n.target:
+                    case FbCall(pou=pou) | FunctionCall(pou=pou):
+                        callees.add(id(pou))
+                    case MethodCall(pou=mt, obj=obj):
+                        callees |= by_name.get(("method", mt.name.lower()), set())
+                        own = own or obj is None
+                    case ActionCall(name=act, inst=inst):
+                        callees |= by_name.get(("action", act), set())
+                        own = own or inst is None
             elif isinstance(n, A.AccessorCall) and n.accessor is not None:
                 callees |= by_name.get(("accessor", n.accessor.name.lower()), set())
                 own = own or n.obj is None

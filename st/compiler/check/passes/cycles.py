@@ -20,6 +20,7 @@ from ....source import Span
 from ... import ast as A
 from ..common import SUPER, THIS
 from ..context import CheckContext
+from ..targets import ActionCall, FbCall, FunctionCall, MethodCall
 
 
 def check_cycles(ctx: CheckContext) -> None:
@@ -126,17 +127,16 @@ class _Graph:
         """The bodies that node x (a call, a property read or written) runs, as far as the
         declarations show them."""
         if isinstance(x, A.Call) and x.target is not None:
-            tgt = x.target
-            if tgt.kind == "function":
-                return [tgt.pou]
-            if tgt.kind == "method":
-                name = tgt.pou.name.lower()
-                return self._on(tgt.obj, block, lambda t: t.methods.get(name))
-            if tgt.kind == "fb":
-                return self._on(x.callee, block, lambda t: t)
-            if tgt.kind == "action":
-                name = tgt.name
-                return self._on(getattr(tgt, "inst", None), block, lambda t: t.actions.get(name))
+            match x.target:
+                case FunctionCall(pou=pou):
+                    return [pou]
+                case MethodCall(pou=mt, obj=obj):
+                    name = mt.name.lower()
+                    return self._on(obj, block, lambda t: t.methods.get(name))
+                case FbCall():
+                    return self._on(x.callee, block, lambda t: t)
+                case ActionCall(name=act, inst=inst):
+                    return self._on(inst, block, lambda t: t.actions.get(act))
             return []
         if isinstance(x, (A.Name, A.Field)) and isinstance(x.sym, T.PropSym):
             name = x.sym.name.lower()
