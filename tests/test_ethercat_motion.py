@@ -346,3 +346,19 @@ def test_a_drive_layout_from_an_esi_file():
     )
     assert drv.master.slaves[0].vendor_id == 0xABC
     until(plc, lambda: plc["main.pw1.Status"])
+
+
+def test_a_segment_that_cannot_start_leaves_its_master_and_capture_closed(monkeypatch, tmp_path):
+    from st.io.ethercat import segment as segment_module
+
+    closed = []
+    real = segment_module.Segment.close
+    monkeypatch.setattr(segment_module.Segment, "close", lambda self: (closed.append(self), real(self))[1])
+    seg = {
+        "segment": {"cycle": "1ms"},
+        "slave": [{"name": "d1", "type": "cia402", "axis": 1, "bind": {"no_such_entry": "%IW3"}}],
+    }
+    plc = PLC(compile_text(PROGRAM, "ecat_motion.st"))
+    with pytest.raises(MasterError, match="slave d1: no PDO entry 'no_such_entry' to bind to %IW3"):
+        EtherCATDriver(plc, from_dict(seg), backend="sim", capture=str(tmp_path / "c.pcap"))
+    assert len(closed) == 1 and (tmp_path / "c.pcap").read_bytes()[:4] == bytes.fromhex("d4c3b2a1")

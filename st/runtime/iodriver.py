@@ -6,12 +6,14 @@ outputs went to their safe values (stop, fault). `rebind()` follows every reload
 program (warm restart, online change). Work done there must be a few memory operations: a
 driver keeps its own threads or processes off the scan's path.
 
-The optional parts have defaults in `IODriverBase`, which drivers extend: a `name` and
-`stats()` for the end-of-run report, and for a driver that lives in the program's namespace
-(`per_namespace`, listed in its `_io_drivers`, made again with every reload) `adopt(old)` to
-take over the state of the one it replaces, and `join(plc)`, which puts it into `PLC.io` (a driver
-with nothing to do yet may wait, as the motion kernel waits for its first axis: the engine
-then pays nothing for it).
+The optional parts have defaults in `IODriverBase`, which drivers extend: a `name`, `stats()`
+for the end-of-run report, `status()`, a JSON-able view of the driver's state that the online
+mode asks of each driver on `plc.io` by its name between two jobs (the motion kernel's axes,
+EtherCAT's counters and slaves, the Modbus slave's clients), and for a driver that lives in the
+program's namespace (`per_namespace`, listed in its `_io_drivers`, made again with every reload)
+`adopt(old)` to take over the state of the one it replaces, and `join(plc)`, which puts it into
+`PLC.io` (a driver with nothing to do yet may wait, as the motion kernel waits for its first
+axis: the engine then pays nothing for it).
 """
 
 from __future__ import annotations
@@ -37,11 +39,13 @@ class IODriver(Protocol):
 
     def stats(self) -> dict[str, Any] | None: ...
 
+    def status(self) -> dict[str, Any] | None: ...
+
 
 class IODriverBase:
     """Defaults for the optional parts of IODriver: nothing to do, nothing to report."""
 
-    name = ""  # shown in reports ("" and stats() None: not reported)
+    name = ""  # shown in reports and the online mode ("" and stats() / status() None: not shown)
     per_namespace = False  # True: made by the program's namespace, replaced on every reload
 
     def before_job(self, task: Task | None = None) -> None:
@@ -63,4 +67,9 @@ class IODriverBase:
 
     def stats(self) -> dict[str, Any] | None:
         """Counters for the end-of-run report, or None."""
+        return None
+
+    def status(self) -> dict[str, Any] | None:
+        """The driver's state as JSON-able values for the online mode (called between two jobs), or
+        None: nothing to show."""
         return None

@@ -280,10 +280,6 @@ def _trunc_sig(name, dst):
     return sig
 
 
-def _ref_emit(ctx, args, types, rt):
-    return ctx.ref_to(ctx._current_ref_arg)
-
-
 def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", matiec_errors: bool = False) -> Library:
     """The IEC standard library. `time_unit`: what TIME_TO_<int> counts (ms, or s as MatIEC).
     `matiec_errors`: where IEC calls a case an error and leaves the reaction open, do what MatIEC

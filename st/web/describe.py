@@ -36,8 +36,8 @@ def describe(plc: Any, name: str, read_only: bool) -> dict:
         "instances": instances,
         "pous": pous,
         "axes": axes,
-        "ethercat": any(hasattr(d, "master") and hasattr(d, "counters") for d in plc.io),
-        "modbus": any(hasattr(d, "ex") and hasattr(d, "cfg") for d in plc.io),
+        "ethercat": any(d.name == "ethercat" for d in plc.io),
+        "modbus": any(d.name == "modbus" for d in plc.io),
         "flow": compiled.coverage_hits is not None,
     }
 

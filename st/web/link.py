@@ -243,6 +243,7 @@ class WebLink:
             types.append(t)
             values.append(v)
         fault = plc.fault if plc.state == FAULT else None
+        io = io_status(plc)
         log = [(m.time, m.kind, m.text) for m in plc.log.since(max(plc.log.total - LOG_KEPT, 0))]
         return {
             "number": self._number,
@@ -258,9 +259,9 @@ class WebLink:
             "values": values,
             "forced": plc.forced,
             "lines": self._last_lines,  # (measured after one job; the last measure otherwise)
-            "axes": _axes(plc),
-            "ethercat": _ethercat(plc),
-            "modbus": _modbus(plc),
+            "axes": io["motion"]["axes"] if "motion" in io else None,
+            "ethercat": io.get("ethercat"),
+            "modbus": io.get("modbus"),
             "log": log,
             "log_total": plc.log.total,
             "results": list(self._results),
@@ -332,55 +333,13 @@ class WebLink:
         }
 
 
-def _axes(plc: Any) -> list | None:
-    from ..stdlib.plcopen import registry
-
-    reg = registry(plc)
-    if reg is None or not reg.axes:
-        return None
-    out = []
-    for ax in sorted(reg.axes.values(), key=lambda a: getattr(a, "axis_no", 0)):
-        err = getattr(ax, "axis_error", 0)
-        out.append(
-            {
-                "no": getattr(ax, "axis_no", 0),
-                "state": str(ax.state),
-                "position": float(ax.act_pos),
-                "velocity": float(ax.act_vel),
-                "error": bool(err),
-                "error_id": int(err),
-                "error_text": _error_text(err),
-            }
-        )
+def io_status(plc: Any) -> dict[str, dict]:
+    """Each named I/O driver's `status()` by its name (the first driver of a name; a driver with
+    nothing to show is left out): "motion" (the axes), "ethercat", "modbus", …"""
+    out: dict[str, dict] = {}
+    for d in plc.io:
+        if d.name and d.name not in out:
+            s = d.status()
+            if s is not None:
+                out[d.name] = s
     return out
-
-
-def _error_text(code: int) -> str:
-    from ..stdlib.plcopen.errors import E
-
-    if not code:
-        return ""
-    try:
-        return E(code).name
-    except ValueError:
-        return f"16#{code:04X}"
-
-
-def _ethercat(plc: Any) -> dict | None:
-    for d in plc.io:
-        if hasattr(d, "master") and hasattr(d, "counters"):
-            c = d.counters
-            # one LRW datagram serves every slave: a working-counter error belongs to the segment
-            slaves = [
-                {"position": i + 1, "name": s.name, "state": s.state, "wkc_errors": None}
-                for i, s in enumerate(d.master.slaves)
-            ]
-            return {"lost_frames": c.get("lost_frames", 0), "wkc_errors": c.get("wkc_errors", 0), "slaves": slaves}
-    return None
-
-
-def _modbus(plc: Any) -> dict | None:
-    for d in plc.io:
-        if hasattr(d, "ex") and hasattr(d, "cfg") and hasattr(d, "clients"):
-            return {"clients": d.clients()}
-    return None

@@ -249,7 +249,11 @@ class EtherCATDriver(IODriverBase):
             self.master = SoemMaster(iface)
         else:
             raise MasterError(f"unknown EtherCAT backend '{backend}' (sim or soem)")
-        self._start()
+        try:
+            self._start()
+        except BaseException:  # a segment that cannot start leaves nothing open (the master, a capture)
+            self.close()
+            raise
 
     # ------------------------------------------------------------------ the sim transport
     def _now(self) -> float:
@@ -446,6 +450,17 @@ class EtherCATDriver(IODriverBase):
         out["slaves"] = [f"{s.name}:{s.state}" for s in self.master.slaves]
         out["drives"] = {f"axis{l.axis_no}": l.state for l in self.links}
         return out
+
+    def status(self) -> dict[str, Any]:
+        """The online mode's view: lost frames, working-counter errors and each slave's AL state.
+        One LRW datagram serves every slave: a working-counter error belongs to the segment, so no
+        slave has a count of its own (None)."""
+        c = self.counters
+        slaves = [
+            {"position": i + 1, "name": s.name, "state": s.state, "wkc_errors": None}
+            for i, s in enumerate(self.master.slaves)
+        ]
+        return {"lost_frames": c.get("lost_frames", 0), "wkc_errors": c.get("wkc_errors", 0), "slaves": slaves}
 
     def close(self) -> None:
         try:

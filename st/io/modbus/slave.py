@@ -13,6 +13,7 @@ import json
 import os
 import subprocess
 import time
+from typing import Any
 
 from ...runtime.iodriver import IODriverBase
 from ...runtime.scheduler import Task
@@ -85,6 +86,8 @@ class ModbusSlave(IODriverBase):
     max_connections, idle_timeout (s), max_rate (requests/s per connection, 0 = unbounded);
     unit_ids: the unit ids answered (None = all; others get exception 0x0B); log_path: append the
     server's log there instead of to stderr."""
+
+    name = "modbus"
 
     def __init__(
         self,
@@ -164,6 +167,10 @@ class ModbusSlave(IODriverBase):
             return []
         doc = self.ex.status()
         return json.loads(doc).get("clients", []) if doc else []
+
+    def status(self) -> dict[str, Any]:
+        """The online mode's view: {"clients": clients()}."""
+        return {"clients": self.clients()}
 
     def __enter__(self):
         return self.start()

@@ -8,6 +8,8 @@ task's job it advances the axes that task commands (the kernel phase).
 
 from __future__ import annotations
 
+from typing import Any
+
 from ...runtime.iodriver import IODriver, IODriverBase
 from ...runtime.scheduler import Task
 from .axis import (
@@ -37,6 +39,7 @@ class MotionRegistry(IODriverBase):
     """Every axis of one PLC, by handle; configurations by AxisNo. The motion kernel: an I/O driver
     of the PLC made with the program's namespace."""
 
+    name = "motion"
     per_namespace = True
 
     def __init__(self):
@@ -130,6 +133,27 @@ class MotionRegistry(IODriverBase):
         if plc is not None and self not in plc.io:
             plc.io.insert(0, self)
 
+    def status(self) -> dict[str, Any] | None:
+        """The online mode's view: {"axes": [...]}, each axis in AxisNo order with its state, actual
+        position and velocity and its axis error (the code and its name); None before the first axis."""
+        if not self.axes:
+            return None
+        axes = []
+        for ax in sorted(self.axes.values(), key=lambda a: a.axis_no):
+            code = ax.axis_error
+            axes.append(
+                {
+                    "no": ax.axis_no,
+                    "state": str(ax.state),
+                    "position": float(ax.act_pos),
+                    "velocity": float(ax.act_vel),
+                    "error": bool(code),
+                    "error_id": int(code),
+                    "error_text": _error_name(code),
+                }
+            )
+        return {"axes": axes}
+
     def after_job(self, task: Task | None = None) -> None:
         if task is None:
             return
@@ -141,6 +165,16 @@ class MotionRegistry(IODriverBase):
             ax = tr.axis
             if ax is not None and ax.task is task:
                 tr.sample()
+
+
+def _error_name(code: int) -> str:
+    """An ErrorID's name (FOLLOWING_ERROR), 16#XXXX for a code st does not name, "" for none."""
+    if not code:
+        return ""
+    try:
+        return E(code).name
+    except ValueError:
+        return f"16#{code:04X}"
 
 
 # ---------------------------------------------------------------------------- output helpers
