@@ -18,10 +18,12 @@ from click.testing import CliRunner
 from st import PLC
 from st.api import compile_text
 from st.cli import main
+from st.compiler.codegen.facts import BodyCall, BodyFacts, Helper, Local, Loop
 from st.compiler.native import kinds, toolchain
 from st.compiler.native.kinds import Int
 from st.compiler.native.pyx import module_text
 from st.compiler.native.typer import ClassInfo, NotEligible, type_body
+from st.model import types as T
 from st.model.compiled import CompiledProgram
 from st.runtime.faults import PLCFaultError
 
@@ -111,6 +113,11 @@ def _body(src: str) -> py.FunctionDef:
     return fn
 
 
+def _facts(**cached: T.Type) -> BodyFacts:
+    """The facts codegen records for a hand-written body: its cached variables (VARs), `_range`."""
+    return BodyFacts("body", {n: Local(t, "VAR") for n, t in cached.items()}, helpers={"_range": Helper.RANGE})
+
+
 def test_a_product_beyond_int64_is_computed_on_python_integers():
     fn = _body(
         "def _body(self):\n"
@@ -121,7 +128,8 @@ def test_a_product_beyond_int64_is_computed_on_python_integers():
         "    finally:\n"
         "        self.x = x\n"
     )
-    typed = type_body(fn, "_prg_main", {"_prg_main": ClassInfo(frozenset({"x"}), {"x": DINT})}, frozenset())
+    classes = {"_prg_main": ClassInfo(frozenset({"x"}), {"x": DINT})}
+    typed = type_body(fn, "_prg_main", classes, frozenset(), facts=_facts(x=T.DINT))
     assert typed.decls == {"x": "int64_t"}
     text, _ = module_text([("_prg_main", "p.st", "main", typed)])
     assert "_k_obj(x * x) * x" in text
@@ -130,14 +138,17 @@ def test_a_product_beyond_int64_is_computed_on_python_integers():
 
 def test_a_body_writing_a_global_or_using_a_reserved_name_stays_python():
     with pytest.raises(NotEligible, match="writes a global variable"):
-        type_body(_body("def _body(self):\n    global g\n    while g:\n        g = 0\n"), "_fb_x", {}, frozenset())
+        fn = _body("def _body(self):\n    global g\n    while g:\n        g = 0\n")
+        type_body(fn, "_fb_x", {}, frozenset(), facts=_facts())
     with pytest.raises(NotEligible, match="uses the name double, which C or Cython reserve"):
-        type_body(_body("def _body(self):\n    double = self.double\n"), "_fb_x", {}, frozenset())
+        type_body(_body("def _body(self):\n    double = self.double\n"), "_fb_x", {}, frozenset(), facts=_facts())
+    with pytest.raises(NotEligible, match="the code generator recorded no facts for it"):
+        type_body(_body("def _body(self):\n    pass\n"), "_fb_x", {}, frozenset())
 
 
 def test_rebound_globals_are_read_from_the_namespace_at_each_use():
     fn = _body("def _body(self):\n    for i in _range(0, 2):\n        self.t = _g_count + _helper(i)\n")
-    typed = type_body(fn, "_fb_x", {}, frozenset({"_g_count"}))
+    typed = type_body(fn, "_fb_x", {}, frozenset({"_g_count"}), facts=_facts())
     text, _ = module_text([("_fb_x", "p.st", "x", typed)])
     assert "self.t = _k_c.ns['_g_count'] + _k_c._helper(i)" in text
     assert "    _k_c._helper = _k_ns['_helper']" in text  # bound once per PLC, in its context
@@ -161,7 +172,7 @@ def test_slots_of_known_blocks_are_reached_at_their_offsets():
         "_prg_main": ClassInfo(frozenset({"n", "f", "t"}), {"n": DINT, "f": kinds.Inst("_fb_f")}),
         "_fb_f": ClassInfo(frozenset({"x", "q"}), {"x": DINT, "q": DINT}),
     }
-    typed = type_body(fn, "_prg_main", classes, frozenset())
+    typed = type_body(fn, "_prg_main", classes, frozenset(), facts=_facts(n=T.DINT))
     assert typed.decls == {"n": "int64_t"}
     assert typed.slots == {("_prg_main", "n"), ("_prg_main", "f"), ("_prg_main", "t"), ("_fb_f", "x"), ("_fb_f", "q")}
     text, _ = module_text([("_prg_main", "p.st", "main", typed)])
@@ -181,11 +192,50 @@ def test_a_call_of_a_block_compiled_in_the_same_module_is_a_c_call():
         "_prg_main": ClassInfo(frozenset({"f"}), {"f": kinds.Inst("_fb_f")}),
         "_fb_f": ClassInfo(frozenset(), {}),
     }
-    main = type_body(fn, "_prg_main", classes, frozenset())
-    callee = type_body(_body("def _body(self):\n    pass\n"), "_fb_f", classes, frozenset())
+    call = fn.body[1].value  # `_t1._body()`: codegen's fact names the block's class
+    assert isinstance(call, py.Call)
+    facts = _facts()
+    facts.body_calls.append(BodyCall(call, "_fb_f"))
+    main = type_body(fn, "_prg_main", classes, frozenset(), facts=facts)
+    callee = type_body(_body("def _body(self):\n    pass\n"), "_fb_f", classes, frozenset(), facts=_facts())
     text, _ = module_text([("_prg_main", "p.st", "main", main), ("_fb_f", "p.st", "f", callee)])
     assert "_k_impl_fb_f(_k_c, _t1) if _k_c._k_own_fb_f and type(_t1) is _k_c._k_T_fb_f else _t1._body()" in text
     assert "cdef object _k_impl_fb_f(_k_Ctx _k_c, object self):" in text
+
+
+def test_what_codegen_meant_comes_from_its_facts_not_from_the_shape():
+    src = (
+        "def _body(self):\n"
+        "    n = self.n\n"
+        "    try:\n"
+        "        for i in _range(1, 101):\n"
+        "            if _wd_armed:\n"
+        "                _wd_check()\n"
+        "            n = i * i * i + _div2(n, 7)\n"
+        "        if _wd_armed:\n"
+        "            _wd_check()\n"
+        "    finally:\n"
+        "        self.n = n\n"
+    )
+    classes = {"_prg_main": ClassInfo(frozenset({"n"}), {"n": DINT})}
+    fn = _body(src)
+    loop = fn.body[1].body[0]
+    assert isinstance(loop, py.For)
+    facts = _facts(n=T.DINT, i=T.DINT)
+    facts.helpers["_div2"] = Helper.DIV  # codegen's name for IEC DIV, whatever it is
+    facts.guards.append(loop.body[0])  # the loop's guard; the second `if` only looks like one
+    facts.loops.append(Loop(loop, "i", Int(1, 100)))
+    typed = type_body(fn, "_prg_main", classes, frozenset({"_wd_armed"}), facts=facts)
+    text, _ = module_text([("_prg_main", "p.st", "main", typed)])
+    assert "if not _k_wd & 1023:" in text and text.count("_k_c._wd_check()") == 2
+    assert "if _k_c.ns['_wd_armed']:" in text  # the look-alike stays what it is
+    # i is 1..100 in the loop: i * i * i is computed in C (three DINTs would not be)
+    assert "n = i * i * i + _k_idiv(n, 7)" in text
+    without = _facts(n=T.DINT, i=T.DINT)
+    text, _ = module_text(
+        [("_prg_main", "p.st", "main", type_body(_body(src), "_prg_main", classes, frozenset(), facts=without))]
+    )
+    assert "_k_obj(i * i) * i" in text and "_k_c._div2(n, 7)" in text and "_k_wd &" not in text
 
 
 # ---------------------------------------------------------------------------- whole programs
@@ -257,7 +307,7 @@ def test_online_change_binds_the_new_program_and_keeps_values(faults_native):
 def test_a_missing_module_runs_the_program_as_python_and_says_why(faults_native, tmp_path):
     from dataclasses import replace
 
-    gone = replace(faults_native.native[0], path=str(tmp_path / "gone.so"), name="st_k_gone")
+    gone = replace(faults_native.native[0], name="st_k_gone")  # no module of that hash in the cache
     plc = PLC(replace(faults_native, native=[gone]))
     plc.scan(1)
     assert plc["main.a"] == [1, 2, 3, 0, 0]
@@ -280,9 +330,9 @@ def test_without_the_toolchain_the_program_compiles_as_python_with_w012(monkeypa
 @needs_toolchain
 def test_a_build_is_found_again_not_repeated(faults_native):
     m = faults_native.native[0]
-    text = Path(m.path).with_name(m.pyx).read_text()
+    text = m.file.with_name(m.pyx).read_text()
     assert toolchain.module_name(text) == m.name
-    assert toolchain.build(text) == (m.name, Path(m.path), False)
+    assert toolchain.build(text) == (m.name, m.file, False)
 
 
 @needs_toolchain
@@ -311,10 +361,10 @@ def test_a_module_cython_refuses_is_kept_for_a_bug_report(tmp_path, monkeypatch)
 def test_an_expression_nested_beyond_cythons_parser_keeps_its_body_python():
     chain = " + ".join(["x"] * 150)  # a left-nested chain of 149 additions
     with pytest.raises(NotEligible, match="an expression is nested more than 100 deep"):
-        type_body(_body(f"def _body(self):\n    x = self.x\n    self.y = {chain}\n"), "_fb_x", {}, frozenset())
-    type_body(
-        _body(f"def _body(self):\n    x = self.x\n    self.y = {' + '.join(['x'] * 90)}\n"), "_fb_x", {}, frozenset()
-    )
+        fn = _body(f"def _body(self):\n    x = self.x\n    self.y = {chain}\n")
+        type_body(fn, "_fb_x", {}, frozenset(), facts=_facts(x=T.DINT))
+    fn = _body(f"def _body(self):\n    x = self.x\n    self.y = {' + '.join(['x'] * 90)}\n")
+    type_body(fn, "_fb_x", {}, frozenset(), facts=_facts(x=T.DINT))
 
 
 def test_a_subrange_variable_has_its_base_types_interval():
@@ -592,7 +642,7 @@ def test_functions_are_compiled_and_called_in_c_with_the_same_results_and_faults
     line = FEATURES.splitlines().index("quot := a / b;") + 1
     assert out[True][1] == ("DIV0", "features.st", line, "quot", "division by zero")
     assert compiled.native[0].functions == ("_fn_sq", "_fn_scale", "_fn_pick", "_fn_quot", "_fn_outer")
-    text = Path(compiled.native[0].path).with_name(compiled.native[0].pyx).read_text()
+    text = compiled.native[0].file.with_name(compiled.native[0].pyx).read_text()
     assert "cdef int64_t _k_impl_fn_sq(_k_Ctx _k_c, int64_t a) except? -1:" in text
     assert (
         "cdef bint _k_impl_fn_pick(_k_Ctx _k_c, bint g, int64_t d, object _r_twice, object _r_hits) except -1:" in text

@@ -16,7 +16,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from ..model.compiled import CompiledProgram, FormatError
+from ..model.compiled import CompiledProgram, FormatError, cache_root
 from ..source import SourceFile
 from .library import Library
 from .options import CompileOptions
@@ -30,10 +30,7 @@ def cache_dir() -> Path | None:
     set or the directory cannot be made."""
     if os.environ.get("ST_NO_CACHE"):
         return None
-    base = os.environ.get("ST_CACHE_DIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "st"
-    )
-    p = Path(base) / "compiled"
+    p = cache_root() / "compiled"
     try:
         p.mkdir(parents=True, exist_ok=True)
     except OSError:
@@ -72,7 +69,9 @@ def cache_key(sources: list[SourceFile], libraries: list[Library], options: Comp
 def load(
     directory: Path, key: str, *, sources: dict[str, SourceFile], helpers: dict[str, Any]
 ) -> CompiledProgram | None:
-    """The program stored under `key`, with the caller's sources and helpers, or None."""
+    """The program stored under `key`, with the caller's sources and helpers, or None. A program
+    whose native module (found by its content hash) is no longer in the build directory is a miss
+    too: compiled again, the module is built again."""
     try:
         data = (directory / key).read_bytes()
     except OSError:
@@ -80,6 +79,8 @@ def load(
     try:
         compiled = CompiledProgram.from_bytes(data, sources=sources, helpers=helpers)
     except FormatError:
+        return None
+    if any(not m.file.exists() for m in compiled.native):
         return None
     return replace(compiled, from_cache=True)
 

@@ -15,7 +15,7 @@ import threading
 from pathlib import Path
 from types import CodeType
 
-from ..diagnostics import CompileError, Diagnostic, DiagnosticSink, Severity
+from ..diagnostics import Code, CompileError, Diagnostic, DiagnosticSink, Severity
 from ..model.compiled import CompiledProgram, NativeModule
 from ..model.program import Project
 from ..source import SourceFile, Span
@@ -82,7 +82,7 @@ def parse_source(
             unit, diags = parser.parse(src, nested_comments)
         except RecursionError:
             sink.error(
-                "E041",
+                Code.TOO_DEEP,
                 Span(src.path, 1, 1),
                 "this file is nested too deeply to parse",
                 "split deeply nested expressions or statements",
@@ -92,7 +92,7 @@ def parse_source(
             if os.environ.get("ST_DEBUG"):
                 raise
             sink.error(
-                "E099",
+                Code.INTERNAL,
                 Span(src.path, 1, 1),
                 f"internal compiler error while parsing: {type(exc).__name__}: {exc}",
                 "please report this with the source file; set ST_DEBUG=1 to see the traceback",
@@ -177,14 +177,14 @@ def _compile_sources(
     except RecursionError as exc:
         first = sources[0].path if sources else "<input>"
         sink.error(
-            "E041",
+            Code.TOO_DEEP,
             getattr(exc, "st_span", None) or Span(first, 1, 1),
             "this statement is nested too deeply to compile",
             "split the expression into several assignments",
         )
     except SyntaxError as exc:  # Python's own limits, e.g. more than 20 nested loops
         sink.error(
-            "E041",
+            Code.TOO_DEEP,
             Span(exc.filename or (sources[0].path if sources else "<input>"), exc.lineno or 1, 1),
             f"this code is nested too deeply to compile ({exc.msg})",
             "move inner loops into a FUNCTION",
@@ -192,7 +192,7 @@ def _compile_sources(
     except Exception as exc:  # a compiler bug must still not show the user a traceback
         first = sources[0].path if sources else "<input>"
         sink.error(
-            "E099",
+            Code.INTERNAL,
             getattr(exc, "st_span", None) or Span(first, 1, 1),
             f"internal compiler error: {type(exc).__name__}: {exc}",
             "please report this with the source file; set ST_DEBUG=1 to see the traceback",
@@ -222,7 +222,7 @@ def _compile_sources(
             if os.environ.get("ST_DEBUG"):
                 raise
             sink.error(
-                "E099",
+                Code.INTERNAL,
                 Span(sources[0].path if sources else "<input>", 1, 1),
                 f"internal compiler error: {type(exc).__name__}: {exc}",
                 "please report this with the source file; set ST_DEBUG=1 to see the traceback",
@@ -268,7 +268,7 @@ def _parse_all(
     sink.items = [
         d
         for d in sink.items
-        if not (d.code == "W001" and (d.datum("pragma") in known or d.span.file in every_lib_path))
+        if not (d.code == Code.IGNORED_PRAGMA and (d.datum("pragma") in known or d.span.file in every_lib_path))
     ]
     return units, lib_paths, in_use
 
@@ -301,7 +301,7 @@ def _libraries_in_use(
             td = clash[0]
             more = f" and {len(clash) - 1} more of its types" if len(clash) > 1 else ""
             sink.warning(
-                "W010",
+                Code.OWN_MOTION_LIBRARY,
                 td.span,
                 f"the project declares its own {td.name}{more}: st's {lib.name} library is left out",
                 f"the project's own blocks are used; rename {td.name} to use st's {lib.name} blocks",
@@ -337,7 +337,8 @@ def _read_text(p: str) -> str:
         raw = Path(p).read_bytes()
     except OSError as e:
         raise CompileError(
-            [Diagnostic("E000", Severity.ERROR, Span(str(p), 0, 0), f"cannot read file: {e.strerror}")], {}
+            [Diagnostic(Code.UNREADABLE_FILE, Severity.ERROR, Span(str(p), 0, 0), f"cannot read file: {e.strerror}")],
+            {},
         ) from None
     try:
         text = raw.decode("utf-8")

@@ -14,17 +14,21 @@ import copyreg
 import importlib.util
 import io
 import marshal
+import os
 import pickle
+import sysconfig
+import tempfile
 import types
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from ..diagnostics import Diagnostic
 from ..source import SourceFile
 from .program import Project
 
-FORMAT = 3
+FORMAT = 4  # 4: a NativeModule names its module by content hash, not by path
 _MAGIC = b"st-compiled\n"
 _HEADER = _MAGIC + FORMAT.to_bytes(2, "big") + importlib.util.MAGIC_NUMBER
 _LEAF = ("st.model.", "st.source", "st.diagnostics")
@@ -42,17 +46,46 @@ class FormatError(ValueError):
     """A payload that is not a compiled program of this format and this Python."""
 
 
+def cache_root() -> Path:
+    """The directory of st's caches: $ST_CACHE_DIR, else $XDG_CACHE_HOME/st or ~/.cache/st."""
+    base = os.environ.get("ST_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "st"
+    )
+    return Path(base)
+
+
+def native_dir() -> Path:
+    """Where the native tier's modules are built and found: the compile cache's native/ directory
+    (without a cache, ST_NO_CACHE, a directory of this user's under the system's temporary one)."""
+    if os.environ.get("ST_NO_CACHE"):
+        return Path(tempfile.gettempdir()) / f"st-cache-{os.getuid()}" / "native"
+    return cache_root() / "compiled" / "native"
+
+
+def native_file(name: str) -> Path:
+    """The extension module called `name` in the native build directory (it may not exist)."""
+    return native_dir() / (name + (sysconfig.get_config_var("EXT_SUFFIX") or ".so"))
+
+
 @dataclass(frozen=True)
 class NativeModule:
     """A program's bodies compiled by the native tier (st/compiler/native): an extension module
-    whose `make(ns)` gives {class name: body}; `lines` maps its lines to (ST file, line, POU)."""
+    whose `make(ns)` gives {class name: body}; `lines` maps its lines to (ST file, line, POU).
 
-    name: str  # the module's import name
-    path: str  # the built extension module (in the compile cache's native/ directory)
+    The module is named after the hash of its contents (its text, Cython, the ABI, the C flags and
+    compiler) and is found by that name in the native build directory (`native_dir()`), wherever
+    the cache is when the program runs: an artefact holds no path."""
+
+    name: str  # the module's import name: "st_k_" and the content hash
     pyx: str  # its source file's name, as its tracebacks name it
     classes: tuple[str, ...]  # the classes whose `_body` it replaces
     lines: dict[int, tuple[str, int, str]]
     functions: tuple[str, ...] = ()  # the FUNCTIONs it compiles (called in C by its bodies)
+
+    @property
+    def file(self) -> Path:
+        """The built extension module, where it is looked for now (it may not exist)."""
+        return native_file(self.name)
 
 
 @dataclass

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, cast
 
 from ...model import types as T
 from .. import ast as A
+from .. import intervals as I
 from ..check import (
     STEP,
     BoundCall,
@@ -22,6 +23,7 @@ from ..check import (
 
 if TYPE_CHECKING:
     from .module import ModuleGen
+from .facts import UserFunctionCall, current, note_range
 from .pyast import DAY_NS, Unsupported, _args, _attr, _call, _const, _name, default_value, f32
 
 # an array of more elements than this is built by the runtime's `_fill`, a chunk at a time (so that
@@ -172,7 +174,7 @@ class ExprGen:
         self.loop_vars: list = []
         self.written_locals: set = set()
         self.result_name = ""
-        self.loop_ranges: dict = {}  # VarSym → (lo, hi): a FOR counter inside its body (range form)
+        self.loop_ranges: dict[T.VarSym, I.Interval] = {}  # a FOR counter inside its body (range form)
         self.index_memo: dict = {}  # index_key → temp: an element's checked index, computed once
 
     def _result_boxed(self) -> bool:
@@ -272,10 +274,10 @@ class ExprGen:
             if isinstance(sub, T.SubrangeType) and sub.outside == "clamp":  # MatIEC's check functions
                 return _call("_clamp_subrange", node, _const(sub.lo), _const(sub.hi))
             if isinstance(sub, T.SubrangeType):  # CODESYS/TwinCAT without CheckRange: kept, as the base type
-                return wrap(node, d) if not self.in_range(e, d) else node
+                return wrap(node, d) if not self._proven(node, e, d) else node
             if s is not None and s.is_bool:
                 node = _call("_int", node)
-            if not self.in_range(e, d):
+            if not self._proven(node, e, d):
                 return wrap(node, d)
             return node
         if isinstance(d, T.StringType):
@@ -305,25 +307,34 @@ class ExprGen:
         r = self.value_range(e)
         return r is not None and d.lo <= r[0] and r[1] <= d.hi
 
-    def value_range(self, e):
-        """The (lo, hi) interval an integer expression's value lies in, or None if unknown."""
+    def _proven(self, node: py.expr, e, d: T.ElemType) -> bool:
+        """`in_range`, noting the interval of `node` (e's value) where it holds (facts.py)."""
+        r = self.value_range(e)
+        if r is None or not (d.lo <= r[0] and r[1] <= d.hi):
+            return False
+        note_range(node, r)
+        return True
+
+    def value_range(self, e) -> I.Interval | None:
+        """The interval an integer expression's value lies in, or None if unknown (the arithmetic:
+        compiler/intervals.py)."""
         if e is None:
             return None
         if isinstance(e, A.Literal):
-            return (int(e.value), int(e.value)) if isinstance(e.value, (int, bool)) else None
+            return I.point(int(e.value)) if isinstance(e.value, (int, bool)) else None
         if isinstance(e.const, int):
-            return (e.const, e.const)
+            return I.point(e.const)
         t = T.base_of(e.ty) if e.ty is not None else None
         if t is None:
             return None
         if t.is_bool:
-            return (0, 1)
+            return I.Interval(0, 1)
         if isinstance(t, T.EnumType):
             vals = [v for _, v in t.members.values()] or [0]
-            return (min(vals), max(vals))
+            return I.Interval(min(vals), max(vals))
         # a subrange variable's interval is its base type's: a POINTER, a REFERENCE or a byte view
         # writes it without the check (and codesys/twincat keep a value outside it)
-        declared = (t.lo, t.hi) if t.is_intlike else None
+        declared = I.of_type(t)
         if isinstance(e, A.Name) and e.sym in self.loop_ranges:
             return self.loop_ranges[e.sym]  # a FOR counter its body does not write: start..end
         if isinstance(e, (A.Name, A.Field, A.Index, A.Deref, A.Bit, A.AccessorCall)) or (
@@ -333,30 +344,16 @@ class ExprGen:
         if isinstance(e, A.Binary):
             op = e.op
             if op in ("=", "<>", "<", ">", "<=", ">="):
-                return (0, 1)
+                return I.Interval(0, 1)
             l, r = self.value_range(e.left), self.value_range(e.right)
             if l is None or r is None:
                 return None
-            if op == "+":
-                return (l[0] + r[0], l[1] + r[1])
-            if op == "-":
-                return (l[0] - r[1], l[1] - r[0])
-            if op == "*":
-                ps = [x * y for x in l for y in r]
-                return (min(ps), max(ps))
-            if op == "/":
-                if r[0] >= 1:  # a positive divisor: truncation toward zero, monotone in both
-                    lo = l[0] // r[1] if l[0] >= 0 else -(-l[0] // r[0])
-                    hi = l[1] // r[0] if l[1] >= 0 else -(-l[1] // r[1])
-                    return (lo, hi)
-                m = max(abs(l[0]), abs(l[1]))
-                return (-m, m) if l[0] < 0 or r[0] < 0 else (0, m)
-            if op == "MOD":
-                m = max(abs(r[0]), abs(r[1]))
-                return (-(m - 1) if l[0] < 0 else 0, max(m - 1, 0))
+            arith = _ARITH.get(op)
+            if arith is not None:
+                return arith(l, r)
             if op in ("AND", "OR", "XOR") and declared is not None:
                 # bitwise results of in-range operands stay in the operands' (common) type
-                if declared[0] <= l[0] and l[1] <= declared[1] and declared[0] <= r[0] and r[1] <= declared[1]:
+                if I.within(l, declared) and I.within(r, declared):
                     return declared
             return None
         if isinstance(e, A.Unary):
@@ -364,12 +361,12 @@ class ExprGen:
             if v is None:
                 return None
             if e.op == "-":
-                return (-v[1], -v[0])
+                return I.neg(v)
             if e.op == "+":
                 return v
             if e.op == "NOT":
                 # ~x on a signed value stays in its type; unsigned NOT is masked
-                return declared if declared is not None and declared[0] <= v[0] and v[1] <= declared[1] else None
+                return declared if declared is not None and I.within(v, declared) else None
         if isinstance(e, A.Call) and isinstance(e.target, NativeCall):
             sig = e.target.sig
             if getattr(sig, "exact", False):
@@ -378,14 +375,14 @@ class ExprGen:
                 skip = 1 if sig.name in ("SEL", "MUX") else 0
                 rs = [self.value_range(a.value) for a in e.target.args[skip:]]
                 if rs and None not in rs:
+                    known = cast(list[I.Interval], rs)
                     if sig.name == "MIN":
-                        return (min(r[0] for r in rs), min(r[1] for r in rs))
+                        return I.minimum(known)
                     if sig.name == "MAX":
-                        return (max(r[0] for r in rs), max(r[1] for r in rs))
-                    if sig.name == "LIMIT" and len(rs) == 3:  # MN, MX, or IN between them
-                        mn, mx = rs[0], rs[2]
-                        return (min(mn[0], mx[0]), max(mn[1], mx[1]))
-                    return (min(r[0] for r in rs), max(r[1] for r in rs))
+                        return I.maximum(known)
+                    if sig.name == "LIMIT" and len(known) == 3:  # MN, MX, or IN between them
+                        return I.hull(known[0], known[2])
+                    return I.hull(*known)
         return None
 
     # ------------------------------------------------------------------ expressions
@@ -533,27 +530,28 @@ class ExprGen:
                 if hi < lo:  # ARRAY[*]: bounds known only at run time
                     term = iv
                 else:
-                    term = (
-                        _call("_ix", iv, _const(lo), _const(hi))
-                        if not self._index_safe(i, lo, hi)
-                        else (py.BinOp(iv, py.Sub(), _const(lo)) if lo else iv)
-                    )
+                    safe = self._index_safe(i, lo, hi)
+                    if safe is not None:
+                        note_range(iv, safe)
+                        term = py.BinOp(iv, py.Sub(), _const(lo)) if lo else iv
+                    else:
+                        term = _call("_ix", iv, _const(lo), _const(hi))
                 if st != 1:
                     term = py.BinOp(term, py.Mult(), _const(st))
             flat = term if flat is None else py.BinOp(flat, py.Add(), term)
         assert flat is not None  # an index has one term per dimension, at least one
         return flat
 
-    def _index_safe(self, i, lo, hi) -> bool:
-        """Can the index never leave lo..hi? (Then it needs no check: a FOR over the array's range,
-        `i + 1` in a FOR to hi - 1, a subrange-typed index, …)"""
+    def _index_safe(self, i, lo, hi) -> I.Interval | None:
+        """The values of an index that can never leave lo..hi (then it needs no check: a FOR over
+        the array's range, `i + 1` in a FOR to hi - 1, a subrange-typed index, …), else None."""
         r = self.value_range(i)
         if r is not None and lo <= r[0] and r[1] <= hi:
-            return True
+            return r
         t = T.base_of(i.ty) if i.ty is not None else None
-        if isinstance(t, T.ElemType) and t.is_intlike:
-            return lo <= t.lo and t.hi <= hi
-        return False
+        if isinstance(t, T.ElemType) and t.is_intlike and lo <= t.lo and t.hi <= hi:
+            return I.Interval(t.lo, t.hi)
+        return None
 
     def x_Deref(self, e: A.Deref) -> py.expr:
         if isinstance(e.base, A.Name) and getattr(e.base.sym, "kind", "") in ("this", "super"):
@@ -825,6 +823,9 @@ class ExprGen:
                 else:
                     args.append(self.ref_to(a.value, negated=a.negated))
         node: py.expr = _call(fn if fn is not None else pou.pyname, *args)
+        facts = current()
+        if facts is not None and fn is None and isinstance(node, py.Call):
+            facts.function_calls.append(UserFunctionCall(node, pou.pyname))
         en = tgt.bind.get("en")
         if en is not None:
             rt = pou.return_type
@@ -914,6 +915,10 @@ def _group_type(tgt, sig, group):
     return out
 
 
+# ST's arithmetic operators on the intervals of their operands
+_ARITH = {"+": I.add, "-": I.sub, "*": I.mul, "/": I.div_trunc, "MOD": I.mod_trunc}
+
+
 def _wrap_value(v: int, d) -> int:
     bits = d.bits
     if d.signed:
@@ -923,12 +928,17 @@ def _wrap_value(v: int, d) -> int:
 
 
 def wrap(node: py.expr, d) -> py.expr:
-    """Two's-complement wrap of an int expression to d's width."""
+    """Two's-complement wrap of an int expression to d's width (its values: d's, a fact)."""
     mask = (1 << d.bits) - 1
+    out: py.expr
     if d.signed:
         h = 1 << (d.bits - 1)
-        return py.BinOp(py.BinOp(py.BinOp(node, py.Add(), _const(h)), py.BitAnd(), _const(mask)), py.Sub(), _const(h))
-    return py.BinOp(node, py.BitAnd(), _const(mask))
+        out = py.BinOp(py.BinOp(py.BinOp(node, py.Add(), _const(h)), py.BitAnd(), _const(mask)), py.Sub(), _const(h))
+        note_range(out, I.Interval(-h, h - 1))
+    else:
+        out = py.BinOp(node, py.BitAnd(), _const(mask))
+        note_range(out, I.Interval(0, mask))
+    return out
 
 
 def _is_pointer(t) -> bool:

@@ -18,6 +18,7 @@ import copy
 
 from ...model import types as T
 from .. import ast as A
+from .facts import current, facts_of
 from .pyast import _set_lines
 
 _ALLOWED = (
@@ -75,8 +76,13 @@ def _plain_var(sym) -> bool:
 
 def inline_body(fn: py.FunctionDef, inst: str, prefix: str, line: int) -> list[py.stmt]:
     """The body's statements for the instance named `inst`: its locals renamed with `prefix`, every
-    position the call's line (a fault cannot happen in it; line marks show the call)."""
-    body = copy.deepcopy(fn.body)
+    position the call's line (a fault cannot happen in it; line marks show the call). The body's
+    facts (facts.py) join those of the caller being generated."""
+    memo: dict[int, object] = {}
+    body = copy.deepcopy(fn.body, memo)
+    own, caller = facts_of(fn), current()
+    if own is not None and caller is not None:
+        caller.add_inlined(own, memo, prefix)
     local = {n.id for n in py.walk(fn) if isinstance(n, py.Name) and isinstance(n.ctx, py.Store)}
     for stmt in body:
         for n in py.walk(stmt):

@@ -11,6 +11,7 @@ from ..lower.fb_init import Constructor
 from ..lower.walk import walk_stmts
 from ..names import mangle
 from .expressions import InitGen
+from .facts import BodyFacts, Local, attach, recording
 from .pyast import _args, _attr, _call, _const, _name, _set_lines, _store
 from .statements import StmtGen, _by_ref_names, _walk_exprs_in
 
@@ -20,13 +21,31 @@ if TYPE_CHECKING:
 
 class FuncGen(StmtGen):
     pou: T.POUType
+    facts_kind = "function"  # BodyFacts.kind
 
     def __init__(self, mod: ModuleGen, pou: T.POUType):
         super().__init__(mod, pou)
         self.self_name = None
         self.result_name = mangle_result(pou)
+        self.param_facts: list[tuple[str, T.Type | None]] = []
 
     def function(self) -> py.FunctionDef:
+        """The Python function, with its facts (facts.py): the variables it holds in locals and
+        their IEC types, its parameters, and what `recording` notes while it is printed."""
+        facts = BodyFacts(self.facts_kind)
+        with recording(facts):
+            fn = self._function()
+        pou = self.pou
+        held = self.cached if self.self_name is not None else set(pou.vars.values())
+        for v in held:
+            if v.section in _LOCAL_SECTIONS and v not in self.boxed and v.pyname:
+                facts.locals[v.pyname] = Local(v.type, v.section)
+        if pou.return_type is not None and not self._result_boxed():
+            facts.locals[self.result_name] = Local(pou.return_type, "RESULT")
+        facts.params = self.param_facts
+        return attach(fn, facts)
+
+    def _function(self) -> py.FunctionDef:
         pou = self.pou
         d = pou.decl
         by_ref = _by_ref_names(d.body)
@@ -101,6 +120,9 @@ class FuncGen(StmtGen):
         gl = sorted(self.globals_written)
         if gl:
             main.insert(0, py.Global(gl))
+        # BodyFacts.params: the IEC type of a parameter that receives a value (not a reference or a box)
+        by_value = {p.pyname: p.type for p in pou.params() if p.section == "VAR_INPUT" and p not in self.boxed}
+        self.param_facts = [(name, by_value.get(name)) for name in params]
         fn = py.FunctionDef(pou.pyname, _args(params), main, [], None, None)
         return _set_lines(fn, d.span.line)
 
@@ -109,11 +131,13 @@ class MethodGen(FuncGen):
     """A METHOD: a function of the instance (`self`); its own variables are Python locals, the
     instance's are attributes."""
 
+    facts_kind = "method"  # BodyFacts.kind
+
     def __init__(self, mod: ModuleGen, mt: T.POUType):
         super().__init__(mod, mt)
         self.self_name = "self"
 
-    def function(self) -> py.FunctionDef:
+    def _function(self) -> py.FunctionDef:
         mt = self.pou
         by_ref = _by_ref_names(mt.decl.body)
         boxed = {v for v in by_ref if v.owner is mt and not T.unalias(v.type).is_aggregate}
@@ -121,9 +145,13 @@ class MethodGen(FuncGen):
             v for v in mt.vars.values() if v.address_taken and v.owner is mt and not T.unalias(v.type).is_aggregate
         }
         self.cached = {v for v in mt.vars.values() if v not in boxed and v.section not in ("VAR_EXTERNAL", "VAR_INST")}
-        fn = super().function()
+        fn = super()._function()
         fn.args.args.insert(0, _set_lines(py.arg("self"), mt.decl.span.line))
         return fn
+
+
+# the sections of a POU's variables that a function holds in Python locals (when not boxed)
+_LOCAL_SECTIONS = frozenset(("VAR", "VAR_TEMP", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT"))
 
 
 def _mentions_this(body) -> bool:
@@ -217,7 +245,8 @@ class BodyGen(StmtGen):
         )
         if sfc is not None:
             run = py.Expr(_call(_attr(_attr(_name("self"), "_sfc"), "run"), _name("self"), _name("_now")))
-            members.append(_set_lines(py.FunctionDef("_body", _args(["self"]), [run], [], None, None), d.span.line))
+            sfc_body = py.FunctionDef("_body", _args(["self"]), [run], [], None, None)
+            members.append(attach(_set_lines(sfc_body, d.span.line), BodyFacts("body")))
         else:
             body_fn = self.method(
                 "_body", d.body, can_cache, edges, d.span.line, d.end_span.line if d.end_span else d.span.line
@@ -288,6 +317,16 @@ class BodyGen(StmtGen):
         return _set_lines(py.FunctionDef("_ctor", _args(["self", "a"]), body, [], None, None), line)
 
     def method(self, name, body, can_cache, edges, line, end_line) -> py.FunctionDef:
+        """The block's `_body` (or one of its actions): its variables in Python locals where
+        `can_cache` allows, written back at the end."""
+        facts = BodyFacts("body")
+        with recording(facts):
+            fn = self._method(name, body, can_cache, edges, line, end_line)
+        for v in self.cached:
+            facts.locals[v.pyname] = Local(v.type, v.section)
+        return attach(fn, facts)
+
+    def _method(self, name, body, can_cache, edges, line, end_line) -> py.FunctionDef:
         pou = self.pou
         by_ref = _by_ref_names(body)
         used = set()

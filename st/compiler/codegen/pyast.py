@@ -7,6 +7,7 @@ import struct
 from typing import TypeVar
 
 from ...model import types as T
+from .facts import note_helper
 
 _F32 = struct.Struct("<f")
 DAY_NS = 86_400_000_000_000
@@ -34,8 +35,10 @@ def _attr(obj: py.expr, name: str, ctx=None) -> py.Attribute:
 def _call(fn: str | py.expr, *args) -> py.Call:
     if fn == "_f32" and len(args) == 1 and _rounded(args[0]):
         return args[0]  # REAL rounding is idempotent: `_f32(_f32(x))` is `_f32(x)`
-    f = _name(fn) if isinstance(fn, str) else fn
-    return py.Call(f, list(args), [])
+    if isinstance(fn, str):
+        note_helper(fn)
+        return py.Call(_name(fn), list(args), [])
+    return py.Call(fn, list(args), [])
 
 
 def _rounded(node: py.expr) -> bool:

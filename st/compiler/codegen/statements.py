@@ -9,6 +9,7 @@ from typing import cast
 
 from ...model import types as T
 from .. import ast as A
+from .. import intervals as I
 from ..check import (
     ActionCall,
     CallTarget,
@@ -22,6 +23,7 @@ from ..check import (
 )
 from ..lower.walk import walk_stmts
 from .expressions import ExprGen, index_key, wrap
+from .facts import WATCHDOG_ARMED, WATCHDOG_CHECK, BodyCall, Loop, current
 from .inline import exact_instance, inline_body
 from .pyast import Unsupported, _attr, _call, _const, _name, _set_lines
 
@@ -80,7 +82,11 @@ class StmtGen(ExprGen):
         return list(before) + self.stmts(body)
 
     def s_LoopGuard(self, s: A.LoopGuard) -> list:
-        return [py.If(_name("_wd_armed"), [py.Expr(_call("_wd_check"))], [])]
+        guard = py.If(_name(WATCHDOG_ARMED), [py.Expr(_call(WATCHDOG_CHECK))], [])
+        facts = current()
+        if facts is not None:
+            facts.guards.append(guard)
+        return [guard]
 
     def stmt(self, s) -> list:
         return getattr(self, "s_" + type(s).__name__)(s)
@@ -329,7 +335,11 @@ class StmtGen(ExprGen):
         elif inline_fn is not None and isinstance(inst, py.Name) and exact_instance(callee):
             out.extend(inline_body(inline_fn, inst.id, self.new_tmp() + "_", c.span.line))
         else:
-            out.append(py.Expr(_call(_attr(inst, run))))
+            call = _call(_attr(inst, run))
+            facts = current()
+            if facts is not None and run == "_body":
+                facts.body_calls.append(BodyCall(call, fb.pyname))
+            out.append(py.Expr(call))
         out.extend(after)
         for key, a in bind.items():
             p = fb.vars[key]
@@ -487,7 +497,8 @@ class StmtGen(ExprGen):
                 loopvar = self.new_tmp()
                 body = self.loop_body(s.body, self.assign(var, _name(loopvar), None))
         finally:
-            self.loop_ranges.pop(sym, None)
+            if sym is not None:
+                self.loop_ranges.pop(sym, None)
         # before: loopvar = start - step (so that 'else' can add step: the IEC final value)
         init = py.Assign([_name(loopvar, py.Store())], py.BinOp(start, py.Sub(), step))
         final: py.expr = py.BinOp(_name(loopvar), py.Add(), step)
@@ -496,7 +507,11 @@ class StmtGen(ExprGen):
         orelse: list[py.stmt] = [py.Assign([_name(loopvar, py.Store())], final)]
         if not direct:
             orelse += self.assign(var, _name(loopvar), None)
-        return out + pre + [init, py.For(_name(loopvar, py.Store()), rng, body, orelse)]
+        loop = py.For(_name(loopvar, py.Store()), rng, body, orelse)
+        facts = current()
+        if facts is not None and sym is not None and direct and known is not None:
+            facts.loops.append(Loop(loop, loopvar, known))
+        return out + pre + [init, loop]
 
     def _once(self, value: py.expr, out: list) -> py.Name:
         """`value` evaluated into a temporary (appended to `out`), read from there."""
@@ -504,16 +519,16 @@ class StmtGen(ExprGen):
         out.append(py.Assign([_name(tmp, py.Store())], value))
         return _name(tmp)
 
-    def _counter_range(self, s: A.CountedFor, step_c) -> tuple[int, int] | None:
+    def _counter_range(self, s: A.CountedFor, step_c) -> I.Interval | None:
         """The values a FOR counter takes in its body (range form: the body does not write it)."""
         a, b = self.value_range(s.start), self.value_range(s.end)
         if a is None or b is None:
             return None
         if step_c is not None and step_c > 0:
-            return (a[0], b[1]) if a[0] <= b[1] else None
+            return I.Interval(a.lo, b.hi) if a.lo <= b.hi else None
         if step_c is not None and step_c < 0:
-            return (b[0], a[1]) if b[0] <= a[1] else None
-        return (min(a[0], b[0]), max(a[1], b[1]))
+            return I.Interval(b.lo, a.hi) if b.lo <= a.hi else None
+        return I.hull(a, b)
 
     def _for_while(self, s: A.CountedFor, start, end, step_c):
         """FOR whose body writes the loop variable: a faithful while loop."""

@@ -1,7 +1,9 @@
 """The native tier (`--native`): block bodies compiled to C by Cython, with the same semantics.
 
 Pure CPython spends most of a scan on dispatch and boxing; this tier takes the `_body` of
-every PROGRAM and FUNCTION_BLOCK of the project, as the code generator printed it, gives its
+every PROGRAM and FUNCTION_BLOCK of the project, and every user FUNCTION, as the code generator
+printed them, with the facts it recorded beside each (codegen/facts.py: which locals hold which
+ST variables, the loop guards, the helpers and what for, the intervals it proved), gives their
 BOOL/integer/REAL locals C types where that computes exactly what Python computes, reaches
 instance variables at their slots' offsets (kinds.py, typer.py), and builds all of them into
 one extension module per program
@@ -17,18 +19,19 @@ from __future__ import annotations
 import ast as py
 from typing import Any
 
-from ...diagnostics import DiagnosticSink
+from ...diagnostics import Code, DiagnosticSink
 from ...model import types as T
 from ...model.compiled import NativeModule
 from ...model.program import Project
 from ...source import Span
+from ..codegen.facts import WATCHDOG_ARMED, facts_of
 from .kinds import Inst, ctype, of_type
 from .pyx import module_text
 from .toolchain import ToolchainError, build, missing
 from .typer import ClassInfo, FuncInfo, NotEligible, Typed, type_body
 
 # what the runtime rebinds in a namespace while the program runs (st.runtime)
-RUNTIME_VOLATILE = frozenset({"_now", "_wd_armed", "_plc_log", "_cov"})
+RUNTIME_VOLATILE = frozenset({"_now", WATCHDOG_ARMED, "_plc_log", "_cov"})
 _SECTIONS = ("VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_TEMP")
 
 
@@ -38,7 +41,9 @@ def build_native(
     """The native module of a program's generated `modules`, and {POU: why its body stays Python}."""
     why = missing()
     if why is not None:
-        sink.warning("W012", where, f"the native tier is not available: {why}", "the program runs as Python")
+        sink.warning(
+            Code.NATIVE_UNAVAILABLE, where, f"the native tier is not available: {why}", "the program runs as Python"
+        )
         return [], {}
     volatile = RUNTIME_VOLATILE | _rebound_globals(modules)
     by_class = {p.pyname: p for p in project.pous.values() if p.pyname}
@@ -70,6 +75,9 @@ def build_native(
     bodies: list[tuple[str, str, str, Typed]] = []
     skipped: dict[str, str] = {}
     for path, fdef, pou in fdefs:
+        if fdef.name not in funcs:
+            skipped[pou.name] = "the code generator recorded no facts for its parameters"
+            continue
         try:
             bodies.append((fdef.name, path, pou.name, type_body(fdef, fdef.name, classes, volatile, funcs)))
         except NotEligible as e:
@@ -88,21 +96,27 @@ def build_native(
         return [], skipped
     text, lines = module_text(bodies)
     try:
-        name, so, _built = build(text)
+        name, _so, _built = build(text)
     except ToolchainError as e:
-        sink.warning("W012", where, f"the native tier could not build this program: {e}", "the program runs as Python")
+        sink.warning(
+            Code.NATIVE_UNAVAILABLE,
+            where,
+            f"the native tier could not build this program: {e}",
+            "the program runs as Python",
+        )
         return [], skipped
     blocks = tuple(c for c, _, _, t in bodies if t.function is None)
     functions = tuple(c for c, _, _, t in bodies if t.function is not None)
-    return [NativeModule(name, str(so), name + ".pyx", blocks, lines, functions)], skipped
+    return [NativeModule(name, name + ".pyx", blocks, lines, functions)], skipped
 
 
 def _functions(
     modules: list[tuple[str, py.Module]], project: Project
 ) -> tuple[dict[str, FuncInfo], list[tuple[str, py.FunctionDef, Any]]]:
     """The user FUNCTIONs as the code generator printed them (module-level `def`s): {name: the
-    kinds of its parameters and result}, and [(file, def, POU)]. A parameter that is not a
-    VAR_INPUT of a C kind (a VAR_IN_OUT's or VAR_OUTPUT's reference) stays an object."""
+    kinds of its parameters and result}, and [(file, def, POU)]. A parameter that receives no
+    value of a C kind (its facts say: a VAR_IN_OUT's or VAR_OUTPUT's reference, a box) stays an
+    object."""
     by_name = {p.pyname: p for p in project.pous.values() if p.pyname and p.pou_kind == "FUNCTION" and not p.library}
     infos: dict[str, FuncInfo] = {}
     defs = []
@@ -112,9 +126,10 @@ def _functions(
             if pou is None:
                 continue
             assert isinstance(node, py.FunctionDef)
-            inputs = {v.pyname: v for v in pou.vars.values() if v.section == "VAR_INPUT" and v.pyname}
-            params = [of_type(inputs[a.arg].type) if a.arg in inputs else None for a in node.args.args]
-            infos[node.name] = FuncInfo([k if ctype(k) else None for k in params], of_type(pou.return_type))
+            facts = facts_of(node)
+            if facts is not None and [a.arg for a in node.args.args] == [name for name, _ in facts.params]:
+                params = [of_type(t) if t is not None else None for _, t in facts.params]
+                infos[node.name] = FuncInfo([k if ctype(k) else None for k in params], of_type(pou.return_type))
             defs.append((path, node, pou))
     return infos, defs
 

@@ -8,7 +8,9 @@ leave the values Python would compute, so every integer expression carries the i
 values: an operation whose result may not fit in int64 (a product of three DINTs, a shift by a
 variable count) is done on Python integers instead, as are operations whose C and Python
 meanings differ at the edges (`**`, a float `//` or `%`). An int converted to double must lie
-within ±2^53, where the conversion is exact in both.
+within ±2^53, where the conversion is exact in both. The interval arithmetic is the compiler's
+own (compiler/intervals.py, shared with the code generator); what is C's here is the int64 bound
+and which operations C computes as Python does.
 """
 
 from __future__ import annotations
@@ -17,15 +19,11 @@ import ast as py
 from dataclasses import dataclass
 
 from ...model import types as T
+from .. import intervals as I
+from ..intervals import Interval as Int  # an integer (a C int64_t) whose values lie in lo..hi
 
 INT64_MIN, INT64_MAX = -(1 << 63), (1 << 63) - 1
 EXACT = 1 << 53  # integers a double holds exactly
-
-
-@dataclass(frozen=True)
-class Int:
-    lo: int
-    hi: int
 
 
 @dataclass(frozen=True)
@@ -107,7 +105,7 @@ def element_kind(t: T.Type | None) -> Kind:
 
 def join(a: Kind, b: Kind) -> Kind:
     if isinstance(a, Int) and isinstance(b, Int):
-        return Int(min(a.lo, b.lo), max(a.hi, b.hi))
+        return I.hull(a, b)
     if a == b:
         return a
     return None
@@ -141,39 +139,26 @@ def divides(a: Int, b: Int) -> bool:
 
 def int_binop(op: py.operator, a: Int, b: Int) -> Int | None:
     """The interval of `a op b` on integers when C's int64 computes it as Python does, else None."""
+    r: Int | None
     if isinstance(op, py.Add):
-        r = Int(a.lo + b.lo, a.hi + b.hi)
+        r = I.add(a, b)
     elif isinstance(op, py.Sub):
-        r = Int(a.lo - b.hi, a.hi - b.lo)
+        r = I.sub(a, b)
     elif isinstance(op, py.Mult):
-        ps = (a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi)
-        r = Int(min(ps), max(ps))
-    elif isinstance(op, py.FloorDiv):
+        r = I.mul(a, b)
+    elif isinstance(op, (py.FloorDiv, py.Mod)):
         if not divides(a, b):
             return None
-        m = max(abs(a.lo), abs(a.hi))
-        r = Int(-m, m)
-    elif isinstance(op, py.Mod):
-        if not divides(a, b):
-            return None
-        m = max(abs(b.lo), abs(b.hi), 1) - 1
-        r = Int(0 if b.lo > 0 else -m, 0 if b.hi < 0 else m)
+        r = I.div_floor(a, b) if isinstance(op, py.FloorDiv) else I.mod_floor(a, b)
     elif isinstance(op, py.LShift):
-        if a.lo < 0 or b.lo < 0 or b.hi > 62:
-            return None
-        r = Int(a.lo << b.lo, a.hi << b.hi)
+        r = I.shl(a, b) if b.hi <= 62 else None  # C: a count below the width, a result in int64
     elif isinstance(op, py.RShift):
-        if b.lo < 0 or b.hi > 63:
-            return None
-        cs = (a.lo >> b.lo, a.lo >> b.hi, a.hi >> b.lo, a.hi >> b.hi)
-        r = Int(min(cs), max(cs))
+        r = I.shr(a, b) if b.hi <= 63 else None
     elif isinstance(op, (py.BitAnd, py.BitOr, py.BitXor)):
-        if a.lo >= 0 and b.lo >= 0:
-            n = max(a.hi.bit_length(), b.hi.bit_length())
-            r = Int(0, min(a.hi, b.hi)) if isinstance(op, py.BitAnd) else Int(0, (1 << n) - 1)
-        else:
-            n = max(abs(v).bit_length() for v in (a.lo, a.hi, b.lo, b.hi))
-            r = Int(-(1 << n), (1 << n) - 1)
+        r = I.bitwise(_BITWISE[type(op)], a, b)
     else:
         return None
-    return r if fits(r.lo, r.hi) else None
+    return r if r is not None and fits(r.lo, r.hi) else None
+
+
+_BITWISE = {py.BitAnd: "and", py.BitOr: "or", py.BitXor: "xor"}

@@ -1,9 +1,10 @@
 """Cython and the C compiler: a .pyx text to a loadable extension module, built once.
 
 The module is named after the hash of everything that decides its bytes (its text, Cython's
-version, this Python's ABI, the C flags), so a build is found again by any later compile of
-the same program and two processes building it at once both end with the same file: each
-builds in its own directory and renames the result into place.
+version, this Python's ABI, the C flags and compiler), so a build is found again by any later
+compile of the same program, a compiled program finds it by that name alone (NativeModule.file),
+and two processes building it at once both end with the same file: each builds in its own
+directory and renames the result into place.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import sysconfig
 import tempfile
 from pathlib import Path
 
-from .. import cache
+from ...model.compiled import native_dir, native_file
 
 # -ffp-contract=off: no fused multiply-add (x * x - 0.01 must round twice, as Python does)
 CFLAGS = ["-O2", "-fwrapv", "-fno-strict-aliasing", "-ffp-contract=off", "-fPIC", "-shared", "-w"]
@@ -58,10 +59,8 @@ def missing() -> str | None:
 
 
 def build_dir() -> Path:
-    base = cache.cache_dir()
-    if base is None:
-        base = Path(tempfile.gettempdir()) / f"st-cache-{os.getuid()}"
-    d = base / "native"
+    """The native build directory (st.model.compiled.native_dir: where the runtime looks too)."""
+    d = native_dir()
     d.mkdir(parents=True, exist_ok=True)
     return d
 
@@ -78,8 +77,11 @@ def build(text: str) -> tuple[str, Path, bool]:
     if why is not None:
         raise ToolchainError(why)
     name = module_name(text)
-    d = build_dir()
-    so = d / (name + (sysconfig.get_config_var("EXT_SUFFIX") or ".so"))
+    try:
+        d = build_dir()
+    except OSError as e:
+        raise ToolchainError(f"the native build directory cannot be made: {e}") from None
+    so = native_file(name)
     pyx = d / (name + ".pyx")
     if so.exists() and pyx.exists():
         return name, so, False

@@ -1,8 +1,12 @@
 """One generated `_body` (or user FUNCTION) made ready for Cython: C types where they are exact,
 the rest unchanged.
 
-Input: the body's Python AST as the code generator printed it, the kinds of the instance's
-variables (kinds.py) and the names that may change between calls (globals). Output: the same
+Input: the body's Python AST as the code generator printed it, the facts the code generator
+recorded while printing it (codegen/facts.py: the locals holding ST variables and their IEC
+types, the loop guards, the runtime helpers called and what for, the calls of block bodies and
+FUNCTIONs, the intervals it proved), the kinds of the instances' variables (kinds.py) and the
+names that may change between calls (globals). What codegen meant comes from the facts, never
+from the shape of its output; the AST gives the statements to compile. Output: the same
 statements with
 - the locals that cache a BOOL/integer/REAL variable, and the temporaries that only ever hold
   such values, declared as C variables (`cdef` lines, added by pyx.py);
@@ -11,11 +15,14 @@ statements with
   which check the exact type first), and a call of a block's body made directly (`_k_run`,
   resolved by pyx.py);
 - an operation that C's int64 might compute differently done on Python objects (`_k_obj`);
-- the hot helpers (`_ix`, `_idiv`, `_imod`, `_fdiv`, `_f32`, MIN/MAX/ABS) replaced by C functions
-  with the same results and faults (pyx.py's prelude);
-- the loop guard `if _wd_armed: _wd_check()` replaced by a call of `_wd_check()` every 1024
+- the hot runtime helpers (index checks, DIV, MOD, REAL division and rounding, MIN/MAX/ABS, as
+  the facts name them) replaced by C functions with the same results and faults (pyx.py's
+  prelude), and the standard functions with a C twin (SQRT, SEL, …) computed by it where the
+  PLC's namespace binds the very helper the twin copies (pyx.TWINS);
+- each loop guard (`if _wd_armed: _wd_check()`) replaced by a call of `_wd_check()` every 1024
   iterations: a compiled loop holds the GIL, so the watchdog thread's flag would never come,
   while `_wd_check` itself compares the clock with the job's deadline;
+- inside a FOR loop that does not write its counter, the counter's interval is the loop's;
 - a global that the runtime or ST code rebinds (VAR_GLOBALs) read from the PLC's namespace at
   each use, the job's time `_now` once per body; every other global (helpers, classes,
   functions) bound once per PLC.
@@ -27,8 +34,27 @@ import ast as py
 import builtins
 import copy
 from dataclasses import dataclass, field
+from typing import Any, TypeVar
 
-from .kinds import FLOAT, Arr, Bool, Float, Inst, Int, Kind, as_int, ctype, divides, exact_float, fits, int_binop, join
+from .. import intervals as I
+from ..codegen.facts import WATCHDOG_CHECK, BodyFacts, Helper, deepcopy_with, facts_of
+from .kinds import (
+    FLOAT,
+    Arr,
+    Bool,
+    Float,
+    Inst,
+    Int,
+    Kind,
+    as_int,
+    ctype,
+    divides,
+    exact_float,
+    fits,
+    int_binop,
+    join,
+    of_type,
+)
 
 NS = "_k_ns"  # the PLC's namespace, a parameter of the module's make()
 GUARD_EVERY = 1024  # loop iterations between two watchdog checks
@@ -70,6 +96,7 @@ class Typed:
 
 
 _BOTTOM = object()  # a temporary whose kind is not known yet (no assignment seen)
+_N = TypeVar("_N", bound=py.AST)
 
 
 @dataclass
@@ -94,12 +121,20 @@ def type_body(
     classes: dict[str, ClassInfo],
     volatile: frozenset[str],
     funcs: dict[str, FuncInfo] | None = None,
+    facts: BodyFacts | None = None,
 ) -> Typed:
     """The `_body` of class `own`, or (with `own` a key of `funcs`) the FUNCTION `own` itself;
-    `classes`: every generated class (block or STRUCT) by name; `funcs`: every user FUNCTION."""
+    `classes`: every generated class (block or STRUCT) by name; `funcs`: every user FUNCTION;
+    `facts`: what the code generator recorded for `fn` (by default, the facts kept on it)."""
     funcs = funcs or {}
     function = funcs.get(own)
-    fn = _unshared(copy.deepcopy(fn))
+    facts = facts if facts is not None else facts_of(fn)
+    if facts is None:
+        raise NotEligible("the code generator recorded no facts for it")
+    memo: dict[int, object] = {}
+    fn = deepcopy_with(fn, facts, memo)
+    index = _Facts(facts, memo)
+    fn = _unshared(fn, index)
     _check_eligible(fn)
     if function is not None and (
         fn.args.vararg or fn.args.kwarg or fn.args.kwonlyargs or fn.args.defaults or fn.args.posonlyargs
@@ -107,34 +142,30 @@ def type_body(
         raise NotEligible("its parameters are not plain positional ones")
     stores = _stores(fn)
     params = {a.arg for a in fn.args.args}
-    fields = classes[own].kinds if own in classes else {}
-    env: dict[str, Kind] = {"self": Inst(own)} if function is None else {}
+    env: dict[str, Kind] = {}
+    if function is None and fn.args.args:
+        env[fn.args.args[0].arg] = Inst(own)  # a body's instance (`self`)
+    for name, local in facts.locals.items():
+        kind = of_type(local.type)
+        if kind is None or (local.section == "VAR_IN_OUT" and not isinstance(kind, Inst)):
+            continue  # an elementary in-out holds what the caller passed, copied in unconverted
+        if isinstance(kind, (Arr, Inst)) and len(stores.get(name, ())) > 1:
+            continue  # a list or an instance only where nothing else is stored in the local
+        if name in params and ctype(kind) is not None:
+            continue  # a parameter is a C value only where the signature says so (below, pyx.py)
+        env[name] = kind
     if function is not None:
         for a, k in zip(fn.args.args, function.params, strict=True):
             if ctype(k) is not None:
                 env[a.arg] = k  # a C parameter: the caller passes a value of its type (codegen wraps it)
-    for stmt in fn.body:
-        if isinstance(stmt, py.Try):
-            break
-        if (
-            isinstance(stmt, py.Assign)
-            and len(stmt.targets) == 1
-            and isinstance(stmt.targets[0], py.Name)
-            and isinstance(stmt.value, py.Attribute)
-            and isinstance(stmt.value.value, py.Name)
-            and stmt.value.value.id == "self"
-        ):
-            local, kind = stmt.targets[0].id, fields.get(stmt.value.attr)
-            if kind is not None and (not isinstance(kind, (Arr, Inst)) or len(stores.get(local, ())) == 1):
-                env[local] = kind  # a list or an instance only where nothing else is stored in the local
     temps = {
         name: values
         for name, values in stores.items()
         if name not in env and name not in params and all(v is not None for v in values)
     }
     locals_ = set(stores) | params
-    _infer_temps(temps, env, classes, locals_, funcs)
-    t = _Transformer(env, classes, locals_, volatile, funcs)
+    _infer_temps(temps, env, classes, locals_, funcs, index)
+    t = _Transformer(env, classes, locals_, volatile, funcs, index)
     t.generic_visit(fn)
     if t.uses_now:
         now = py.Assign([py.Name("_k_now", py.Store())], py.Subscript(py.Name(NS, py.Load()), py.Constant("_now")))
@@ -163,9 +194,67 @@ def _check_eligible(fn: py.FunctionDef) -> None:
             raise NotEligible(f"it uses the name {node.attr}, which C or Cython reserve")
 
 
-def _unshared(fn: py.FunctionDef) -> py.FunctionDef:
+class _Facts:
+    """A body's facts (codegen/facts.py) for its copy: each node a fact names, found by identity
+    in the copied tree (and in any further copy made through `copy`)."""
+
+    def __init__(self, facts: BodyFacts, memo: dict[int, object]):
+        self.helpers = facts.helpers
+        # id(node) → (node, what is known of it): the node is held, so its id stays its own
+        self.guards: dict[int, tuple[object, Any]] = {}
+        self.loops: dict[int, tuple[object, Any]] = {}  # (counter, its values in the loop's body)
+        self.ranges: dict[int, tuple[object, Any]] = {}  # the values (Interval)
+        self.body_calls: dict[int, tuple[object, Any]] = {}  # the block's class
+        self.function_calls: dict[int, tuple[object, Any]] = {}  # the FUNCTION's name
+
+        def add(table: dict[int, tuple[object, Any]], node: object, value: Any) -> None:
+            c = memo.get(id(node))
+            if c is not None:
+                table[id(c)] = (c, value)
+
+        for g in facts.guards:
+            add(self.guards, g, None)
+        for loop in facts.loops:
+            add(self.loops, loop.node, (loop.counter, loop.values))
+        for b in facts.body_calls:
+            add(self.body_calls, b.node, b.cls)
+        for f in facts.function_calls:
+            add(self.function_calls, f.node, f.name)
+        for r in facts.ranges:
+            had = self.get(self.ranges, memo.get(id(r.node)))
+            add(self.ranges, r.node, r.values if had is None else I.meet(had, r.values))
+
+    def _tables(self) -> tuple[dict, ...]:
+        return (self.guards, self.loops, self.ranges, self.body_calls, self.function_calls)
+
+    def alias(self, memo: dict[int, object]) -> None:
+        """The facts of nodes that a deep copy (its `memo`) copied hold for the copies too."""
+        for table in self._tables():
+            for key, (_node, value) in list(table.items()):
+                c = memo.get(key)
+                if c is not None:
+                    table[id(c)] = (c, value)
+
+    def copy(self, node: _N) -> _N:
+        memo: dict[int, object] = {}
+        out = copy.deepcopy(node, memo)
+        self.alias(memo)
+        return out
+
+    @staticmethod
+    def get(table: dict, node: object):
+        got = table.get(id(node))
+        return got[1] if got is not None and got[0] is node else None
+
+    def is_guard(self, node: object) -> bool:
+        got = self.guards.get(id(node))
+        return got is not None and got[0] is node
+
+
+def _unshared(fn: py.FunctionDef, index: _Facts) -> py.FunctionDef:
     """`fn` as a tree: the code generator may put one node in two places (a FOR loop's start is
-    both the counter's first value and the range's), and this module rewrites nodes in place."""
+    both the counter's first value and the range's), and this module rewrites nodes in place.
+    A node's second place gets a copy, with the node's facts."""
     seen: set[int] = set()
     todo: list[py.AST] = [fn]
     while todo:
@@ -176,7 +265,7 @@ def _unshared(fn: py.FunctionDef) -> py.FunctionDef:
             for item in items:
                 if isinstance(item, py.AST):
                     if id(item) in seen:
-                        item = copy.deepcopy(item)
+                        item = index.copy(item)
                     seen.add(id(item))
                     todo.append(item)
                 fresh.append(item)
@@ -219,9 +308,15 @@ def _stores(fn: py.FunctionDef) -> dict[str, list[py.expr | None]]:
 
 
 def _infer_temps(
-    temps: dict[str, list], env: dict[str, Kind], classes: dict, locals_: set[str], funcs: dict[str, FuncInfo]
+    temps: dict[str, list],
+    env: dict[str, Kind],
+    classes: dict,
+    locals_: set[str],
+    funcs: dict[str, FuncInfo],
+    index: _Facts,
 ) -> None:
-    """Kinds of the temporaries, to a fixed point (a few rounds; what does not settle stays an object)."""
+    """Kinds of the temporaries (the generated code's own locals, which hold no ST variable), to
+    a fixed point (a few rounds; what does not settle stays an object)."""
     kinds: dict[str, object] = {name: _BOTTOM for name in temps}
     for _ in range(6):
         changed = False
@@ -229,7 +324,8 @@ def _infer_temps(
             k: object = _BOTTOM
             for v in values:
                 known = {n: kk for n, kk in kinds.items() if kk is not _BOTTOM}
-                vk = _Transformer({**env, **known}, classes, locals_, frozenset(), funcs).expr(copy.deepcopy(v))[1]
+                t = _Transformer({**env, **known}, classes, locals_, frozenset(), funcs, index)
+                vk = t.expr(index.copy(v))[1]
                 k = vk if k is _BOTTOM else join(k, vk)  # type: ignore[arg-type]
             if k != kinds[name]:
                 kinds[name], changed = k, True
@@ -281,10 +377,12 @@ class _Transformer(py.NodeTransformer):
         classes: dict[str, ClassInfo],
         locals_: set[str],
         volatile: frozenset[str],
-        funcs: dict[str, FuncInfo] | None = None,
+        funcs: dict[str, FuncInfo],
+        facts: _Facts,
     ):
         self.env, self.classes, self.locals, self.volatile = env, classes, locals_, volatile
-        self.funcs = funcs or {}
+        self.funcs = funcs
+        self.facts = facts
         self.calls: set[str] = set()
         self.captured: set[str] = set()
         self.slots: set[tuple[str, str]] = set()
@@ -318,24 +416,43 @@ class _Transformer(py.NodeTransformer):
         return super().visit(node)
 
     def visit_If(self, node: py.If):
-        if (
-            isinstance(node.test, py.Name)
-            and node.test.id == "_wd_armed"
-            and len(node.body) == 1
-            and isinstance(node.body[0], py.Expr)
-            and isinstance(node.body[0].value, py.Call)
-            and isinstance(node.body[0].value.func, py.Name)
-            and node.body[0].value.func.id == "_wd_check"
-            and not node.orelse
-        ):
-            self.captured.add("_wd_check")
+        if self.facts.is_guard(node):  # a loop guard: the watchdog's check every GUARD_EVERY rounds
+            self.captured.add(WATCHDOG_CHECK)
             count = py.AugAssign(py.Name("_k_wd", py.Store()), py.Add(), py.Constant(1))
             due = py.UnaryOp(py.Not(), py.BinOp(py.Name("_k_wd", py.Load()), py.BitAnd(), py.Constant(GUARD_EVERY - 1)))
-            check = py.If(due, [py.Expr(_call("_wd_check"))], [])
+            check = py.If(due, [py.Expr(_call(WATCHDOG_CHECK))], [])
             for s in (count, check, check.body[0]):
                 py.copy_location(s, node)
             return [count, check]
         return self.generic_visit(node)
+
+    def visit_For(self, node: py.For):
+        """A FOR whose body does not write its counter: in the body, the counter's values are the
+        loop's (codegen's Loop fact), often fewer than its type's."""
+        loop = self.facts.get(self.facts.loops, node)
+        known = self.env.get(loop[0]) if loop is not None else None
+        if loop is None or not isinstance(known, Int) or not fits(loop[1].lo, loop[1].hi):
+            return self.generic_visit(node)
+        counter, values = loop
+        node.target = self.visit(node.target)
+        node.iter = self.visit(node.iter)
+        self.env[counter] = values
+        try:
+            node.body = self._statements(node.body)
+        finally:
+            self.env[counter] = known
+        node.orelse = self._statements(node.orelse)  # after the loop: any value of its type again
+        return node
+
+    def _statements(self, body: list[py.stmt]) -> list[py.stmt]:
+        out: list[py.stmt] = []
+        for stmt in body:
+            got = self.visit(stmt)
+            if isinstance(got, list):
+                out.extend(got)
+            elif got is not None:
+                out.append(got)
+        return out
 
     def visit_Assign(self, node: py.Assign):
         target = node.targets[0]
@@ -360,10 +477,16 @@ class _Transformer(py.NodeTransformer):
     # ------------------------------------------------------------------ expressions
     def expr(self, e: py.expr) -> tuple[py.expr, Kind]:
         m = getattr(self, "x_" + type(e).__name__, None)
-        if m is not None:
-            return m(e)
-        self.generic_visit(e)
-        return e, None
+        if m is None:
+            self.generic_visit(e)
+            return e, None
+        proven = self.facts.get(self.facts.ranges, e)  # codegen's interval of this value
+        out, kind = m(e)
+        if proven is not None and isinstance(kind, Int):
+            narrowed = I.meet(kind, proven)
+            if narrowed.lo <= narrowed.hi:
+                kind = narrowed
+        return out, kind
 
     def x_Constant(self, e: py.Constant):
         v = e.value
@@ -386,7 +509,7 @@ class _Transformer(py.NodeTransformer):
         name = e.id
         if name in self.locals:
             return e, self.env.get(name)
-        if name == "_range":
+        if self.facts.helpers.get(name) is Helper.RANGE:  # Cython's C loop over `range`
             return py.copy_location(py.Name("range", py.Load()), e), None
         if name == "_now":  # the job's release time: the same all through a body (read once, at its start)
             self.uses_now = True
@@ -449,11 +572,11 @@ class _Transformer(py.NodeTransformer):
             r = FLOAT
         elif i is not None:
             if isinstance(op, py.USub):
-                r = Int(-i.hi, -i.lo)
+                r = I.neg(i)
             elif isinstance(op, py.UAdd):
                 r = i
             elif isinstance(op, py.Invert):
-                r = Int(~i.hi, ~i.lo)
+                r = I.invert(i)
             if isinstance(r, Int) and not fits(r.lo, r.hi):
                 r = None
         if r is None:
@@ -491,17 +614,19 @@ class _Transformer(py.NodeTransformer):
 
     def x_Call(self, e: py.Call):
         f = e.func
-        if isinstance(f, py.Attribute) and f.attr == "_body" and not e.args and not e.keywords:
-            obj, kind = self.expr(f.value)
-            if isinstance(kind, Inst) and isinstance(obj, py.Name):
+        cls = self.facts.get(self.facts.body_calls, e)
+        if cls is not None and isinstance(f, py.Attribute) and not e.args and not e.keywords:
+            obj, _kind = self.expr(f.value)
+            if isinstance(obj, py.Name):
                 # a block's call: pyx.py makes it a direct call of the compiled body when there is one
-                return py.copy_location(_call("_k_run", obj, py.Constant(kind.cls)), e), None
+                return py.copy_location(_call("_k_run", obj, py.Constant(cls)), e), None
             f.value = obj
             return e, None
         name = e.func.id if isinstance(e.func, py.Name) else None
         if name is not None and not e.keywords and name not in self.locals:
             parts = [self.expr(a) for a in e.args]
-            info = self.funcs.get(name)
+            called = self.facts.get(self.facts.function_calls, e)
+            info = self.funcs.get(called) if called == name else None
             if (
                 info is not None
                 and len(parts) == len(info.params)
@@ -522,41 +647,40 @@ class _Transformer(py.NodeTransformer):
         return e, None
 
     def _helper(self, name: str, parts: list[tuple[py.expr, Kind]]) -> tuple[py.expr, Kind] | None:
-        """A helper call computed in C, or None to call the Python helper."""
+        """A helper call computed in C, or None to call the Python helper: a runtime helper by
+        what the facts say it computes, a standard function by its C twin."""
         ks = [k for _, k in parts]
         vs = [v for v, _ in parts]
         n = len(parts)
-        if name == "_f32" and n == 1:
+        what = self.facts.helpers.get(name)
+        if what is Helper.ROUND and n == 1:
             if ks[0] is None:
                 return _call("_k_f32", _call("_k_f64", vs[0])), FLOAT
             if exact_float(ks[0]):
                 return _call("_k_f32", vs[0]), FLOAT
-        if name == "_float" and n == 1 and ks[0] is not None and exact_float(ks[0]):
+        if what is Helper.TO_REAL and n == 1 and ks[0] is not None and exact_float(ks[0]):
             return _call("_k_tofloat", vs[0]), FLOAT
-        if name == "_abs" and n == 1:
+        if what is Helper.ABS and n == 1:
             if isinstance(ks[0], Float):
                 return _call("abs", vs[0]), FLOAT
             i = ks[0]
             if isinstance(i, Int) and fits(i.lo, i.hi, -(1 << 62), 1 << 62):
-                lo = 0 if i.lo <= 0 <= i.hi else min(abs(i.lo), abs(i.hi))
-                return _call("abs", vs[0]), Int(lo, max(abs(i.lo), abs(i.hi)))
-        if name in ("_min", "_max") and n == 2:
+                return _call("abs", vs[0]), I.absolute(i)
+        if what in (Helper.MIN, Helper.MAX) and n == 2:
             k = join(ks[0], ks[1])
             if isinstance(k, (Int, Float)) and isinstance(ks[0], type(ks[1])):
-                return _call(name[1:], *vs), k
-        if name == "_ix" and n == 3 and isinstance(ks[0], Int):
+                return _call("min" if what is Helper.MIN else "max", *vs), k
+        if what is Helper.INDEX and n == 3 and isinstance(ks[0], Int):
             first, last = (v.value if isinstance(v, py.Constant) and type(v.value) is int else None for v in vs[1:])
             if isinstance(first, int) and isinstance(last, int) and fits(first, last, -(1 << 62), 1 << 62):
                 return _call("_k_ix", *vs), Int(0, max(last - first, 0))
-        if name in ("_idiv", "_imod", "_umod") and n == 2:
+        if what in (Helper.DIV, Helper.MOD, Helper.UMOD) and n == 2:
             a, b = (as_int(k) for k in ks)
             if a is not None and b is not None and divides(a, b):
-                if name == "_idiv":
-                    m = max(abs(a.lo), abs(a.hi))
-                    return _call("_k_idiv", *vs), Int(-m, m)
-                m = max(abs(b.lo), abs(b.hi), 1) - 1
-                return _call("_k_imod", *vs), Int(-m if a.lo < 0 else 0, m if a.hi > 0 else 0)
-        if name == "_fdiv" and n == 2 and all(k is not None and exact_float(k) for k in ks):
+                if what is Helper.DIV:
+                    return _call("_k_idiv", *vs), I.div_trunc(a, b)
+                return _call("_k_imod", *vs), I.mod_trunc(a, b)
+        if what is Helper.REAL_DIV and n == 2 and all(k is not None and exact_float(k) for k in ks):
             return _call("_k_fdiv", *vs), FLOAT
         if name in MATH_TWINS and n == 1 and ks[0] is not None and exact_float(ks[0]):
             return self._twin(
@@ -568,7 +692,7 @@ class _Transformer(py.NodeTransformer):
             if sel is not None and isinstance(ks[1], type(ks[2])):
                 python = _call(CAST[ctype(k) or ""], _call(name, *copy.deepcopy(vs)))
                 return self._twin(name, _call(sel, *vs), python), k
-        if name == "_int" and n == 1 and isinstance(ks[0], (Bool, Int)):  # BOOL_TO_DINT and the like
+        if what is Helper.TO_INT and n == 1 and isinstance(ks[0], (Bool, Int)):  # BOOL_TO_DINT and the like
             c = _call("_k_bool_int", vs[0]) if isinstance(ks[0], Bool) else vs[0]
             k = Int(0, 1) if isinstance(ks[0], Bool) else ks[0]
             return self._twin(name, c, _call("_k_i64", _call(name, copy.deepcopy(vs[0])))), k
