@@ -26,9 +26,9 @@ def libraries(options: CompileOptions | None = None) -> list:
     are the options'), PLCopen motion, and the vendor compatibility library under codesys, twincat
     and the default (not under iec and openplc, whose programs know none of its names)."""
     options = options or CompileOptions()
-    matiec = options.dialect is not None and options.dialect.name == "openplc"
+    matiec = options.dialect is not None and options.dialect.matiec_errors
     libs = [default_library(options.f_trig_first_scan, options.time_unit, matiec), plcopen_library()]
-    if options.dialect is None or options.dialect.name in ("codesys", "twincat"):
+    if options.dialect is None or options.dialect.vendor_library:
         libs.append(vendor_library())
     return libs
 

@@ -40,7 +40,11 @@ class Code(str, Enum):
     UNCLOSED_COMMENT = "E002", ("A comment '(*', '/*' or a pragma '{' is never closed.")
     MISPLACED_SECTION = (
         "E003",
-        ("A declaration section is in a place where it is not allowed (e.g. VAR_INPUT outside a POU)."),
+        (
+            "A declaration section is in a place where it is not allowed (e.g. VAR_INPUT outside a POU, a "
+            "VAR_OUTPUT or VAR_IN_OUT in FB_init, FB_reinit or FB_exit, which run when an instance is created "
+            "and take inputs only)."
+        ),
     )
     MALFORMED_LITERAL = (
         "E004",
@@ -66,12 +70,22 @@ class Code(str, Enum):
             "POU, ...)."
         ),
     )
-    TYPE_MISMATCH = "E013", ("Type mismatch: the value's type cannot be assigned or passed to the target's type.")
+    TYPE_MISMATCH = (
+        "E013",
+        (
+            "Type mismatch: a value of one type where another is needed: assigned, passed to a parameter, "
+            "an array index, EN, a typed literal's value (INT#1.5), the operand of an intrinsic (LOWER_BOUND "
+            "of an array, __DELETE of a POINTER) or of a test statement (ASSERT_TRUE of a BOOL)."
+        ),
+    )
     BAD_OPERANDS = "E014", ("The operands of an operator have types it cannot combine; convert one side explicitly.")
     CONDITION_NOT_BOOL = "E015", ("A condition (IF, ELSIF, WHILE, UNTIL, transition) is not BOOL.")
     BAD_PARAMETER = (
         "E016",
-        ("A call names a parameter the POU does not have, or uses ':=' for an output / '=>' for an input."),
+        (
+            "A call (or the FB_init arguments of an instance's declaration) names a parameter the POU does not "
+            "have or names one twice, or uses ':=' for an output / '=>' for an input."
+        ),
     )
     ARGUMENT_COUNT = "E017", ("A call has too many or too few arguments.")
     WRITE_TO_CONSTANT = (
@@ -100,7 +114,14 @@ class Code(str, Enum):
         ),
     )
     BAD_CONFIGURATION = "E028", ("A configuration names an unknown PROGRAM type or task.")
-    NOT_CONSTANT = "E029", ("A constant expression is required (array bounds, CASE labels, string lengths, ...).")
+    NOT_CONSTANT = (
+        "E029",
+        (
+            "A constant expression is required (array bounds, CASE labels, string lengths, ...), or a constant "
+            "has a value it cannot have there (an empty array range, a FOR step of 0, a task INTERVAL that is "
+            "not positive)."
+        ),
+    )
     SFC = "E030", ("An SFC error: unknown step or action, missing INITIAL_STEP, a bad qualifier.")
     NOT_A_VARIABLE = "E031", ("An output (=>) or VAR_IN_OUT argument must be a variable.")
     RECURSION = (
@@ -134,12 +155,13 @@ class Code(str, Enum):
             " values (arrays of arrays or of structures)."
         ),
     )
-    OOP_RULE = (
+    NOT_ACCESSIBLE = (
         "E043",
         (
-            "An object-oriented rule is broken: a PRIVATE or PROTECTED method, property or variable used from "
-            "outside, an ABSTRACT function block instantiated or an ABSTRACT method or property called or left "
-            "unimplemented, an OVERRIDE that overrides nothing."
+            "An access rule is broken: a PRIVATE or PROTECTED method, property or variable used from outside "
+            "(PRIVATE: only its own block; PROTECTED: its block and the blocks that extend it), a method "
+            "overridden with a narrower access than the base's, or an interface's method implemented by one "
+            "that is not PUBLIC."
         ),
     )
     NOT_IN_DIALECT = (
@@ -169,7 +191,7 @@ class Code(str, Enum):
             "An inheritance or interface contract is broken: a FINAL function block extended or a FINAL method "
             "overridden, an override or an interface method implemented with other parameters or return type, "
             "a property overridden with another type, a method or property of an implemented interface missing, "
-            "a method of an INTERFACE with a body."
+            "a method of an INTERFACE with a body, a method marked OVERRIDE that overrides nothing."
         ),
     )
     WRITE_TO_INPUT = (
@@ -212,6 +234,76 @@ class Code(str, Enum):
             "dialect: IEC 61131-3 and MatIEC forbid it. CODESYS and TwinCAT allow it, and so do their dialects "
             "and the default: the loop then tests the value the body left. Count in another variable, or use "
             "WHILE."
+        ),
+    )
+    NOT_ASSIGNABLE = (
+        "E053",
+        (
+            "Something that is not a variable is written: the target of an assignment (or of an output '=>', "
+            "a VAR_IN_OUT argument, REF=, ...) is a literal, a call, an operator's result, a typed enumeration "
+            "value or an SFC step."
+        ),
+    )
+    REFERENCE_MISMATCH = (
+        "E054",
+        (
+            "A reference is bound to something it cannot refer to: REF= whose left side is no REFERENCE TO "
+            "variable, or whose right side is a variable (or the REFERENCE TO a call returns) of another type; "
+            "a REFERENCE TO variable initialised with, or a REFERENCE TO input bound to, a variable of another "
+            "type."
+        ),
+    )
+    BAD_ASSIGNMENT_ATTEMPT = (
+        "E055",
+        (
+            "An assignment attempt (dest ?= src) with an operand it cannot work on: dest must be an interface "
+            "variable or a REF_TO a function block or interface, src an interface, a function block instance, "
+            "a reference to one, or NULL."
+        ),
+    )
+    SET_RESET_NOT_BOOL = (
+        "E056",
+        ("A set or reset assignment (x S= c, x R= c) whose variable or value is not BOOL: both must be."),
+    )
+    BAD_INITIALIZER = (
+        "E057",
+        (
+            "An initial value of a form the declared type cannot take: an array initializer [...] for "
+            "something that is not an array (or a single value for an array), a structure initializer (...) "
+            "for something that is neither a structure nor a block, FB_init arguments for something that is "
+            "not a function block (or in a TYPE), an initial value of a UNION member, an enumeration's default "
+            "that is not one of its values."
+        ),
+    )
+    LOCATED_TYPE = (
+        "E058",
+        (
+            "A variable located AT an address of the process image has a type the address cannot hold: a "
+            "string, a structure, an array or a block (a cell holds one elementary value), or a value of "
+            "another width than the address's size (%IW is 16 bits, %QX one)."
+        ),
+    )
+    RESULT_WITHOUT_TYPE = (
+        "E059",
+        (
+            "A FUNCTION or METHOD declared without a return type is given a result: its name is assigned in "
+            "its body, or a MOCK_FUNCTION gives it a RETURNS value. Declare the return type (FUNCTION F : INT)."
+        ),
+    )
+    DECLARATION_MISMATCH = (
+        "E060",
+        (
+            "Two declarations of one variable disagree on its type: a VAR_EXTERNAL and the VAR_GLOBAL it "
+            "names, or a VAR_CONFIG entry and the variable of the program instance it configures."
+        ),
+    )
+    ABSTRACT = (
+        "E061",
+        (
+            "An ABSTRACT rule is broken: an ABSTRACT function block instantiated (declared, or made with "
+            "__NEW), an ABSTRACT method or property in a block that is not ABSTRACT or with a body, one left "
+            "unimplemented by a block that is not ABSTRACT, or an ABSTRACT method called through SUPER^ (it "
+            "has no implementation)."
         ),
     )
     INTERNAL = "E099", ("An internal compiler error (a bug in st): please report it with the source file.")

@@ -2,11 +2,14 @@
 
 Read from the source with `ast`, so imports inside functions count as much as those at the top
 of a module: a function-level import may delay loading an optional dependency, never hide a cycle.
+The compiler's own conventions are read the same way: diagnostics raised as `Code` members, one
+rule per module under check/rules, call targets read by their class.
 """
 
 from __future__ import annotations
 
 import ast
+import re
 from collections import defaultdict
 from pathlib import Path
 
@@ -222,4 +225,98 @@ def test_the_lower_layers_import_no_optional_dependency_at_module_level(layer):
                 if x.split(".")[0] in ("matplotlib", "pysoem", "ruckig", "pymodbus", "lark", "click", "rich")
                 and x.split(".")[0] not in third_party_ok
             ]
+    assert not wrong, "\n".join(wrong)
+
+
+# ------------------------------------------------------------------ the compiler's conventions
+
+COMPILER = PACKAGE / "compiler"
+RAW_CODE = re.compile(r"[EW]\d{3}")
+
+
+def _string_constants(path: Path) -> list[tuple[int, str]]:
+    """(line, value) of the string constants of a module that are not docstrings."""
+    tree = ast.parse(path.read_text())
+    docs = {
+        id(n.body[0].value)
+        for n in ast.walk(tree)
+        if isinstance(n, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
+        and n.body
+        and isinstance(n.body[0], ast.Expr)
+        and isinstance(n.body[0].value, ast.Constant)
+    }
+    return [
+        (n.lineno, n.value)
+        for n in ast.walk(tree)
+        if isinstance(n, ast.Constant) and isinstance(n.value, str) and id(n) not in docs
+    ]
+
+
+def test_the_compiler_raises_diagnostics_as_code_members():
+    """No raw code string ("E013", "W002") in st/compiler: every code is `Code.X` (st/diagnostics.py)."""
+    found: dict[str, set[str]] = {}
+    for path in sorted(COMPILER.rglob("*.py")):
+        for _line, value in _string_constants(path):
+            if RAW_CODE.fullmatch(value):
+                found.setdefault(str(path.relative_to(ROOT)), set()).add(value)
+    assert not found, f"raw code strings in st/compiler: {found}"
+
+
+def _codes_used(path: Path) -> set[str]:
+    """The `Code` members a module names (Code.X), as their values."""
+    from st.diagnostics import Code
+
+    names = {
+        n.attr
+        for n in ast.walk(ast.parse(path.read_text()))
+        if isinstance(n, ast.Attribute) and isinstance(n.value, ast.Name) and n.value.id == "Code"
+    }
+    return {Code[name].value for name in names}
+
+
+RULE_MODULES = sorted(p for p in (COMPILER / "check" / "rules").glob("*.py") if p.name != "__init__.py")
+
+
+@pytest.mark.parametrize("path", RULE_MODULES, ids=[p.stem for p in RULE_MODULES])
+def test_each_rule_module_raises_the_codes_its_docstring_names(path):
+    """One rule per module: its docstring says what it enforces and ends with `Codes: E0xx, ...`,
+    and the module raises exactly those codes."""
+    doc = ast.get_docstring(ast.parse(path.read_text())) or ""
+    m = re.search(r"^Codes: (.+)\.$", doc, re.M)
+    assert m, f"{path.name}: the docstring names no 'Codes: ...'"
+    assert len(doc.split("\n\n")[0]) > 40, f"{path.name}: the docstring does not say what the rule enforces"
+    assert set(RAW_CODE.findall(m.group(1))) == _codes_used(path)
+
+
+def test_the_rules_are_modules_of_their_own():
+    """A rule module imports no other rule module (the parts and passes call the rules)."""
+    wrong = [
+        f"{m} imports {target}"
+        for m, imports in GRAPH.items()
+        if m.startswith("st.compiler.check.rules.")
+        for target, _, _, _ in imports
+        if target.startswith("st.compiler.check.rules.") and target != m
+    ]
+    assert not wrong, "\n".join(wrong)
+
+
+def test_no_call_target_is_read_by_a_kind_string():
+    """Call targets are one class per kind (check/targets.py), read with match or isinstance: none
+    has a `kind`, and no module compares `<target>.kind`."""
+    from st.compiler.check import targets
+
+    kinds = [
+        c.__name__
+        for c in vars(targets).values()
+        if isinstance(c, type) and issubclass(c, targets.CallTarget) and hasattr(c, "kind")
+    ]
+    assert not kinds, f"call targets with a kind: {kinds}"
+    wrong = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for n in ast.walk(ast.parse(path.read_text())):
+            if isinstance(n, ast.Attribute) and n.attr == "kind":
+                base = n.value
+                named = base.attr if isinstance(base, ast.Attribute) else base.id if isinstance(base, ast.Name) else ""
+                if named in ("target", "tgt"):
+                    wrong.append(f"{path.relative_to(ROOT)}:{n.lineno}")
     assert not wrong, "\n".join(wrong)

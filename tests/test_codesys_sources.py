@@ -243,17 +243,17 @@ def test_fb_init_runs_once_per_instance_with_declaration_arguments_base_first():
         (
             "b : Base(nId := 5);",
             "b : Base(nSize := 5);",
-            "tc.st:23:14: error[E017]: FB_init of Base has no input 'nSize' to set here",
+            "tc.st:23:14: error[E016]: FB_init of Base has no input 'nSize' to set here",
         ),
         (
             "calls : INT;",
             "calls : INT(n := 1);",
-            "tc.st:26:13: error[E013]: arguments in a declaration go to a function block's FB_init; INT is not a function block",
+            "tc.st:26:13: error[E057]: arguments in a declaration go to a function block's FB_init; INT is not a function block",
         ),
         (
             "nId : INT := 9; END_VAR",
             "nId : INT := 9; END_VAR VAR_OUTPUT o : INT; END_VAR",
-            "tc.st:5:91: error[E017]: FB_init runs when the instance is created: it takes inputs only",
+            "tc.st:5:91: error[E003]: FB_init runs when the instance is created: it takes inputs only",
         ),
         (
             "b : Base(nId := 5);",

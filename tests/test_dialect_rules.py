@@ -574,7 +574,7 @@ def test_initial_values_naming_variables_are_checked():
     out = errors(src, "codesys")
     assert "t.st:30:35: error[E029]: 'b' is declared below; initial values are set in declaration order" in out
     assert "t.st:30:86: error[E029]: an index in an initial value must be a constant; 'k' is a variable" in out
-    assert "t.st:31:28: error[E013]: a REFERENCE TO INT needs a INT variable, not FB_A" in out
+    assert "t.st:31:28: error[E054]: a REFERENCE TO INT needs a INT variable, not FB_A" in out
     assert "t.st:31:46: error[E017]: FB_init of FB_A takes 2 argument(s) here, not 3" in out
     assert "t.st:31:67: error[E017]: a positional argument cannot follow named ones" in out
 
@@ -760,7 +760,7 @@ def test_a_union_member_must_have_bytes_and_no_initial_value():
         "not ST_A" in out
     )
     assert "t.st:4:" not in out  # a TIME has bytes (4, in ms)
-    assert "t.st:5:14: error[E013]: a UNION member cannot have an initial value (they share their bytes)" in out
+    assert "t.st:5:14: error[E057]: a UNION member cannot have an initial value (they share their bytes)" in out
 
 
 TIME_UNION = """TYPE U_Any : UNION

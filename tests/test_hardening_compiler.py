@@ -233,7 +233,7 @@ def test_a_located_variable_must_be_a_value_one_image_cell_holds(t):
     # checked clean, then crashed the start-up with a TypeError
     src = _program("", f"y : DINT;\n  x AT %MW2 : {t};")
     assert _errors(src) == [
-        ("E013", 3, 3, f"'%MW2' is one cell of the process image; it cannot hold a value of type {t}")
+        ("E058", 3, 3, f"'%MW2' is one cell of the process image; it cannot hold a value of type {t}")
     ]
 
 

@@ -1075,7 +1075,7 @@ FUNCTION_BLOCK B EXTENDS A
 END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; END_VAR END_PROGRAM
 """,
-        "conf.st:8:10: error[E043]: method M of A is ABSTRACT: it has no implementation to call",
+        "conf.st:8:10: error[E061]: method M of A is ABSTRACT: it has no implementation to call",
     ),
     (
         """
@@ -1145,7 +1145,7 @@ FUNCTION_BLOCK ABSTRACT A
 END_FUNCTION_BLOCK
 PROGRAM main VAR a : A; END_VAR END_PROGRAM
 """,
-        "conf.st:5:22: error[E043]: 'A' is ABSTRACT and cannot be instantiated",
+        "conf.st:5:22: error[E061]: 'A' is ABSTRACT and cannot be instantiated",
     ),
     (
         """
@@ -1155,7 +1155,7 @@ PROGRAM main VAR p : POINTER TO A; END_VAR
   p := __NEW(A);
 END_PROGRAM
 """,
-        "conf.st:5:14: error[E043]: 'A' is ABSTRACT and cannot be instantiated",
+        "conf.st:5:14: error[E061]: 'A' is ABSTRACT and cannot be instantiated",
     ),
     (
         """
@@ -1192,7 +1192,7 @@ FUNCTION_BLOCK A
 END_FUNCTION_BLOCK
 PROGRAM main VAR a : A; END_VAR END_PROGRAM
 """,
-        "conf.st:3:19: error[E043]: method M is marked OVERRIDE but A inherits no method of that name",
+        "conf.st:3:19: error[E047]: method M is marked OVERRIDE but A inherits no method of that name",
     ),
     (
         """
@@ -1204,7 +1204,7 @@ FUNCTION_BLOCK B EXTENDS A
 END_FUNCTION_BLOCK
 PROGRAM main VAR b : B; END_VAR END_PROGRAM
 """,
-        "conf.st:6:16: error[E043]: B does not implement the ABSTRACT method M of A",
+        "conf.st:6:16: error[E061]: B does not implement the ABSTRACT method M of A",
     ),
     (
         """
@@ -1214,7 +1214,7 @@ FUNCTION_BLOCK A
 END_FUNCTION_BLOCK
 PROGRAM main VAR a : A; END_VAR END_PROGRAM
 """,
-        "conf.st:3:19: error[E043]: ABSTRACT method M in A, which is not ABSTRACT",
+        "conf.st:3:19: error[E061]: ABSTRACT method M in A, which is not ABSTRACT",
     ),
     (
         """
@@ -1225,7 +1225,7 @@ FUNCTION_BLOCK ABSTRACT A
 END_FUNCTION_BLOCK
 PROGRAM main END_PROGRAM
 """,
-        "conf.st:3:19: error[E043]: ABSTRACT method M has a body",
+        "conf.st:3:19: error[E061]: ABSTRACT method M has a body",
     ),
     (
         """
@@ -1324,7 +1324,7 @@ FUNCTION_BLOCK F
 END_FUNCTION_BLOCK
 PROGRAM main END_PROGRAM
 """,
-        "conf.st:3:10: error[E013]: METHOD M has no return type but assigns a result",
+        "conf.st:3:10: error[E059]: METHOD M has no return type but assigns a result",
     ),
     (
         """
@@ -1830,7 +1830,7 @@ FUNCTION AddTo : INT VAR_INPUT r : REFERENCE TO INT; END_VAR AddTo := r; END_FUN
 PROGRAM main VAR y : INT; z : REAL; END_VAR y := AddTo(y + 1); y := AddTo(z); END_PROGRAM
 """)
     assert "conf.st:3:56: error[E031]: 'r' is a REFERENCE TO INT: pass a variable" in msg
-    assert "conf.st:3:75: error[E013]: 'r' is a REFERENCE TO INT; REAL cannot be bound to it" in msg
+    assert "conf.st:3:75: error[E054]: 'r' is a REFERENCE TO INT; REAL cannot be bound to it" in msg
 
 
 def test_an_action_called_from_a_method():

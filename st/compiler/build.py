@@ -10,6 +10,7 @@ import copy
 
 from lark import Token, Transformer
 
+from ..diagnostics import Code
 from ..model.literals import (
     LiteralError,
     LiteralRangeError,
@@ -67,7 +68,7 @@ _QUALIFIERS = frozenset(
 
 
 class BuildError(Exception):
-    def __init__(self, span: Span, message: str, code: str = "E003"):
+    def __init__(self, span: Span, message: str, code: str = Code.MISPLACED_SECTION):
         self.span = span
         self.message = message
         self.code = code
@@ -117,13 +118,17 @@ class AstBuilder(Transformer):
         try:
             return fn(str(tok), *args)
         except LiteralRangeError as e:
-            self.errors.append(BuildError(self.sp(at if at is not None else tok), f"{shown or tok} {e}", "E021"))
+            self.errors.append(
+                BuildError(self.sp(at if at is not None else tok), f"{shown or tok} {e}", Code.OUT_OF_RANGE)
+            )
             return 0
         except (LiteralError, ValueError, OverflowError) as e:
             full = shown or str(tok)
             text = full if len(full) <= 60 else f"{full[:40]}…"
             self.errors.append(
-                BuildError(self.sp(at if at is not None else tok), f"invalid literal {text!r}: {e}", "E004")
+                BuildError(
+                    self.sp(at if at is not None else tok), f"invalid literal {text!r}: {e}", Code.MALFORMED_LITERAL
+                )
             )
             return "" if fn is parse_string else 0
 
@@ -167,7 +172,9 @@ class AstBuilder(Transformer):
             and tok.upper() in RESERVED
             and tok.upper() not in self.names_allowed
         ):
-            self.errors.append(BuildError(self.sp(tok), f"'{tok}' is a reserved keyword and cannot be a name", "E001"))
+            self.errors.append(
+                BuildError(self.sp(tok), f"'{tok}' is a reserved keyword and cannot be a name", Code.SYNTAX)
+            )
         return tok
 
     # ---------------------------------------------------------------- types
@@ -377,7 +384,7 @@ class AstBuilder(Transformer):
         namespaces (one project, its libraries) both mean visible everywhere."""
         for m in mods:
             if m not in ("PUBLIC", "INTERNAL"):
-                self.errors.append(BuildError(pou.span, f"{m} is not allowed on a {pou.kind}", "E001"))
+                self.errors.append(BuildError(pou.span, f"{m} is not allowed on a {pou.kind}", Code.SYNTAX))
 
     def fb_decl(self, c):
         mods = []
@@ -434,7 +441,7 @@ class AstBuilder(Transformer):
         itf.end_span = self.sp(c[-1])
         for m in mods:
             if m not in ("PUBLIC", "INTERNAL"):
-                self.errors.append(BuildError(itf.span, f"{m} is not allowed on an INTERFACE", "E001"))
+                self.errors.append(BuildError(itf.span, f"{m} is not allowed on an INTERFACE", Code.SYNTAX))
         after_extends = False
         for x in c[i + 1 : -1]:
             if isinstance(x, A.Method):
@@ -690,7 +697,7 @@ class AstBuilder(Transformer):
                 orelse = x[1]
             elif isinstance(x, A.Stmt):
                 if not branches:  # reported, the statement dropped: parsing goes on
-                    self.errors.append(BuildError(x.span, "a statement in a CASE needs a label before it", "E001"))
+                    self.errors.append(BuildError(x.span, "a statement in a CASE needs a label before it", Code.SYNTAX))
                     continue
                 branches[-1].body.append(x)
         return A.Case(self.sp(c[0]), c[1], branches, orelse)

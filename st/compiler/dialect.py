@@ -3,9 +3,11 @@
     openplc   what MatIEC (OpenPLC v3) accepts: TIME_TO_<int> counts seconds, F_TRIG pulses on the
               first scan; a POU may assign its own inputs (MatIEC forbids only writing a block's
               outputs from outside, FOR variables and constants); a FOR's body may not write its
-              control variable (E052); no object-oriented ST and no vendor extensions
-    iec       IEC 61131-3 3rd edition, strict: object-oriented ST, REF_TO/REF()/NULL; a FOR's body
-              may not write its control variable (E052); no vendor
+              control variable (E052); no object-oriented ST and no vendor extensions; REAL
+              arithmetic as MatIEC's C computes it, %IW0.0 read as %IW0 (W011), MatIEC's answers
+              where IEC leaves an error's reaction open
+    iec       IEC 61131-3 3rd edition, strict: object-oriented ST (THIS.x read as THIS^.x),
+              REF_TO/REF()/NULL; a FOR's body may not write its control variable (E052); no vendor
               extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
               __NEW, __DELETE, VAR_INST, VAR_STAT, STRUCT EXTENDS, methods of programs)
     codesys   the 3rd edition plus CODESYS's extensions; {attribute '…'} pragmas accepted silently;
@@ -24,7 +26,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from ..diagnostics import CompileError, Diagnostic, Severity
+from ..diagnostics import Code, CompileError, Diagnostic, Severity
 from ..source import Span
 
 
@@ -51,6 +53,22 @@ class Dialect:
     writable_for_counter: bool = True
     # a POU that calls itself: E032 (IEC 61131-3, MatIEC), or W013 as CODESYS and TwinCAT warn and run it
     recursion_allowed: bool = True
+    # THIS and SUPER name the instance itself, as IEC 61131-3's 3rd edition writes them (THIS.x,
+    # SUPER.M()): read as CODESYS's THIS^.x, SUPER^.M(); elsewhere THIS is only the pointer (THIS^.x)
+    this_as_instance: bool = False
+    # REAL arithmetic as MatIEC's generated C computes it: single precision where both operands
+    # are C floats (REAL variables, integers), double where a REAL literal takes part
+    c_float_arithmetic: bool = False
+    # a byte, word, double or long address with a '.' (%IW0.0) is bound by its first number, as
+    # OpenPLC's glue generator does, with a warning (W011); elsewhere the process image refuses it (E004)
+    dotted_word_addresses: bool = False
+    # where IEC calls a case an error and leaves the reaction open, do what MatIEC does (a MUX
+    # selector out of range gives the type's default value, REAL to integer rounds halfway cases
+    # to even) instead of a PLC fault
+    matiec_errors: bool = False
+    # the vendor compatibility library (st/stdlib/vendor: T_MaxString, MEMCPY, ADSLOGSTR, SysFile,
+    # ...) is part of the compilation; iec and openplc programs know none of its names
+    vendor_library: bool = True
 
 
 PRESETS = {
@@ -65,8 +83,19 @@ PRESETS = {
         subranges="clamp",
         writable_for_counter=False,
         recursion_allowed=False,
+        c_float_arithmetic=True,
+        dotted_word_addresses=True,
+        matiec_errors=True,
+        vendor_library=False,
     ),
-    "iec": Dialect("iec", vendor_extensions=False, writable_for_counter=False, recursion_allowed=False),
+    "iec": Dialect(
+        "iec",
+        vendor_extensions=False,
+        writable_for_counter=False,
+        recursion_allowed=False,
+        this_as_instance=True,
+        vendor_library=False,
+    ),
     "codesys": Dialect(
         "codesys",
         attribute_pragmas=True,
@@ -106,7 +135,7 @@ def pragma_preset(sources) -> Dialect | None:
     name, span = found
     if name not in PRESETS:
         diag = Diagnostic(
-            "E045",
+            Code.UNKNOWN_DIALECT,
             Severity.ERROR,
             span,
             f"unknown dialect '{name}' in a {{dialect}} pragma",

@@ -6,7 +6,8 @@ their type in `.ty`; names get their symbol in `.sym`; calls get `.target`.
 
 `Checker.run` applies ordered passes (`passes/`) to one explicit `CheckContext`;
 the parts that check declarations, constants, expressions, calls and statements
-refer to each other (`Semantics`) and are used by the passes.
+refer to each other (`Semantics`) and are used by the passes. Each rule the parts
+and passes apply is a module of `rules/`, naming the diagnostic codes it raises.
 """
 
 from __future__ import annotations
@@ -18,7 +19,6 @@ from ..library import Library
 from ..options import CompileOptions
 from .common import _NULL, STEP, Scope, StepType
 from .context import CheckContext
-from .limits import check_storage_limits
 from .passes.bodies import check_bodies
 from .passes.collect import collect
 from .passes.configuration import check_configurations
@@ -28,7 +28,8 @@ from .passes.namespaces import resolve_namespaces
 from .passes.oop import check_oop_rules
 from .passes.tests import check_tests
 from .passes.types import resolve_types
-from .passes.unused import warn_unused
+from .rules.storage_limits import check_storage_limits
+from .rules.unused import warn_unused
 from .semantics import Semantics
 from .targets import (
     BODY_CALLS,
@@ -97,7 +98,7 @@ class Checker:
         resolve_types(sem)
         check_oop_rules(ctx)
         declare_globals(sem)
-        check_storage_limits(ctx.project, ctx.err, lambda span: span.file in library_units)
+        check_storage_limits(ctx)
         check_bodies(sem)
         check_tests(sem)
         check_cycles(ctx)

@@ -4,6 +4,7 @@ targets: targets.py)."""
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 
 from ...model import types as T
 from ...model.addresses import AddressError, parse_address
@@ -17,25 +18,6 @@ _DIRECT = re.compile(r"%([IQM])([XBWDL]?)(\*|[0-9]+(?:\.[0-9]+)*)")
 # CODESYS's implicit methods: FB_init runs when an instance is created (before the first scan)
 CONSTRUCTION = ("fb_init", "fb_reinit", "fb_exit")
 _DIRECT_TYPES = {"X": T.BOOL, "": T.BOOL, "B": T.BYTE, "W": T.WORD, "D": T.DWORD, "L": T.LWORD}
-
-
-_WORD_WITH_BIT = re.compile(r"(%[IQM][BWDL][0-9]+)((?:\.[0-9]+)+)", re.I)
-
-
-def openplc_address(ctx, addr: str, span) -> str:
-    """OpenPLC binds a byte, word, double or long address by its first number only (its glue
-    generator drops the rest: %IW0.0 is %IW0); under openplc and the default the address is read so,
-    with a warning; the other presets keep it as written (and refuse it)."""
-    m = _WORD_WITH_BIT.fullmatch(addr.strip())
-    if m is None or not (ctx.dialect is None or ctx.dialect.name == "openplc"):
-        return addr
-    ctx.warn(
-        "W011",
-        span,
-        f"'{addr}': OpenPLC binds it to {m.group(1).upper()} and ignores '{m.group(2)}'",
-        f"write {m.group(1).upper()}; only bit addresses (X) have a '.'",
-    )
-    return m.group(1)
 
 
 def image_problem(addr: str):
@@ -140,47 +122,47 @@ ANY_FAMILIES = frozenset(
 
 
 def _satisfies(t: T.Type, constraint: str) -> bool:
+    """Does a value of type `t` meet a library parameter's constraint (ANY_NUM, INT, ...)?"""
     b = T.base_of(t)
     if constraint == "ANY":
         return True
     if constraint == "ANY_POINTER":  # a POINTER, REF_TO or ADR(...) (the vendor memory functions)
         return isinstance(T.unalias(t), T.RefType)
     if isinstance(b, T.LiteralType):
-        if constraint in ("ANY_NUM", "ANY_MAGNITUDE", "ANY_ELEMENTARY"):
-            return True
-        if constraint in ("ANY_INT", "ANY_BIT", "ANY_INTLIKE"):
-            return b is T.LIT_INT
-        if constraint == "ANY_REAL":
-            return True
-        c = T.ELEMENTARY.get(constraint)
-        if c is not None:
-            return c.is_num or (c.is_bit and b is T.LIT_INT)
-        return False
-    k = b.kind
-    if constraint == "ANY_NUM":
-        return k in ("int", "real")
-    if constraint == "ANY_REAL":
-        return k in ("int", "real")  # integers are accepted and computed as LREAL
-    if constraint == "ANY_INT":
-        return k == "int" or k == "bit"
-    if constraint == "ANY_BIT":
-        return k in ("bit", "int", "bool")
-    if constraint == "ANY_INTLIKE":
-        return k in ("bit", "int")
-    if constraint == "ANY_MAGNITUDE":
-        return k in ("int", "real", "time")
-    if constraint == "ANY_STRING":
-        return k == "string"
-    if constraint == "ANY_DATE":
-        return k in ("date", "tod", "dt")
-    if constraint == "ANY_ELEMENTARY":
-        return b.is_elementary or isinstance(b, T.EnumType)
-    if constraint == "ANY_CHARS":
-        return k in ("string", "char")
+        return _literal_satisfies(b, constraint)
+    family = _FAMILIES.get(constraint)
+    if family is not None:
+        return family(b)
     c = T.ELEMENTARY.get(constraint)
     if c is None:
         return False
     return b is c or T.widens_to(b, c)
+
+
+def _literal_satisfies(b: T.LiteralType, constraint: str) -> bool:
+    if constraint in ("ANY_NUM", "ANY_MAGNITUDE", "ANY_ELEMENTARY", "ANY_REAL"):
+        return True
+    if constraint in ("ANY_INT", "ANY_BIT", "ANY_INTLIKE"):
+        return b is T.LIT_INT
+    c = T.ELEMENTARY.get(constraint)
+    if c is not None:
+        return c.is_num or (c.is_bit and b is T.LIT_INT)
+    return False
+
+
+# the generic families of the library's parameters, for a value of a declared type (by its base)
+_FAMILIES: dict[str, Callable[[T.Type], bool]] = {
+    "ANY_NUM": lambda b: b.kind in ("int", "real"),
+    "ANY_REAL": lambda b: b.kind in ("int", "real"),  # integers are accepted and computed as LREAL
+    "ANY_INT": lambda b: b.kind in ("int", "bit"),
+    "ANY_BIT": lambda b: b.kind in ("bit", "int", "bool"),
+    "ANY_INTLIKE": lambda b: b.kind in ("bit", "int"),
+    "ANY_MAGNITUDE": lambda b: b.kind in ("int", "real", "time"),
+    "ANY_STRING": lambda b: b.kind == "string",
+    "ANY_DATE": lambda b: b.kind in ("date", "tod", "dt"),
+    "ANY_ELEMENTARY": lambda b: b.is_elementary or isinstance(b, T.EnumType),
+    "ANY_CHARS": lambda b: b.kind in ("string", "char"),
+}
 
 
 def same_type(a: T.Type, b: T.Type) -> bool:

@@ -3,6 +3,8 @@ labels, string lengths, initial values of CONSTANTs), before and after the globa
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from ...model import types as T
 from .. import ast as A
 from .common import Scope
@@ -12,89 +14,79 @@ from .part import Part
 class Constants(Part):
     def value(self, e, scope: Scope | None):
         """Evaluate a constant expression (literals, CONSTANT variables, enum values), or None."""
-        if isinstance(e, A.Field):
-            if isinstance(e.sym, T.EnumType):
-                return e.const
-            if isinstance(e.base, A.Name) and (scope is None or e.base.name.lower() not in scope.vars):
-                return self._raw_global_constant(e.name.lower(), e.base.name.lower())  # GVL_Param.N
-            return None
-        if isinstance(e, A.Literal):
-            return e.value
-        if isinstance(e, A.Call):
-            return self._sizeof(e, scope)
-        if isinstance(e, A.EnumLit):
-            et = self.decls.resolve_named_type(e.type_name.lower(), e.span)
-            if isinstance(et, T.EnumType):
-                m = et.members.get(e.member.lower())
-                return m[1] if m else None
-            return None
-        if isinstance(e, A.Name):
-            key = e.name.lower()
-            sym = scope.vars.get(key) if scope is not None else None
-            own = sym is not None and sym.global_ref is None  # the POU's own: its initial value may name others
-            if sym is None:
-                gs = self.p.global_names.get(key)
-                sym = gs[0] if gs else None
-            if sym is not None:
-                if sym.global_ref is not None:
-                    sym = sym.global_ref
-                if sym.constant and sym.init is not None and isinstance(sym.init, A.Expr):
-                    sym.used = True
-                    if key in self.ctx.raw_const_busy:
-                        return None
-                    self.ctx.raw_const_busy.add(key)
-                    try:
-                        return self.value(sym.init, scope if own else None)
-                    finally:
-                        self.ctx.raw_const_busy.discard(key)
-                return None
-            mems = self.p.enum_members.get(key)
-            if mems and len({m[2] for m in mems}) == 1:
-                return mems[0][2]
-            local = self._raw_local_constant(key, scope)
-            return local if local is not None else self._raw_global_constant(key)
-        if isinstance(e, A.Unary):
-            v = self.value(e.operand, scope)
-            if v is None or isinstance(v, str):
-                return None
-            if e.op == "-":
-                return -v
-            if e.op == "+":
-                return v
-            if e.op == "NOT" and isinstance(v, bool):
-                return not v
-            return None
-        if isinstance(e, A.Binary):
-            a, b = self.value(e.left, scope), self.value(e.right, scope)
-            if a is None or b is None or isinstance(a, str) or isinstance(b, str):
-                return None
-            try:
-                op = e.op
-                if op == "+":
-                    return a + b
-                if op == "-":
-                    return a - b
-                if op == "*":
-                    return a * b
-                if op == "/":
-                    if isinstance(a, int) and isinstance(b, int):
-                        q = abs(a) // abs(b)
-                        return q if (a >= 0) == (b >= 0) else -q
-                    return a / b
-                if op == "MOD":
-                    return 0 if b == 0 else a - b * int(a / b)
-                if op == "**":
-                    return float(a) ** b
-                if op == "AND":
-                    return a & b
-                if op == "OR":
-                    return a | b
-                if op == "XOR":
-                    return a ^ b
-            except (ZeroDivisionError, OverflowError):
-                return None
-            return None
+        evaluate = _EVALUATE.get(type(e))
+        return evaluate(self, e, scope) if evaluate is not None else None
+
+    def _field(self, e: A.Field, scope: Scope | None):
+        if isinstance(e.sym, T.EnumType):
+            return e.const
+        if isinstance(e.base, A.Name) and (scope is None or e.base.name.lower() not in scope.vars):
+            return self._raw_global_constant(e.name.lower(), e.base.name.lower())  # GVL_Param.N
         return None
+
+    def _literal(self, e: A.Literal, scope: Scope | None):
+        return e.value
+
+    def _enum_lit(self, e: A.EnumLit, scope: Scope | None):
+        et = self.decls.resolve_named_type(e.type_name.lower(), e.span)
+        if isinstance(et, T.EnumType):
+            m = et.members.get(e.member.lower())
+            return m[1] if m else None
+        return None
+
+    def _name(self, e: A.Name, scope: Scope | None):
+        key = e.name.lower()
+        sym = scope.vars.get(key) if scope is not None else None
+        own = sym is not None and sym.global_ref is None  # the POU's own: its initial value may name others
+        if sym is None:
+            gs = self.p.global_names.get(key)
+            sym = gs[0] if gs else None
+        if sym is not None:
+            return self._constant_variable(key, sym, scope if own else None)
+        mems = self.p.enum_members.get(key)
+        if mems and len({m[2] for m in mems}) == 1:
+            return mems[0][2]
+        local = self._raw_local_constant(key, scope)
+        return local if local is not None else self._raw_global_constant(key)
+
+    def _constant_variable(self, key: str, sym: T.VarSym, scope: Scope | None):
+        """The value of a declared CONSTANT (a VAR_EXTERNAL's global's), or None for a variable."""
+        if sym.global_ref is not None:
+            sym = sym.global_ref
+        if not (sym.constant and sym.init is not None and isinstance(sym.init, A.Expr)):
+            return None
+        sym.used = True
+        if key in self.ctx.raw_const_busy:
+            return None
+        self.ctx.raw_const_busy.add(key)
+        try:
+            return self.value(sym.init, scope)
+        finally:
+            self.ctx.raw_const_busy.discard(key)
+
+    def _unary(self, e: A.Unary, scope: Scope | None):
+        v = self.value(e.operand, scope)
+        if v is None or isinstance(v, str):
+            return None
+        if e.op == "-":
+            return -v
+        if e.op == "+":
+            return v
+        if e.op == "NOT" and isinstance(v, bool):
+            return not v
+        return None
+
+    def _binary(self, e: A.Binary, scope: Scope | None):
+        a, b = self.value(e.left, scope), self.value(e.right, scope)
+        if a is None or b is None or isinstance(a, str) or isinstance(b, str):
+            return None
+        op = _OPERATORS.get(e.op)
+        if op is None:
+            return None
+        try:
+            return op(a, b)
+        except (ZeroDivisionError, OverflowError):
+            return None
 
     def _sizeof(self, e: A.Call, scope: Scope | None):
         """SIZEOF(type or variable) in a constant expression (CODESYS: array bounds from sizes)."""
@@ -152,3 +144,32 @@ class Constants(Part):
                     finally:
                         self.ctx.raw_const_busy.discard(key)
         return None
+
+
+def _divide(a, b):
+    if isinstance(a, int) and isinstance(b, int):  # integers divide towards zero
+        q = abs(a) // abs(b)
+        return q if (a >= 0) == (b >= 0) else -q
+    return a / b
+
+
+_OPERATORS: dict[str, Callable] = {
+    "+": lambda a, b: a + b,
+    "-": lambda a, b: a - b,
+    "*": lambda a, b: a * b,
+    "/": _divide,
+    "MOD": lambda a, b: 0 if b == 0 else a - b * int(a / b),
+    "**": lambda a, b: float(a) ** b,
+    "AND": lambda a, b: a & b,
+    "OR": lambda a, b: a | b,
+    "XOR": lambda a, b: a ^ b,
+}
+_EVALUATE: dict[type, Callable] = {
+    A.Field: Constants._field,
+    A.Literal: Constants._literal,
+    A.Call: Constants._sizeof,
+    A.EnumLit: Constants._enum_lit,
+    A.Name: Constants._name,
+    A.Unary: Constants._unary,
+    A.Binary: Constants._binary,
+}

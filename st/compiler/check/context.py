@@ -5,13 +5,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from ...diagnostics import DiagnosticSink
+from ...diagnostics import Code, DiagnosticSink
 from ...model import types as T
 from ...model.program import Project
 from ...source import Span
 from .. import ast as A
-from ..dialect import PRESETS, Dialect
+from ..dialect import Dialect
 from ..library import FuncSig, Library
+from .rules import dialect_features
 
 
 @dataclass
@@ -56,10 +57,10 @@ class CheckContext:
     """Library and project namespaces, lower name → name: `Tc2_Standard.TON` is TON (passes/namespaces.py)."""
 
     # ---------------------------------------------------------------- reporting
-    def err(self, code: str, span: Span, msg: str, hint: str = "") -> None:
+    def err(self, code: Code, span: Span, msg: str, hint: str = "") -> None:
         self.sink.error(code, span, msg, hint)
 
-    def warn(self, code: str, span: Span, msg: str, hint: str = "") -> None:
+    def warn(self, code: Code, span: Span, msg: str, hint: str = "") -> None:
         if span is not None and span.file in self.library_units:
             return
         self.sink.warning(code, span, msg, hint)
@@ -70,25 +71,13 @@ class CheckContext:
 
     # ---------------------------------------------------------------- dialect
     def feature(self, kind: str, span: Span, what: str) -> bool:
-        """Is this construct part of the chosen dialect? (No preset: everything is.) Reports E044 if not."""
-        d = self.dialect
-        if d is None or (span is not None and span.file in self.library_units):
-            return True
-        if (kind == "oop" and d.oop) or (kind == "vendor" and d.vendor_extensions):
-            return True
-        others = [n for n, p in PRESETS.items() if (p.oop if kind == "oop" else p.vendor_extensions)]
-        self.err(
-            "E044",
-            span,
-            f"{what} is not part of the {d.name} dialect",
-            f"choose --dialect {' or '.join(others)} (or a {{dialect '…'}} pragma) to use it",
-        )
-        return False
+        """Is this construct part of the chosen dialect? (No preset: everything is.) Reports E044 if not
+        (rules/dialect_features.py)."""
+        return dialect_features.check_feature(self, kind, span, what)
 
     def feature_quiet(self, kind: str) -> bool:
         """`feature` without a report: does the dialect allow oop / vendor constructs?"""
-        d = self.dialect
-        return d is None or (d.oop if kind == "oop" else d.vendor_extensions)
+        return dialect_features.allows(self.dialect, kind)
 
     def bits_as_numbers(self) -> bool:
         """May bit strings and numbers convert implicitly where the value is kept (codesys, twincat,

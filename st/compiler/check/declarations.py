@@ -4,9 +4,10 @@ is resolved when first met, so declarations may come in any order."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import cast
 
+from ...diagnostics import Code
 from ...model import types as T
 from ...source import Span
 from .. import ast as A
@@ -19,15 +20,30 @@ from .common import (
     Scope,
     _names_in,
     image_problem,
-    openplc_address,
-    same_type,
-    signature,
     take_address,
 )
 from .part import Part
 from .passes.namespaces import unknown_namespace
+from .rules import (
+    abstract,
+    array_bounds,
+    hidden_variable,
+    inheritance,
+    initializers,
+    located_type,
+    reference_binding,
+    self_containment,
+    storage_limits,
+)
+from .rules.openplc_address import openplc_address
 
-MAX_ARRAY_ELEMENTS = 50_000_000
+# the sections each kind of POU may declare
+_SECTIONS = {
+    "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL", "VAR_STAT"},
+    "FUNCTION_BLOCK": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL", "VAR_STAT"},
+    "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL", "VAR_GLOBAL"},
+    "TEST": {"VAR", "VAR_TEMP"},
+}
 
 
 class Declarations(Part):
@@ -38,7 +54,7 @@ class Declarations(Part):
         if key not in self.ctx.pending_types:
             return None
         if key in self.ctx.resolving:
-            self.err("E046", span, f"type '{key}' is defined in terms of itself")
+            self_containment.report_named_type(self.ctx, key, span)
             return None
         td, lib = self.ctx.pending_types[key]
         self.ctx.resolving.add(key)
@@ -55,46 +71,22 @@ class Declarations(Part):
         spec = T.byte_layout(t)
         if spec is None or spec[0] in ("r", "u") or (spec[0] == "a" and spec[2][0] in ("a", "r", "u", "s")):
             self.err(
-                "E012",
+                Code.BAD_TYPE,
                 d.type.span,
                 f"a UNION member must be an elementary value or a one-dimensional array of numbers, not {t}",
             )
-        if d.init is not None:
-            self.err("E013", d.init.span, "a UNION member cannot have an initial value (they share their bytes)")
+        initializers.check_union_member(self.ctx, d)
 
     def _type_from_decl(self, td: A.TypeDecl) -> T.Type:
         spec = td.spec
         if isinstance(spec, A.EnumType):
             if isinstance(td.init, A.Name) and not spec.default:
                 spec.default = td.init.name  # TYPE E : (A, B) := B;
-            elif td.init is not None and not spec.default:
-                self.err("E013", td.init.span, "an enumeration's default must be one of its values")
+            elif td.init is not None:
+                initializers.check_enum_default(self.ctx, td.init, spec)
             return self._enum(td.name, spec)
         if isinstance(spec, A.StructType):
-            st = T.StructType(td.name, pyname="_st_" + mangle(td.name), kind="union" if spec.union else "struct")
-            self.p.types[td.name.lower()] = st  # allow references to itself through REF_TO
-            if spec.extends is not None:  # the base's fields come first, as declared there
-                self.feature("vendor", spec.extends.span, "STRUCT EXTENDS")
-                bt = T.unalias(self.resolve_type(spec.extends, None))
-                if isinstance(bt, T.StructType):
-                    st.members.update(bt.members)
-                else:
-                    self.err("E012", spec.extends.span, f"a structure can only extend a structure, not {bt}")
-            for d in spec.members:
-                mt = self.resolve_type(d.type, None)
-                for n, sp in d.names:
-                    if n.lower() in st.members:
-                        self.err("E011", sp, f"field '{n}' is declared twice in {td.name}")
-                        continue
-                    st.members[n.lower()] = T.Member(n, mt, d.init, sp, mangle(n))
-                    if spec.union:
-                        self._union_member(d, mt)
-                    elif d.init is not None:
-                        self.check_initializer(d.init, mt, None)
-            if spec.union:
-                self.feature("vendor", spec.span, "UNION")
-            st.resolved = True
-            return st
+            return self._struct(td, spec)
         if isinstance(spec, A.SubrangeType):
             t = self.resolve_type(spec, None)
             if isinstance(t, T.SubrangeType):
@@ -108,12 +100,40 @@ class Declarations(Part):
             self.check_initializer(td.init, target, None)
         return T.AliasType(td.name, target, td.init)
 
+    def _struct(self, td: A.TypeDecl, spec: A.StructType) -> T.StructType:
+        st = T.StructType(td.name, pyname="_st_" + mangle(td.name), kind="union" if spec.union else "struct")
+        self.p.types[td.name.lower()] = st  # allow references to itself through REF_TO
+        if spec.extends is not None:  # the base's fields come first, as declared there
+            self.feature("vendor", spec.extends.span, "STRUCT EXTENDS")
+            bt = T.unalias(self.resolve_type(spec.extends, None))
+            if isinstance(bt, T.StructType):
+                st.members.update(bt.members)
+            else:
+                self.err(Code.BAD_TYPE, spec.extends.span, f"a structure can only extend a structure, not {bt}")
+        for d in spec.members:
+            mt = self.resolve_type(d.type, None)
+            for n, sp in d.names:
+                if n.lower() in st.members:
+                    self.err(Code.DECLARED_TWICE, sp, f"field '{n}' is declared twice in {td.name}")
+                    continue
+                st.members[n.lower()] = T.Member(n, mt, d.init, sp, mangle(n))
+                if spec.union:
+                    self._union_member(d, mt)
+                elif d.init is not None:
+                    self.check_initializer(d.init, mt, None)
+        if spec.union:
+            self.feature("vendor", spec.span, "UNION")
+        st.resolved = True
+        return st
+
     def _enum(self, name: str, spec: A.EnumType) -> T.EnumType:
         base = T.INT
         if spec.base:
             b = T.ELEMENTARY.get(spec.base.upper())
             if not isinstance(b, T.ElemType) or not b.is_intlike:  # (only an ElemType is int-like)
-                self.err("E012", spec.span, f"an enumeration's base type must be an integer type, not '{spec.base}'")
+                self.err(
+                    Code.BAD_TYPE, spec.span, f"an enumeration's base type must be an integer type, not '{spec.base}'"
+                )
             else:
                 base = b
         et = T.EnumType(name or "enum", base=base)
@@ -122,11 +142,11 @@ class Declarations(Part):
             if v.value is not None:
                 c = self.consts.value(v.value, None)
                 if not isinstance(c, int):
-                    self.err("E029", v.span, f"the value of '{v.name}' must be an integer constant")
+                    self.err(Code.NOT_CONSTANT, v.span, f"the value of '{v.name}' must be an integer constant")
                     c = nxt
                 nxt = c
             if v.name.lower() in et.members:
-                self.err("E011", v.span, f"'{v.name}' appears twice in the enumeration")
+                self.err(Code.DECLARED_TWICE, v.span, f"'{v.name}' appears twice in the enumeration")
                 continue
             et.members[v.name.lower()] = (v.name, nxt)
             et.names_by_value.setdefault(nxt, v.name)
@@ -137,105 +157,102 @@ class Declarations(Part):
         if spec.default:
             m = et.members.get(spec.default.lower())
             if m is None:
-                self.err("E010", spec.span, f"'{spec.default}' is not a value of this enumeration")
+                self.err(Code.UNDECLARED, spec.span, f"'{spec.default}' is not a value of this enumeration")
             else:
                 et.default_value = m[1]
         return et
 
     def resolve_type(self, spec: A.TypeSpec, scope: Scope | None) -> T.Type:
-        if isinstance(spec, A.NamedType):
-            if spec.ctor_args:
-                self.err(
-                    "E013",
-                    spec.span,
-                    "FB_init arguments belong where an instance is declared (`inst : FB(a := 1);`), not in a type",
-                )
-            key = spec.name.lower()
-            up = spec.name.upper()
-            if up in T.ELEMENTARY:
-                return T.ELEMENTARY[up]
-            t = self.resolve_named_type(key, spec.span)
-            if t is not None:
-                return t
-            if up == "BIT" and key not in self.p.pous and self.ctx.feature_quiet("vendor"):
-                return T.BOOL  # CODESYS's BIT (structures, blocks): one BOOL; st does not pack bits
-            pou = self.p.pous.get(key)
-            if pou is not None:
-                if pou.pou_kind == "FUNCTION":
-                    self.err("E012", spec.span, f"'{spec.name}' is a FUNCTION, not a type")
-                    return T.INT
-                return pou
-            self.err(
-                "E012", spec.span, unknown_namespace(spec.name, self.ctx.namespaces) or f"unknown type '{spec.name}'"
-            )
-            return T.INT
-        if isinstance(spec, A.StringType):
-            n = 80
-            if spec.length is not None:
-                c = self.consts.value(spec.length, scope)
-                if not isinstance(c, int) or c < 1:
-                    self.err("E029", spec.span, "a string length must be a positive integer constant")
-                else:
-                    n = c
-            return T.StringType(n, spec.wide)
-        if isinstance(spec, A.ArrayType):
-            dims = []
-            for r in spec.ranges:
-                if r is None:
-                    dims.append((0, -1))  # ARRAY[*]: bounds come from the argument
-                    continue
-                lo, hi = self.consts.value(r[0], scope), self.consts.value(r[1], scope)
-                if not isinstance(lo, int) or not isinstance(hi, int):
-                    self.err("E029", spec.span, "array bounds must be integer constants")
-                    lo, hi = 0, 0
-                elif hi < lo:
-                    self.err("E029", spec.span, f"empty array range {lo}..{hi}")
-                    hi = lo
-                dims.append((lo, hi))
-            elem = self.resolve_type(spec.element, scope)
-            at = T.ArrayType(dims, elem)
-            if at.size > MAX_ARRAY_ELEMENTS:
-                self.err(
-                    "E042", spec.span, f"an array of {at.size:,} elements is too large (at most {MAX_ARRAY_ELEMENTS:,})"
-                )
-            return at
-        if isinstance(spec, A.RefType):
-            if spec.kind != "REF_TO":
-                self.feature("vendor", spec.span, f"{spec.kind} TO")
-            return T.RefType(self.resolve_type(spec.target, scope), spec.kind)
-        if isinstance(spec, A.SubrangeType):
-            base = cast(T.ElemType | None, T.ELEMENTARY.get(spec.base.upper()))
-            if base is None or not base.is_intlike:
-                self.err("E012", spec.span, f"a subrange needs an integer base type, not '{spec.base}'")
-                base = T.INT
-            lo, hi = self.consts.value(spec.lo, scope), self.consts.value(spec.hi, scope)
+        resolve = _TYPE_SPECS.get(type(spec))
+        if resolve is None:
+            raise AssertionError(spec)
+        return resolve(self, spec, scope)
+
+    def _named_type(self, spec: A.NamedType, scope: Scope | None) -> T.Type:
+        initializers.check_type_has_no_arguments(self.ctx, spec)
+        key = spec.name.lower()
+        up = spec.name.upper()
+        if up in T.ELEMENTARY:
+            return T.ELEMENTARY[up]
+        t = self.resolve_named_type(key, spec.span)
+        if t is not None:
+            return t
+        if up == "BIT" and key not in self.p.pous and self.ctx.feature_quiet("vendor"):
+            return T.BOOL  # CODESYS's BIT (structures, blocks): one BOOL; st does not pack bits
+        pou = self.p.pous.get(key)
+        if pou is not None:
+            if pou.pou_kind == "FUNCTION":
+                self.err(Code.BAD_TYPE, spec.span, f"'{spec.name}' is a FUNCTION, not a type")
+                return T.INT
+            return pou
+        self.err(
+            Code.BAD_TYPE, spec.span, unknown_namespace(spec.name, self.ctx.namespaces) or f"unknown type '{spec.name}'"
+        )
+        return T.INT
+
+    def _string_type(self, spec: A.StringType, scope: Scope | None) -> T.Type:
+        n = 80
+        if spec.length is not None:
+            c = self.consts.value(spec.length, scope)
+            if not isinstance(c, int) or c < 1:
+                self.err(Code.NOT_CONSTANT, spec.span, "a string length must be a positive integer constant")
+            else:
+                n = c
+        return T.StringType(n, spec.wide)
+
+    def _array_type(self, spec: A.ArrayType, scope: Scope | None) -> T.Type:
+        dims = []
+        for r in spec.ranges:
+            if r is None:
+                dims.append((0, -1))  # ARRAY[*]: bounds come from the argument
+                continue
+            lo, hi = self.consts.value(r[0], scope), self.consts.value(r[1], scope)
             if not isinstance(lo, int) or not isinstance(hi, int):
-                self.err("E029", spec.span, "subrange bounds must be integer constants")
-                lo, hi = base.lo, base.hi
-            outside = self.ctx.dialect.subranges if self.ctx.dialect is not None else "fault"
-            return T.SubrangeType(f"{base.name}({lo}..{hi})", base, lo, hi, outside)
-        if isinstance(spec, A.EnumType):
-            return self._enum("", spec)
-        if isinstance(spec, A.StructType):
-            self.err("E012", spec.span, "STRUCT is only allowed in a TYPE declaration")
-            return T.INT
-        raise AssertionError(spec)
+                self.err(Code.NOT_CONSTANT, spec.span, "array bounds must be integer constants")
+                lo, hi = 0, 0
+            elif hi < lo:
+                self.err(Code.NOT_CONSTANT, spec.span, f"empty array range {lo}..{hi}")
+                hi = lo
+            dims.append((lo, hi))
+        elem = self.resolve_type(spec.element, scope)
+        at = T.ArrayType(dims, elem)
+        storage_limits.check_array_size(self.ctx, at, spec.span)
+        return at
+
+    def _ref_type(self, spec: A.RefType, scope: Scope | None) -> T.Type:
+        if spec.kind != "REF_TO":
+            self.feature("vendor", spec.span, f"{spec.kind} TO")
+        return T.RefType(self.resolve_type(spec.target, scope), spec.kind)
+
+    def _subrange_type(self, spec: A.SubrangeType, scope: Scope | None) -> T.Type:
+        base = cast(T.ElemType | None, T.ELEMENTARY.get(spec.base.upper()))
+        if base is None or not base.is_intlike:
+            self.err(Code.BAD_TYPE, spec.span, f"a subrange needs an integer base type, not '{spec.base}'")
+            base = T.INT
+        lo, hi = self.consts.value(spec.lo, scope), self.consts.value(spec.hi, scope)
+        if not isinstance(lo, int) or not isinstance(hi, int):
+            self.err(Code.NOT_CONSTANT, spec.span, "subrange bounds must be integer constants")
+            lo, hi = base.lo, base.hi
+        outside = self.ctx.dialect.subranges if self.ctx.dialect is not None else "fault"
+        return T.SubrangeType(f"{base.name}({lo}..{hi})", base, lo, hi, outside)
+
+    def _enum_type(self, spec: A.EnumType, scope: Scope | None) -> T.Type:
+        return self._enum("", spec)
+
+    def _struct_type(self, spec: A.StructType, scope: Scope | None) -> T.Type:
+        self.err(Code.BAD_TYPE, spec.span, "STRUCT is only allowed in a TYPE declaration")
+        return T.INT
 
     def _check_ctor_args(self, init: A.CtorInit, t: T.Type, scope: Scope | None) -> None:
         """`inst : FB(a := 1)`: the arguments go to the inputs of FB's FB_init (CODESYS)."""
         self.feature("vendor", init.span, "FB_init arguments in a declaration")
-        bt = T.unalias(t)
-        if not (isinstance(bt, T.POUType) and bt.pou_kind == "FUNCTION_BLOCK"):
-            self.err(
-                "E013",
-                init.span,
-                f"arguments in a declaration go to a function block's FB_init; {t} is not a function block",
-            )
+        if not initializers.check_constructed(self.ctx, init, t):
             return
+        bt = cast(T.POUType, T.unalias(t))
         self.resolve_interface(bt)
         mt = bt.methods.get("fb_init")
         if mt is None:
-            self.err("E017", init.span, f"{bt.name} has no FB_init method to take these arguments")
+            self.err(Code.ARGUMENT_COUNT, init.span, f"{bt.name} has no FB_init method to take these arguments")
             return
         inputs = {p.name.lower(): p for p in mt.params() if p.section == "VAR_INPUT"}
         own = [p.name for p in inputs.values() if p.name.lower() not in ("binitretains", "bincopycode")]
@@ -245,21 +262,23 @@ class Declarations(Part):
             named = named or bool(name)
             if not name:  # positional: the inputs FB_init declares after bInitRetains, bInCopyCode
                 if named:
-                    self.err("E017", sp, "a positional argument cannot follow named ones")
+                    self.err(Code.ARGUMENT_COUNT, sp, "a positional argument cannot follow named ones")
                     continue
                 if i >= len(own):
                     self.err(
-                        "E017", sp, f"FB_init of {bt.name} takes {len(own)} argument(s) here, not {len(init.args)}"
+                        Code.ARGUMENT_COUNT,
+                        sp,
+                        f"FB_init of {bt.name} takes {len(own)} argument(s) here, not {len(init.args)}",
                     )
                     continue
                 name = own[i]
                 init.args[i] = (name, sp, val)
             p = inputs.get(name.lower())
             if p is None or name.lower() in ("binitretains", "bincopycode"):
-                self.err("E017", sp, f"FB_init of {bt.name} has no input '{name}' to set here")
+                self.err(Code.BAD_PARAMETER, sp, f"FB_init of {bt.name} has no input '{name}' to set here")
                 continue
             if name.lower() in seen:
-                self.err("E017", sp, f"'{name}' is given twice")
+                self.err(Code.BAD_PARAMETER, sp, f"'{name}' is given twice")
             seen.add(name.lower())
             self.check_initializer(val, p.type, scope)
         if init.inner is not None:
@@ -293,7 +312,7 @@ class Declarations(Part):
             sym = None  # declared below the variable it initialises: not set yet
         if sym is None and _declared_in(scope.pou, root.name):
             self.err(
-                "E029",
+                Code.NOT_CONSTANT,
                 root.span,
                 f"'{root.name}' is declared below; initial values are set in declaration order",
                 f"declare '{root.name}' above the variable it initialises",
@@ -305,8 +324,7 @@ class Declarations(Part):
             self.feature("vendor", init.span, "a REFERENCE TO initialised with a variable")
             vt = self.exprs.expr(init, scope)
             want = cast(T.RefType, T.unalias(t)).target
-            if vt is not None and want is not None and not same_type(vt, want) and not T.extends(vt, want):
-                self.err("E013", init.span, f"a REFERENCE TO {want} needs a {want} variable, not {vt}")
+            reference_binding.check_initial_reference(self.ctx, init, want, vt)
         else:
             vt = self.exprs.expr(init, scope, t)
             if vt is not None:
@@ -314,7 +332,11 @@ class Declarations(Part):
         take_address(target)
         for n in _names_in([target]):  # indices must still be constants
             if n is not root and isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
-                self.err("E029", n.span, f"an index in an initial value must be a constant; '{n.name}' is a variable")
+                self.err(
+                    Code.NOT_CONSTANT,
+                    n.span,
+                    f"an index in an initial value must be a constant; '{n.name}' is a variable",
+                )
         return True
 
     # ================================================================ interfaces
@@ -337,31 +359,35 @@ class Declarations(Part):
                     pou.vars[k] = v
         self.declare_blocks(d.var_blocks, pou.vars, scope, pou)
         if d.kind in ("FUNCTION", "FUNCTION_BLOCK"):
-            # EN and ENO are implicit in every function and FB; declare them when the body uses them
-            mentioned = {n.name.lower() for n in _names_in(d.body)}
-            for key, section in (("en", "VAR_INPUT"), ("eno", "VAR_OUTPUT")):
-                if key in mentioned and key not in pou.vars:
-                    true = A.Literal(d.span, "bool", True, "", "TRUE")
-                    pou.vars[key] = T.VarSym(
-                        key.upper(), T.BOOL, section, d.span, true, pyname=key.upper(), owner=pou, used=True
-                    )
+            self._implicit_en_eno(pou)
+        self._declare_members(pou)
+        if base is not None:
+            _inherit(pou, base)
+        if d.kind == "FUNCTION_BLOCK" and d.implements:
+            self._link_interfaces(pou)
+
+    def _implicit_en_eno(self, pou: T.POUType) -> None:
+        """EN and ENO are implicit in every function and FB; declared when the body uses them."""
+        d = pou.decl
+        mentioned = {n.name.lower() for n in _names_in(d.body)}
+        for key, section in (("en", "VAR_INPUT"), ("eno", "VAR_OUTPUT")):
+            if key in mentioned and key not in pou.vars:
+                true = A.Literal(d.span, "bool", True, "", "TRUE")
+                pou.vars[key] = T.VarSym(
+                    key.upper(), T.BOOL, section, d.span, true, pyname=key.upper(), owner=pou, used=True
+                )
+
+    def _declare_members(self, pou: T.POUType) -> None:
+        """A POU's actions, methods and properties."""
+        d = pou.decl
         for act in d.actions:
             if act.name.lower() in pou.actions:
-                self.err("E011", act.span, f"action '{act.name}' is declared twice")
+                self.err(Code.DECLARED_TWICE, act.span, f"action '{act.name}' is declared twice")
             pou.actions[act.name.lower()] = act
         for m in getattr(d, "methods", ()):
             self._declare_method(pou, m)
         for pr in getattr(d, "properties", ()):
             self._declare_property(pou, pr)
-        if base is not None:
-            for k, ba in base.actions.items():
-                pou.actions.setdefault(k, ba)  # actions are inherited; a same-named one replaces it
-            for k, bp in base.properties.items():
-                pou.properties.setdefault(k, bp)  # an own property of that name overrides it
-            for k, bm in base.methods.items():
-                pou.methods.setdefault(k, bm)  # an own method of that name overrides it
-        if d.kind == "FUNCTION_BLOCK" and d.implements:
-            self._link_interfaces(pou)
 
     def _link_interfaces(self, fb: T.POUType) -> None:
         """FUNCTION_BLOCK … IMPLEMENTS I1, I2: the interfaces it provides (whether it implements them
@@ -380,7 +406,11 @@ class Declarations(Part):
         if itf is None or itf.pou_kind != "INTERFACE":
             what = "not declared" if itf is None else f"a {itf.pou_kind.replace('_', ' ')}, not an INTERFACE"
             msg = unknown_namespace(name, self.ctx.namespaces) if itf is None else ""
-            self.err("E012" if itf is not None else "E010", span, f"{who}: {msg or repr(name) + ' is ' + what}")
+            self.err(
+                Code.BAD_TYPE if itf is not None else Code.UNDECLARED,
+                span,
+                f"{who}: {msg or repr(name) + ' is ' + what}",
+            )
             return None
         self.resolve_interface(itf)
         return itf
@@ -392,18 +422,11 @@ class Declarations(Part):
             base = self._interface_named(name, d.span, f"INTERFACE {itf.name} EXTENDS")
             if base is None:
                 continue
-            if T.implements(base, itf):
-                self.err("E046", d.span, f"INTERFACE {itf.name} extends itself through '{base.name}'")
+            if not self_containment.check_interface_extends(self.ctx, itf, base):
                 continue
             itf.interfaces.append(base)
         for m in d.methods:
-            if m.body:
-                self.err(
-                    "E047",
-                    m.span,
-                    f"a method of INTERFACE {itf.name} has no body; implement it in a "
-                    f"FUNCTION_BLOCK that IMPLEMENTS {itf.name}",
-                )
+            inheritance.check_interface_method_body(self.ctx, itf, m)
             self._declare_method(itf, m)
         for pr in d.properties:
             bare = pr.get is None and pr.set is None
@@ -420,10 +443,8 @@ class Declarations(Part):
                 mine = itf.methods.get(k)
                 if mine is None:
                     itf.methods[k] = bm
-                elif signature(mine) != signature(bm):
-                    self.err(
-                        "E047", mine.decl.span, f"method {mine.name} of {itf.name} differs from {base.name}.{bm.name}"
-                    )
+                else:
+                    inheritance.check_interface_extension(self.ctx, itf, base, mine, bm)
 
     def _declare_property(self, owner: T.POUType, pr) -> None:
         """PROPERTY: GET is a method returning the property's type under its name; SET a method whose
@@ -434,7 +455,7 @@ class Declarations(Part):
             or key in owner.methods
             or (key in owner.properties and owner.properties[key].owner is owner)
         ):
-            self.err("E011", pr.span, f"'{pr.name}' is declared twice in {owner.name}")
+            self.err(Code.DECLARED_TWICE, pr.span, f"'{pr.name}' is declared twice in {owner.name}")
             return
         t = self.resolve_type(pr.type, Scope(owner, owner.vars))
         ps = T.PropSym(pr.name, t, owner=owner, span=pr.span)
@@ -446,7 +467,7 @@ class Declarations(Part):
             pr.set.var_blocks.insert(0, A.VarBlock(pr.span, "VAR_INPUT", [], [value]))
             ps.set = self._accessor(owner, pr.set, "_ps_")
         if ps.get is None and ps.set is None:
-            self.err("E012", pr.span, f"property {pr.name} has neither GET nor SET")
+            self.err(Code.BAD_TYPE, pr.span, f"property {pr.name} has neither GET nor SET")
         owner.properties[key] = ps
 
     def _accessor(self, owner: T.POUType, m, prefix: str) -> T.POUType:
@@ -467,28 +488,20 @@ class Declarations(Part):
         base = self.p.pous.get(d.extends.lower())
         if base is None:
             msg = unknown_namespace(d.extends, self.ctx.namespaces)
-            self.err("E010", d.span, msg or f"{pou.name} extends '{d.extends}', which is not declared")
+            self.err(Code.UNDECLARED, d.span, msg or f"{pou.name} extends '{d.extends}', which is not declared")
             return None
         if base.pou_kind != "FUNCTION_BLOCK":
             kind = base.pou_kind.replace("_", " ")
             self.err(
-                "E012",
+                Code.BAD_TYPE,
                 d.span,
                 f"{pou.name} can only extend a FUNCTION_BLOCK; '{base.name}' is "
                 f"{'an' if kind[0] in 'AEIOU' else 'a'} {kind}",
             )
             return None
-        chain = {pou.name.lower()}
-        b: T.POUType | None = base
-        while b is not None:
-            if b.name.lower() in chain:
-                self.err("E046", d.span, f"{pou.name} extends itself through '{b.name}'")
-                return None
-            chain.add(b.name.lower())
-            nxt = b.decl.extends if b.decl is not None else ""
-            b = self.p.pous.get(nxt.lower()) if nxt else None
-        if "FINAL" in (base.decl.modifiers if base.decl is not None else ()):
-            self.err("E047", d.span, f"'{base.name}' is FINAL and cannot be extended")
+        if not self_containment.check_extends_chain(self.ctx, pou, base):
+            return None
+        if not inheritance.check_extensible(self.ctx, pou, base):
             return None
         self.resolve_interface(base)
         return base
@@ -497,7 +510,7 @@ class Declarations(Part):
         """A METHOD: a function whose body also sees the instance's variables (and THIS)."""
         key = m.name.lower()
         if (key in fb.methods and fb.methods[key].owner_fb is fb) or key in fb.vars or key in fb.actions:
-            self.err("E011", m.span, f"'{m.name}' is declared twice in {fb.name}")
+            self.err(Code.DECLARED_TWICE, m.span, f"'{m.name}' is declared twice in {fb.name}")
             return
         if fb.pou_kind == "PROGRAM":
             self.feature("vendor", m.span, "a METHOD of a PROGRAM")
@@ -510,148 +523,156 @@ class Declarations(Part):
             mt.return_type = self.resolve_type(m.return_type, scope)
         self.declare_blocks(m.var_blocks, mt.vars, scope, mt)
         for v in mt.vars.values():
-            if v.name.lower() in fb.vars and v.section != "VAR_EXTERNAL":
-                self.warn("W006", v.span, f"'{v.name}' in method {m.name} hides the variable of {fb.name}")
+            hidden_variable.check_hidden_variable(self.ctx, fb, m.name, v)
             if v.section == "VAR_INST":  # kept in the instance between calls
                 self.feature("vendor", v.span, "VAR_INST")
                 v.pyname = "_mi_" + qualified(m.name, v.name)
             if key in CONSTRUCTION and v.section in ("VAR_IN_OUT", "VAR_OUTPUT"):
-                self.err("E017", v.span, f"{m.name} runs when the instance is created: it takes inputs only")
+                self.err(
+                    Code.MISPLACED_SECTION, v.span, f"{m.name} runs when the instance is created: it takes inputs only"
+                )
         fb.methods[key] = mt
 
     def declare_block(self, block: A.VarBlock, table: dict, scope: Scope | None, owner) -> None:
-        kind = block.kind
-        quals = set(block.qualifiers)
-        if owner is not None:
-            allowed = {
-                "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL", "VAR_STAT"},
-                "FUNCTION_BLOCK": {
-                    "VAR",
-                    "VAR_INPUT",
-                    "VAR_OUTPUT",
-                    "VAR_IN_OUT",
-                    "VAR_TEMP",
-                    "VAR_EXTERNAL",
-                    "VAR_STAT",
-                },
-                "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL", "VAR_GLOBAL"},
-                "TEST": {"VAR", "VAR_TEMP"},
-            }[owner.pou_kind]
-            if getattr(owner, "owner_fb", None) is not None:
-                allowed = allowed | {"VAR_INST"}  # a METHOD's variables that live in the instance
-            if kind not in allowed:
-                self.err("E003", block.span, f"{kind} is not allowed in a {owner.pou_kind}")
-                if kind in ("VAR_GLOBAL", "VAR_ACCESS", "VAR_CONFIG"):
-                    return
-                kind = "VAR"  # still declare the names: no cascade of 'undeclared' errors
-            if kind == "VAR_GLOBAL":
-                self.ctx.global_blocks.append((owner.name, block))
-                return
-        access = [q for q in block.qualifiers if q in ("PUBLIC", "PRIVATE", "PROTECTED", "INTERNAL")]
-        if access:
-            if (
-                owner is None
-                or owner.pou_kind != "FUNCTION_BLOCK"
-                or kind != "VAR"
-                or getattr(owner, "owner_fb", None) is not None
-            ):
-                self.err(
-                    "E003",
-                    block.span,
-                    f"{access[0]} applies to the VAR sections of function blocks and "
-                    f"classes (inputs and outputs are always public)",
-                )
-            else:
-                self.feature("oop", block.span, f"VAR {access[0]}")
-            if len(access) > 1:
-                self.err("E003", block.span, f"a VAR section has one access specifier, not {' and '.join(access)}")
+        kind = self._section_kind(block, owner)
+        if kind is None:
+            return
+        access = self._access(block, kind, owner)
         for decl in block.decls:
-            family = self._any_input(decl, kind, owner)
-            t = self.resolve_type(A.NamedType(decl.type.span, "AnyType"), scope) if family else None
-            if t is None:
-                family = ""
-                t = self.resolve_type(decl.type, scope)
-            if T.is_conformant(t) and kind != "VAR_IN_OUT":
-                self.err(
-                    "E012",
-                    decl.type.span,
-                    "ARRAY[*] takes its bounds from an argument: it is only allowed for a VAR_IN_OUT",
-                )
-            if (
-                isinstance(t, T.POUType)
-                and t.pou_kind == "FUNCTION_BLOCK"
-                and t.decl is not None
-                and "ABSTRACT" in t.decl.modifiers
-                and kind not in ("VAR_IN_OUT", "VAR_EXTERNAL")
-            ):
-                self.err(
-                    "E043",
-                    decl.type.span,
-                    f"'{t.name}' is ABSTRACT and cannot be instantiated; declare "
-                    f"an instance of a block that EXTENDS it",
-                )
-            if isinstance(t, T.POUType) and t.pou_kind == "PROGRAM" and owner is not None and owner.pou_kind != "TEST":
-                self.err("E012", decl.type.span, f"a PROGRAM ('{t.name}') cannot be instantiated inside a POU")
+            t, family = self._decl_type(decl, kind, scope, owner)
             if decl.location:
                 decl.location = openplc_address(self.ctx, decl.location, decl.names[0][1] if decl.names else decl.span)
             for n, sp in decl.names:
-                key = n.lower()
-                if key in table:
-                    self.err("E011", sp, f"'{n}' is declared twice")
-                    continue
-                if (
-                    owner is not None
-                    and owner.pou_kind == "FUNCTION"
-                    and key == owner.name.lower()
-                    and (owner.return_type is not None or getattr(owner.decl, "return_type", None) is not None)
-                ):  # a FUNCTION without a result type has no variable of its name (TwinCAT)
-                    self.err("E011", sp, f"'{n}' is the function's own name (its return value)")
-                    continue
-                sym = T.VarSym(
-                    n,
-                    t,
-                    kind,
-                    sp,
-                    decl.init,
-                    decl.location,
-                    constant="CONSTANT" in quals,
-                    retain="RETAIN" in quals,
-                    persistent="PERSISTENT" in quals,
-                    edge=decl.edge,
-                    pyname=mangle(n),
-                    owner=owner,
-                )
-                if kind == "VAR_EXTERNAL":
-                    sym.is_global = True
-                sym.any_input = family
-                if access:
-                    sym.access = access[0]
-                if kind == "VAR_STAT" and owner is not None:
-                    # static: one variable shared by every instance and call, kept as a module global
-                    self.feature("vendor", sp, "VAR_STAT")
-                    sym.is_global = True
-                    where = (
-                        [owner.name] if getattr(owner, "owner_fb", None) is None else [owner.owner_fb.name, owner.name]
-                    )
-                    sym.pyname = "_gs_" + qualified(*where, n)
-                    self.p.globals[sym.pyname] = sym
-                table[key] = sym
-                if decl.location:
-                    self.check_location(decl.location, t, sp)
-            if decl.init is not None and kind != "VAR_EXTERNAL" and owner is None:
-                self.ctx.deferred_inits.append((decl, t))
-            elif decl.init is not None and kind != "VAR_EXTERNAL":
-                if self.ctx.globals_declared:
-                    self.check_initializer(decl.init, t, scope)
-                else:  # it may name a global constant: checked once the globals are declared
-                    self.ctx.deferred_pou_inits.append((decl, t, scope))
-                if "CONSTANT" in quals:
-                    cv = self.consts.value(decl.init, scope) if isinstance(decl.init, A.Expr) else None
-                    if cv is not None:
-                        for n, _ in decl.names:
-                            table[n.lower()].const_value = cv
+                self._declare_name(n, sp, decl, t, kind, block, access, family, table, owner)
+            self._declare_init(decl, t, kind, block, table, scope, owner)
             if kind in ("VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT") and owner is None:
-                self.err("E003", decl.span, f"{kind} is only allowed in a POU")
+                self.err(Code.MISPLACED_SECTION, decl.span, f"{kind} is only allowed in a POU")
+
+    def _section_kind(self, block: A.VarBlock, owner) -> str | None:
+        """The section the block's variables are declared in (VAR for one the POU may not have, so
+        that its names are still known), None when there is nothing to declare here."""
+        kind = block.kind
+        if owner is None:
+            return kind
+        allowed = _SECTIONS[owner.pou_kind]
+        if getattr(owner, "owner_fb", None) is not None:
+            allowed = allowed | {"VAR_INST"}  # a METHOD's variables that live in the instance
+        if kind not in allowed:
+            self.err(Code.MISPLACED_SECTION, block.span, f"{kind} is not allowed in a {owner.pou_kind}")
+            if kind in ("VAR_GLOBAL", "VAR_ACCESS", "VAR_CONFIG"):
+                return None
+            kind = "VAR"  # still declare the names: no cascade of 'undeclared' errors
+        if kind == "VAR_GLOBAL":
+            self.ctx.global_blocks.append((owner.name, block))
+            return None
+        return kind
+
+    def _access(self, block: A.VarBlock, kind: str, owner) -> list[str]:
+        """The block's access specifiers (PRIVATE, PROTECTED, ...): for the VARs of a function block."""
+        access = [q for q in block.qualifiers if q in ("PUBLIC", "PRIVATE", "PROTECTED", "INTERNAL")]
+        if not access:
+            return access
+        if (
+            owner is None
+            or owner.pou_kind != "FUNCTION_BLOCK"
+            or kind != "VAR"
+            or getattr(owner, "owner_fb", None) is not None
+        ):
+            self.err(
+                Code.MISPLACED_SECTION,
+                block.span,
+                f"{access[0]} applies to the VAR sections of function blocks and "
+                f"classes (inputs and outputs are always public)",
+            )
+        else:
+            self.feature("oop", block.span, f"VAR {access[0]}")
+        if len(access) > 1:
+            self.err(
+                Code.MISPLACED_SECTION,
+                block.span,
+                f"a VAR section has one access specifier, not {' and '.join(access)}",
+            )
+        return access
+
+    def _decl_type(self, decl: A.VarDecl, kind: str, scope: Scope | None, owner) -> tuple[T.Type, str]:
+        """The declared type and, for an ANY input, its family."""
+        family = self._any_input(decl, kind, owner)
+        t = self.resolve_type(A.NamedType(decl.type.span, "AnyType"), scope) if family else None
+        if t is None:
+            family = ""
+            t = self.resolve_type(decl.type, scope)
+        if T.is_conformant(t) and kind != "VAR_IN_OUT":
+            self.err(
+                Code.BAD_TYPE,
+                decl.type.span,
+                "ARRAY[*] takes its bounds from an argument: it is only allowed for a VAR_IN_OUT",
+            )
+        abstract.check_declared_instance(self.ctx, t, kind, decl.type.span)
+        if isinstance(t, T.POUType) and t.pou_kind == "PROGRAM" and owner is not None and owner.pou_kind != "TEST":
+            self.err(Code.BAD_TYPE, decl.type.span, f"a PROGRAM ('{t.name}') cannot be instantiated inside a POU")
+        return t, family
+
+    def _declare_name(self, n: str, sp: Span, decl: A.VarDecl, t, kind, block, access, family, table, owner) -> None:
+        key = n.lower()
+        if key in table:
+            self.err(Code.DECLARED_TWICE, sp, f"'{n}' is declared twice")
+            return
+        if (
+            owner is not None
+            and owner.pou_kind == "FUNCTION"
+            and key == owner.name.lower()
+            and (owner.return_type is not None or getattr(owner.decl, "return_type", None) is not None)
+        ):  # a FUNCTION without a result type has no variable of its name (TwinCAT)
+            self.err(Code.DECLARED_TWICE, sp, f"'{n}' is the function's own name (its return value)")
+            return
+        quals = block.qualifiers
+        sym = T.VarSym(
+            n,
+            t,
+            kind,
+            sp,
+            decl.init,
+            decl.location,
+            constant="CONSTANT" in quals,
+            retain="RETAIN" in quals,
+            persistent="PERSISTENT" in quals,
+            edge=decl.edge,
+            pyname=mangle(n),
+            owner=owner,
+        )
+        if kind == "VAR_EXTERNAL":
+            sym.is_global = True
+        sym.any_input = family
+        if access:
+            sym.access = access[0]
+        if kind == "VAR_STAT" and owner is not None:
+            # static: one variable shared by every instance and call, kept as a module global
+            self.feature("vendor", sp, "VAR_STAT")
+            sym.is_global = True
+            where = [owner.name] if getattr(owner, "owner_fb", None) is None else [owner.owner_fb.name, owner.name]
+            sym.pyname = "_gs_" + qualified(*where, n)
+            self.p.globals[sym.pyname] = sym
+        table[key] = sym
+        if decl.location:
+            self.check_location(decl.location, t, sp)
+
+    def _declare_init(self, decl: A.VarDecl, t: T.Type, kind: str, block, table, scope: Scope | None, owner) -> None:
+        """The initial value: a global's once every global is declared, a POU variable's now (or
+        once the globals are, if they are not yet: it may name a global constant)."""
+        if decl.init is None or kind == "VAR_EXTERNAL":
+            return
+        if owner is None:
+            self.ctx.deferred_inits.append((decl, t))
+            return
+        if self.ctx.globals_declared:
+            self.check_initializer(decl.init, t, scope)
+        else:
+            self.ctx.deferred_pou_inits.append((decl, t, scope))
+        if "CONSTANT" in block.qualifiers:
+            cv = self.consts.value(decl.init, scope) if isinstance(decl.init, A.Expr) else None
+            if cv is not None:
+                for n, _ in decl.names:
+                    table[n.lower()].const_value = cv
 
     def declare_blocks(self, blocks: list[A.VarBlock], table: dict, scope: Scope, owner) -> None:
         """A POU's VAR sections: its VAR CONSTANT sections first, since CODESYS lets an initial value
@@ -676,7 +697,9 @@ class Declarations(Part):
         if not (isinstance(spec, A.NamedType) and spec.name.upper() in ANY_FAMILIES):
             return ""
         if kind != "VAR_INPUT" or owner is None or owner.pou_kind not in ("FUNCTION", "FUNCTION_BLOCK"):
-            self.err("E012", spec.span, f"{spec.name.upper()} is for the inputs of functions, blocks and methods only")
+            self.err(
+                Code.BAD_TYPE, spec.span, f"{spec.name.upper()} is for the inputs of functions, blocks and methods only"
+            )
             return ""
         if not self.feature("vendor", spec.span, f"an {spec.name.upper()} input"):
             return ""
@@ -687,84 +710,89 @@ class Declarations(Part):
     def check_location(self, loc: str, t: T.Type, span: Span) -> None:
         m = _DIRECT.fullmatch(loc.upper())
         if not m:
-            self.err("E004", span, f"malformed address '{loc}'")
+            self.err(Code.MALFORMED_LITERAL, span, f"malformed address '{loc}'")
             return
         size = m.group(2)
         if m.group(3) == "*":
             return
         problem = image_problem(loc)
         if problem:
-            self.err("E004", span, problem)
+            self.err(Code.MALFORMED_LITERAL, span, problem)
             return
-        want = _DIRECT_TYPES[size]
-        bt = T.base_of(t)
-        if not (isinstance(bt, T.EnumType) or isinstance(bt, T.ElemType) and bt.kind not in ("string", "char")):
-            self.err(
-                "E013",
-                span,
-                f"'{loc}' is one cell of the process image; it cannot hold a value of type {t}",
-                "locate a number, a bit string, BOOL, a time or a date, or use an unlocated variable",
-            )
-            return
-        if isinstance(bt, T.ElemType) and bt.bits != want.bits and not (size in ("", "X") and bt.is_bool):
-            self.err("E013", span, f"'{loc}' is {want.bits} bit(s) wide; it cannot hold a {t}")
+        located_type.check_located_type(self.ctx, loc, t, size, _DIRECT_TYPES[size], span)
 
     # ================================================================ initializers
     def check_initializer(self, init, t: T.Type, scope: Scope | None) -> None:
-        bt = T.unalias(t)
         if isinstance(init, A.CtorInit):
             return self._check_ctor_args(init, t, scope)
         if isinstance(init, A.ArrayInit):
-            if not isinstance(bt, T.ArrayType):
-                self.err("E013", init.span, f"an array initializer cannot initialize a {t}")
-                return
-            count = 0
-            for item in init.items:
-                if isinstance(item, A.RepeatInit):
-                    for sub in item.items:
-                        self.check_initializer(sub, bt.element, scope)
-                    count += item.count * max(1, len(item.items))
-                else:
-                    self.check_initializer(item, bt.element, scope)
-                    count += 1
-            if count > bt.size:
-                self.err("E022", init.span, f"{count} initial values for an array of {bt.size} elements")
-            return
+            return self._array_initializer(init, t, scope)
         if isinstance(init, A.StructInit):
-            fields: Mapping[str, T.Member | T.VarSym]
-            if isinstance(bt, T.StructType):
-                fields, what = bt.members, "field"
-            elif isinstance(bt, T.POUType) and bt.pou_kind != "FUNCTION":
-                self.resolve_interface(bt)
-                fields, what = bt.vars, "variable"
-            else:
-                self.err("E013", init.span, f"a structure initializer cannot initialize a {t}")
-                return
-            for name, sp, val in init.fields:
-                m = fields.get(name.lower())
-                if m is None:
-                    self.err("E023", sp, f"'{t}' has no {what} '{name}'")
-                    continue
-                self.check_initializer(val, m.type, scope)
-            return
+            return self._struct_initializer(init, t, scope)
         if isinstance(init, A.Expr):
-            if isinstance(bt, T.ArrayType) and isinstance(init, A.Literal):
-                # CODESYS-style: a single value initializes... no; IEC needs [..]
-                self.err("E013", init.span, f"an array needs an initializer in brackets, e.g. [{init.text}]")
+            self._value_initializer(init, t, scope)
+        return None
+
+    def _array_initializer(self, init: A.ArrayInit, t: T.Type, scope: Scope | None) -> None:
+        if not initializers.check_array_form(self.ctx, init, t):
+            return
+        bt = cast(T.ArrayType, T.unalias(t))
+        count = 0
+        for item in init.items:
+            if isinstance(item, A.RepeatInit):
+                for sub in item.items:
+                    self.check_initializer(sub, bt.element, scope)
+                count += item.count * max(1, len(item.items))
+            else:
+                self.check_initializer(item, bt.element, scope)
+                count += 1
+        array_bounds.check_initializer_count(self.ctx, init, count, bt.size)
+
+    def _struct_initializer(self, init: A.StructInit, t: T.Type, scope: Scope | None) -> None:
+        bt = T.unalias(t)
+        fields: Mapping[str, T.Member | T.VarSym]
+        if isinstance(bt, T.StructType):
+            fields, what = bt.members, "field"
+        elif isinstance(bt, T.POUType) and bt.pou_kind != "FUNCTION":
+            self.resolve_interface(bt)
+            fields, what = bt.vars, "variable"
+        else:
+            initializers.check_structure_form(self.ctx, init, t)
+            return
+        for name, sp, val in init.fields:
+            m = fields.get(name.lower())
+            if m is None:
+                self.err(Code.BAD_ACCESS, sp, f"'{t}' has no {what} '{name}'")
+                continue
+            self.check_initializer(val, m.type, scope)
+
+    def _value_initializer(self, init: A.Expr, t: T.Type, scope: Scope | None) -> None:
+        if not initializers.check_single_value(self.ctx, init, t):
+            return
+        if self._bound_initializer(init, t, T.unalias(t), scope):
+            return
+        st = self.exprs.expr(init, scope or Scope(None, {}), t)
+        for n in _names_in([init]):
+            if isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
+                self.err(
+                    Code.NOT_CONSTANT,
+                    n.span,
+                    f"an initial value must be a constant; '{n.name}' is a variable",
+                    "assign it in the code instead, or declare it CONSTANT",
+                )
                 return
-            if self._bound_initializer(init, t, bt, scope):
-                return
-            st = self.exprs.expr(init, scope or Scope(None, {}), t)
-            for n in _names_in([init]):
-                if isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
-                    self.err(
-                        "E029",
-                        n.span,
-                        f"an initial value must be a constant; '{n.name}' is a variable",
-                        "assign it in the code instead, or declare it CONSTANT",
-                    )
-                    return
-            self.stmts.assignable(init, st, t, init.span)
+        self.stmts.assignable(init, st, t, init.span)
+
+
+_TYPE_SPECS: dict[type, Callable[..., T.Type]] = {
+    A.NamedType: Declarations._named_type,
+    A.StringType: Declarations._string_type,
+    A.ArrayType: Declarations._array_type,
+    A.RefType: Declarations._ref_type,
+    A.SubrangeType: Declarations._subrange_type,
+    A.EnumType: Declarations._enum_type,
+    A.StructType: Declarations._struct_type,
+}
 
 
 def _below(a: Span | None, b: Span | None) -> bool:
@@ -777,3 +805,13 @@ def _declared_in(pou: T.POUType, name: str) -> bool:
     key = name.lower()
     d = pou.decl
     return d is not None and any(n.lower() == key for vb in d.var_blocks for vd in vb.decls for n, _ in vd.names)
+
+
+def _inherit(pou: T.POUType, base: T.POUType) -> None:
+    """What a block inherits from its base besides its variables."""
+    for k, ba in base.actions.items():
+        pou.actions.setdefault(k, ba)  # actions are inherited; a same-named one replaces it
+    for k, bp in base.properties.items():
+        pou.properties.setdefault(k, bp)  # an own property of that name overrides it
+    for k, bm in base.methods.items():
+        pou.methods.setdefault(k, bm)  # an own method of that name overrides it

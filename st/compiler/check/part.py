@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ...diagnostics import Code
 from ...model.program import Project
 from ...source import Span
 from .context import CheckContext
@@ -41,10 +42,10 @@ class Part:
     def p(self) -> Project:
         return self.ctx.project
 
-    def err(self, code: str, span: Span, msg: str, hint: str = "") -> None:
+    def err(self, code: Code, span: Span, msg: str, hint: str = "") -> None:
         self.ctx.err(code, span, msg, hint)
 
-    def warn(self, code: str, span: Span, msg: str, hint: str = "") -> None:
+    def warn(self, code: Code, span: Span, msg: str, hint: str = "") -> None:
         self.ctx.warn(code, span, msg, hint)
 
     def feature(self, kind: str, span: Span, what: str) -> bool:

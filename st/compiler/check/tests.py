@@ -11,11 +11,13 @@ from __future__ import annotations
 
 from typing import cast
 
+from ...diagnostics import Code
 from ...model import types as T
 from ...model.program import AssertInfo
 from .. import ast as A
 from .common import Scope
 from .part import Part
+from .rules import call_without_value, result_without_type, unit_test_only
 from .targets import TestCall
 
 # name → (minimum, maximum) number of arguments, the message included
@@ -46,10 +48,7 @@ _CMP_OF = {
 class TestStatements(Part):
     # ---------------------------------------------------------------- statements
     def _test_only(self, span, what: str, scope: Scope) -> bool:
-        if getattr(scope, "test", False):
-            return True
-        self.err("E033", span, f"{what} is only allowed inside a TEST, SETUP or TEARDOWN block")
-        return False
+        return unit_test_only.check_test_only(self.ctx, span, what, scope)
 
     def mock(self, s: A.Mock, scope: Scope) -> None:
         if not self._test_only(s.span, "MOCK", scope):
@@ -59,7 +58,7 @@ class TestStatements(Part):
             return
         if not _is_instance(t):
             self.err(
-                "E013",
+                Code.TYPE_MISMATCH,
                 s.target.span,
                 f"MOCK needs a function block or program instance, not a {t}",
                 "functions are mocked with MOCK_FUNCTION name RETURNS value;",
@@ -71,14 +70,14 @@ class TestStatements(Part):
         pou = self.p.pous.get(s.name.lower())
         if pou is None or pou.pou_kind != "FUNCTION" or pou.decl is None:
             what = "a standard function" if self.ctx.native(s.name.lower()) is not None else "not a FUNCTION"
-            self.err("E020", s.span, f"'{s.name}' is {what}; MOCK_FUNCTION replaces a FUNCTION written in ST")
+            self.err(
+                Code.NOT_CALLABLE, s.span, f"'{s.name}' is {what}; MOCK_FUNCTION replaces a FUNCTION written in ST"
+            )
             self.exprs.expr(s.value, scope)
             return
         s.pou = pou
         vt = self.exprs.expr(s.value, scope, pou.return_type)
-        if pou.return_type is None:
-            self.err("E013", s.value.span, f"FUNCTION {pou.name} returns nothing")
-        elif vt is not None:
+        if result_without_type.check_mocked_result(self.ctx, pou, s.value) and vt is not None:
             self.stmts.assignable(s.value, vt, pou.return_type, s.value.span)
 
     # ---------------------------------------------------------------- calls
@@ -87,17 +86,16 @@ class TestStatements(Part):
         name = cast(A.Name, c.callee).name.upper()
         if not self._test_only(c.span, name, scope):
             return None
-        if not statement:
-            self.err("E049", c.span, f"{name} is a statement; it has no value")
+        if call_without_value.check_statement_call(self.ctx, c, statement, f"{name} is a statement; it has no value"):
             return None
         lo, hi = TEST_CALLS[key]
         args = c.args
         if any(a.name or a.output for a in args):
-            self.err("E016", c.span, f"{name} takes positional arguments only")
+            self.err(Code.BAD_PARAMETER, c.span, f"{name} takes positional arguments only")
             return None
         if not lo <= len(args) <= hi:
             want = str(lo) if lo == hi else f"{lo} or {hi}"
-            self.err("E017", c.span, f"{name} takes {want} arguments, not {len(args)}")
+            self.err(Code.ARGUMENT_COUNT, c.span, f"{name} takes {want} arguments, not {len(args)}")
             for a in args:
                 self.exprs.expr(a.value, scope)
             return None
@@ -110,7 +108,7 @@ class TestStatements(Part):
                 msg = values[n_operands]
                 mt = self.exprs.expr(msg, scope)
                 if mt is not None and T.base_of(mt).kind not in ("string",):
-                    self.err("E013", msg.span, f"the message of {name} must be a STRING, not {mt}")
+                    self.err(Code.TYPE_MISMATCH, msg.span, f"the message of {name} must be a STRING, not {mt}")
             values = values[:n_operands]
             ok = self._check_assert(key, name, values, scope, info)
         elif key == "advance_time":
@@ -118,7 +116,11 @@ class TestStatements(Part):
             ok = t is not None
             if t is not None:  # (info is kept only when ok)
                 if not (T.base_of(t).is_time or T.base_of(t).is_intlike or isinstance(T.base_of(t), T.LiteralType)):
-                    self.err("E013", values[0].span, f"ADVANCE_TIME needs a TIME or a number of nanoseconds, not {t}")
+                    self.err(
+                        Code.TYPE_MISMATCH,
+                        values[0].span,
+                        f"ADVANCE_TIME needs a TIME or a number of nanoseconds, not {t}",
+                    )
                     ok = False
                 info.types = [t]
         else:  # mock_verify_called / mock_verify_call_count
@@ -134,7 +136,7 @@ class TestStatements(Part):
             t = self.exprs.expr(values[0], scope, T.BOOL)
             info.types = [t]
             if t is not None and not T.base_of(t).is_bool:
-                self.err("E013", values[0].span, f"{name} needs a BOOL, not {t}")
+                self.err(Code.TYPE_MISMATCH, values[0].span, f"{name} needs a BOOL, not {t}")
                 return False
             return t is not None
         if key == "assert_near":
@@ -142,7 +144,7 @@ class TestStatements(Part):
             info.types = ts
             for v, t in zip(values, ts):
                 if t is not None and not (T.base_of(t).is_num or isinstance(T.base_of(t), T.LiteralType)):
-                    self.err("E013", v.span, f"{name} compares numbers, not {t}")
+                    self.err(Code.TYPE_MISMATCH, v.span, f"{name} compares numbers, not {t}")
                     return False
             return None not in ts
         # a comparison: checked as `a OP b`, so every rule of the operator applies
@@ -154,7 +156,11 @@ class TestStatements(Part):
         for v in values:
             ut = T.unalias(v.ty) if v.ty is not None else None
             if ut is not None and ut.is_aggregate:
-                self.err("E013", v.span, f"{name} compares elementary values; compare the elements of this {v.ty}")
+                self.err(
+                    Code.TYPE_MISMATCH,
+                    v.span,
+                    f"{name} compares elementary values; compare the elements of this {v.ty}",
+                )
                 return False
         return True
 
@@ -167,20 +173,20 @@ class TestStatements(Part):
                 target.ty = None
                 info.types = [pou]
             else:
-                self.err("E010", target.span, f"'{target.name}' is neither an instance nor a FUNCTION")
+                self.err(Code.UNDECLARED, target.span, f"'{target.name}' is neither an instance nor a FUNCTION")
                 return False
         else:
             t = self.exprs.expr(target, scope)
             if t is None:
                 return False
             if not _is_instance(t):
-                self.err("E013", target.span, f"{name} needs a mocked instance or FUNCTION, not a {t}")
+                self.err(Code.TYPE_MISMATCH, target.span, f"{name} needs a mocked instance or FUNCTION, not a {t}")
                 return False
             info.types = [t]
         if key == "mock_verify_call_count":
             ct = self.exprs.expr(values[1], scope, T.DINT)
             if ct is not None and not (T.base_of(ct).is_intlike or isinstance(T.base_of(ct), T.LiteralType)):
-                self.err("E013", values[1].span, f"the expected call count must be an integer, not {ct}")
+                self.err(Code.TYPE_MISMATCH, values[1].span, f"the expected call count must be an integer, not {ct}")
                 return False
             return ct is not None
         return True

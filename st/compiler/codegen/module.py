@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast as py
 
+from ...diagnostics import Code
 from ...model import types as T
 from ..lower import LoweredProgram
 from .expressions import InitGen
@@ -86,7 +87,7 @@ class ModuleGen:
                 else:
                     node = BodyGen(self, pou).klass()
             except Unsupported as u:
-                self.sink.error("E040", u.span, u.msg)
+                self.sink.error(Code.UNSUPPORTED, u.span, u.msg)
                 continue
             if isinstance(node, list):
                 for n in node:
@@ -97,7 +98,7 @@ class ModuleGen:
             try:
                 self.tests_by_file.setdefault(test.span.file, []).append(TestGen(self, test).function())
             except Unsupported as u:
-                self.sink.error("E040", u.span, u.msg)
+                self.sink.error(Code.UNSUPPORTED, u.span, u.msg)
         # module-level globals: VAR_GLOBAL and directly addressed variables
         init_stmts = []
         for g in self.p.globals.values():

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from ...model import types as T
 from .. import ast as A
-from ..check.for_counter import counter_writes, root_sym
+from ..check.rules.for_counter import counter_writes, root_sym
 from .walk import inner_bodies, walk_stmts
 from .writes import Writes
 
@@ -46,7 +46,7 @@ def counted(s: A.For, writes: Writes | None = None, block: T.POUType | None = No
 
 def may_write_counter(body: list, var, writes: Writes | None, block: T.POUType | None) -> bool:
     """Whether anything may write the loop variable `var` while `body` runs: the body itself
-    (check/for_counter.py), or, for a variable other code can reach (a global, a VAR_IN_OUT, a
+    (check/rules/for_counter.py), or, for a variable other code can reach (a global, a VAR_IN_OUT, a
     reference, one whose address is taken anywhere, an instance variable of a block whose instance
     other code may reach), the code the body calls (writes.py). Without `writes` (a body lowered
     on its own) only what the body shows is known, and any call is assumed to write."""

@@ -3,7 +3,7 @@
 Two choices of code generation rest on it: an instance's variables are kept in Python locals
 during its body (codegen/pous.py, "cached"), and a FOR whose body does not write its counter runs
 as a Python `for` (loops.py, "range"). Both are right only if nothing but the body's own statements
-writes those variables meanwhile. The body's text shows its own writes (check/for_counter.py);
+writes those variables meanwhile. The body's text shows its own writes (check/rules/for_counter.py);
 this module adds what the text cannot show, from the whole project:
 
 - a call of a method, action or property of the same instance (THIS), or THIS handed to a call;

@@ -5,10 +5,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ....diagnostics import Code
 from ....model import types as T
 from ....model.program import ConfigModel, InstanceModel, TaskModel
 from ... import ast as A
-from ..common import _SECTIONS_PARAM, Scope, same_type
+from ..common import _SECTIONS_PARAM, Scope
+from ..rules import declaration_mismatch
 
 if TYPE_CHECKING:
     from ..semantics import Semantics
@@ -29,59 +31,14 @@ def _check_configuration(sem: Semantics, cfg: A.Configuration) -> None:
         for td in res.tasks:
             tm = TaskModel(td.name, span=td.span)
             for k, v in td.params.items():
-                if k == "INTERVAL":
-                    tt = sem.exprs.expr(v, scope, T.TIME)
-                    c = sem.consts.value(v, scope)
-                    if tt is None or not T.base_of(tt).is_time or not isinstance(c, int):
-                        ctx.err("E013", v.span, "INTERVAL must be a TIME constant, e.g. T#20ms")
-                    elif c <= 0:
-                        ctx.err("E029", v.span, "INTERVAL must be positive")
-                    else:
-                        tm.interval = c
-                elif k == "PRIORITY":
-                    c = sem.consts.value(v, scope)
-                    if not isinstance(c, int):
-                        ctx.err("E029", v.span, "PRIORITY must be an integer constant")
-                    else:
-                        tm.priority = c
-                elif k == "SINGLE":
-                    if isinstance(v, A.Name):
-                        gs = ctx.project.global_names.get(v.name.lower())
-                        if not gs:
-                            ctx.err("E010", v.span, f"SINGLE refers to unknown variable '{v.name}'")
-                        else:
-                            tm.single = gs[0].pyname
-                    else:
-                        ctx.err("E013", v.span, "SINGLE must name a BOOL variable")
-                else:
-                    ctx.err("E016", v.span, f"unknown task parameter '{k}' (INTERVAL, SINGLE, PRIORITY)")
+                _task_parameter(sem, tm, k, v, scope)
             if any(t.name.lower() == td.name.lower() for t in cm.tasks):
-                ctx.err("E011", td.span, f"task '{td.name}' is declared twice")
+                ctx.err(Code.DECLARED_TWICE, td.span, f"task '{td.name}' is declared twice")
             cm.tasks.append(tm)
         for pc in res.programs:
-            pou = ctx.project.pous.get(pc.type_name.lower())
-            if pou is None or pou.pou_kind != "PROGRAM":
-                ctx.err("E028", pc.span, f"'{pc.type_name}' is not a PROGRAM")
-                continue
-            if pc.task and not any(t.name.lower() == pc.task.lower() for t in cm.tasks):
-                ctx.err("E028", pc.span, f"unknown task '{pc.task}'")
-                continue
-            if any(i.name.lower() == pc.instance.lower() for i in cm.instances):
-                ctx.err("E011", pc.span, f"program instance '{pc.instance}' is declared twice")
-                continue
-            im = InstanceModel(pc.instance, pou, pc.task, res.name, [], pc.span)
-            for a in pc.args:
-                p = pou.vars.get(a.name.lower())
-                if p is None or p.section not in _SECTIONS_PARAM:
-                    ctx.err("E016", a.span, f"{pou.name} has no parameter '{a.name}'")
-                    continue
-                if a.output:
-                    sem.exprs.expr(a.value, scope)
-                else:
-                    vt = sem.exprs.expr(a.value, scope, p.type)
-                    sem.stmts.assignable(a.value, vt, p.type, a.value.span, "pass")
-                im.args.append((p, a.value, a.output))
-            cm.instances.append(im)
+            im = _program_instance(sem, cm, res, pc, scope)
+            if im is not None:
+                cm.instances.append(im)
     for b in cfg.var_blocks:
         if b.kind == "VAR_CONFIG":
             for d in b.decls:
@@ -90,25 +47,83 @@ def _check_configuration(sem: Semantics, cfg: A.Configuration) -> None:
     ctx.project.configs.append(cm)
 
 
+def _task_parameter(sem: Semantics, tm: TaskModel, k: str, v: A.Expr, scope: Scope) -> None:
+    """TASK t (INTERVAL := T#20ms, SINGLE := trigger, PRIORITY := 1): one of them."""
+    ctx = sem.ctx
+    if k == "INTERVAL":
+        tt = sem.exprs.expr(v, scope, T.TIME)
+        c = sem.consts.value(v, scope)
+        if tt is None or not T.base_of(tt).is_time or not isinstance(c, int):
+            ctx.err(Code.TYPE_MISMATCH, v.span, "INTERVAL must be a TIME constant, e.g. T#20ms")
+        elif c <= 0:
+            ctx.err(Code.NOT_CONSTANT, v.span, "INTERVAL must be positive")
+        else:
+            tm.interval = c
+    elif k == "PRIORITY":
+        c = sem.consts.value(v, scope)
+        if not isinstance(c, int):
+            ctx.err(Code.NOT_CONSTANT, v.span, "PRIORITY must be an integer constant")
+        else:
+            tm.priority = c
+    elif k == "SINGLE":
+        if not isinstance(v, A.Name):
+            ctx.err(Code.TYPE_MISMATCH, v.span, "SINGLE must name a BOOL variable")
+            return
+        gs = ctx.project.global_names.get(v.name.lower())
+        if not gs:
+            ctx.err(Code.UNDECLARED, v.span, f"SINGLE refers to unknown variable '{v.name}'")
+        else:
+            tm.single = gs[0].pyname
+    else:
+        ctx.err(Code.BAD_PARAMETER, v.span, f"unknown task parameter '{k}' (INTERVAL, SINGLE, PRIORITY)")
+
+
+def _program_instance(sem: Semantics, cm: ConfigModel, res, pc, scope: Scope) -> InstanceModel | None:
+    """PROGRAM inst WITH task : Type (in := a, out => b): None after an error."""
+    ctx = sem.ctx
+    pou = ctx.project.pous.get(pc.type_name.lower())
+    if pou is None or pou.pou_kind != "PROGRAM":
+        ctx.err(Code.BAD_CONFIGURATION, pc.span, f"'{pc.type_name}' is not a PROGRAM")
+        return None
+    if pc.task and not any(t.name.lower() == pc.task.lower() for t in cm.tasks):
+        ctx.err(Code.BAD_CONFIGURATION, pc.span, f"unknown task '{pc.task}'")
+        return None
+    if any(i.name.lower() == pc.instance.lower() for i in cm.instances):
+        ctx.err(Code.DECLARED_TWICE, pc.span, f"program instance '{pc.instance}' is declared twice")
+        return None
+    im = InstanceModel(pc.instance, pou, pc.task, res.name, [], pc.span)
+    for a in pc.args:
+        p = pou.vars.get(a.name.lower())
+        if p is None or p.section not in _SECTIONS_PARAM:
+            ctx.err(Code.BAD_PARAMETER, a.span, f"{pou.name} has no parameter '{a.name}'")
+            continue
+        if a.output:
+            sem.exprs.expr(a.value, scope)
+        else:
+            vt = sem.exprs.expr(a.value, scope, p.type)
+            sem.stmts.assignable(a.value, vt, p.type, a.value.span, "pass")
+        im.args.append((p, a.value, a.output))
+    return im
+
+
 def _config_path_type(sem: Semantics, cm: ConfigModel, d: A.VarDecl):
     """Check a VAR_CONFIG entry `inst.fb.var AT %QX0.0 : T := v;`; its variable's type or None."""
     ctx = sem.ctx
     path = d.path or []
     inst = next((i for i in cm.instances if path and i.name.lower() == path[0].lower()), None)
     if inst is None:
-        ctx.err("E010", d.span, f"VAR_CONFIG: no program instance named '{path[0] if path else ''}'")
+        ctx.err(Code.UNDECLARED, d.span, f"VAR_CONFIG: no program instance named '{path[0] if path else ''}'")
         return None
     t: T.Type = inst.type
     for name in path[1:]:
         ut = T.unalias(t)
         sym = ut.vars.get(name.lower()) if isinstance(ut, T.POUType) else None
         if sym is None:
-            ctx.err("E010", d.span, f"VAR_CONFIG: {'.'.join(path)}: '{name}' is not a variable of {ut}")
+            ctx.err(Code.UNDECLARED, d.span, f"VAR_CONFIG: {'.'.join(path)}: '{name}' is not a variable of {ut}")
             return None
         t = sym.type
     want = sem.decls.resolve_type(d.type, None)
-    if not same_type(want, t):
-        ctx.err("E013", d.type.span, f"VAR_CONFIG: {'.'.join(path)} is {t}, not {want}")
+    if not declaration_mismatch.check_config_entry(ctx, d, path, want, t):
         return None
     if d.location:
         sem.decls.check_location(d.location, t, d.span)

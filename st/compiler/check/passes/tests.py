@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ....diagnostics import Code
 from ....model import types as T
 from ....model.program import TestModel
 from ... import ast as A
@@ -29,7 +30,9 @@ def check_tests(sem: Semantics) -> None:
                 continue
             if tb.name in seen:
                 ctx.err(
-                    "E011", tb.span, f"a TEST named '{tb.name}' already exists in this file (line {seen[tb.name].line})"
+                    Code.DECLARED_TWICE,
+                    tb.span,
+                    f"a TEST named '{tb.name}' already exists in this file (line {seen[tb.name].line})",
                 )
                 continue
             seen[tb.name] = tb.span
@@ -39,7 +42,11 @@ def check_tests(sem: Semantics) -> None:
 def _single_block(ctx: CheckContext, blocks: list[A.TestBlock], kind: str) -> A.TestBlock | None:
     found = [b for b in blocks if b.kind == kind]
     for extra in found[1:]:
-        ctx.err("E011", extra.span, f"a file may have one {kind} block (the first is at line {found[0].span.line})")
+        ctx.err(
+            Code.DECLARED_TWICE,
+            extra.span,
+            f"a file may have one {kind} block (the first is at line {found[0].span.line})",
+        )
     return found[0] if found else None
 
 

@@ -1,20 +1,27 @@
-"""Resource limits of a program's storage: how deeply types nest and how many values one
-declaration holds. A program within them can always be built at start-up; one beyond them is a
-located error here rather than a RecursionError or MemoryError when `st run` builds it.
+"""Resource limits of a program's storage: how deeply types nest, how many elements one array has
+and how many values one declaration holds. A program within them can always be built at
+start-up; one beyond them is a located error here rather than a RecursionError or MemoryError
+when `st run` builds it. Under every preset (not in library sources).
 
 Depth: an elementary type is 0; a STRUCT, an ARRAY or a function block instance is one more than
 its deepest part. Values: an elementary value (or a reference) is 1; an array holds its size
 times its element's; a STRUCT or block the sum of its parts.
+
+Codes: E041, E042.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 
-from ...model import types as T
+from ....diagnostics import Code
+from ....model import types as T
+from ....source import Span
+from ..context import CheckContext
 
 MAX_NESTING = 100  # real programs nest types and blocks a handful of levels deep
 MAX_VALUES = 50_000_000  # the same bound as one array's elements (E042)
+MAX_ARRAY_ELEMENTS = 50_000_000
 _STORED = ("VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_STAT", "VAR_INST", "VAR_TEMP", "VAR_GLOBAL")
 
 
@@ -65,9 +72,20 @@ class _Measure:
         return memo[id(t)]
 
 
-def check_storage_limits(project, err: Callable, in_library: Callable) -> None:
+def check_array_size(ctx: CheckContext, at: T.ArrayType, span: Span) -> None:
+    """An array type of more than MAX_ARRAY_ELEMENTS elements (E042), where it is written."""
+    if at.size > MAX_ARRAY_ELEMENTS:
+        ctx.err(
+            Code.TOO_LARGE,
+            span,
+            f"an array of {at.size:,} elements is too large (at most {MAX_ARRAY_ELEMENTS:,})",
+        )
+
+
+def check_storage_limits(ctx: CheckContext) -> None:
     """Report E041 where nesting crosses MAX_NESTING and E042 at the innermost declaration that
     holds more than MAX_VALUES values (each problem once, where it starts)."""
+    project, err = ctx.project, ctx.err
     m = _Measure()
     decls: list = []  # (span, type) of every declaration with storage
     seen_types: set = set()
@@ -83,13 +101,13 @@ def check_storage_limits(project, err: Callable, in_library: Callable) -> None:
             decls.extend(_parts(t))
     reported: set = set()
     for span, t in decls:
-        if span is None or in_library(span) or (span, id(t)) in reported:
+        if span is None or span.file in ctx.library_units or (span, id(t)) in reported:
             continue
         reported.add((span, id(t)))
         depth, values = m.measure(t)
         if depth == MAX_NESTING + 1:
             err(
-                "E041",
+                Code.TOO_DEEP,
                 span,
                 f"this declaration's type nests {MAX_NESTING + 1} levels deep "
                 f"(structures, arrays and function blocks inside each other; at most {MAX_NESTING})",
@@ -100,7 +118,7 @@ def check_storage_limits(project, err: Callable, in_library: Callable) -> None:
             if isinstance(u, T.ArrayType) and u.size > MAX_VALUES:
                 continue  # the array itself is already E042 (its elements)
             err(
-                "E042",
+                Code.TOO_LARGE,
                 span,
                 f"this declaration holds {values:,} values (at most {MAX_VALUES:,})",
                 "make the arrays smaller",
