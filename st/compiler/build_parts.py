@@ -1,0 +1,146 @@
+"""What the AST builder's callbacks (build.py) hand one another: the result of a grammar rule that
+is not a node of the AST (ast.py) but a piece its parent rule takes apart, read with `isinstance`
+or `match`. Private to the builder: none of these reaches the AST.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from ..source import Span
+from . import ast as A
+
+# the AST's own shapes, built by one callback and stored as they are by another
+FieldValue = tuple[str, Span, Any]  # `name := initializer` (StructInit.fields, NamedType.ctor_args)
+Range = tuple[A.Expr, A.Expr]  # `lo..hi` of an ARRAY or a subrange type (None for `*`)
+CaseLabelValue = tuple[A.Expr, A.Expr | None]  # a CASE label: a value (hi None) or a range
+
+
+class Chain(list[A.Assign]):
+    """Several statements from one piece of text (a chained assignment), spliced into the
+    statement list around it by `flat`."""
+
+
+def flat(items: Iterable[Any]) -> Iterator[Any]:
+    """The items, each Chain replaced by its statements."""
+    for x in items:
+        if isinstance(x, Chain):
+            yield from x
+        else:
+            yield x
+
+
+# ------------------------------------------------------------------ declarations
+
+
+@dataclass(frozen=True, slots=True)
+class Modifier:
+    """A POU, method, property or accessor modifier (PUBLIC, ABSTRACT, OVERRIDE, ...), upper case."""
+
+    name: str
+
+
+@dataclass(frozen=True, slots=True)
+class Extends:
+    """`EXTENDS base` of a function block or class."""
+
+    base: str
+
+
+@dataclass(frozen=True, slots=True)
+class Implements:
+    """`IMPLEMENTS I1, I2` of a function block or class."""
+
+    names: list[str]
+
+
+@dataclass(frozen=True, slots=True)
+class Accessor:
+    """A property's GET or SET: where it starts and what is between the keyword and its END_*
+    (modifiers, VAR blocks, statements)."""
+
+    kind: Literal["GET", "SET"]
+    span: Span
+    parts: list[Any]
+
+
+@dataclass(frozen=True, slots=True)
+class TypeBody:
+    """What follows `TYPE name :`, the type and its initial value (None without one)."""
+
+    spec: A.TypeSpec
+    init: Any
+
+
+@dataclass(frozen=True, slots=True)
+class Location:
+    """`AT %IX0.0`: the address, upper case."""
+
+    address: str
+
+
+@dataclass(frozen=True, slots=True)
+class Edge:
+    """R_EDGE or F_EDGE after a VAR_INPUT's type, upper case."""
+
+    kind: str
+
+
+@dataclass(frozen=True, slots=True)
+class TaskParam:
+    """`INTERVAL := T#10ms` in a TASK declaration (the name as written)."""
+
+    name: str
+    value: A.Expr
+
+
+# ------------------------------------------------------------------ statements
+
+
+@dataclass(frozen=True, slots=True)
+class ElsIf:
+    """`ELSIF cond THEN body` of an IF."""
+
+    cond: A.Expr
+    body: list[A.Stmt]
+
+
+@dataclass(frozen=True, slots=True)
+class Else:
+    """`ELSE body` of an IF or a CASE."""
+
+    body: list[A.Stmt]
+
+
+@dataclass(frozen=True, slots=True)
+class CaseLabel:
+    """One CASE label: a value (hi None) or a range lo..hi."""
+
+    lo: A.Expr
+    hi: A.Expr | None
+
+
+@dataclass(frozen=True, slots=True)
+class CaseLabels:
+    """`label, label, ... :` that starts a CASE branch."""
+
+    labels: list[CaseLabelValue]
+
+
+# ------------------------------------------------------------------ SFC
+
+
+@dataclass(frozen=True, slots=True)
+class TransitionCond:
+    """`:= expression;` of a transition."""
+
+    cond: A.Expr
+
+
+@dataclass(frozen=True, slots=True)
+class TransitionBody:
+    """`: statements` of a transition (assigning the transition's name)."""
+
+    body: list[A.Stmt]
