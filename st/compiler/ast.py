@@ -10,13 +10,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..model.syntax import Syntax
 from ..source import Span
 
 # --------------------------------------------------------------------------- expressions
 
 
 @dataclass(slots=True, eq=False)
-class Expr:
+class Expr(Syntax):
     span: Span
     ty: Any = field(default=None, init=False, repr=False)
     const: Any = field(default=None, init=False, repr=False)
@@ -75,7 +76,7 @@ class Deref(Expr):
 
 
 @dataclass(slots=True, eq=False)
-class Arg:
+class Arg(Syntax):
     span: Span
     name: str  # "" for a positional argument
     value: Expr
@@ -121,26 +122,26 @@ class AccessorCall(Expr):
 
 
 @dataclass(slots=True, eq=False)
-class ArrayInit:
+class ArrayInit(Syntax):
     span: Span
     items: list  # of initializers or RepeatInit
 
 
 @dataclass(slots=True, eq=False)
-class RepeatInit:
+class RepeatInit(Syntax):
     span: Span
     count: int
     items: list
 
 
 @dataclass(slots=True, eq=False)
-class StructInit:
+class StructInit(Syntax):
     span: Span
     fields: list  # of (name, span, initializer)
 
 
 @dataclass(slots=True, eq=False)
-class CtorInit:
+class CtorInit(Syntax):
     """`inst : FB(a := 1)` (CODESYS): arguments for the block's FB_init, plus an ordinary
     initializer (`:= (x := 2)`) if one is given too."""
 
@@ -153,7 +154,7 @@ class CtorInit:
 
 
 @dataclass(slots=True, eq=False)
-class Stmt:
+class Stmt(Syntax):
     span: Span
 
 
@@ -196,7 +197,7 @@ class If(Stmt):
 
 
 @dataclass(slots=True, eq=False)
-class CaseBranch:
+class CaseBranch(Syntax):
     span: Span
     labels: list[tuple[Expr, Expr | None]]
     body: list[Stmt]
@@ -279,7 +280,7 @@ class Empty(Stmt):
 
 
 @dataclass(slots=True, eq=False)
-class TypeSpec:
+class TypeSpec(Syntax):
     span: Span
 
 
@@ -317,7 +318,7 @@ class SubrangeType(TypeSpec):
 
 
 @dataclass(slots=True, eq=False)
-class EnumValue:
+class EnumValue(Syntax):
     span: Span
     name: str
     value: Expr | None = None
@@ -341,7 +342,7 @@ class StructType(TypeSpec):
 
 
 @dataclass(slots=True, eq=False)
-class VarDecl:
+class VarDecl(Syntax):
     span: Span
     names: list  # [(name, span)]
     type: TypeSpec
@@ -352,7 +353,7 @@ class VarDecl:
 
 
 @dataclass(slots=True, eq=False)
-class VarBlock:
+class VarBlock(Syntax):
     span: Span
     kind: str  # VAR, VAR_INPUT, ... (upper case)
     qualifiers: list  # CONSTANT, RETAIN, NON_RETAIN, PERSISTENT, PUBLIC, PRIVATE, PROTECTED, INTERNAL
@@ -360,7 +361,7 @@ class VarBlock:
 
 
 @dataclass(slots=True, eq=False)
-class TypeDecl:
+class TypeDecl(Syntax):
     span: Span
     name: str
     spec: TypeSpec
@@ -368,13 +369,13 @@ class TypeDecl:
 
 
 @dataclass(slots=True, eq=False)
-class TypeBlock:
+class TypeBlock(Syntax):
     span: Span
     types: list
 
 
 @dataclass(slots=True, eq=False)
-class ActionAssoc:
+class ActionAssoc(Syntax):
     span: Span
     action: str
     qualifier: str
@@ -382,7 +383,7 @@ class ActionAssoc:
 
 
 @dataclass(slots=True, eq=False)
-class Step:
+class Step(Syntax):
     span: Span
     name: str
     initial: bool
@@ -390,7 +391,7 @@ class Step:
 
 
 @dataclass(slots=True, eq=False)
-class Transition:
+class Transition(Syntax):
     span: Span
     name: str
     priority: Expr | None
@@ -401,14 +402,14 @@ class Transition:
 
 
 @dataclass(slots=True, eq=False)
-class ActionDecl:
+class ActionDecl(Syntax):
     span: Span
     name: str
     body: list
 
 
 @dataclass(slots=True, eq=False)
-class Method:
+class Method(Syntax):
     span: Span
     name: str
     modifiers: list = field(default_factory=list)
@@ -423,7 +424,7 @@ class Method:
 
 
 @dataclass(slots=True, eq=False)
-class Property:
+class Property(Syntax):
     span: Span
     name: str
     modifiers: list = field(default_factory=list)
@@ -434,7 +435,7 @@ class Property:
 
 
 @dataclass(slots=True, eq=False)
-class Interface:
+class Interface(Syntax):
     span: Span
     name: str
     extends: list = field(default_factory=list)
@@ -453,7 +454,7 @@ class Interface:
 
 
 @dataclass(slots=True, eq=False)
-class POU:
+class POU(Syntax):
     span: Span
     kind: str  # FUNCTION, FUNCTION_BLOCK, PROGRAM
     name: str
@@ -472,14 +473,14 @@ class POU:
 
 
 @dataclass(slots=True, eq=False)
-class TaskDecl:
+class TaskDecl(Syntax):
     span: Span
     name: str
     params: dict  # upper-case name → Expr
 
 
 @dataclass(slots=True, eq=False)
-class ProgramConfig:
+class ProgramConfig(Syntax):
     span: Span
     instance: str
     task: str
@@ -489,7 +490,7 @@ class ProgramConfig:
 
 
 @dataclass(slots=True, eq=False)
-class Resource:
+class Resource(Syntax):
     span: Span
     name: str
     target: str
@@ -499,7 +500,7 @@ class Resource:
 
 
 @dataclass(slots=True, eq=False)
-class Configuration:
+class Configuration(Syntax):
     span: Span
     name: str
     var_blocks: list
@@ -507,7 +508,7 @@ class Configuration:
 
 
 @dataclass(slots=True, eq=False)
-class TestBlock:
+class TestBlock(Syntax):
     span: Span
     kind: str  # TEST, SETUP, TEARDOWN
     name: str
@@ -516,7 +517,7 @@ class TestBlock:
 
 
 @dataclass(slots=True, eq=False)
-class Unit:
+class Unit(Syntax):
     """Everything declared in one source file."""
 
     path: str

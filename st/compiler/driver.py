@@ -16,7 +16,7 @@ from pathlib import Path
 from types import CodeType
 
 from ..diagnostics import Code, CompileError, Diagnostic, DiagnosticSink, Severity
-from ..model.compiled import CompiledProgram, NativeModule
+from ..model.compiled import CompiledProgram
 from ..model.program import Project
 from ..source import SourceFile, Span
 from . import ast as A
@@ -27,9 +27,10 @@ from .check import Checker
 from .codegen import ModuleGen
 from .codegen.source import python_text
 from .library import Library
-from .lower import lower
+from .lower import LoweredProgram, lower
 from .native import build_native
 from .options import CompileOptions
+from .stages import Checked, Generated, NativeBuild, Parsed
 
 _parser_lock = threading.Lock()
 _parser = None
@@ -149,31 +150,19 @@ def _compile_sources(
         if hit is not None:
             return hit
     sink = DiagnosticSink()
-    units, lib_paths, in_use = _parse_all(sources, libraries, options, sink)
-    checker = Checker(sink, in_use, options)
-    modules: list[tuple[str, CodeType]] = []
-    test_modules: list[tuple[str, CodeType]] = []
-    pysrc: dict[str, str] = {}
-    native: list[NativeModule] = []
-    native_skipped: dict[str, str] = {}
+    parsed = parse(sources, libraries, options, sink)
     project = Project()
-    gen = None
+    generated: Generated | None = None
+    native = NativeBuild()
     try:
-        project = checker.run(units, lib_paths)
+        checked = check(parsed, options, sink)
+        project = checked.project
         _attach_test_texts(project, all_sources)
         if not sink.has_errors:
-            inline_files = frozenset(path for lib in in_use if lib.inline_blocks for path, _ in lib.sources)
-            gen = ModuleGen(lower(project), sink, coverage=options.coverage, inline_files=inline_files)
-            py_modules = gen.generate()
-            if not sink.has_errors:
-                for out, group in ((modules, py_modules), (test_modules, gen.test_modules())):
-                    for path, mod in group:
-                        if options.emit_python:
-                            pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + python_text(mod)
-                        out.append((path, compile(mod, path, "exec")))
-                if options.native and not options.coverage and not project.tests:
-                    where = Span(sources[0].path if sources else "<input>", 1, 1)
-                    native, native_skipped = build_native(py_modules, project, sink, where)
+            generated = generate(lower(project), checked, options, sink)
+            if not sink.has_errors and options.native and not options.coverage and not project.tests:
+                where = Span(sources[0].path if sources else "<input>", 1, 1)
+                native = NativeBuild(*build_native(generated.python_modules, project, sink, where))
     except RecursionError as exc:
         first = sources[0].path if sources else "<input>"
         sink.error(
@@ -201,19 +190,19 @@ def _compile_sources(
             raise
     diags = sink.sorted()
     draft = CompiledProgram(
-        modules,
+        generated.modules if generated is not None else [],
         project,
         diags,
         all_sources,
         helpers,
-        pysrc,
-        test_modules=test_modules,
-        native=native,
-        native_skipped=native_skipped,
+        generated.python_text if generated is not None else {},
+        test_modules=generated.test_modules if generated is not None else [],
+        native=native.modules,
+        native_skipped=native.skipped,
     )
-    if options.coverage and gen is not None:
-        draft.coverage_points = gen.cov_points
-        draft.coverage_hits = bytearray(len(gen.cov_points))
+    if generated is not None and generated.coverage_points is not None:
+        draft.coverage_points = generated.coverage_points
+        draft.coverage_hits = bytearray(len(generated.coverage_points))
     result = None
     if not any(d.is_error for d in diags):
         try:
@@ -238,10 +227,8 @@ def _compile_sources(
     return result
 
 
-def _parse_all(
-    sources: list[SourceFile], libraries: list[Library], options: CompileOptions, sink: DiagnosticSink
-) -> tuple[list[A.Unit], set[str], list[Library]]:
-    """Parse the libraries' sources and the user's; (units, the library paths, the libraries in use)."""
+def parse(sources: list[SourceFile], libraries: list[Library], options: CompileOptions, sink: DiagnosticSink) -> Parsed:
+    """Parse the libraries' sources and the user's."""
     lib_units: list[tuple[Library, A.Unit]] = []
     for lib in libraries:
         for path, text in lib.sources:
@@ -270,7 +257,32 @@ def _parse_all(
         for d in sink.items
         if not (d.code == Code.IGNORED_PRAGMA and (d.datum("pragma") in known or d.span.file in every_lib_path))
     ]
-    return units, lib_paths, in_use
+    return Parsed(units, frozenset(lib_paths), in_use)
+
+
+def check(parsed: Parsed, options: CompileOptions, sink: DiagnosticSink) -> Checked:
+    """Check the parsed units (every problem a diagnostic in `sink`)."""
+    project = Checker(sink, parsed.libraries, options).run(parsed.units, set(parsed.library_paths))
+    return Checked(project, parsed.libraries)
+
+
+def generate(lowered: LoweredProgram, checked: Checked, options: CompileOptions, sink: DiagnosticSink) -> Generated:
+    """Python modules and their code objects (none if code generation reported an error)."""
+    inline_files = frozenset(path for lib in checked.libraries if lib.inline_blocks for path, _ in lib.sources)
+    gen = ModuleGen(lowered, sink, coverage=options.coverage, inline_files=inline_files)
+    py_modules = gen.generate()
+    coverage = gen.cov_points if options.coverage else None
+    if sink.has_errors:
+        return Generated([], [], py_modules, coverage_points=coverage)
+    modules: list[tuple[str, CodeType]] = []
+    test_modules: list[tuple[str, CodeType]] = []
+    pysrc: dict[str, str] = {}
+    for out, group in ((modules, py_modules), (test_modules, gen.test_modules())):
+        for path, mod in group:
+            if options.emit_python:
+                pysrc[path] = (pysrc[path] + "\n\n" if path in pysrc else "") + python_text(mod)
+            out.append((path, compile(mod, path, "exec")))
+    return Generated(modules, test_modules, py_modules, pysrc, coverage)
 
 
 def _type_names(units, with_pous: bool = False) -> dict[str, A.TypeDecl | A.POU | A.Interface]:
@@ -319,9 +331,7 @@ def check_sources(
     AST-free artefact instead."""
     options = options or CompileOptions()
     sink = DiagnosticSink()
-    units, lib_paths, in_use = _parse_all(sources, libraries, options, sink)
-    project = Checker(sink, in_use, options).run(units, lib_paths)
-    return project, sink.sorted()
+    return check(parse(sources, libraries, options, sink), options, sink).project, sink.sorted()
 
 
 def _attach_test_texts(project: Project, sources: dict) -> None:

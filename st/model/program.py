@@ -1,16 +1,30 @@
 """The checked program: what the checker produces, code generation consumes and the runtime reads.
 
-Fields marked "syntax" hold the compiler's AST while it compiles; in the compiled artefact
-(st.compiler.artefact) they hold the AST-free values of st.model.summaries, or None.
+Fields typed `Syntax` hold the compiler's AST while it compiles (st.model.syntax); in the
+compiled artefact (st.compiler.artefact) they hold the AST-free values of st.model.summaries, or
+None.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Protocol
 
 from ..source import Span
+from .summaries import InitialValue
+from .syntax import Syntax
 from .types import EnumType, POUType, Type, VarSym
+
+
+class LibrarySources(Protocol):
+    """A library as the model sees it (the compiler's Library, the artefact's LibraryInfo)."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def sources(self) -> Sequence[tuple[str, str]]: ...
 
 
 @dataclass(eq=False)
@@ -19,7 +33,7 @@ class TaskModel:
     interval: int = 0  # ns; 0 for an event task
     priority: int = 0
     single: str = ""  # the name of the BOOL global that triggers an event task
-    span: Any = None
+    span: Span | None = None
 
 
 @dataclass(eq=False)
@@ -28,9 +42,9 @@ class InstanceModel:
     type: POUType
     task: str  # task name ("" = runs every base tick)
     resource: str = ""
-    # connections [(param, syntax: Expr (None in the artefact), is_output)]
-    args: list[tuple[Any, Any, bool]] = field(default_factory=list)  # (parameter VarSym, connection, is output)
-    span: Any = None
+    # connections [(parameter, its connection (compiler: an expression; artefact: None), is output)]
+    args: list[tuple[VarSym, Syntax | None, bool]] = field(default_factory=list)
+    span: Span | None = None
 
 
 @dataclass(eq=False)
@@ -38,8 +52,11 @@ class ConfigModel:
     name: str
     tasks: list[TaskModel] = field(default_factory=list)
     instances: list[InstanceModel] = field(default_factory=list)
-    # [(path, location, syntax: init (artefact: InitialValue | None), syntax: declared type (None), span)]
-    var_config: list[tuple[list[str], str, Any, Any, Span]] = field(default_factory=list)
+    # [(path, location, initial value (compiler: its syntax; artefact: a value or None), declared type
+    # (compiler: its syntax; artefact: None), span)]
+    var_config: list[tuple[list[str], str, Syntax | InitialValue | None, Syntax | None, Span]] = field(
+        default_factory=list
+    )
     implicit: bool = False  # made up for a file with only a PROGRAM
 
 
@@ -48,8 +65,8 @@ class StepModel:
     name: str
     index: int
     initial: bool
-    actions: list[tuple[str, str, Any]]  # [(action name, qualifier, syntax: time Expr | None)]
-    span: Any = None
+    actions: list[tuple[str, str, Syntax | None]]  # [(action name, qualifier, its time (compiler) | None)]
+    span: Span | None = None
 
 
 @dataclass(eq=False)
@@ -57,9 +74,9 @@ class TransitionModel:
     index: int
     sources: list[int]  # step indices
     targets: list[int]
-    cond: Any  # syntax: Expr (BOOL) | None
+    cond: Syntax | None  # compiler: the BOOL expression; artefact: None
     priority: int = 0
-    span: Any = None
+    span: Span | None = None
 
 
 @dataclass(eq=False)
@@ -80,10 +97,10 @@ class Project:
     enum_members: dict[str, list[tuple[EnumType, str, int]]] = field(default_factory=dict)  # lower member → …
     direct_vars: dict[str, tuple[str, Type]] = field(default_factory=dict)  # "%QX0.0" → (pyname, Type)
     sfc: dict[str, SfcModel] = field(default_factory=dict)  # pou lower → SfcModel
-    test_blocks: list[Any] = field(default_factory=list)  # syntax: ast.TestBlock as parsed ([] in the artefact)
+    test_blocks: list[Syntax] = field(default_factory=list)  # ast.TestBlock as parsed ([] in the artefact)
     tests: list[TestModel] = field(default_factory=list)  # checked
     test_asserts: list[AssertInfo] = field(default_factory=list)  # index = id in generated code
-    libraries: list[Any] = field(default_factory=list)  # compiler: Library; artefact: LibraryInfo
+    libraries: Sequence[LibrarySources] = field(default_factory=list)  # compiler: Library; artefact: LibraryInfo
 
     def user_pous(self) -> list[POUType]:
         return [p for p in self.pous.values() if not p.library]
@@ -96,10 +113,10 @@ class TestModel:
     name: str
     span: Span
     pyname: str
-    pou: Any = None  # the pseudo-POU holding SETUP + TEST variables (None in the artefact)
-    setup: list[Any] = field(default_factory=list)  # syntax: statements ([] in the artefact)
-    body: list[Any] = field(default_factory=list)
-    teardown: list[Any] = field(default_factory=list)
+    pou: POUType | None = None  # the pseudo-POU holding SETUP + TEST variables (None in the artefact)
+    setup: list[Syntax] = field(default_factory=list)  # statements ([] in the artefact)
+    body: list[Syntax] = field(default_factory=list)
+    teardown: list[Syntax] = field(default_factory=list)
 
 
 @dataclass(eq=False)

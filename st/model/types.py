@@ -12,6 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..source import Span
+from .summaries import InitialValue, PouInfo
+from .syntax import Syntax
+
 
 class Type:
     name: str = "?"
@@ -214,8 +218,8 @@ class ArrayType(Type):
 class Member:
     name: str
     type: Type
-    init: Any = None  # syntax: the initializer (compiler: AST; artefact: InitialValue | None)
-    span: Any = None
+    span: Span
+    init: Syntax | InitialValue | None = None  # the initializer (compiler: its syntax; artefact: a value or None)
     pyname: str = ""
 
 
@@ -282,7 +286,7 @@ class AliasType(Type):
 
     name: str = "?"
     target: Type = None  # type: ignore[assignment]  # always given
-    init: Any = None  # syntax: the default value (compiler: AST; artefact: InitialValue | None)
+    init: Syntax | InitialValue | None = None  # the default value (compiler: its syntax; artefact: a value or None)
 
 
 @dataclass(eq=False)
@@ -290,21 +294,21 @@ class VarSym:
     name: str
     type: Type
     section: str  # VAR, VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT, VAR_TEMP, VAR_GLOBAL, VAR_EXTERNAL
-    span: Any = None
-    init: Any = None  # syntax: the initial value (compiler: AST; artefact: InitialValue | None)
+    span: Span
+    init: Syntax | InitialValue | None = None  # the initial value (compiler: its syntax; artefact: a value or None)
     location: str = ""
     constant: bool = False
     retain: bool = False
     persistent: bool = False
     edge: str = ""
     pyname: str = ""
-    owner: Any = None  # the POUType or None for globals
+    owner: POUType | None = None  # None for globals
     used: bool = False
     written: bool = False
     address_taken: bool = False
     const_value: Any = None
     is_global: bool = False
-    global_ref: Any = None  # VAR_EXTERNAL → the VAR_GLOBAL symbol
+    global_ref: VarSym | None = None  # VAR_EXTERNAL → the VAR_GLOBAL symbol
     access: str = ""  # PUBLIC, PRIVATE, PROTECTED or INTERNAL from `VAR PRIVATE`; "" = unrestricted
     any_input: str = ""  # an input declared ANY / ANY_NUM / ...: the generic family (its type is AnyType)
 
@@ -313,21 +317,30 @@ class VarSym:
 class POUType(Type):
     name: str = "?"
     pou_kind: str = "FUNCTION_BLOCK"  # FUNCTION, FUNCTION_BLOCK, PROGRAM (TEST: a unit test's variables)
-    decl: Any = None  # syntax: ast.POU / ast.Method (artefact: PouInfo); None for native
+    decl: Syntax | PouInfo | None = None  # compiler: ast.POU / ast.Method; artefact: PouInfo; None for native
     vars: dict[str, VarSym] = field(default_factory=dict)  # lower → VarSym, declaration order
     return_type: Type | None = None
     pyname: str = ""
     library: str = ""  # "" for user code, else the library name
     native: Any = None  # a native implementation (Python) for library POUs
-    actions: dict[str, Any] = field(default_factory=dict)  # lower → syntax: ast.ActionDecl (artefact: PouInfo)
+    actions: dict[str, Syntax | PouInfo] = field(
+        default_factory=dict
+    )  # lower → compiler: ast.ActionDecl; artefact: PouInfo
     resolved: bool = False
     result_address_taken: bool = False  # ADR(F) inside F: its result lives in a box (codegen)
     methods: dict[str, POUType] = field(default_factory=dict)  # lower → POUType (pou_kind FUNCTION, owner_fb set)
-    owner_fb: Any = None  # a METHOD: the function block it belongs to
-    base: Any = None  # FUNCTION_BLOCK … EXTENDS base
+    owner_fb: POUType | None = None  # a METHOD: the function block it belongs to
+    base: POUType | None = None  # FUNCTION_BLOCK … EXTENDS base
     interfaces: list[POUType] = field(default_factory=list)  # INTERFACEs implemented (FB) or extended (INTERFACE)
     properties: dict[str, PropSym] = field(default_factory=dict)  # lower → PropSym
     modifiers: tuple[str, ...] = ()  # ABSTRACT, FINAL, OVERRIDE, PUBLIC, …
+
+    @property
+    def block(self) -> POUType:
+        """The function block (or interface) a METHOD or property accessor belongs to."""
+        if self.owner_fb is None:
+            raise TypeError(f"{self.name} is not a method")
+        return self.owner_fb
 
     @property
     def kind(self) -> str:  # type: ignore[override]
@@ -358,10 +371,10 @@ class PropSym:
 
     name: str
     type: Type
-    get: Any = None  # POUType (FUNCTION returning `type`), pyname _pg_<name>
-    set: Any = None  # POUType with one VAR_INPUT named like the property, pyname _ps_<name>
-    owner: Any = None
-    span: Any = None
+    owner: POUType  # the block or interface that declares it
+    span: Span
+    get: POUType | None = None  # POUType (FUNCTION returning `type`), pyname _pg_<name>
+    set: POUType | None = None  # POUType with one VAR_INPUT named like the property, pyname _ps_<name>
     bare: bool = False  # an interface prototype without accessors: GET, SET or both satisfy it
 
 
@@ -388,9 +401,9 @@ def extends(t: Type, base: Type) -> bool:
 def fb_init_chain(pou: POUType) -> list[POUType]:
     """The FB_init methods that construct an instance of `pou` (CODESYS): its bases' first, then
     its own; each block's own one only (an inherited entry is its base's)."""
-    chain = []
-    x = pou
-    while isinstance(x, POUType):
+    chain: list[POUType] = []
+    x: POUType | None = pou
+    while x is not None:
         own = x.methods.get("fb_init")
         if own is not None and own.owner_fb is x:
             chain.append(own)
@@ -402,7 +415,7 @@ def implements(t: Type, itf: POUType) -> bool:
     """Does a function block or interface type provide interface `itf` (directly, through its
     base blocks, or through interfaces that extend it)?"""
     seen = set()
-    todo = [t]
+    todo: list[Type | None] = [t]
     while todo:
         x = todo.pop()
         if x is None or id(x) in seen:

@@ -7,6 +7,7 @@ from __future__ import annotations
 from ...diagnostics import Code
 from ...model import types as T
 from .. import ast as A
+from ..syntax import decl_of
 from .binding import bind_args
 from .common import Scope, method_of
 from .intrinsics import INTRINSICS
@@ -144,11 +145,11 @@ class Calls(Part):
         if (
             not isinstance(fb, T.POUType)
             or fb.pou_kind in ("FUNCTION", "INTERFACE")
-            or (fb.decl is not None and "CLASS" in fb.decl.modifiers)
+            or (fb.decl is not None and "CLASS" in decl_of(fb).modifiers)
         ):
             what = (
                 "an instance of the CLASS " + fb.name + " has no body; call its methods"
-                if isinstance(fb, T.POUType) and fb.decl is not None and "CLASS" in fb.decl.modifiers
+                if isinstance(fb, T.POUType) and fb.decl is not None and "CLASS" in decl_of(fb).modifiers
                 else f"a {t} is not callable"
             )
             self.err(Code.NOT_CALLABLE, c.span, what)
@@ -166,7 +167,7 @@ class Calls(Part):
 
     def _method_call(self, c: A.Call, mt: T.POUType, scope: Scope, obj):
         """A METHOD call; obj is the instance expression (None: this instance)."""
-        access.check_access(self.ctx, mt.decl.modifiers, mt.owner_fb, f"method {mt.name}", scope, c.span)
+        access.check_access(self.ctx, decl_of(mt).modifiers, mt.block, f"method {mt.name}", scope, c.span)
         abstract.check_super_call(self.ctx, c, mt, obj)
         c.target = MethodCall(mt, bind_args(self, c, mt, scope, is_fb=False), obj)
         return mt.return_type

@@ -12,6 +12,7 @@ from ...model import types as T
 from ...source import Span
 from .. import ast as A
 from ..names import mangle, qualified
+from ..syntax import block_decl, decl_of, declared, interface_decl
 from .common import (
     _DIRECT,
     _DIRECT_TYPES,
@@ -116,7 +117,7 @@ class Declarations(Part):
                 if n.lower() in st.members:
                     self.err(Code.DECLARED_TWICE, sp, f"field '{n}' is declared twice in {td.name}")
                     continue
-                st.members[n.lower()] = T.Member(n, mt, d.init, sp, mangle(n))
+                st.members[n.lower()] = T.Member(n, mt, sp, d.init, mangle(n))
                 if spec.union:
                     self._union_member(d, mt)
                 elif d.init is not None:
@@ -344,14 +345,14 @@ class Declarations(Part):
         if pou.resolved or pou.decl is None:
             return
         pou.resolved = True
-        d = pou.decl
+        d = decl_of(pou)
         scope = Scope(pou, pou.vars)
         if d.kind == "INTERFACE":
             return self._resolve_itf(pou)
         if d.kind == "FUNCTION":
             if d.return_type is not None:
                 pou.return_type = self.resolve_type(d.return_type, scope)
-        base = self._base_of(pou) if d.kind == "FUNCTION_BLOCK" and d.extends else None
+        base = self._base_of(pou) if isinstance(d, A.POU) and d.kind == "FUNCTION_BLOCK" and d.extends else None
         if base is not None:  # inherited variables come first, as declared there
             pou.base = base
             for k, v in base.vars.items():
@@ -363,12 +364,12 @@ class Declarations(Part):
         self._declare_members(pou)
         if base is not None:
             _inherit(pou, base)
-        if d.kind == "FUNCTION_BLOCK" and d.implements:
+        if isinstance(d, A.POU) and d.kind == "FUNCTION_BLOCK" and d.implements:
             self._link_interfaces(pou)
 
     def _implicit_en_eno(self, pou: T.POUType) -> None:
         """EN and ENO are implicit in every function and FB; declared when the body uses them."""
-        d = pou.decl
+        d = decl_of(pou)
         mentioned = {n.name.lower() for n in _names_in(d.body)}
         for key, section in (("en", "VAR_INPUT"), ("eno", "VAR_OUTPUT")):
             if key in mentioned and key not in pou.vars:
@@ -379,7 +380,7 @@ class Declarations(Part):
 
     def _declare_members(self, pou: T.POUType) -> None:
         """A POU's actions, methods and properties."""
-        d = pou.decl
+        d = decl_of(pou)
         for act in d.actions:
             if act.name.lower() in pou.actions:
                 self.err(Code.DECLARED_TWICE, act.span, f"action '{act.name}' is declared twice")
@@ -392,8 +393,8 @@ class Declarations(Part):
     def _link_interfaces(self, fb: T.POUType) -> None:
         """FUNCTION_BLOCK … IMPLEMENTS I1, I2: the interfaces it provides (whether it implements them
         fully is an object-oriented rule, checked later)."""
-        for name in fb.decl.implements:
-            itf = self._interface_named(name, fb.decl.span, f"{fb.name} IMPLEMENTS")
+        for name in block_decl(fb).implements:
+            itf = self._interface_named(name, decl_of(fb).span, f"{fb.name} IMPLEMENTS")
             if itf is not None:
                 fb.interfaces.append(itf)
 
@@ -417,7 +418,7 @@ class Declarations(Part):
 
     def _resolve_itf(self, itf: T.POUType) -> None:
         """An INTERFACE: its method prototypes and those of the interfaces it EXTENDS."""
-        d = itf.decl
+        d = interface_decl(itf)
         for name in d.extends:
             base = self._interface_named(name, d.span, f"INTERFACE {itf.name} EXTENDS")
             if base is None:
@@ -484,7 +485,7 @@ class Declarations(Part):
 
     def _base_of(self, pou: T.POUType):
         """The function block `pou` EXTENDS, resolved and checked (None after an error)."""
-        d = pou.decl
+        d = block_decl(pou)
         base = self.p.pous.get(d.extends.lower())
         if base is None:
             msg = unknown_namespace(d.extends, self.ctx.namespaces)
@@ -803,7 +804,7 @@ def _below(a: Span | None, b: Span | None) -> bool:
 def _declared_in(pou: T.POUType, name: str) -> bool:
     """Is `name` declared anywhere in the POU's own declaration (above or below)?"""
     key = name.lower()
-    d = pou.decl
+    d = declared(pou)
     return d is not None and any(n.lower() == key for vb in d.var_blocks for vd in vb.decls for n, _ in vd.names)
 
 

@@ -10,6 +10,7 @@ from ...model import types as T
 from ...model.addresses import canonical
 from ...model.literals import fits_real, real_range_text
 from .. import ast as A
+from ..syntax import decl_of
 from .common import (
     _CMP,
     _DIRECT,
@@ -341,7 +342,9 @@ class Expressions(Part):
             e.sym = sym
             return sym.type
         e.sym = SUPER
-        return T.RefType(cast(T.POUType, scope.fb).base)
+        base = scope.fb.base if scope.fb is not None else None
+        assert base is not None  # lookup gives SUPER inside a block that extends another only
+        return T.RefType(base)
 
     def _variable(self, e: A.Name, sym: T.VarSym, scope: Scope):
         if sym.access:
@@ -645,7 +648,9 @@ class Expressions(Part):
             e.sym = ps = b.properties[key]
             acc = (ps.set if lvalue else ps.get) or ps.get or ps.set  # GET and SET may differ in access
             if acc is not None and acc.decl is not None:
-                access.check_access(self.ctx, acc.decl.modifiers, ps.owner, f"property {ps.name}", scope, e.name_span)
+                access.check_access(
+                    self.ctx, decl_of(acc).modifiers, ps.owner, f"property {ps.name}", scope, e.name_span
+                )
             return ps.type
         if v is None:
             if key in b.actions or key in b.methods:

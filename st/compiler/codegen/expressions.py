@@ -888,7 +888,7 @@ class ExprGen:
 def _wrap_spec(t):
     """(lo, hi, signed bits) for integer refs so that stores through them wrap, else None."""
     b = T.base_of(t) if t is not None else None
-    if b is not None and b.is_intlike:
+    if isinstance(b, T.ElemType) and b.is_intlike:
         return (b.bits, b.signed)
     if b is T.REAL:
         return "f32"

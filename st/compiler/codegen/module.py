@@ -7,6 +7,7 @@ import ast as py
 from ...diagnostics import Code
 from ...model import types as T
 from ..lower import LoweredProgram
+from ..syntax import declared
 from .expressions import InitGen
 from .inline import inlinable
 from .pous import BodyGen, FuncGen
@@ -76,7 +77,7 @@ class ModuleGen:
                 path = span.file if span else "<types>"
                 add(path, self.struct_class(t))
         for pou in self.p.pous.values():
-            d = pou.decl
+            d = declared(pou)
             if d is None or pou.pou_kind == "INTERFACE":
                 continue
             node: py.stmt | list[py.stmt]

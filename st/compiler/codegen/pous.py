@@ -10,6 +10,7 @@ from .. import ast as A
 from ..lower.fb_init import Constructor
 from ..lower.walk import walk_stmts
 from ..names import mangle
+from ..syntax import decl_of
 from .expressions import InitGen
 from .facts import BodyFacts, Local, attach, recording
 from .pyast import _args, _attr, _call, _const, _name, _set_lines, _store
@@ -47,7 +48,7 @@ class FuncGen(StmtGen):
 
     def _function(self) -> py.FunctionDef:
         pou = self.pou
-        d = pou.decl
+        d = decl_of(pou)
         by_ref = _by_ref_names(d.body)
         self.boxed = {v for v in by_ref if v.owner is pou and not T.unalias(v.type).is_aggregate}
         self.boxed |= {
@@ -139,14 +140,14 @@ class MethodGen(FuncGen):
 
     def _function(self) -> py.FunctionDef:
         mt = self.pou
-        by_ref = _by_ref_names(mt.decl.body)
+        by_ref = _by_ref_names(decl_of(mt).body)
         boxed = {v for v in by_ref if v.owner is mt and not T.unalias(v.type).is_aggregate}
         boxed |= {
             v for v in mt.vars.values() if v.address_taken and v.owner is mt and not T.unalias(v.type).is_aggregate
         }
         self.cached = {v for v in mt.vars.values() if v not in boxed and v.section not in ("VAR_EXTERNAL", "VAR_INST")}
         fn = super()._function()
-        fn.args.args.insert(0, _set_lines(py.arg("self"), mt.decl.span.line))
+        fn.args.args.insert(0, _set_lines(py.arg("self"), decl_of(mt).span.line))
         return fn
 
 
@@ -182,7 +183,7 @@ class BodyGen(StmtGen):
         """The block's class; with an SFC, the SFC's description first, then the class."""
         pou = self.pou
         block = self.mod.blocks[pou]
-        d = pou.decl
+        d = decl_of(pou)
         init = InitGen(self.mod, pou)
         sfc = self.mod.p.sfc.get(pou.name.lower())
         slots = [v.pyname for v in block.variables]
@@ -295,7 +296,7 @@ class BodyGen(StmtGen):
             _const(tuple(steps)),
             _const(tuple(actions)),
         )
-        return _set_lines(py.Assign([_name("_sfc_" + pou.pyname, py.Store())], desc), pou.decl.span.line)
+        return _set_lines(py.Assign([_name("_sfc_" + pou.pyname, py.Store())], desc), decl_of(pou).span.line)
 
     def _constructor(self, ctor: Constructor, line: int) -> py.FunctionDef:
         """_ctor(self, a): every FB_init call of the constructor in turn (a: the declaration's

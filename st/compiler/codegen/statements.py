@@ -699,7 +699,7 @@ def _inert(e) -> bool:
 
 def _walk_exprs_in(body):
     """Every expression node in a statement list (for pre-scans)."""
-    stack = []
+    stack: list[A.Expr | None] = []
     for s in walk_stmts(body):
         if isinstance(s, A.Assign):
             stack += [s.target, s.value]

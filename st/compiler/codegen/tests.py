@@ -12,6 +12,7 @@ import ast as py
 
 from ...model import types as T
 from ...model.program import TestModel
+from ..syntax import test_pou
 from .expressions import InitGen
 from .pyast import _args, _call, _const, _name, _set_lines
 from .statements import StmtGen, _by_ref_names
@@ -38,11 +39,13 @@ class TestGen(StmtGen):
         everything = t.setup + t.body + t.teardown
         by_ref = _by_ref_names(everything)
         self.boxed = {
-            v for v in t.pou.vars.values() if (v in by_ref or v.address_taken) and not T.unalias(v.type).is_aggregate
+            v
+            for v in test_pou(t).vars.values()
+            if (v in by_ref or v.address_taken) and not T.unalias(v.type).is_aggregate
         }
         init = InitGen(self.mod)
         main: list[py.stmt] = []
-        for v in t.pou.vars.values():
+        for v in test_pou(t).vars.values():
             val = init.initial(v.type, v.init)
             node = py.Assign([_name(v.pyname, py.Store())], py.List([val], py.Load()) if v in self.boxed else val)
             main.append(_set_lines(node, v.span.line))

@@ -68,7 +68,8 @@ def dispatch(e):
 def kinds_of(pou: T.POUType) -> set:
     """Lower-case names of what an instance is: its block, the blocks it extends and every
     interface they provide (for __QUERYINTERFACE and ?=)."""
-    out, todo = set(), [pou]
+    out: set[str] = set()
+    todo: list[T.POUType | None] = [pou]
     while todo:
         x = todo.pop()
         if x is None or x.name.lower() in out:

@@ -14,7 +14,7 @@ def plain_name(e):
         out = A.Name(e.span, sym.name, sym)
         out.ty = e.ty
         return out
-    if isinstance(e, A.Field) and getattr(sym, "is_global", False) and isinstance(e.base, A.Name):
+    if isinstance(e, A.Field) and sym is not None and getattr(sym, "is_global", False) and isinstance(e.base, A.Name):
         out = A.Name(e.span, sym.name, sym)
         out.ty = e.ty
         return out

@@ -5,11 +5,13 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from dataclasses import fields as dataclass_fields
 from dataclasses import replace
+from typing import TypeGuard
 
 from ...model import types as T
 from ...model.program import Project
 from .. import ast as A
 from ..check import CallTarget
+from ..syntax import action_of, decl_of
 
 # fields of a call target that are declarations (a POU, a type, a signature), never rewritten
 _TARGET_DECLS = frozenset(("pou", "nonvirtual", "block", "sig", "type", "itf", "info", "arg_types", "value"))
@@ -25,16 +27,15 @@ def bodies(project: Project) -> Iterator[tuple[list, T.POUType | None]]:
             continue
         block = pou if pou.pou_kind in ("FUNCTION_BLOCK", "PROGRAM") else None
         yield getattr(pou.decl, "body", None) or [], block
-        for act in pou.actions.values():
-            if act is not None:
-                yield act.body, block
+        for key in pou.actions:
+            yield action_of(pou, key).body, block
         for mt in pou.methods.values():
             if mt.decl is not None:
-                yield mt.decl.body, mt.owner_fb or block
+                yield decl_of(mt).body, mt.owner_fb or block
         for ps in pou.properties.values():
             for acc in (ps.get, ps.set):
                 if acc is not None and acc.decl is not None:
-                    yield acc.decl.body, ps.owner or block
+                    yield decl_of(acc).body, ps.owner or block
     for test in project.tests:
         yield test.setup, None
         yield test.body, None
@@ -86,7 +87,7 @@ def rewrite_outside_bodies(project: Project, fn: Callable) -> None:
             im.args = [(p, one(value), is_out) for p, value, is_out in im.args]
 
 
-def is_super(e) -> bool:
+def is_super(e: object) -> TypeGuard[A.Deref]:
     """SUPER^ (the instance as its base block)."""
     return isinstance(e, A.Deref) and isinstance(e.base, A.Name) and getattr(e.base.sym, "kind", "") == "super"
 

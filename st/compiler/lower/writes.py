@@ -21,6 +21,7 @@ from ...model import types as T
 from ...model.program import Project
 from .. import ast as A
 from ..check import ActionCall, FbCall, FunctionCall, MethodCall
+from ..syntax import action_of, decl_of
 
 
 class Writes:
@@ -63,7 +64,7 @@ class Writes:
             return False
         if len(by_ref) > 1:
             return True
-        f = self.facts(fn.decl.body)
+        f = self.facts(decl_of(fn).body)
         if f.direct or f.callees & self.reaching:
             return True
         return fn.owner_fb is not None and (f.own or any(sym.owner is not fn for sym in f.variables))
@@ -96,16 +97,16 @@ class Writes:
             if pou.decl is None or pou.library:
                 continue
             yield id(pou), getattr(pou.decl, "body", None) or []
-            for act in pou.actions.values():
-                if act is not None:
-                    yield id(act), act.body
+            for key in pou.actions:
+                act = action_of(pou, key)
+                yield id(act), act.body
             for mt in pou.methods.values():
                 if mt.decl is not None and mt.owner_fb is pou:
-                    yield id(mt), mt.decl.body
+                    yield id(mt), decl_of(mt).body
             for ps in pou.properties.values():
                 for acc in (ps.get, ps.set):
                     if acc is not None and acc.decl is not None and ps.owner is pou:
-                        yield id(acc), acc.decl.body
+                        yield id(acc), decl_of(acc).body
 
     # ------------------------------------------------------------------ reached instances
     def _reached(self) -> set:
@@ -144,9 +145,9 @@ class Writes:
         if pou.library or pou.decl is None:
             return False
         lists = [getattr(pou.decl, "body", None) or []]
-        lists += [act.body for act in pou.actions.values() if act is not None]
-        lists += [mt.decl.body for mt in pou.methods.values() if mt.decl is not None]
-        lists += [acc.decl.body for ps in pou.properties.values() for acc in (ps.get, ps.set) if acc and acc.decl]
+        lists += [action_of(pou, key).body for key in pou.actions]
+        lists += [decl_of(mt).body for mt in pou.methods.values() if mt.decl is not None]
+        lists += [decl_of(acc).body for ps in pou.properties.values() for acc in (ps.get, ps.set) if acc and acc.decl]
         return any(self.facts(body).this for body in lists)
 
     def _blocks_in(self, t: T.Type) -> frozenset:
@@ -182,7 +183,7 @@ class Writes:
             u = T.unalias(t)
             if isinstance(u, T.StructType):
                 for m in u.members.values():
-                    yield T.VarSym(m.name, m.type, "VAR")
+                    yield T.VarSym(m.name, m.type, "VAR", m.span)
 
 
 class _Facts:

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 from ....diagnostics import Code
 from ....model import types as T
 from ....model.program import SfcModel, StepModel, TransitionModel
+from ...syntax import decl_of
 from ..common import Scope
 from ..rules import conditions, result_without_type
 
@@ -23,7 +24,7 @@ def check_bodies(sem: Semantics) -> None:
 
 def _check_body(sem: Semantics, pou: T.POUType) -> None:
     ctx = sem.ctx
-    d = pou.decl
+    d = decl_of(pou)
     if pou.pou_kind == "INTERFACE":
         return
     if "CLASS" in getattr(d, "modifiers", ()) and d.body:
@@ -57,14 +58,14 @@ def _check_method(sem: Semantics, fb: T.POUType, mt: T.POUType) -> None:
     names.update(mt.vars)
     scope = Scope(mt, names, library=fb.library)
     scope.fb = fb
-    sem.stmts.stmt_list(mt.decl.body, scope)
+    sem.stmts.stmt_list(decl_of(mt).body, scope)
     if mt.pyname.startswith("_m_"):
-        result_without_type.check_assigned_result(ctx, mt, "METHOD", mt.decl.body, names, mt.decl.span)
+        result_without_type.check_assigned_result(ctx, mt, "METHOD", decl_of(mt).body, names, decl_of(mt).span)
 
 
 def _check_sfc(sem: Semantics, pou: T.POUType, scope: Scope) -> None:
     ctx = sem.ctx
-    d = pou.decl
+    d = decl_of(pou)
     steps, index = _sfc_steps(ctx, pou)
     initial = [s for s in steps if s.initial]
     if len(initial) != 1:
@@ -90,7 +91,7 @@ def _sfc_steps(ctx, pou: T.POUType) -> tuple[list[StepModel], dict]:
     """The steps of an SFC, in order, and their index by lower-case name."""
     steps: list[StepModel] = []
     index: dict = {}
-    for s in pou.decl.steps:
+    for s in decl_of(pou).steps:
         key = s.name.lower()
         if key in index:
             ctx.err(Code.DECLARED_TWICE, s.span, f"step '{s.name}' is declared twice")

@@ -9,6 +9,7 @@ from ....diagnostics import Code
 from ....model import types as T
 from ....model.program import ConfigModel, InstanceModel, TaskModel
 from ... import ast as A
+from ...syntax import decl_of
 from ..common import _SECTIONS_PARAM, Scope
 from ..rules import declaration_mismatch
 
@@ -138,5 +139,5 @@ def _implicit_configuration(sem: Semantics) -> None:
     cm = ConfigModel("", implicit=True)
     cm.tasks.append(TaskModel("main", 0, 0))
     for p in progs:
-        cm.instances.append(InstanceModel(p.name, p, "main", "", [], p.decl.span if p.decl else None))
+        cm.instances.append(InstanceModel(p.name, p, "main", "", [], decl_of(p).span if p.decl else None))
     ctx.project.configs.append(cm)

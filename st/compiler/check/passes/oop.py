@@ -6,6 +6,8 @@ implemented with their signatures."""
 from __future__ import annotations
 
 from ....model import types as T
+from ... import ast as A
+from ...syntax import declared
 from ..common import CONSTRUCTION
 from ..context import CheckContext
 from ..rules import abstract, access, inheritance
@@ -13,8 +15,8 @@ from ..rules import abstract, access, inheritance
 
 def check_oop_rules(ctx: CheckContext) -> None:
     for fb in list(ctx.project.pous.values()):
-        d = fb.decl
-        if d is None or d.kind != "FUNCTION_BLOCK":
+        d = declared(fb)
+        if not isinstance(d, A.POU) or d.kind != "FUNCTION_BLOCK":
             continue
         base = fb.base
         if base is not None:

@@ -9,6 +9,7 @@ from ....diagnostics import Code
 from ....model import types as T
 from ....model.program import TestModel
 from ... import ast as A
+from ...syntax import test_blocks
 from ..common import Scope
 from ..context import CheckContext
 
@@ -19,7 +20,7 @@ if TYPE_CHECKING:
 def check_tests(sem: Semantics) -> None:
     ctx = sem.ctx
     by_file: dict = {}
-    for tb in ctx.project.test_blocks:
+    for tb in test_blocks(ctx.project):
         by_file.setdefault(tb.span.file, []).append(tb)
     for _path, blocks in by_file.items():
         setup = _single_block(ctx, blocks, "SETUP")

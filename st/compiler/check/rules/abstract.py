@@ -13,11 +13,12 @@ from ....diagnostics import Code
 from ....model import types as T
 from ....source import Span
 from ... import ast as A
+from ...syntax import decl_of
 from ..context import CheckContext
 
 
 def _is_abstract(t) -> bool:
-    return isinstance(t, T.POUType) and t.decl is not None and "ABSTRACT" in t.decl.modifiers
+    return isinstance(t, T.POUType) and t.decl is not None and "ABSTRACT" in decl_of(t).modifiers
 
 
 def check_declared_instance(ctx: CheckContext, t: T.Type, section: str, span: Span) -> None:
@@ -44,7 +45,7 @@ def check_new_instance(ctx: CheckContext, t: T.Type, span: Span) -> None:
 def check_super_call(ctx: CheckContext, c: A.Call, mt: T.POUType, obj) -> None:
     """`c` calls the method `mt` on `obj` (None: this instance): SUPER^.M() runs the base's own M."""
     if (
-        "ABSTRACT" in mt.decl.modifiers
+        "ABSTRACT" in decl_of(mt).modifiers
         and isinstance(obj, A.Deref)
         and isinstance(obj.base, A.Name)
         and getattr(obj.base.sym, "kind", "") == "super"
@@ -52,44 +53,44 @@ def check_super_call(ctx: CheckContext, c: A.Call, mt: T.POUType, obj) -> None:
         ctx.err(
             Code.ABSTRACT,
             c.span,
-            f"method {mt.name} of {mt.owner_fb.name} is ABSTRACT: it has no implementation to call",
+            f"method {mt.name} of {mt.block.name} is ABSTRACT: it has no implementation to call",
         )
 
 
 def check_method(ctx: CheckContext, fb: T.POUType, mt: T.POUType) -> None:
     """The method `mt` of the block `fb` (its own, or inherited)."""
-    mods = mt.decl.modifiers
-    abstract_fb = "ABSTRACT" in fb.decl.modifiers
+    mods = decl_of(mt).modifiers
+    abstract_fb = "ABSTRACT" in decl_of(fb).modifiers
     if "ABSTRACT" not in mods:
         return
     if mt.owner_fb is not fb:
         if not abstract_fb:
             ctx.err(
                 Code.ABSTRACT,
-                fb.decl.span,
-                f"{fb.name} does not implement the ABSTRACT method {mt.name} of {mt.owner_fb.name}",
+                decl_of(fb).span,
+                f"{fb.name} does not implement the ABSTRACT method {mt.name} of {mt.block.name}",
             )
         return
     if not abstract_fb:
-        ctx.err(Code.ABSTRACT, mt.decl.span, f"ABSTRACT method {mt.name} in {fb.name}, which is not ABSTRACT")
-    if mt.decl.body:
-        ctx.err(Code.ABSTRACT, mt.decl.span, f"ABSTRACT method {mt.name} has a body")
+        ctx.err(Code.ABSTRACT, decl_of(mt).span, f"ABSTRACT method {mt.name} in {fb.name}, which is not ABSTRACT")
+    if decl_of(mt).body:
+        ctx.err(Code.ABSTRACT, decl_of(mt).span, f"ABSTRACT method {mt.name} has a body")
 
 
 def check_property(ctx: CheckContext, fb: T.POUType, ps: T.PropSym) -> None:
     """The property `ps` of the block `fb` (its own, or inherited)."""
     acc = ps.get or ps.set
-    if acc is None or acc.decl is None or "ABSTRACT" not in acc.decl.modifiers:
+    if acc is None or acc.decl is None or "ABSTRACT" not in decl_of(acc).modifiers:
         return
-    abstract_fb = "ABSTRACT" in fb.decl.modifiers
+    abstract_fb = "ABSTRACT" in decl_of(fb).modifiers
     if ps.owner is fb:
         if not abstract_fb:
             ctx.err(Code.ABSTRACT, ps.span, f"ABSTRACT property {ps.name} in {fb.name}, which is not ABSTRACT")
-        if any(a is not None and a.decl.body for a in (ps.get, ps.set)):
+        if any(a is not None and decl_of(a).body for a in (ps.get, ps.set)):
             ctx.err(Code.ABSTRACT, ps.span, f"ABSTRACT property {ps.name} has a body")
     elif not abstract_fb:
         ctx.err(
             Code.ABSTRACT,
-            fb.decl.span,
+            decl_of(fb).span,
             f"{fb.name} does not implement the ABSTRACT property {ps.name} of {ps.owner.name}",
         )

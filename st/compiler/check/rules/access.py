@@ -11,12 +11,16 @@ from __future__ import annotations
 from ....diagnostics import Code
 from ....model import types as T
 from ....source import Span
+from ...syntax import decl_of
 from ..common import Scope
 from ..context import CheckContext
 
 
-def check_access(ctx: CheckContext, mods, owner: T.POUType, what: str, scope: Scope, span: Span) -> None:
-    """`what` (a member of `owner` with the modifiers `mods`) used in `scope`."""
+def check_access(ctx: CheckContext, mods, owner: T.POUType | None, what: str, scope: Scope, span: Span) -> None:
+    """`what` (a member of `owner` with the modifiers `mods`) used in `scope` (a global has no owner
+    and no access modifier)."""
+    if owner is None:
+        return
     if "PRIVATE" in mods and scope.fb is not owner:
         ctx.err(Code.NOT_ACCESSIBLE, span, f"{what} of {owner.name} is PRIVATE: only {owner.name} itself may use it")
     elif "PROTECTED" in mods and (scope.fb is None or not T.implements(scope.fb, owner)):
@@ -34,21 +38,21 @@ def _rank(mods) -> int:
 
 def check_override_access(ctx: CheckContext, mine: T.POUType, theirs: T.POUType) -> None:
     """The method `mine` overrides `theirs`: no narrower access."""
-    m = mine.decl
-    if _rank(m.modifiers) > _rank(theirs.decl.modifiers):
+    m = decl_of(mine)
+    if _rank(m.modifiers) > _rank(decl_of(theirs).modifiers):
         ctx.err(
             Code.NOT_ACCESSIBLE,
             m.span,
-            f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a narrower "
+            f"method {m.name} overrides {theirs.block.name}.{m.name} with a narrower "
             f"access (an override keeps the base's access or widens it)",
         )
 
 
 def check_implementation_access(ctx: CheckContext, fb: T.POUType, mine: T.POUType, itf: T.POUType, im) -> None:
     """The method `mine` of `fb` implements `im` of the interface `itf`: it is PUBLIC."""
-    if {"PRIVATE", "PROTECTED"} & set(mine.decl.modifiers):
+    if {"PRIVATE", "PROTECTED"} & set(decl_of(mine).modifiers):
         ctx.err(
             Code.NOT_ACCESSIBLE,
-            mine.decl.span,
+            decl_of(mine).span,
             f"method {mine.name} of {fb.name} implements {itf.name}.{im.name}: it must be PUBLIC",
         )

@@ -11,14 +11,15 @@ from __future__ import annotations
 
 from ....diagnostics import Code
 from ....model import types as T
+from ...syntax import decl_of
 from ..common import signature
 from ..context import CheckContext
 
 
 def check_extensible(ctx: CheckContext, pou: T.POUType, base: T.POUType) -> bool:
     """`pou` EXTENDS `base`: not a FINAL one (reported: False)."""
-    if "FINAL" in (base.decl.modifiers if base.decl is not None else ()):
-        ctx.err(Code.INHERITANCE_CONTRACT, pou.decl.span, f"'{base.name}' is FINAL and cannot be extended")
+    if "FINAL" in (decl_of(base).modifiers if base.decl is not None else ()):
+        ctx.err(Code.INHERITANCE_CONTRACT, decl_of(pou).span, f"'{base.name}' is FINAL and cannot be extended")
         return False
     return True
 
@@ -39,7 +40,7 @@ def check_interface_extension(ctx: CheckContext, itf: T.POUType, base: T.POUType
     if signature(mine) != signature(theirs):
         ctx.err(
             Code.INHERITANCE_CONTRACT,
-            mine.decl.span,
+            decl_of(mine).span,
             f"method {mine.name} of {itf.name} differs from {base.name}.{theirs.name}",
         )
 
@@ -57,19 +58,19 @@ def check_property_override(ctx: CheckContext, fb: T.POUType, base: T.POUType, m
 def check_method_override(ctx: CheckContext, mine: T.POUType, theirs: T.POUType) -> bool:
     """A method that replaces an inherited one keeps its signature; a FINAL one cannot be replaced
     (reported: False, nothing more to check)."""
-    m = mine.decl
-    if "FINAL" in theirs.decl.modifiers:
+    m = decl_of(mine)
+    if "FINAL" in decl_of(theirs).modifiers:
         ctx.err(
             Code.INHERITANCE_CONTRACT,
             m.span,
-            f"method {m.name} of {theirs.owner_fb.name} is FINAL and cannot be overridden",
+            f"method {m.name} of {theirs.block.name} is FINAL and cannot be overridden",
         )
         return False
     if signature(mine) != signature(theirs):
         ctx.err(
             Code.INHERITANCE_CONTRACT,
             m.span,
-            f"method {m.name} overrides {theirs.owner_fb.name}.{m.name} with a different "
+            f"method {m.name} overrides {theirs.block.name}.{m.name} with a different "
             f"signature (parameters and return type must be the same)",
         )
     return True
@@ -77,10 +78,10 @@ def check_method_override(ctx: CheckContext, mine: T.POUType, theirs: T.POUType)
 
 def check_override_marker(ctx: CheckContext, fb: T.POUType, mt: T.POUType, base: T.POUType | None) -> None:
     """The own method `mt` of `fb`: marked OVERRIDE only where `base` has a method of its name."""
-    if "OVERRIDE" in mt.decl.modifiers and (base is None or mt.name.lower() not in base.methods):
+    if "OVERRIDE" in decl_of(mt).modifiers and (base is None or mt.name.lower() not in base.methods):
         ctx.err(
             Code.INHERITANCE_CONTRACT,
-            mt.decl.span,
+            decl_of(mt).span,
             f"method {mt.name} is marked OVERRIDE but {fb.name} inherits no method of that name",
         )
 
@@ -91,11 +92,11 @@ def check_interface_property(ctx: CheckContext, fb: T.POUType, itf: T.POUType, k
     if mine is not None and str(mine.type) == str(ip.type):
         if ip.bare or not ((ip.get and not mine.get) or (ip.set and not mine.set)):
             return
-    if mine is None and "ABSTRACT" in fb.decl.modifiers:
+    if mine is None and "ABSTRACT" in decl_of(fb).modifiers:
         return
     ctx.err(
         Code.INHERITANCE_CONTRACT,
-        fb.decl.span,
+        decl_of(fb).span,
         f"{fb.name} does not implement property {ip.name} of interface "
         f"{itf.name} (same type, GET and SET as declared there)",
     )
@@ -106,17 +107,17 @@ def check_interface_method(ctx: CheckContext, fb: T.POUType, itf: T.POUType, key
     ABSTRACT) and with its signature. Returns `fb`'s method when it is so."""
     mine = fb.methods.get(key)
     if mine is None:
-        if "ABSTRACT" not in fb.decl.modifiers:
+        if "ABSTRACT" not in decl_of(fb).modifiers:
             ctx.err(
                 Code.INHERITANCE_CONTRACT,
-                fb.decl.span,
+                decl_of(fb).span,
                 f"{fb.name} does not implement method {im.name} of interface {itf.name}",
             )
         return None
     if signature(mine) != signature(im):
         ctx.err(
             Code.INHERITANCE_CONTRACT,
-            mine.decl.span,
+            decl_of(mine).span,
             f"method {mine.name} of {fb.name} does not match "
             f"{itf.name}.{im.name} (parameters and return type must be the same)",
         )

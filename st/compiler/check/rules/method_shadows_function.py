@@ -26,6 +26,6 @@ def check_method_shadows_function(ctx: CheckContext, c: A.Call, callee: A.Name, 
         ctx.warn(
             Code.METHOD_SHADOWS_FUNCTION,
             callee.span,
-            f"'{callee.name}' calls the method {mt.name} of {mt.owner_fb.name}, not the function of that name",
+            f"'{callee.name}' calls the method {mt.name} of {mt.block.name}, not the function of that name",
             f"write THIS^.{mt.name}(...) to say so, or rename the method",
         )

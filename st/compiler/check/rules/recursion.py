@@ -23,6 +23,7 @@ from ....diagnostics import Code
 from ....model import types as T
 from ....source import Span
 from ... import ast as A
+from ...syntax import decl_of, declared
 from ..common import SUPER, THIS
 from ..context import CheckContext
 from ..targets import ActionCall, FbCall, FunctionCall, MethodCall
@@ -37,7 +38,7 @@ class _Graph:
         self.blocks = [p for p in pous if p.pou_kind in ("FUNCTION_BLOCK", "PROGRAM")]
         self._kin: dict[int, list] = {}
         for pou in pous:
-            d = pou.decl
+            d = declared(pou)
             if d is None or pou.pou_kind in ("INTERFACE", "TEST"):
                 continue
             block = pou if pou.pou_kind in ("FUNCTION_BLOCK", "PROGRAM") else None
@@ -47,13 +48,13 @@ class _Graph:
             self._add(pou, f"{kind}{pou.name}", [d.body, getattr(d, "transitions", [])], block)
             for mt in pou.methods.values():
                 if mt.owner_fb is pou and mt.decl is not None:
-                    self._add(mt, f"method {pou.name}.{mt.name}", [mt.decl.body], pou)
+                    self._add(mt, f"method {pou.name}.{mt.name}", [decl_of(mt).body], pou)
             for ps in pou.properties.values():
                 if ps.owner is not pou:
                     continue
                 for acc, which in ((ps.get, "GET"), (ps.set, "SET")):
                     if acc is not None and acc.decl is not None:
-                        self._add(acc, f"property {pou.name}.{ps.name} ({which})", [acc.decl.body], pou)
+                        self._add(acc, f"property {pou.name}.{ps.name} ({which})", [decl_of(acc).body], pou)
             for act in getattr(d, "actions", ()):
                 self._add(act, f"action {pou.name}.{act.name}", [act.body], block or pou)
 

@@ -13,6 +13,7 @@ from ....diagnostics import Code
 from ....model import types as T
 from ....source import Span
 from ... import ast as A
+from ...syntax import decl_of
 from ..context import CheckContext
 
 _KINDS = {"FUNCTION": "function", "FUNCTION_BLOCK": "function block", "PROGRAM": "program", "INTERFACE": "interface"}
@@ -43,7 +44,7 @@ def used_by_library(ctx: CheckContext, pou: T.POUType, own_type: Span | None = N
     kind cannot stand in for it (the standard library's F_TRIG uses R_TRIG, PID uses INTEGRAL);
     a library POU nothing else uses may be replaced by anything."""
     name = re.compile(rf"\b{re.escape(pou.name)}\b", re.I)
-    own = pou.decl.span if pou.decl is not None else None
+    own = decl_of(pou).span if pou.decl is not None else None
     for lib in ctx.libraries:
         for path, text in lib.sources:
             if own_type is not None and path == own_type.file:  # a TYPE: all but its own line

@@ -11,6 +11,8 @@ from __future__ import annotations
 from ....diagnostics import Code
 from ....model import types as T
 from ....source import Span
+from ... import ast as A
+from ...syntax import decl_of
 from ..context import CheckContext
 
 
@@ -25,10 +27,10 @@ def check_extends_chain(ctx: CheckContext, pou: T.POUType, base: T.POUType) -> b
     b: T.POUType | None = base
     while b is not None:
         if b.name.lower() in chain:
-            ctx.err(Code.SELF_CONTAINING_TYPE, pou.decl.span, f"{pou.name} extends itself through '{b.name}'")
+            ctx.err(Code.SELF_CONTAINING_TYPE, decl_of(pou).span, f"{pou.name} extends itself through '{b.name}'")
             return False
         chain.add(b.name.lower())
-        nxt = b.decl.extends if b.decl is not None else ""
+        nxt = b.decl.extends if isinstance(b.decl, A.POU) else ""
         b = ctx.project.pous.get(nxt.lower()) if nxt else None
     return True
 
@@ -36,7 +38,9 @@ def check_extends_chain(ctx: CheckContext, pou: T.POUType, base: T.POUType) -> b
 def check_interface_extends(ctx: CheckContext, itf: T.POUType, base: T.POUType) -> bool:
     """INTERFACE itf EXTENDS base: base does not already extend itf (reported: False)."""
     if T.implements(base, itf):
-        ctx.err(Code.SELF_CONTAINING_TYPE, itf.decl.span, f"INTERFACE {itf.name} extends itself through '{base.name}'")
+        ctx.err(
+            Code.SELF_CONTAINING_TYPE, decl_of(itf).span, f"INTERFACE {itf.name} extends itself through '{base.name}'"
+        )
         return False
     return True
 
