@@ -45,6 +45,9 @@ class InstanceModel:
     # connections [(parameter, its connection (compiler: an expression; artefact: None), is output)]
     args: list[tuple[VarSym, Syntax | None, bool]] = field(default_factory=list)
     span: Span | None = None
+    # the global holding the PROGRAM's one instance when code uses the program by its name
+    # (CODESYS, TwinCAT): the task runs that instance; "" for an instance of its own
+    singleton: str = ""
 
 
 @dataclass(eq=False)

@@ -84,7 +84,7 @@ def build(
                 b.tasks.append(Task(tm.name, interval, tm.priority, [], tm.single, index=len(b.tasks)))
             by_task = {t.name.lower(): t for t in b.tasks}
             for im in cfg.instances:
-                obj = b.ns[im.type.pyname]()
+                obj = b.ns[im.singleton] if im.singleton else b.ns[im.type.pyname]()
                 b.instances[im.name.lower()] = (im.name, obj, im.type)
                 task = by_task.get(im.task.lower()) if im.task else None
                 if task is None:

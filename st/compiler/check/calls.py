@@ -48,6 +48,8 @@ class Calls(Part):
             sym.used = True
             callee.sym = sym
             callee.ty = sym.type
+            if self.ctx.program_instances.get(key) is sym:
+                self.ctx.called_programs.add(key)
             return self._fb_call(c, sym.type, scope, statement)
         mt = self._own_method(c, key, scope)
         if mt is not None:  # a method of this instance: THIS^.M(...)

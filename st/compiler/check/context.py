@@ -12,6 +12,7 @@ from ...source import Span
 from .. import ast as A
 from ..dialect import Dialect
 from ..library import FuncSig, Library
+from ..names import mangle
 from .rules import dialect_features
 
 
@@ -55,6 +56,13 @@ class CheckContext:
     """Globals of a {attribute 'qualified_only'} list (ids of their symbols): reachable only as GVL.x."""
     namespaces: dict[str, str] = field(default_factory=dict)
     """Library and project namespaces, lower name → name: `Tc2_Standard.TON` is TON (passes/namespaces.py)."""
+    program_instances: dict[str, T.VarSym] = field(default_factory=dict)
+    """The one instance of each PROGRAM used by name (CODESYS, TwinCAT: `Prg.x`, `Prg()`,
+    `Prg.M()`), lower program name → its global symbol; a task of the configuration runs that same
+    instance (`InstanceModel.singleton`)."""
+    called_programs: set[str] = field(default_factory=set)
+    """PROGRAMs another POU calls by name (lower names): the implicit configuration's task does
+    not run them itself (they run where they are called, as under a TwinCAT task calling MAIN)."""
 
     # ---------------------------------------------------------------- reporting
     def err(self, code: Code, span: Span, msg: str, hint: str = "") -> None:
@@ -68,6 +76,18 @@ class CheckContext:
     def lib_of(self, span: Span | None) -> str:
         """'lib' for a span in a library source, else ''."""
         return "lib" if span is not None and span.file in self.library_units else ""
+
+    def program_instance(self, pou: T.POUType) -> T.VarSym:
+        """The instance of the PROGRAM `pou` that its name stands for, made when first used."""
+        key = pou.name.lower()
+        sym = self.program_instances.get(key)
+        if sym is None:
+            span = pou.decl.span if isinstance(pou.decl, (A.POU, A.Method, A.Interface)) else Span("<programs>", 1, 1)
+            sym = T.VarSym(pou.name, pou, "VAR_GLOBAL", span, pyname="_pgi_" + mangle(pou.name), is_global=True)
+            self.program_instances[key] = sym
+            self.project.globals["<program> " + key] = sym
+            self.project.global_names.setdefault(key, []).append(sym)  # `Prg.x` for the runtime's paths too
+        return sym
 
     # ---------------------------------------------------------------- dialect
     def feature(self, kind: str, span: Span, what: str) -> bool:

@@ -264,6 +264,9 @@ class Expressions(Part):
         gs = self.p.global_names.get(key)
         if gs and id(gs[0]) not in self.ctx.qualified_only:
             return gs[0]
+        pou = self.p.pous.get(key)
+        if pou is not None and pou.pou_kind == "PROGRAM" and self.ctx.feature_quiet("vendor"):
+            return self.ctx.program_instance(pou)  # CODESYS, TwinCAT: a PROGRAM's name is its instance
         return None
 
     def names_gvl(self, e: A.Expr, scope: Scope) -> bool:
@@ -379,7 +382,11 @@ class Expressions(Part):
         return pick[0]
 
     def _unknown_name(self, e: A.Name, key: str, scope: Scope):
-        if key in self.p.pous or self.ctx.native(key) is not None:
+        pou = self.p.pous.get(key)
+        if pou is not None and pou.pou_kind == "PROGRAM":
+            self.feature("vendor", e.span, "a PROGRAM used by its name (its instance)")
+            return None
+        if pou is not None or self.ctx.native(key) is not None:
             self.err(Code.POU_AS_VALUE, e.span, f"'{e.name}' is a POU, not a value")
             return None
         if key in ("this", "super") and self.ctx.feature_quiet("oop"):

@@ -22,6 +22,11 @@ def check_configurations(sem: Semantics) -> None:
         _check_configuration(sem, cfg_decl)
     if not sem.ctx.project.configs:
         _implicit_configuration(sem)
+    for cm in sem.ctx.project.configs:  # a task runs the instance that `Prg` names in code
+        for im in cm.instances:
+            sym = sem.ctx.program_instances.get(im.type.name.lower())
+            if sym is not None and im.name.lower() == im.type.name.lower():
+                im.singleton = sym.pyname
 
 
 def _check_configuration(sem: Semantics, cfg: A.Configuration) -> None:
@@ -135,7 +140,11 @@ def _config_path_type(sem: Semantics, cm: ConfigModel, d: A.VarDecl):
 
 def _implicit_configuration(sem: Semantics) -> None:
     ctx = sem.ctx
-    progs = [p for p in ctx.project.pous.values() if p.pou_kind == "PROGRAM" and not p.library]
+    progs = [
+        p
+        for p in ctx.project.pous.values()
+        if p.pou_kind == "PROGRAM" and not p.library and p.name.lower() not in ctx.called_programs
+    ]
     cm = ConfigModel("", implicit=True)
     cm.tasks.append(TaskModel("main", 0, 0))
     for p in progs:
