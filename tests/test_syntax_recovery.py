@@ -560,3 +560,11 @@ def test_every_terminal_of_the_grammar_has_an_st_spelling():
         else:
             assert parser.spelling(t.name) == described[t.name], t.name  # a new regex terminal: name it in _PRETTY
     assert parser.spelling("$END") == "end of file"
+
+
+def test_a_subrange_with_a_star_is_a_located_error_not_an_internal_one():
+    sink = DiagnosticSink()
+    parse_source(SourceFile("t.st", "TYPE T : INT( * ); END_TYPE\n"), sink)
+    assert [(d.code, d.span.line, d.span.col, d.message) for d in sink.sorted()] == [
+        ("E001", 1, 10, "a subrange of INT needs its bounds: INT(lo..hi)")
+    ]

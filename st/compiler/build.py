@@ -280,10 +280,15 @@ class AstBuilder(Transformer[Token, A.Unit]):
     def reference_type(self, c: list[Any]) -> A.RefType:
         return A.RefType(self.sp(c[0]), c[-1], "REFERENCE")
 
-    def subrange_type(self, c: list[Any]) -> A.SubrangeType:
+    def subrange_type(self, c: list[Any]) -> A.SubrangeType | A.NamedType:
         base: Token
-        bounds: Range
+        bounds: Range | None
         base, bounds = c
+        if bounds is None:  # INT(*): `*` is an array's bound, not a subrange's
+            self.errors.append(
+                BuildError(self.sp(base), f"a subrange of {base} needs its bounds: {base}(lo..hi)", Code.SYNTAX)
+            )
+            return A.NamedType(self.sp(base), str(base))
         lo, hi = bounds
         return A.SubrangeType(self.sp(base), str(base), lo, hi)
 
