@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import pytest
 
+from st import PLC
 from st.api import compile_text
+from st.diagnostics import CompileError
 from st.model.literals import underscore_problem
 
 from helpers import program, run
@@ -132,11 +134,11 @@ def test_the_largest_and_smallest_time_fit_and_convert_without_wrapping():
         ("t := T#-106751d23h47m16s854ms775us809ns;", 6, "T#-106751d23h47m16s854ms775us809ns", "TIME"),
         ("t := TIME#106752d;", 6, "TIME#106752d", "TIME"),
         ("t := T#9223372036.854775808s;", 6, "T#9223372036.854775808s", "TIME"),
-        ("lt := LT#106752d;", 7, "LT#106752d", "LTIME"),
         ("lt := LTIME#-106752d;", 7, "LTIME#-106752d", "LTIME"),
     ],
 )
 def test_a_time_beyond_64_bit_ns_does_not_fit(stmt, col, shown, kind):
+    """(A positive LTIME up to 2**64 - 1 ns is one under codesys and twincat: the test below.)"""
     prefix = "LT#" if kind == "LTIME" else "T#"
     rng = TIME_RANGE.replace("T#", prefix)
     assert one_statement(stmt) == [("E021", 6, col, f"{shown} does not fit in {kind} ({rng})")]
@@ -246,3 +248,23 @@ def test_a_real_parameter_takes_no_number_beyond_real():
         "r := Half(1E39); r := Half(a := 3.4E38);", "r : REAL;"
     )
     assert found(src) == [("E021", 10, 11, f"1E39 does not fit in REAL ({REAL_RANGE})")]
+
+
+def test_ltime_is_unsigned_in_codesys_and_twincat_and_signed_elsewhere():
+    """TcUnit's verifier asserts on LTIME#213503d23h34m33s709ms551us615ns (2**64 - 1 ns): CODESYS and
+    TwinCAT hold LTIME unsigned; st keeps those 64 bits in its signed LTIME (issue 34)."""
+    src = (
+        "PROGRAM main\nVAR\n  a : LTIME := LTIME#213503D23H34M33S709MS551US615NS;\n  b : LTIME;\n"
+        "  same : BOOL;\nEND_VAR\nb := LT#213503d23h34m33s709ms551us615ns;\nsame := a = b;\nEND_PROGRAM\n"
+    )
+    for dialect in ("codesys", "twincat", None):
+        plc = PLC(compile_text(src, "lt.st", dialect=dialect, use_cache=False))
+        plc.scan(1)
+        assert plc["main.a"] == -1 and plc["main.b"] == -1 and plc["main.same"] is True
+    for dialect in ("iec", "openplc"):
+        with pytest.raises(CompileError) as info:
+            compile_text(src, "lt.st", dialect=dialect, use_cache=False)
+        assert [(d.code, d.span.line, d.span.col) for d in info.value.diagnostics] == [("E021", 3, 16), ("E021", 7, 6)]
+    with pytest.raises(CompileError) as info:  # one ns more is no LTIME anywhere
+        compile_text(src.replace("615ns", "616ns"), "lt.st", dialect="twincat", use_cache=False)
+    assert [(d.code, d.span.line) for d in info.value.diagnostics] == [("E021", 7)]

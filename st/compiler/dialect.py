@@ -69,6 +69,10 @@ class Dialect:
     # the vendor compatibility library (st/stdlib/vendor: T_MaxString, MEMCPY, ADSLOGSTR, SysFile,
     # ...) is part of the compilation; iec and openplc programs know none of its names
     vendor_library: bool = True
+    # LTIME is an unsigned 64-bit count of ns (CODESYS, TwinCAT): a literal up to
+    # LTIME#213503d23h34m33s709ms551us615ns is accepted and held as the same 64 bits in st's signed
+    # LTIME; IEC leaves LTIME's range to the implementation and st's is signed (E021 beyond it)
+    unsigned_ltime: bool = True
 
 
 PRESETS = {
@@ -87,6 +91,7 @@ PRESETS = {
         dotted_word_addresses=True,
         matiec_errors=True,
         vendor_library=False,
+        unsigned_ltime=False,
     ),
     "iec": Dialect(
         "iec",
@@ -95,6 +100,7 @@ PRESETS = {
         recursion_allowed=False,
         this_as_instance=True,
         vendor_library=False,
+        unsigned_ltime=False,
     ),
     "codesys": Dialect(
         "codesys",

@@ -36,6 +36,9 @@ class LiteralRangeError(LiteralError):
 # TIME, LTIME, DATE, DT, TOD (and the other L- types) are 64-bit signed counts of ns in st's type
 # model (types.py); a literal outside this range does not fit its type in any preset
 NS_MIN, NS_MAX = -(1 << 63), (1 << 63) - 1
+# CODESYS and TwinCAT hold LTIME as an unsigned 64-bit count of ns: a literal up to 2**64 - 1 is
+# read here and the checker decides by the preset (E021, or the same 64 bits as st's signed value)
+LTIME_UNSIGNED_MAX = (1 << 64) - 1
 
 
 MAX_INT_DIGITS = 128  # far beyond ULINT (20 decimal digits); longer is a slip, not a number
@@ -190,8 +193,8 @@ def time_literal(text: str) -> int:
     prefix, body = text.split("#", 1)
     _check_underscores(body.lstrip("+-"), duration=True)
     ns = parse_duration(body)
-    if not NS_MIN <= ns <= NS_MAX:
-        t = _time_type(prefix)
+    t = _time_type(prefix)
+    if not NS_MIN <= ns <= (LTIME_UNSIGNED_MAX if t == "LTIME" else NS_MAX):
         raise LiteralRangeError(f"does not fit in {t} ({time_range_text(t)})")
     return ns
 

@@ -8,7 +8,7 @@ from typing import cast
 from ...diagnostics import Code
 from ...model import types as T
 from ...model.addresses import canonical
-from ...model.literals import fits_real, real_range_text
+from ...model.literals import NS_MAX, fits_real, real_range_text, time_range_text
 from .. import ast as A
 from ..syntax import decl_of
 from .common import (
@@ -181,6 +181,11 @@ class Expressions(Part):
         """INT#5, T#1s, MyEnumBase#3, ...: the type the prefix names, which the value must belong to."""
         tn, k = e.type_name, e.kind
         if k in ("time", "date", "tod", "dt"):
+            if k == "time" and isinstance(e.value, int) and e.value > NS_MAX:  # LTIME#213503d...: unsigned
+                if self.ctx.dialect is not None and not self.ctx.dialect.unsigned_ltime:
+                    self.err(Code.OUT_OF_RANGE, e.span, f"{e.text} does not fit in LTIME ({time_range_text('LTIME')})")
+                    return None
+                e.value -= 1 << 64  # the same 64 bits in st's signed LTIME
             return T.ELEMENTARY[_TIME_LITERALS[tn]]
         t = T.ELEMENTARY.get(tn)
         if t is None:
