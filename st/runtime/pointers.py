@@ -123,12 +123,33 @@ class ByteView:
             return r.obj
         return None
 
-    def image(self) -> bytes:
-        """The bytes of what the pointer points into, from its own position on."""
+    def room(self) -> int:
+        """How many bytes there are from the pointer's position to the end of what it points into."""
         raw = self._byte_list()
         if raw is not None:
-            return bytes(v & 0xFF for v in raw[self.ref.key + self.offset :])
-        return b"".join(byteimage.pack(self.src, v) for v in self._values())[self.offset :]
+            start: int = self.ref.key + self.offset
+            return max(0, len(raw) - start)
+        return max(0, self._size() - self.offset)
+
+    def image(self, limit: int | None = None) -> bytes:
+        """The bytes of what the pointer points into, from its own position on (the first `limit`
+        of them: a MEMCPY of 10 bytes into a 64 KiB buffer packs 10, not 64 Ki)."""
+        raw = self._byte_list()
+        if raw is not None:
+            start = self.ref.key + self.offset
+            part = raw[start:] if limit is None else raw[start : start + limit]
+            if not self.src[2]:  # unsigned bytes: 0..255 already (bytes() copies them in C)
+                try:
+                    return bytes(part)
+                except ValueError:
+                    pass
+            return bytes(v & 0xFF for v in part)
+        vals = self._values()
+        if limit is not None:
+            es = byteimage.size(self.src)
+            vals = vals[: (self.offset + limit + es - 1) // es if es else len(vals)]
+        data = b"".join(byteimage.pack(self.src, v) for v in vals)[self.offset :]
+        return data if limit is None else data[:limit]
 
     def write_image(self, data: bytes) -> None:
         """Replace the bytes from the pointer's position on by `data` (at most as many as there are)."""
@@ -155,8 +176,8 @@ class ByteView:
             r.set(new[0])
 
     def get(self) -> Any:
-        data = self.image()
         n = byteimage.size(self.dst)
+        data = self.image(n)
         if n > len(data):
             raise _fault(f"a pointer read past the {self._size()} byte(s) of the variable it points into")
         return byteimage.unpack(self.dst, data[:n])

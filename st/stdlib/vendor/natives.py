@@ -137,10 +137,10 @@ def _whole(p: Any, q: Any, n: int, same: bool, size: int, esize: int) -> bool:
 
 
 def _bytes_of(view: ByteView, n: int, what: str) -> bytes:
-    data = view.image()
-    if n > len(data):
-        raise PLCFault(f"{what} of {n} bytes beyond a variable of {len(data)} bytes", "MEMORY")
-    return data[:n]
+    room = view.room()
+    if n > room:
+        raise PLCFault(f"{what} of {n} bytes beyond a variable of {room} bytes", "MEMORY")
+    return view.image(n)
 
 
 def _vd_memcpy(dest: Any, src: Any, n: int, layout: tuple) -> int:

@@ -91,7 +91,7 @@ def _buffer(p: Any, spec: tuple | None, size: int, what: str) -> Any:
     if p is None or isinstance(p, int):
         raise PLCFault(f"{what} was given a NULL buffer for {size} byte(s)", "NULL")
     view = byte_view(p, spec, what)
-    room = len(view.image())
+    room = view.room()
     if size > room:
         raise PLCFault(f"{what} of {size} byte(s) beyond the {room} byte(s) of the buffer's variable", "MEMORY")
     return view
@@ -162,7 +162,7 @@ def _sf_write(handle: int, buf: Any, size: int, p_result: Any, spec: tuple | Non
     if size <= 0:
         _report(p_result, ERR_OK)
         return 0
-    data = _buffer(buf, spec, size, "SysFileWrite").image()[:size]
+    data = _buffer(buf, spec, size, "SysFileWrite").image(size)
     done = 0
     try:
         while done < size:
