@@ -204,8 +204,12 @@ def _vd_memset(dest: Any, byte: int, n: int, layout: tuple) -> int:
     else:
         value = _fill_value(cur, byte & 0xFF, spec)
     if isinstance(cur, list):
-        for i in range(len(cur) if count is None else count):
-            cur[i] = _clone(value)
+        k = len(cur) if count is None else count
+        if isinstance(value, list) or hasattr(value, "_copy"):
+            for i in range(k):
+                cur[i] = _clone(value)
+        else:  # an elementary value: one slice assignment (a 64 KiB buffer in one step)
+            cur[:k] = [value] * k
     elif count is None:
         _store(dest, value)
     return n
