@@ -14,8 +14,10 @@ DIR/conformance.md, every file's result to DIR/results.json. A file is:
 
 PLCopen XML (`plc.xml`, the OpenPLC Editor's library files) is compiled as it is (st reads its ST
 and SFC bodies); a project with an FBD, LD or IL body (E050) is counted as skipped, not as refused.
-TwinCAT's projects (.plcproj with their .TcPOU/.TcDUT/.TcGVL) are counted as a project format
-unless --projects compiles them (a source's projects as one unit).
+TwinCAT's projects (.plcproj with their .TcPOU/.TcDUT/.TcGVL) listed as `plcprojs` are units of
+their own, each compiled with the libraries it references found on its search path (the sweep's
+`--lib`); a source's `project` files are counted as a project format unless --projects compiles
+them (a source's projects as one unit).
 """
 
 from __future__ import annotations
@@ -48,6 +50,9 @@ class Source:
     together: tuple[tuple[str, str], ...] = ()
     alone: tuple[str, ...] = ()  # path fragments of files checked alone even inside a unit
     pairs: bool = False  # test_X.st is compiled with X.st beside it (STruC++'s validation suite)
+    # TwinCAT/CODESYS projects, each a unit with the libraries it references found on a search path:
+    # (glob of .plcproj files under the root, the search path: paths under CORPORA given as --lib)
+    plcprojs: tuple[tuple[str, tuple[str, ...]], ...] = ()
 
 
 SOURCES = (
@@ -96,8 +101,46 @@ SOURCES = (
         together=(("libs/sources/*", "**/*.st"), ("tests/fixtures/smart-traffic-light", "**/*.st")),
         pairs=True,
     ),
-    # TcUnit's library project and its verifier project, which TwinCAT builds with the library referenced
-    Source("TwinCAT: TcUnit and its verifier", "twincat", "tcunit-TcUnit", project=("**/*.plcproj",)),
+    # TwinCAT projects as TwinCAT builds them: each .plcproj with the libraries it references, found
+    # as library projects on the search path (--lib); Tc2_*/Tc3_* are st's own vendor library
+    Source(
+        "TwinCAT: TcUnit and its verifier",
+        "twincat",
+        "tcunit-TcUnit",
+        plcprojs=(("TcUnit/**/TcUnit.plcproj", ()), ("TcUnit-Verifier/**/*.plcproj", ("tcunit-TcUnit/TcUnit",))),
+    ),
+    Source(
+        "TwinCAT: struckig (library, tests, example, benchmark)",
+        "twincat",
+        "stefanbesler-struckig",
+        plcprojs=(
+            ("Struckig/**/Struckig.plcproj", ()),
+            ("tests/**/*.plcproj", ("stefanbesler-struckig/Struckig", "tcunit-TcUnit/TcUnit")),
+            ("examples/**/*.plcproj", ("stefanbesler-struckig/Struckig",)),
+            ("benchmark/**/*.plcproj", ("stefanbesler-struckig/Struckig",)),
+        ),
+    ),
+    Source(
+        "TwinCAT: TcLog and its tests",
+        "twincat",
+        "bengeisler-TcLog",
+        plcprojs=(
+            ("src/**/TcLog.plcproj", ("tcunit-TcUnit/TcUnit",)),
+            ("src/**/TcLogTEST.plcproj", ("tcunit-TcUnit/TcUnit", "bengeisler-TcLog/src/TcLogProj/TcLog")),
+        ),
+    ),
+    Source(
+        "TwinCAT: PLC design patterns course (0w8States)",
+        "twincat",
+        "0w8States-PLC-Design-Patterns",
+        plcprojs=(("**/*.plcproj", ()),),
+    ),
+    Source(
+        "TwinCAT: blark's samples",
+        "twincat",
+        "klauer-blark",
+        st=("blark/tests/source/*.st", "blark/tests/POUs/*.TcPOU"),
+    ),
 )
 
 
@@ -120,6 +163,7 @@ class FileResult:
     kind: str  # st | xml | skipped-xml | project | duplicate
     note: str = ""  # the ST file compiled (its first file), or why it is not
     paths: list[str] = field(default_factory=list)  # every file compiled (a unit has several)
+    libs: list[str] = field(default_factory=list)  # a project's library search path (--lib)
     outcomes: dict[str, Outcome] = field(default_factory=dict)  # "default" / dialect name → outcome
 
 
@@ -281,15 +325,17 @@ def run_scans(result, scans: int) -> str:
     return "ok"
 
 
-def check_file(paths: list[str], dialect: str | None, timeout: int, scans: int = 0) -> Outcome:
+def check_file(
+    paths: list[str], dialect: str | None, timeout: int, scans: int = 0, libs: list[str] | None = None
+) -> Outcome:
     """One file (or unit) compiled alone, without the cache, and its outcome (and, with `scans`, what
-    running a clean one does)."""
+    running a clean one does); `libs`: a project's library search path."""
     from st.api import compile_paths
 
     signal.signal(signal.SIGALRM, _alarm)
     signal.alarm(timeout)
     try:
-        result = compile_paths(paths, raise_on_error=False, use_cache=False, dialect=dialect)
+        result = compile_paths(paths, raise_on_error=False, use_cache=False, dialect=dialect, lib_path=libs or ())
     except _Timeout:
         return Outcome("internal", "timeout", f"no answer within {timeout} s", paths[0])
     except RecursionError:
@@ -325,13 +371,14 @@ def check_file(paths: list[str], dialect: str | None, timeout: int, scans: int =
     return Outcome(status, first.code, normalise(first.message), where, first.message, listed, languages=languages)
 
 
-def _check_job(job: tuple[list[str], str, int, int]) -> dict[str, dict]:
+def _check_job(job: tuple[list[str], str, int, int, list[str]]) -> dict[str, dict]:
     """A unit with no dialect and with its source's preset ("default" when that is st's default);
     only the preset's outcome is run."""
-    paths, preset, timeout, scans = job
+    paths, preset, timeout, scans, libs = job
     keys = ["default"] if preset == "default" else ["default", preset]
     return {
-        k: asdict(check_file(paths, None if k == "default" else k, timeout, scans if k == preset else 0)) for k in keys
+        k: asdict(check_file(paths, None if k == "default" else k, timeout, scans if k == preset else 0, libs))
+        for k in keys
     }
 
 
@@ -394,6 +441,12 @@ def collect(corpora: Path, only: str | None, projects: bool = False) -> list[Fil
                 continue
             seen[digest] = rel
             files.append(FileResult(src.name, rel, "xml", str(p), [str(p)]))
+        for pattern, libs in src.plcprojs:
+            for p in matches((pattern,)):
+                rel = str(p.relative_to(corpora))
+                search = [str(corpora / lib) for lib in libs]
+                note = "with --lib " + ", ".join(libs) if libs else ""
+                files.append(FileResult(src.name, rel, "st", note, [str(p)], search))
         found = matches(src.project)
         if projects and found:
             rel = str(found[0].relative_to(corpora)) + f" (+{len(found) - 1} files)"
@@ -406,7 +459,7 @@ def collect(corpora: Path, only: str | None, projects: bool = False) -> list[Fil
 def run(files: list[FileResult], timeout: int, jobs: int, scans: int = 0) -> None:
     dialect_of = {s.name: s.dialect for s in SOURCES}
     todo = [f for f in files if f.kind in ("st", "xml")]
-    work = [(f.paths, dialect_of[f.source], timeout, scans) for f in todo]
+    work = [(f.paths, dialect_of[f.source], timeout, scans, f.libs) for f in todo]
     started = time.monotonic()
     if jobs <= 1:
         answers = map(_check_job, work)

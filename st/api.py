@@ -8,6 +8,9 @@ that compile first).
 
 from __future__ import annotations
 
+import os
+from collections.abc import Sequence
+
 from .compiler.driver import compile_sources, load_files
 from .compiler.options import CompileOptions
 from .diagnostics import CompileError
@@ -31,6 +34,13 @@ def libraries(options: CompileOptions | None = None) -> list:
     if options.dialect is None or options.dialect.vendor_library:
         libs.append(vendor_library())
     return libs
+
+
+def provided_libraries() -> frozenset[str]:
+    """The lower-case names of the system libraries st stands in for (the namespaces its libraries
+    answer to: Tc2_Standard, Tc2_System, SysFile, ...): a project's references to them are not
+    searched for."""
+    return frozenset(n.lower() for lib in (default_library(), vendor_library()) for n in lib.namespaces)
 
 
 def _refused(e: CompileError, raise_on_error: bool) -> CompiledProgram:
@@ -79,8 +89,12 @@ def compile_paths(
     coverage: bool = False,
     dialect: str | None = None,
     native: bool = False,
+    lib_path: Sequence[str | os.PathLike] = (),
 ) -> CompiledProgram:
-    sources = load_files([str(p) for p in paths])
+    """Compile ST files (.st, TwinCAT's .TcPOU/.../.plcproj, PLCopen XML). A .plcproj's library
+    references are looked up in `lib_path` (library .plcproj files or folders holding them), then
+    in $ST_LIBPATH (compiler/libpath.py)."""
+    sources = load_files([str(p) for p in paths], [str(p) for p in lib_path], provided_libraries())
     return _compile(
         sources,
         raise_on_error,
@@ -105,15 +119,17 @@ def _compile(sources: list[SourceFile], raise_on_error: bool, **options) -> Comp
 
 class PLC(runtime_plc.PLC):
     """The runtime's PLC, made from ST source text or files: the compile options among `kw`
-    (f_trig_first_scan, time_unit, use_cache, coverage, native) go to the compiler, the rest to the PLC."""
+    (f_trig_first_scan, time_unit, use_cache, coverage, native, dialect; lib_path for files) go to the
+    compiler, the rest to the PLC."""
 
     @classmethod
     def from_source(cls, text: str, cycle=None, *, name: str = "<source>.st", **kw) -> PLC:
         return cls(compile_text(text, name, **_compile_kw(kw)), cycle, **kw)
 
     @classmethod
-    def from_files(cls, *paths: str, cycle=None, **kw) -> PLC:
-        return cls(compile_paths(list(paths), **_compile_kw(kw)), cycle, **kw)
+    def from_files(cls, *paths: str, cycle=None, lib_path: Sequence[str | os.PathLike] = (), **kw) -> PLC:
+        """The PLC of ST files; `lib_path`: where a .plcproj's referenced libraries are (see compile_paths)."""
+        return cls(compile_paths(list(paths), lib_path=lib_path, **_compile_kw(kw)), cycle, **kw)
 
     def axis(self, name: str | int) -> AxisView:
         """A PLCopen axis as the blocks saw it in the last scan (st.stdlib.plcopen.AxisView): by
@@ -123,7 +139,7 @@ class PLC(runtime_plc.PLC):
 
 def _compile_kw(kw: dict) -> dict:
     out = {}
-    for k in ("f_trig_first_scan", "time_unit", "use_cache", "coverage", "native"):
+    for k in ("f_trig_first_scan", "time_unit", "use_cache", "coverage", "native", "dialect"):
         if k in kw:
             out[k] = kw.pop(k)
     return out

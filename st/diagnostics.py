@@ -6,10 +6,10 @@ together; `render` is the one place that turns them into text.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 
-from .source import SourceFile, Span
+from .source import NO_SPAN, SourceFile, Span
 
 
 class Code(str, Enum):
@@ -352,9 +352,11 @@ class Code(str, Enum):
     ADDRESS_PART_IGNORED = (
         "W011",
         (
-            "A byte, word, double or long address with a '.' (%IW0.0): OpenPLC's runtime binds it by its first "
-            "number (%IW0) and ignores the rest, and so do the openplc preset and the default; iec, codesys and "
-            "twincat refuse it (E004)."
+            "A hierarchical address, one with more numbers than its cell needs (%IW0.0, %QX0.4.2): OpenPLC's "
+            "runtime binds it by its leading numbers (%IW0, %QX0.4) and ignores the rest, and so do the openplc "
+            "preset and the default; iec, codesys and twincat accept the declaration as their compilers do "
+            "(its place is the I/O configuration's) and `st run` refuses it, naming the declaration, since "
+            "st's process image has no place for it."
         ),
     )
     NATIVE_UNAVAILABLE = (
@@ -371,6 +373,16 @@ class Code(str, Enum):
             "A POU calls itself, directly or through others (as E032), under the codesys or twincat dialect or "
             "the default: CODESYS and TwinCAT allow it with a warning (C0561, C0298 for methods), IEC 61131-3 "
             "does not. It runs; a recursion that goes too deep faults with RECURSION at the call."
+        ),
+    )
+    LIBRARY_NOT_FOUND = (
+        "W014",
+        (
+            "A TwinCAT or CODESYS project references a library (<PlaceholderReference>, <LibraryReference> in its "
+            ".plcproj) that is neither a project of the compilation nor a library project in the search path "
+            "(--lib PATH, ST_LIBPATH, the API's lib_path=): its files are not compiled, so its names stay unknown "
+            "where they are used. System libraries (Tc2_Standard, Tc2_System, Tc3_Module, SysFile, ...) are "
+            "not searched for."
         ),
     )
 
@@ -460,6 +472,8 @@ class DiagnosticSink:
         self.add(Diagnostic(code, Severity.WARNING, span, message, hint))
 
     def add(self, d: Diagnostic) -> None:
+        if not isinstance(d.span, Span):  # every diagnostic is located; a bug must not hide the report
+            d = replace(d, span=NO_SPAN)
         key = (d.code, d.span.file, d.span.line, d.span.col, d.message)
         if key not in self._seen:
             self._seen.add(key)
@@ -470,4 +484,15 @@ class DiagnosticSink:
         return any(d.is_error for d in self.items)
 
     def sorted(self) -> list[Diagnostic]:
-        return sorted(self.items, key=lambda d: (d.span.file, d.span.line, d.span.col))
+        """By file, line and column (a field that is not what its type says sorts first)."""
+        return sorted(self.items, key=_position)
+
+
+def _position(d: Diagnostic) -> tuple[str, int, int]:
+    s = d.span
+    file, line, col = getattr(s, "file", ""), getattr(s, "line", 0), getattr(s, "col", 0)
+    return (
+        file if isinstance(file, str) else "",
+        line if isinstance(line, int) else 0,
+        col if isinstance(col, int) else 0,
+    )

@@ -80,6 +80,7 @@ WITHOUT_FIXTURE = {
     "E000": "a file that cannot be read: test_an_unreadable_file_is_e000 below",
     "E099": "an internal compiler error (a bug): test_hardening_compiler.py, test_compiled_model.py",
     "W012": "the native tier's toolchain missing or failing: test_native.py",
+    "W014": "a .plcproj's library reference not found: test_twincat_projects.py",
 }
 
 

@@ -211,13 +211,13 @@ END_PROGRAM
 def test_addresses_the_process_image_cannot_hold_are_refused_by_the_checker():
     src = _program(
         "y := TRUE; %QW1024 := 5; %MX0.0 := TRUE;",
-        "y AT %QX9000.0 : BOOL; z AT %IW5000 : INT; b AT %QX1.9 : BOOL; w AT %QX3 : BOOL;",
+        "y AT %QX9000.0 : BOOL; z AT %IW5000 : INT; b AT %QX1.9 : BOOL; w AT %QX1024 : BOOL;",
     )
     assert _errors(src) == [
         ("E004", 2, 5, "%QX9000.0 is outside the process image (1024 entries per table)"),
         ("E004", 2, 28, "%IW5000 is outside the process image (1024 entries per table)"),
         ("E004", 2, 48, "%QX1.9: bit 9 is not 0..7"),
-        ("E004", 2, 68, "%QX3: a bit address needs byte.bit, e.g. %QX0.0"),
+        ("E004", 2, 68, "%QX1024.0 is outside the process image (1024 entries per table)"),
         ("E004", 3, 12, "%QW1024 is outside the process image (1024 entries per table)"),
     ]
     # the last cell of each table is fine

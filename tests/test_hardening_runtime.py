@@ -306,7 +306,7 @@ def test_a_located_address_outside_the_image_is_a_start_error_not_a_traceback(mo
     monkeypatch.setattr(addresses, "TABLE_LEN", 8)
     with pytest.raises(PLCStartError) as info:
         PLC(compiled)
-    assert str(info.value) == "%QW20: %QW20 is outside the process image (8 entries per table)"
+    assert str(info.value) == "addr.st:2:5: %QW20 is outside the process image (8 entries per table)"
 
 
 # ---------------------------------------------------------------------- online change: all or nothing
@@ -369,7 +369,7 @@ def test_a_change_with_an_address_the_image_cannot_hold_is_refused_whole(monkeyp
         plc.online_change(compiled)
     assert (
         str(info.value).splitlines()[1]
-        == "  the new program cannot start: %QW9: %QW9 is outside the process image (8 entries per table)"
+        == "  the new program cannot start: v2.st:8:50: %QW9 is outside the process image (8 entries per table)"
     )
     _assert_untouched(plc, old_obj, old_code)
 

@@ -155,8 +155,7 @@ def test_process_image_latches_inputs_and_publishes_outputs():
     assert plc["%QW100"] == 42
     with pytest.raises(KeyError, match="outside the process image"):
         plc["%IX1024.0"]
-    with pytest.raises(KeyError, match="needs byte.bit"):
-        plc["%QX3"]
+    assert plc["%QX3"] is False and plc["%QX3.0"] is False  # a bit address without its bit: bit 0 (issue 34)
 
 
 FAULTY = """

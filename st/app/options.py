@@ -54,6 +54,8 @@ class RunOptions:
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
     compiled_mtimes: dict | None = None  # the sources as compiled (see --watch)
+    dialect: str | None = None  # --dialect, for --watch's compilations as for the first
+    lib_path: tuple = ()  # --lib, likewise
 
 
 def safe_values(specs: list) -> dict:

@@ -66,6 +66,8 @@ class Watcher:
                 f_trig_first_scan=self.o.f_trig_first_scan,
                 native=self.o.native,
                 coverage=bool(self.o.web) and not self.o.native,  # --web's line marks (cli.run)
+                dialect=self.o.dialect,
+                lib_path=self.o.lib_path,
             )
             self.result = self.plc.prepare_change(compiled)
         except CompileError as e:

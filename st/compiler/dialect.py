@@ -4,8 +4,8 @@
               first scan; a POU may assign its own inputs (MatIEC forbids only writing a block's
               outputs from outside, FOR variables and constants); a FOR's body may not write its
               control variable (E052); no object-oriented ST and no vendor extensions; REAL
-              arithmetic as MatIEC's C computes it, %IW0.0 read as %IW0 (W011), MatIEC's answers
-              where IEC leaves an error's reaction open
+              arithmetic as MatIEC's C computes it, %IW0.0 read as %IW0 and %QX0.4.2 as %QX0.4
+              (W011), MatIEC's answers where IEC leaves an error's reaction open
     iec       IEC 61131-3 3rd edition, strict: object-oriented ST (THIS.x read as THIS^.x),
               REF_TO/REF()/NULL; a FOR's body may not write its control variable (E052); no vendor
               extensions (POINTER TO, REFERENCE TO, REF=, ADR, SIZEOF, __QUERYINTERFACE, __ISVALIDREF,
@@ -59,8 +59,11 @@ class Dialect:
     # REAL arithmetic as MatIEC's generated C computes it: single precision where both operands
     # are C floats (REAL variables, integers), double where a REAL literal takes part
     c_float_arithmetic: bool = False
-    # a byte, word, double or long address with a '.' (%IW0.0) is bound by its first number, as
-    # OpenPLC's glue generator does, with a warning (W011); elsewhere the process image refuses it (E004)
+    # a hierarchical address, more numbers than its cell needs (%IW0.0, %QX0.4.2), is bound by its
+    # leading numbers (%IW0, %QX0.4), as OpenPLC's glue generator does, with a warning (W011); off,
+    # it is accepted as written as IEC, CODESYS and TwinCAT accept it (its place is the I/O
+    # configuration's) and a run refuses it at its declaration (st/model/addresses.py). A bit
+    # address with one number (%IX1) is %IX1.0 under every preset.
     dotted_word_addresses: bool = False
     # where IEC calls a case an error and leaves the reaction open, do what MatIEC does (a MUX
     # selector out of range gives the type's default value, REAL to integer rounds halfway cases

@@ -12,6 +12,7 @@ import os
 import pickle
 import sys
 import threading
+from collections.abc import Collection, Sequence
 from pathlib import Path
 from types import CodeType
 
@@ -20,9 +21,9 @@ from ..model.compiled import CompiledProgram
 from ..model.program import Project
 from ..source import SourceFile, Span
 from . import ast as A
-from . import cache, plcopen_xml, twincat
+from . import cache, libpath, plcopen_xml, twincat, twincat_tasks
 from .artefact import artefact, libraries_only
-from .build import EDGE_NAMES, AstBuilder
+from .build import VENDOR_NAMES, AstBuilder
 from .check import Checker
 from .codegen import ModuleGen
 from .codegen.source import python_text
@@ -69,16 +70,16 @@ def parse_library_source(path: str, text: str, sink: DiagnosticSink) -> A.Unit |
 
 
 def parse_source(
-    src: SourceFile, sink: DiagnosticSink, nested_comments: bool | None = True, edge_names: bool = False
+    src: SourceFile, sink: DiagnosticSink, nested_comments: bool | None = True, vendor_names: bool = False
 ) -> A.Unit | None:
     """Parse one file; every problem becomes a diagnostic of that file (never an exception).
-    `nested_comments`: see grammar.comments.strip_comments; `edge_names`: R_EDGE and F_EDGE may
-    be names (CODESYS, TwinCAT, the default)."""
+    `nested_comments`: see grammar.comments.strip_comments; `vendor_names`: R_EDGE, F_EDGE,
+    CONFIGURATION and RESOURCE may be names (CODESYS, TwinCAT, the default)."""
     with _parser_lock:
         parser, builder = _get_parser()
         builder.path = src.path
         builder.errors = []
-        builder.names_allowed = EDGE_NAMES if edge_names else frozenset()
+        builder.names_allowed = VENDOR_NAMES if vendor_names else frozenset()
         try:
             unit, diags = parser.parse(src, nested_comments)
         except RecursionError:
@@ -237,11 +238,11 @@ def parse(sources: list[SourceFile], libraries: list[Library], options: CompileO
                 lib_units.append((lib, u))
     units: list[A.Unit] = []
     nested = options.dialect.nested_comments if options.dialect is not None else None
-    edge_names = options.dialect is None or options.dialect.vendor_extensions
+    vendor_names = options.dialect is None or options.dialect.vendor_extensions
     for s in sources:
         for d in s.load_diagnostics:
             sink.add(d)
-        u = parse_source(s, sink, nested, edge_names)
+        u = parse_source(s, sink, nested, vendor_names)
         if u is not None:
             units.append(u)
     in_use = _libraries_in_use(libraries, lib_units, units, sink)
@@ -344,12 +345,15 @@ def _attach_test_texts(project: Project, sources: dict) -> None:
 
 def _read_text(p: str) -> str:
     try:
-        raw = Path(p).read_bytes()
+        return _decoded(Path(p).read_bytes())
     except OSError as e:
         raise CompileError(
             [Diagnostic(Code.UNREADABLE_FILE, Severity.ERROR, Span(str(p), 0, 0), f"cannot read file: {e.strerror}")],
             {},
         ) from None
+
+
+def _decoded(raw: bytes) -> str:
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
@@ -359,23 +363,64 @@ def _read_text(p: str) -> str:
     return text.replace("\r\n", "\n").replace("\r", "\n")
 
 
-def load_files(paths: list[str]) -> list[SourceFile]:
+def load_files(paths: list[str], lib_path: Sequence[str] = (), provided: Collection[str] = ()) -> list[SourceFile]:
     """The sources: .st files as they are; TwinCAT's .TcPOU/.TcDUT/.TcGVL/.TcIO and PLCopen XML
     projects (plc.xml) as their ST laid out at the XML's lines (diagnostics point into the XML file,
     and the problems of reading it are the source's `load_diagnostics`); a .plcproj as the files it
-    compiles."""
-    out = []
-    for p in paths:
-        if str(p).lower().endswith(twincat.PROJECT_SUFFIX):
-            xml = _read_text(str(p))
-            out += load_files(twincat.project_files(str(p), xml))
-            out.append(SourceFile(str(p), twincat.project_namespaces(xml)))  # only pragmas
-            continue
-        text = _read_text(str(p))
-        problems: list[Diagnostic] = []
-        if twincat.is_twincat(str(p)):
-            text = twincat.twincat_source(text)
-        elif plcopen_xml.handles(str(p), text):
-            text, problems = plcopen_xml.plcopen_source(text, str(p))
-        out.append(SourceFile(str(p), text, load_diagnostics=problems))
+    compiles, and the library projects it references (libpath.py: found among the projects named and
+    in the search path `lib_path` + ST_LIBPATH, transitively, each once; `provided`: lower-case
+    names of the libraries st stands in for, never searched for)."""
+    paths = [str(p) for p in paths]
+    projects = [p for p in paths if p.lower().endswith(twincat.PROJECT_SUFFIX)]
+    found = libpath.resolve(projects, lib_path, provided) if projects else libpath.Resolution()
+    out: list[SourceFile] = []
+    for p in paths + found.libraries:
+        if p.lower().endswith(twincat.PROJECT_SUFFIX):
+            out += _load_project(p, found, tasks=p in projects)
+        else:
+            out.append(_load_file(p))
     return out
+
+
+def _load_file(p: str) -> SourceFile:
+    text = _read_text(p)
+    problems: list[Diagnostic] = []
+    if twincat.is_twincat(p):
+        text = twincat.twincat_source(text)
+    elif plcopen_xml.handles(p, text):
+        text, problems = plcopen_xml.plcopen_source(text, p)
+    return SourceFile(p, text, load_diagnostics=problems)
+
+
+def _load_project(p: str, found: libpath.Resolution, tasks: bool = False) -> list[SourceFile]:
+    """A .plcproj's files, then the project itself as a source of pragmas (its namespaces and those
+    its library references give) that carries what went wrong reading it: a <Compile> file missing
+    (E000 at the element, its name matched ignoring case first, as on Windows), a library not found
+    (W014 at the reference); with `tasks` (a project named, not a library found), the CONFIGURATION
+    its .TcTTO task files mean (twincat_tasks.py), after the XML's last line."""
+    xml = _read_text(p)
+    out = []
+    problems = list(found.warnings.get(p, []))
+    for item in twincat.compile_items(p, xml):
+        reason = "no such file, nor one whose name differs only in case"
+        if item.found:
+            try:
+                out.append(_load_file(item.path))
+                continue
+            except CompileError as e:
+                reason = e.diagnostics[0].message.removeprefix("cannot read file: ")
+        problems.append(
+            Diagnostic(
+                Code.UNREADABLE_FILE,
+                Severity.ERROR,
+                Span(p, item.line, item.col),
+                f"cannot read file '{item.include}' of this project: {reason}",
+            )
+        )
+    pragmas = twincat.project_namespaces(xml) + "".join(
+        "{namespace '" + n + "'}\n" for n in found.namespaces.get(p, []) if n.isidentifier()
+    )
+    text = twincat.project_source(xml, pragmas, [d.span.line for d in problems])
+    if tasks:
+        text += "\n" + twincat_tasks.project_configuration(p, xml)
+    return out + [SourceFile(p, text, load_diagnostics=problems)]

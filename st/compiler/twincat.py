@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import PureWindowsPath
 
 from .layout import Layout
@@ -23,6 +25,7 @@ PROJECT_SUFFIX = ".plcproj"
 _TOKEN = re.compile(
     r"<!\[CDATA\[(.*?)\]\]>|<(/?)([A-Za-z_][\w.]*)((?:[^>\"']|\"[^\"]*\"|'[^']*')*?)(/?)>|<\?.*?\?>|<!--.*?-->", re.S
 )
+COMPILE_ITEM = re.compile(r"<Compile\s+Include\s*=\s*\"([^\"]+)\"")
 _NAME_ATTR = re.compile(r"\bName\s*=\s*\"([^\"]*)\"")
 _KIND = re.compile(
     r"^\s*(?:\{[^}]*\}\s*|\(\*.*?\*\)\s*|//[^\n]*\n\s*)*"
@@ -45,15 +48,80 @@ def project_namespaces(xml: str) -> str:
     return "".join("{namespace '" + n + "'}\n" for n in names)
 
 
-def project_files(project_path: str, xml: str) -> list[str]:
-    """The ST files a .plcproj compiles (its `<Compile Include="…"/>` items), as paths."""
+@dataclass(frozen=True)
+class CompileItem:
+    """One `<Compile Include="…"/>` of a .plcproj that st reads: the file and where it is named."""
+
+    include: str  # as written: 'POUs\\FB_Test.TcPOU'
+    path: str  # the file: the exact path, else one whose names match case-insensitively
+    found: bool  # False: no such file, even ignoring case
+    line: int  # 1-based line and column of the <Compile element in the .plcproj
+    col: int
+
+
+def compile_items(project_path: str, xml: str) -> list[CompileItem]:
+    """The ST files a .plcproj compiles (its `<Compile Include="…"/>` items of .TcPOU/.TcDUT/
+    .TcGVL/.TcIO). TwinCAT runs on Windows, where names are case-insensitive: an Include whose
+    exact path does not exist is looked up component by component ignoring case."""
     base = os.path.dirname(project_path)
     out = []
-    for m in re.finditer(r"<Compile\s+Include\s*=\s*\"([^\"]+)\"", xml):
+    for m in COMPILE_ITEM.finditer(xml):
         rel = PureWindowsPath(m.group(1)).as_posix()
-        if rel.lower().endswith(SUFFIXES):
-            out.append(os.path.join(base, rel))
+        if not rel.lower().endswith(SUFFIXES):
+            continue
+        exact = os.path.join(base, rel)
+        path = exact if os.path.exists(exact) else find_ignoring_case(base, rel)
+        line = xml.count("\n", 0, m.start()) + 1
+        col = m.start() - (xml.rfind("\n", 0, m.start()) + 1) + 1
+        out.append(CompileItem(m.group(1), path or exact, path is not None, line, col))
     return out
+
+
+def project_files(project_path: str, xml: str) -> list[str]:
+    """The ST files a .plcproj compiles, as paths (see `compile_items`)."""
+    return [item.path for item in compile_items(project_path, xml)]
+
+
+def find_ignoring_case(base: str, rel: str) -> str | None:
+    """The path under `base` whose components match `rel`'s ignoring case (an exact match first,
+    else the first in sorted order), or None."""
+    path = base
+    for part in (p for p in rel.split("/") if p and p != "."):
+        if part == "..":
+            path = os.path.join(path, part)
+            continue
+        exact = os.path.join(path, part)
+        if os.path.exists(exact):
+            path = exact
+            continue
+        try:
+            names = sorted(os.listdir(path or "."))
+        except OSError:
+            return None
+        match = next((n for n in names if n.lower() == part.lower()), None)
+        if match is None:
+            return None
+        path = os.path.join(path, match)
+    return path
+
+
+def project_source(xml: str, namespaces: str, lines: Iterable[int] = ()) -> str:
+    """The ST a .plcproj stands for in the compilation: its namespace pragmas (`project_namespaces`),
+    and, at each line in `lines` (where a diagnostic about the project points: a <Compile> whose file
+    is missing, a library reference not found), the XML of that line in a `//` comment at its own
+    columns, so that the diagnostic shows it. Every other line is blank."""
+    out = Layout(xml)
+    if namespaces:
+        out.keyword(0, namespaces.replace("\n", " ").strip())
+    text_lines = xml.split("\n")
+    for n in sorted(set(lines)):
+        if 1 < n <= len(text_lines):
+            shown = text_lines[n - 1]
+            start = len(shown) - len(shown.lstrip())
+            if start >= 3:  # room for the '//' before the element
+                out.code(out.starts[n - 1], "//")
+                out.code(out.starts[n - 1] + start, shown.strip())
+    return out.text()
 
 
 def twincat_source(xml: str) -> str:

@@ -167,25 +167,31 @@ def _apply_var_config(cfg: Any, b: Build) -> None:
             raise PLCStartError(f"{span.file}:{span.line}: VAR_CONFIG {'.'.join(path)}: {e}") from None
 
 
-def _located(b: Build) -> Iterator[tuple[str, Any, Any, Any, str | None]]:
-    """(address, container, key, type, owning instance name or None) of every located variable."""
+def _located(b: Build) -> Iterator[tuple[str, Any, Any, Any, str | None, str]]:
+    """(address, container, key, type, owning instance name or None, where it is declared as
+    'file:line:col: ' or '') of every located variable."""
     for lname, (_name, obj, pou) in b.instances.items():
         for sym in pou.vars.values():
             if sym.location and "*" not in sym.location:
-                yield sym.location, obj, sym.pyname, sym.type, lname
+                yield sym.location, obj, sym.pyname, sym.type, lname, _where(sym.span)
     for g in b.project.globals.values():
         if g.location and "*" not in g.location:
-            yield g.location, b.ns, g.pyname, g.type, None
+            yield g.location, b.ns, g.pyname, g.type, None, _where(g.span)
     for addr, (pyname, t) in b.project.direct_vars.items():
-        yield addr, b.ns, pyname, t, None
+        yield addr, b.ns, pyname, t, None, ""
     if b.config is not None:
-        for path, location, _init, _ty, _span in b.config.var_config:
+        for path, location, _init, _ty, span in b.config.var_config:
             if location and "*" not in location:
                 try:
                     container, key, t = resolve(b, ".".join(path))
                 except KeyError:
                     continue
-                yield location, container, key, t, path[0].lower()
+                yield location, container, key, t, path[0].lower(), _where(span)
+
+
+def _where(span: Any) -> str:
+    """'file:line:col: ' of a declaration, for a start error that names it ('' if unknown)."""
+    return f"{span.file}:{span.line}:{span.col}: " if span is not None and span.line else ""
 
 
 def _bind_image(b: Build, image: ProcessImage) -> None:
@@ -195,11 +201,11 @@ def _bind_image(b: Build, image: ProcessImage) -> None:
         t.ins, t.outs = [], []
         for name, _obj, _im in t.instances:
             owner_task[name.lower()] = t
-    for addr, container, key, t, inst in _located(b):
+    for addr, container, key, t, inst, where in _located(b):
         try:
             bd = Binding(addr, container, key, t, image)
         except AddressError as e:
-            raise PLCStartError(f"{addr}: {e}") from None
+            raise PLCStartError(f"{where}{e}") from None
         b.bindings.setdefault(norm_addr(addr), []).append(bd)
         b.binding_of[(id(container), key)] = bd
         targets = [owner_task[inst]] if inst in owner_task else b.tasks

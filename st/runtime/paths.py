@@ -13,10 +13,10 @@ from collections.abc import Iterator
 from typing import Any, Protocol
 
 from ..model import types as T
+from ..model.addresses import canonical
 from .helpers import _setbit
 
 _PATH_TOKEN = re.compile(r"\s*(?:([A-Za-z_][A-Za-z0-9_]*)|\.([A-Za-z_][A-Za-z0-9_]*|[0-9]+)|\[([^\]]*)\])")
-_ADDR = re.compile(r"%([IQM])([XBWDL]?)([0-9]+(?:\.[0-9]+)*)$", re.I)
 
 
 class Program(Protocol):
@@ -153,10 +153,6 @@ def tokens(path: str) -> Iterator[tuple[str, str]]:
 
 
 def norm_addr(addr: str) -> str:
-    """'%qx0.1' → '%QX0.1', '%I0.0' → '%IX0.0': the key of the bindings table."""
-    a = addr.strip().upper()
-    m = _ADDR.match(a)
-    if not m:
-        return a
-    size = m.group(2) or "X"
-    return f"%{m.group(1)}{size}{m.group(3)}"
+    """'%qx0.1' → '%QX0.1', '%I0.0' → '%IX0.0', '%QX1' → '%QX1.0': the key of the bindings table
+    (the compiler's spelling of a cell, st.model.addresses.canonical)."""
+    return canonical(addr)
