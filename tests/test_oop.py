@@ -1125,3 +1125,37 @@ END_PROGRAM
         "REF(__NEW)",
     ]
     assert plc.variables()["main.r1"] == "REF(main.m[2, 1])"
+
+
+def test_a_method_var_inst_bound_by_ref_or_addressed_stays_in_the_instance():
+    """struckig's Otg.Calculate: `p REF= _profiles[dof]` with p and dof a method's VAR_INST (they were
+    boxed as locals that did not exist: a NameError fault)."""
+    src = """
+TYPE Prof : STRUCT p : ARRAY[0..2] OF LREAL; END_STRUCT END_TYPE
+FUNCTION_BLOCK Fb
+VAR profs : ARRAY[0..1] OF Prof; total : LREAL; seen : INT; END_VAR
+METHOD Calc
+VAR_INST
+  dof : INT;
+  p : REFERENCE TO Prof;
+  q : POINTER TO INT;
+  k : INT := 5;
+END_VAR
+FOR dof := 0 TO 1 DO
+  p REF= profs[dof];
+  p.p[2] := dof + 1.5;
+  total := total + p.p[2];
+END_FOR
+q := ADR(k);
+q^ := q^ + 1;
+seen := k;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR f : Fb; END_VAR
+f.Calc();
+f.Calc();
+END_PROGRAM
+"""
+    plc = run(src, dialect="twincat")
+    assert plc["main.f.total"] == 8.0 and plc["main.f.profs"][1] == {"p": [0.0, 0.0, 2.5]} and plc["main.f.seen"] == 7

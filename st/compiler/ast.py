@@ -82,6 +82,9 @@ class Arg(Syntax):
     value: Expr
     output: bool = False  # name => variable
     negated: bool = False  # NOT name => variable
+    # the checker: a VAR_IN_OUT CONSTANT's argument that is no variable (a literal, an expression,
+    # a constant), passed through a temporary (CODESYS)
+    temporary: bool = False
 
 
 @dataclass(slots=True, eq=False)
@@ -229,6 +232,18 @@ class While(Stmt):
 class Repeat(Stmt):
     body: list[Stmt]
     cond: Expr
+
+
+@dataclass(slots=True, eq=False)
+class Try(Stmt):
+    """`__TRY body __CATCH(var) handler __FINALLY final __ENDTRY` (CODESYS, TwinCAT): a fault in the
+    body that a __CATCH handles ends the body, gives `var` its __SYSTEM.ExceptionCode and runs the
+    handler; the final statements run in every case. No __CATCH: None; no __FINALLY: None."""
+
+    body: list[Stmt]
+    catch_var: Expr | None = None
+    handler: list[Stmt] | None = None
+    final: list[Stmt] | None = None
 
 
 @dataclass(slots=True, eq=False)

@@ -11,9 +11,10 @@ from typing import cast
 from ...diagnostics import Code
 from ...model import types as T
 from .. import ast as A
-from .common import _SECTIONS_PARAM, Scope, _satisfies, same_type, take_address
+from .common import _SECTIONS_PARAM, Scope, _satisfies, names_constant, same_type, take_address
+from .expressions import _null_at, _zero_pointer
 from .part import Part
-from .rules import reference_binding
+from .rules import dialect_features, reference_binding
 from .targets import Binding
 
 _VARIABLE = (A.Name, A.Field, A.Index, A.Bit, A.Deref, A.Direct)  # what an output or in-out argument may be
@@ -101,6 +102,8 @@ class _Binder:
         elif p.any_input:
             self._any_input(a, p)
         else:
+            if _zero_pointer(self.ctx, a.value, p.type):
+                a.value = _null_at(a.value)  # a literal 0 for a POINTER (CODESYS): NULL, as in `p := 0`
             vt = self.part.exprs.expr(a.value, self.scope, p.type)
             self.part.stmts.assignable(a.value, vt, p.type, a.value.span, "pass")
 
@@ -114,9 +117,15 @@ class _Binder:
             self.part.stmts.assignable(None, pt, vt, a.value.span, "assign output")
 
     def _in_out(self, a: A.Arg, p: T.VarSym) -> None:
+        if p.constant and self.ctx.feature_quiet("vendor") and not self._storage(a.value):
+            self._in_out_temporary(a, p)
+            return
         if not isinstance(a.value, _VARIABLE):
+            hint = ""
+            if p.constant:  # iec, openplc
+                hint = f"{dialect_features.presets_with('vendor')} pass an expression to a VAR_IN_OUT CONSTANT"
             self.part.err(
-                Code.NOT_A_VARIABLE, a.value.span, f"VAR_IN_OUT '{p.name}' needs a variable, not an expression"
+                Code.NOT_A_VARIABLE, a.value.span, f"VAR_IN_OUT '{p.name}' needs a variable, not an expression", hint
             )
             return
         vt = self.part.stmts.lvalue(a.value, self.scope)
@@ -128,6 +137,20 @@ class _Binder:
             and not (isinstance(T.base_of(vt), T.StringType) and isinstance(T.base_of(p.type), T.StringType))
         ):
             self.part.err(Code.TYPE_MISMATCH, a.value.span, f"VAR_IN_OUT '{p.name}' is {p.type}; {vt} cannot be passed")
+
+    def _storage(self, e: A.Expr) -> bool:
+        """Is `e` a variable's storage an in-out can refer to (not an expression, a bit of a
+        variable or a CONSTANT)?"""
+        if not isinstance(e, _VARIABLE) or isinstance(e, A.Bit):
+            return False
+        return not names_constant(self.part, e, self.scope)
+
+    def _in_out_temporary(self, a: A.Arg, p: T.VarSym) -> None:
+        """A literal, an expression or a constant for a VAR_IN_OUT CONSTANT (CODESYS, TwinCAT: the
+        callee only reads it): checked as an input's value, passed through a temporary."""
+        vt = self.part.exprs.expr(a.value, self.scope, p.type)
+        self.part.stmts.assignable(a.value, vt, p.type, a.value.span, "pass")
+        a.temporary = True
 
     def _reference_input(self, a: A.Arg, p: T.VarSym) -> None:
         want = cast(T.RefType, T.unalias(p.type)).target

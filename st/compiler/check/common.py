@@ -110,6 +110,19 @@ def take_address(e) -> None:
         root.sym.address_taken = True
 
 
+def names_constant(part, e, scope: Scope) -> bool:
+    """Does the variable path `e` (x, x.f, x[i], GVL.x), not typed yet, name a CONSTANT or a part
+    of one? (`part`: the checker's Part, for its look-ups.)"""
+    root = e
+    while isinstance(root, (A.Field, A.Index)):
+        if isinstance(root, A.Field) and isinstance(root.base, A.Name) and part.exprs.names_gvl(root.base, scope):
+            g = part.ctx.gvls[root.base.name.lower()].get(root.name.lower())  # GVL.x
+            return isinstance(g, T.VarSym) and g.constant
+        root = root.base
+    sym = part.exprs.lookup(root.name.lower(), scope) if isinstance(root, A.Name) else None
+    return isinstance(sym, T.VarSym) and (sym.global_ref or sym).constant
+
+
 def method_of(fb, key: str):
     """The METHOD `key` of a function block (None when it has none by that name)."""
     return fb.methods.get(key) if fb is not None else None
@@ -126,6 +139,8 @@ def _satisfies(t: T.Type, constraint: str) -> bool:
     b = T.base_of(t)
     if constraint == "ANY":
         return True
+    if " or " in constraint:  # either family (SUB: "ANY_MAGNITUDE or ANY_DATE")
+        return any(_satisfies(t, c) for c in constraint.split(" or "))
     if constraint == "ANY_POINTER":  # a POINTER, REF_TO or ADR(...) (the vendor memory functions)
         return isinstance(T.unalias(t), T.RefType)
     if isinstance(b, T.LiteralType):

@@ -40,9 +40,10 @@ class CheckContext:
     """Global constants being evaluated before the globals are declared (a cycle yields no value)."""
     deferred_inits: list[tuple[A.VarDecl, T.Type]] = field(default_factory=list)
     """Initial values of globals, checked once every global is declared (they may name each other)."""
-    deferred_pou_inits: list[tuple[A.VarDecl, T.Type, Any]] = field(default_factory=list)
+    deferred_pou_inits: list[tuple[A.VarDecl, T.Type, Any, bool]] = field(default_factory=list)
     """Initial values of POU variables met before the globals are declared (they may name global
-    constants: `h : HANDLE := RTS_INVALID_HANDLE`), checked right after; (declaration, type, scope)."""
+    constants: `h : HANDLE := RTS_INVALID_HANDLE`), checked right after; (declaration, type, scope,
+    whether it may name variables: Declarations.check_initializer)."""
     globals_declared: bool = False
     configs: list[A.Configuration] = field(default_factory=list)
     """CONFIGURATION declarations collected, checked after the bodies."""

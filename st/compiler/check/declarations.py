@@ -9,6 +9,7 @@ from typing import cast
 
 from ...diagnostics import Code
 from ...model import types as T
+from ...model.addresses import AddressError, UnplacedAddress, parse_address
 from ...source import Span
 from .. import ast as A
 from ..names import mangle, qualified
@@ -18,11 +19,12 @@ from .common import (
     _DIRECT_TYPES,
     ANY_FAMILIES,
     CONSTRUCTION,
+    THIS,
     Scope,
     _names_in,
-    image_problem,
     take_address,
 )
+from .expressions import _zero_pointer
 from .part import Part
 from .passes.namespaces import unknown_namespace
 from .rules import (
@@ -48,6 +50,11 @@ _SECTIONS = {
 
 
 class Declarations(Part):
+    _pending_inits: list | None = None
+    """The initial values of the POU whose variables are being declared, checked once all are."""
+    _at_run_time = False
+    """FB_init arguments of __NEW are being checked: any variable of the code may be read."""
+
     # ================================================================ types
     def resolve_named_type(self, key: str, span: Span) -> T.Type | None:
         if key in self.p.types:
@@ -244,9 +251,19 @@ class Declarations(Part):
         self.err(Code.BAD_TYPE, spec.span, "STRUCT is only allowed in a TYPE declaration")
         return T.INT
 
-    def _check_ctor_args(self, init: A.CtorInit, t: T.Type, scope: Scope | None) -> None:
+    def check_ctor_args(self, init: A.CtorInit, t: T.Type, scope: Scope, at_run_time: bool) -> None:
+        """FB_init arguments outside a declaration: `__NEW(FB(a := v))`, where `at_run_time` they
+        may be any expressions of the code around them."""
+        outer, self._at_run_time = self._at_run_time, at_run_time
+        try:
+            self._check_ctor_args(init, t, scope, True)
+        finally:
+            self._at_run_time = outer
+
+    def _check_ctor_args(self, init: A.CtorInit, t: T.Type, scope: Scope | None, variables: bool = False) -> None:
         """`inst : FB(a := 1)`: the arguments go to the inputs of FB's FB_init (CODESYS)."""
-        self.feature("vendor", init.span, "FB_init arguments in a declaration")
+        if not self._at_run_time:
+            self.feature("vendor", init.span, "FB_init arguments in a declaration")
         if not initializers.check_constructed(self.ctx, init, t):
             return
         bt = cast(T.POUType, T.unalias(t))
@@ -281,17 +298,17 @@ class Declarations(Part):
             if name.lower() in seen:
                 self.err(Code.BAD_PARAMETER, sp, f"'{name}' is given twice")
             seen.add(name.lower())
-            self.check_initializer(val, p.type, scope)
+            self.check_initializer(val, p.type, scope, variables)
         if init.inner is not None:
-            self.check_initializer(init.inner, t, scope)
+            self.check_initializer(init.inner, t, scope, variables)
 
-    def _bound_initializer(self, init: A.Expr, t: T.Type, bt: T.Type, scope: Scope | None) -> bool:
+    def _bound_initializer(self, init: A.Expr, t: T.Type, bt: T.Type, scope: Scope | None, variables: bool) -> bool:
         """An initial value that names another variable of the instance (or a global) rather than
         a value (CODESYS): `p : POINTER TO INT := ADR(x)`, `r : REF_TO INT := REF(x)`, an interface
         variable `itf : I_X := inst`, a REFERENCE TO input of FB_init `fs : FB_S(other := a)`.
         Only in a function block or program, where the variable outlives the initial value; the
-        instance or interface must be declared above (initial values are set in declaration order).
-        Returns False when `init` is not such a value (the constant rule applies)."""
+        instance or interface must be declared above (initial values are set in declaration order)
+        unless `variables` (CODESYS: rules/initialization_order.py orders them). Returns False when `init` is not such a value (the constant rule applies)."""
         if scope is None or scope.pou is None or scope.pou.pou_kind not in ("FUNCTION_BLOCK", "PROGRAM"):
             return False
         is_ref = T.is_reference(t)
@@ -309,7 +326,7 @@ class Declarations(Part):
         if not isinstance(root, A.Name):
             return False
         sym = self.exprs.lookup(root.name.lower(), scope)
-        if isinstance(sym, T.VarSym) and sym.owner is scope.pou and _below(sym.span, init.span):
+        if isinstance(sym, T.VarSym) and sym.owner is scope.pou and _below(sym.span, init.span) and not variables:
             sym = None  # declared below the variable it initialises: not set yet
         if sym is None and _declared_in(scope.pou, root.name):
             self.err(
@@ -332,7 +349,12 @@ class Declarations(Part):
                 self.stmts.assignable(init, vt, t, init.span)
         take_address(target)
         for n in _names_in([target]):  # indices must still be constants
-            if n is not root and isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
+            if (
+                n is not root
+                and isinstance(n.sym, T.VarSym)
+                and not (n.sym.global_ref or n.sym).constant
+                and not (variables and _readable_at_init(n.sym, scope))
+            ):
                 self.err(
                     Code.NOT_CONSTANT,
                     n.span,
@@ -347,6 +369,8 @@ class Declarations(Part):
         pou.resolved = True
         d = decl_of(pou)
         scope = Scope(pou, pou.vars)
+        if d.kind == "FUNCTION_BLOCK":
+            scope.fb = pou  # THIS in an initial value (`fbState : FB_Off(THIS);`, CODESYS)
         if d.kind == "INTERFACE":
             return self._resolve_itf(pou)
         if d.kind == "FUNCTION":
@@ -665,10 +689,13 @@ class Declarations(Part):
         if owner is None:
             self.ctx.deferred_inits.append((decl, t))
             return
-        if self.ctx.globals_declared:
-            self.check_initializer(decl.init, t, scope)
+        variables = "CONSTANT" not in block.qualifiers and _evaluated_in_place(kind, owner)
+        if not self.ctx.globals_declared:
+            self.ctx.deferred_pou_inits.append((decl, t, scope, variables))
+        elif self._pending_inits is not None:  # once every variable of the POU is declared
+            self._pending_inits.append((decl, t, scope, variables))
         else:
-            self.ctx.deferred_pou_inits.append((decl, t, scope))
+            self.check_initializer(decl.init, t, scope, variables)
         if "CONSTANT" in block.qualifiers:
             cv = self.consts.value(decl.init, scope) if isinstance(decl.init, A.Expr) else None
             if cv is not None:
@@ -681,8 +708,14 @@ class Declarations(Part):
         `table` keeps the order of declaration."""
         before = list(table)
         constants_first = sorted(blocks, key=lambda b: 0 if b.kind == "VAR" and "CONSTANT" in b.qualifiers else 1)
-        for block in constants_first:
-            self.declare_block(block, table, scope, owner)
+        outer, self._pending_inits = self._pending_inits, []
+        try:
+            for block in constants_first:
+                self.declare_block(block, table, scope, owner)
+        finally:
+            pending, self._pending_inits = self._pending_inits, outer
+        for decl, t, sc, variables in pending:  # an initial value may name a variable declared below it
+            self.check_initializer(decl.init, t, sc, variables)
         order = before + [n.lower() for b in blocks for d in b.decls for n, _ in d.names]
         declared = {k: table[k] for k in order if k in table}
         declared.update(table)
@@ -709,6 +742,11 @@ class Declarations(Part):
         return spec.name.upper()
 
     def check_location(self, loc: str, t: T.Type, span: Span) -> None:
+        """A variable of type `t` declared AT `loc` (at `span`): the address is well formed, in the
+        process image (st/model/addresses.py) and as wide as the type. A hierarchical address
+        (`%QX0.4.2`, `%IW2.5`) that reaches here (not read the OpenPLC way: openplc_address) is
+        accepted where the preset's compiler accepts it (iec, codesys, twincat: its place is the I/O
+        configuration's; `st run` refuses it, located), refused under openplc and the default."""
         m = _DIRECT.fullmatch(loc.upper())
         if not m:
             self.err(Code.MALFORMED_LITERAL, span, f"malformed address '{loc}'")
@@ -716,25 +754,33 @@ class Declarations(Part):
         size = m.group(2)
         if m.group(3) == "*":
             return
-        problem = image_problem(loc)
-        if problem:
-            self.err(Code.MALFORMED_LITERAL, span, problem)
+        try:
+            parse_address(loc)
+        except UnplacedAddress as e:
+            if self.ctx.dialect is None or self.ctx.dialect.dotted_word_addresses:
+                self.err(Code.MALFORMED_LITERAL, span, str(e))
+                return
+        except AddressError as e:
+            self.err(Code.MALFORMED_LITERAL, span, str(e))
             return
         located_type.check_located_type(self.ctx, loc, t, size, _DIRECT_TYPES[size], span)
 
     # ================================================================ initializers
-    def check_initializer(self, init, t: T.Type, scope: Scope | None) -> None:
+    def check_initializer(self, init, t: T.Type, scope: Scope | None, variables: bool = False) -> None:
+        """The initial value `init` of a `t`; `variables`: it is evaluated where the variables it may
+        name have their values (a block's instance variable, a FUNCTION's or METHOD's local), so
+        CODESYS lets it name them (rules/initialization_order.py orders them)."""
         if isinstance(init, A.CtorInit):
-            return self._check_ctor_args(init, t, scope)
+            return self._check_ctor_args(init, t, scope, variables)
         if isinstance(init, A.ArrayInit):
-            return self._array_initializer(init, t, scope)
+            return self._array_initializer(init, t, scope, variables)
         if isinstance(init, A.StructInit):
-            return self._struct_initializer(init, t, scope)
+            return self._struct_initializer(init, t, scope, variables)
         if isinstance(init, A.Expr):
-            self._value_initializer(init, t, scope)
+            self._value_initializer(init, t, scope, variables)
         return None
 
-    def _array_initializer(self, init: A.ArrayInit, t: T.Type, scope: Scope | None) -> None:
+    def _array_initializer(self, init: A.ArrayInit, t: T.Type, scope: Scope | None, variables: bool) -> None:
         if not initializers.check_array_form(self.ctx, init, t):
             return
         bt = cast(T.ArrayType, T.unalias(t))
@@ -742,14 +788,14 @@ class Declarations(Part):
         for item in init.items:
             if isinstance(item, A.RepeatInit):
                 for sub in item.items:
-                    self.check_initializer(sub, bt.element, scope)
+                    self.check_initializer(sub, bt.element, scope, variables)
                 count += item.count * max(1, len(item.items))
             else:
-                self.check_initializer(item, bt.element, scope)
+                self.check_initializer(item, bt.element, scope, variables)
                 count += 1
         array_bounds.check_initializer_count(self.ctx, init, count, bt.size)
 
-    def _struct_initializer(self, init: A.StructInit, t: T.Type, scope: Scope | None) -> None:
+    def _struct_initializer(self, init: A.StructInit, t: T.Type, scope: Scope | None, variables: bool) -> None:
         bt = T.unalias(t)
         fields: Mapping[str, T.Member | T.VarSym]
         if isinstance(bt, T.StructType):
@@ -765,16 +811,26 @@ class Declarations(Part):
             if m is None:
                 self.err(Code.BAD_ACCESS, sp, f"'{t}' has no {what} '{name}'")
                 continue
-            self.check_initializer(val, m.type, scope)
+            self.check_initializer(val, m.type, scope, variables)
 
-    def _value_initializer(self, init: A.Expr, t: T.Type, scope: Scope | None) -> None:
+    def _value_initializer(self, init: A.Expr, t: T.Type, scope: Scope | None, variables: bool) -> None:
         if not initializers.check_single_value(self.ctx, init, t):
             return
-        if self._bound_initializer(init, t, T.unalias(t), scope):
+        variables = variables and self.ctx.feature_quiet("vendor")
+        if self._bound_initializer(init, t, T.unalias(t), scope, variables):
             return
+        if _zero_pointer(self.ctx, init, t):
+            return  # a literal 0 for a POINTER, a REF_TO or an interface (CODESYS): NULL
         st = self.exprs.expr(init, scope or Scope(None, {}), t)
         for n in _names_in([init]):
-            if isinstance(n.sym, T.VarSym) and not (n.sym.global_ref or n.sym).constant:
+            if n.sym is THIS and not variables:
+                self.err(Code.NOT_CONSTANT, n.span, "an initial value must be a constant; THIS is the instance")
+                return
+            if (
+                isinstance(n.sym, T.VarSym)
+                and not (n.sym.global_ref or n.sym).constant
+                and not (variables and (self._at_run_time or _readable_at_init(n.sym, scope)))
+            ):
                 self.err(
                     Code.NOT_CONSTANT,
                     n.span,
@@ -794,6 +850,34 @@ _TYPE_SPECS: dict[type, Callable[..., T.Type]] = {
     A.EnumType: Declarations._enum_type,
     A.StructType: Declarations._struct_type,
 }
+
+
+def _evaluated_in_place(kind: str, owner) -> bool:
+    """Is the initial value of a variable of section `kind` of `owner` evaluated where the variables
+    it may name have values: an instance variable of a block or program (when the instance is
+    created), a local of a FUNCTION or METHOD (at every call)?"""
+    if owner is None or getattr(owner, "owner_fb", None) is not None or owner.pou_kind == "FUNCTION":
+        return owner is not None and kind in ("VAR", "VAR_TEMP")
+    return owner.pou_kind in ("FUNCTION_BLOCK", "PROGRAM") and kind in ("VAR", "VAR_INPUT", "VAR_OUTPUT")
+
+
+def _readable_at_init(sym: T.VarSym, scope: Scope | None) -> bool:
+    """May an initial value in `scope` read the variable `sym` (CODESYS)? A global; in a block or
+    program, its instance variables (not a VAR_TEMP or VAR_IN_OUT, unset then); in a FUNCTION or
+    METHOD, its own parameters and locals and a method's instance variables."""
+    if sym.is_global or sym.section == "VAR_EXTERNAL":
+        return True
+    if scope is None or scope.pou is None:
+        return False
+    inst = scope.pou.owner_fb
+    if scope.pou.pou_kind == "FUNCTION" and sym.owner is scope.pou:
+        return True
+    block = inst if inst is not None else scope.pou if scope.pou.pou_kind != "FUNCTION" else None
+    return (
+        block is not None
+        and any(v is sym for v in block.vars.values())
+        and sym.section not in ("VAR_TEMP", "VAR_IN_OUT")
+    )
 
 
 def _below(a: Span | None, b: Span | None) -> bool:

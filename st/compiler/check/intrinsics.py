@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from ...diagnostics import Code
 from ...model import types as T
 from .. import ast as A
-from .common import Scope, take_address
+from .common import Scope, names_constant, take_address
 from .part import Part
 from .rules import abstract, call_without_value
 from .targets import BoundCall, DeleteCall, IsValidRefCall, NewCall, QueryItfCall, RefCall, SizeofCall
@@ -34,15 +34,20 @@ class Intrinsic:
 
 def _ref(part: Part, c: A.Call, key: str, scope: Scope, statement: bool) -> T.Type | None:
     """REF(x): a reference to a variable (IEC 61131-3 3rd edition); ADR(x): a POINTER TO it (no
-    arithmetic)."""
+    arithmetic). ADR of a CONSTANT is its address (CODESYS): reading through it gives the
+    constant's value; a write through it changes that memory, not the uses of the constant, which
+    are its value wherever the compiler folds them (as CODESYS's 'Replace constants' does)."""
     if len(c.args) != 1 or c.args[0].name:
         part.err(Code.ARGUMENT_COUNT, c.span, "REF takes exactly one variable")
         return None
     arg = c.args[0].value
-    if not isinstance(arg, (A.Name, A.Field, A.Index)):
+    if not isinstance(arg, (A.Name, A.Field, A.Index, A.Deref)):  # (p^, THIS^: what p points at)
         part.err(Code.NOT_A_VARIABLE, arg.span, "REF needs a variable")
         return None
-    t = part.stmts.lvalue(arg, scope)
+    if key == "adr" and names_constant(part, arg, scope):
+        t = part.exprs.expr(arg, scope)  # read through the pointer, never written as a variable
+    else:
+        t = part.stmts.lvalue(arg, scope)
     take_address(arg)
     if isinstance(arg, A.Name) and isinstance(arg.sym, T.POUType):  # ADR(F) inside F: its result
         arg.sym.result_address_taken = True
@@ -107,16 +112,26 @@ def _bound(part: Part, c: A.Call, key: str, scope: Scope, statement: bool) -> T.
 
 def _new(part: Part, c: A.Call, key: str, scope: Scope, statement: bool) -> T.Type | None:
     """__NEW(type): a POINTER TO a fresh value of that type; __NEW(type, n): to the first of n
-    (NULL if n < 1)."""
+    (NULL if n < 1); __NEW(FB(a := v)): a fresh instance whose FB_init gets these arguments, any
+    expressions, evaluated where __NEW runs (CODESYS)."""
     if not 1 <= len(c.args) <= 2 or any(a.name for a in c.args):
         part.err(Code.ARGUMENT_COUNT, c.span, "__NEW takes a type and an optional count")
         return None
     arg = c.args[0].value
+    ctor, outputs = None, False
+    if isinstance(arg, A.Call) and isinstance(arg.callee, A.Name) and arg.callee.name:  # __NEW(FB(a := 1))
+        ctor = A.CtorInit(arg.span, [(a.name, a.span, a.value) for a in arg.args])
+        outputs = any(a.output for a in arg.args)
+        arg = arg.callee
     t = _named_type(part, arg) if isinstance(arg, A.Name) and arg.name else None
     if t is None or (isinstance(t, T.POUType) and t.pou_kind not in ("FUNCTION_BLOCK",)):
         part.err(Code.BAD_TYPE, arg.span, "__NEW needs a data type or a FUNCTION_BLOCK type")
         return None
     abstract.check_new_instance(part.ctx, t, arg.span)
+    if ctor is not None:
+        if outputs:
+            part.err(Code.BAD_PARAMETER, ctor.span, "FB_init takes inputs only")
+        part.decls.check_ctor_args(ctor, t, scope, at_run_time=True)
     count = c.args[1].value if len(c.args) == 2 else None
     if count is not None:
         if isinstance(t, T.POUType):  # as CODESYS: a count only for data types
@@ -128,7 +143,7 @@ def _new(part: Part, c: A.Call, key: str, scope: Scope, statement: bool) -> T.Ty
         ct = part.exprs.expr(count, scope, T.DINT)
         if ct is not None and not (T.base_of(ct).is_int or T.base_of(ct) is T.LIT_INT):
             part.err(Code.TYPE_MISMATCH, count.span, f"the count of __NEW must be an integer, not {ct}")
-    c.target = NewCall(t, count)
+    c.target = NewCall(t, count, ctor)
     return T.RefType(t, "POINTER")
 
 
@@ -149,13 +164,18 @@ def _delete(part: Part, c: A.Call, key: str, scope: Scope, statement: bool) -> T
 
 
 def _is_valid_ref(part: Part, c: A.Call, key: str, scope: Scope, statement: bool) -> T.Type | None:
-    """__ISVALIDREF(r): is the REFERENCE TO r bound?"""
+    """__ISVALIDREF(r): is the REFERENCE TO r bound? r may be a variable, a block's member
+    (`THIS^.refX`, `inst.refX`: the reference itself, not what it refers to) or a VAR_IN_OUT (bound
+    by a call: always in a FUNCTION or METHOD, once the block was called with it in a block)."""
     if len(c.args) != 1 or c.args[0].name:
         part.err(Code.ARGUMENT_COUNT, c.span, "__ISVALIDREF takes one reference")
         return T.BOOL
     t = part.exprs.expr(c.args[0].value, scope)
     arg = c.args[0].value
-    is_ref = isinstance(arg, A.Name) and isinstance(arg.sym, T.VarSym) and T.is_reference(arg.sym.type)
+    sym = arg.sym if isinstance(arg, (A.Name, A.Field)) else None
+    is_ref = isinstance(sym, T.VarSym) and (
+        T.is_reference(sym.type) or (sym.section == "VAR_IN_OUT" and isinstance(arg, A.Name))
+    )
     if not is_ref and not isinstance(T.unalias(t) if t is not None else None, T.RefType):
         part.err(Code.TYPE_MISMATCH, arg.span, f"__ISVALIDREF needs a reference, not {t}")
         return T.BOOL

@@ -95,10 +95,11 @@ class BoundCall(CallTarget):
 
 @dataclass(frozen=True, eq=False)
 class NewCall(CallTarget):
-    """__NEW(T) or __NEW(T, n) (`count`: n, or None)."""
+    """__NEW(T) or __NEW(T, n) (`count`: n, or None); __NEW(FB(a := v)) (`init`: FB_init's arguments)."""
 
     type: T.Type
     count: A.Expr | None
+    init: A.CtorInit | None = None
 
 
 @dataclass(frozen=True, eq=False)

@@ -20,6 +20,7 @@ from ..check import (
     RefCall,
     SizeofCall,
 )
+from ..check.rules.initialization_order import names_variables
 
 if TYPE_CHECKING:
     from .module import ModuleGen
@@ -34,11 +35,15 @@ BIG_ARRAY = 1 << 16
 class InitGen:
     """Initial values: for declarations (constant initializers and defaults)."""
 
-    def __init__(self, mod: ModuleGen, pou: T.POUType | None = None):
+    def __init__(self, mod: ModuleGen, pou: T.POUType | None = None, gen: ExprGen | None = None):
         self.mod = mod
         self.pou = pou  # a block's or program's constructor: initial values may name its variables
+        # a FUNCTION's or METHOD's code: its locals' initial values may name its variables
+        self.gen = gen
 
-    def initial(self, t: T.Type, init) -> py.expr:
+    def initial(self, t: T.Type, init, construct: bool = True) -> py.expr:
+        """The initial value of a `t` declared with `init`; `construct` False: an instance without
+        its FB_init call (made later: `constructor_call`)."""
         ut = T.unalias(t)
         if init is None and isinstance(t, T.AliasType):
             # the alias's own initializer, else its target's
@@ -47,6 +52,8 @@ class InitGen:
                 if a.init is not None:
                     return self.initial(a.target, a.init)
                 a = a.target
+        if isinstance(init, A.Expr) and self._in_place() and names_variables(init):
+            return self._bound(init, t)  # a value computed from variables, a reference, an instance
         if isinstance(ut, T.ArrayType):
             return self.array(ut, init)
         obj: py.expr
@@ -56,8 +63,6 @@ class InitGen:
                 return self._with_fields(obj, init, lambda n: ut.members.get(n.lower()))
             return obj
         if isinstance(ut, T.POUType) and ut.pou_kind == "INTERFACE":
-            if init is not None and self.pou is not None and _names_a_variable(init):
-                return self._bound(init, t)  # itf : I_X := inst
             return _const(None)  # an interface variable: no instance yet (NULL)
         if isinstance(ut, T.POUType):
             ctor = init if isinstance(init, A.CtorInit) else None
@@ -66,30 +71,44 @@ class InitGen:
             obj = _call(ut.pyname)
             if isinstance(init, A.StructInit):
                 obj = self._with_fields(obj, init, lambda n: _member_of_pou(ut, n))
-            block = self.mod.blocks.get(ut)
-            if block is not None and block.constructor is not None:  # FB_init runs once the values are set
-                keys: list[py.expr | None] = []
-                values: list[py.expr] = []
-                if ctor is not None:
-                    inputs = block.constructor.inputs
-                    for name, _sp, val in ctor.args:
-                        keys.append(_const(name.lower()))
-                        values.append(self.initial(inputs[name.lower()].type, val))
-                obj = _call(_attr(obj, "_ctor"), py.Dict(keys, values))
+            if construct:
+                obj = self.constructor_call(obj, ut, ctor)
             return obj
-        if init is None:
-            return _const(default_value(t))
-        if self.pou is not None and _names_a_variable(init):
-            return self._bound(init, t)
+        if init is None or _zero_link(init, ut):
+            return _const(default_value(t))  # (a POINTER's, a REF_TO's: NULL, as a literal 0 there)
         return ExprGen.constant_expr(self.mod, init, t)
 
+    def constructor_call(self, obj: py.expr, ut: T.POUType, ctor: A.CtorInit | None) -> py.expr:
+        """`obj._ctor({...})` with the declaration's FB_init arguments where the block has an FB_init
+        chain (it runs once the values are set), else `obj`."""
+        block = self.mod.blocks.get(ut)
+        if block is None or block.constructor is None:
+            return obj
+        keys: list[py.expr | None] = []
+        values: list[py.expr] = []
+        if ctor is not None:
+            inputs = block.constructor.inputs
+            for name, _sp, val in ctor.args:
+                keys.append(_const(name.lower()))
+                values.append(self.initial(inputs[name.lower()].type, val))
+        return _call(_attr(obj, "_ctor"), py.Dict(keys, values))
+
+    def _in_place(self) -> bool:
+        """Are the initial values made where the variables they may name exist (a block's
+        constructor, a function's or method's code)?"""
+        return self.pou is not None or self.gen is not None
+
     def _bound(self, init, t: T.Type) -> py.expr:
-        """An initial value that is another variable of the instance: a reference to it, its
-        address, or (an interface, a block's input) its value; see the checker's _bound_initializer."""
-        g = ExprGen(self.mod, self.pou)
+        """An initial value that names variables: a reference to one, its address, an instance (an
+        interface's value), or a value computed from them (a copy of an array, a structure or an
+        instance); see the checker's _bound_initializer and rules/initialization_order.py."""
+        g = self.gen if self.gen is not None else ExprGen(self.mod, self.pou)
         if T.is_reference(t) and not isinstance(init, A.Call):
             return g.ref_to(init)
-        return g.coerce(g.expr(init), init, t)
+        value = g.coerce(g.expr(init), init, t)
+        if T.unalias(t).is_aggregate:
+            value = _call("_copy", value)
+        return value
 
     def _with_fields(self, obj: py.expr, init: A.StructInit, lookup) -> py.expr:
         # _init_fields(obj, (('name', value), ...)) returns obj
@@ -143,17 +162,10 @@ class InitGen:
         return lst
 
 
-def _names_a_variable(e) -> bool:
-    stack = [e]
-    while stack:
-        x = stack.pop()
-        if isinstance(x, A.Name) and isinstance(x.sym, T.VarSym) and not (x.sym.global_ref or x.sym).constant:
-            return True
-        if isinstance(x, A.Expr):
-            stack.extend(v for k in type(x).__slots__ if isinstance(v := getattr(x, k, None), A.Expr))
-            if isinstance(x, A.Call):
-                stack.extend(a.value for a in x.args)
-    return False
+def _zero_link(init, ut: T.Type) -> bool:
+    """The literal 0 as a POINTER's or REF_TO's initial value: NULL (the checker allows it where
+    the preset does, as CODESYS)."""
+    return isinstance(ut, T.RefType) and isinstance(init, A.Literal) and init.kind == "int" and init.value == 0
 
 
 def _member_of_pou(pou: T.POUType, name: str):
@@ -720,20 +732,15 @@ class ExprGen:
             ):  # __NEW(T, n): n fresh values, a pointer to the first
                 make = py.Lambda(_args([]), InitGen(self.mod).initial(t, None))
                 return _call("_new_items", make, self.expr(count), _const(_wrap_spec(t)))
-            case NewCall(type=t):  # a one-element box the pointer refers to
+            case NewCall(type=t, init=init):  # a one-element box the pointer refers to
                 return _call(
                     "_ItemRef",
-                    py.List([InitGen(self.mod).initial(t, None)], py.Load()),
+                    py.List([InitGen(self.mod, gen=self).initial(t, init)], py.Load()),
                     _const(0),
                     _const(_wrap_spec(t)),
                 )
             case IsValidRefCall(arg=a):
-                raw = (
-                    self.var_load(a.sym)
-                    if isinstance(a, A.Name) and isinstance(a.sym, T.VarSym) and T.is_reference(a.sym.type)
-                    else self.expr(a)
-                )
-                return py.Compare(raw, [py.IsNot()], [_const(None)])
+                return self.is_valid_ref(a)
             case QueryItfCall(src=src, dst=dst, itf=itf):
                 return _call("_query_itf", self.expr(src), _const(itf.name.lower()), self.ref_to(dst))
             case None:
@@ -812,11 +819,12 @@ class ExprGen:
                         v = _call("_copy", v)
                     args.append(self.coerce(v, a.value, p.type))
             elif p.section == "VAR_IN_OUT":
-                args.append(
-                    self.ref_to(a.value)
-                    if not T.unalias(p.type).is_aggregate
-                    else self.conformant_arg(self.expr(a.value), a.value.ty, p.type)
-                )
+                if a.temporary and not T.unalias(p.type).is_aggregate:  # VAR_IN_OUT CONSTANT := expression
+                    args.append(self.temporary_ref(a.value, p.type))
+                elif not T.unalias(p.type).is_aggregate:
+                    args.append(self.ref_to(a.value))
+                else:
+                    args.append(self.conformant_arg(self.expr(a.value), a.value.ty, p.type))
             else:  # VAR_OUTPUT
                 if a is None:
                     args.append(_const(None))
@@ -845,6 +853,29 @@ class ExprGen:
         return _call(
             "_any_value", _name(st.pyname), ref, _const(T.byte_layout(t)), _const(T.type_class(t)), _const(names)
         )
+
+    def is_valid_ref(self, a) -> py.expr:
+        """__ISVALIDREF(a): the reference a REFERENCE TO variable or member holds (not what it refers
+        to) is not NULL; a FUNCTION's or METHOD's VAR_IN_OUT is always bound (every call gives it),
+        a block's is once a call gave it (it starts unbound: pous.py)."""
+        sym = a.sym if isinstance(a, (A.Name, A.Field)) else None
+        if isinstance(sym, T.VarSym) and sym.section == "VAR_IN_OUT" and not T.is_reference(sym.type):
+            if not isinstance(sym.owner, T.POUType) or sym.owner.pou_kind == "FUNCTION":
+                return _const(True)
+            raw = self.var_load(sym)
+        elif isinstance(a, A.Name) and isinstance(sym, T.VarSym) and T.is_reference(sym.type):
+            raw = self.var_load(sym)
+        elif isinstance(a, A.Field) and isinstance(sym, T.VarSym) and T.is_reference(sym.type):
+            raw = _attr(self.expr(a.base), sym.pyname)  # the reference inst.r holds
+        else:
+            raw = self.expr(a)
+        return py.Compare(raw, [py.IsNot()], [_const(None)])
+
+    def temporary_ref(self, e, t: T.Type) -> py.expr:
+        """A reference to a fresh temporary holding the value of `e` as a `t` (a VAR_IN_OUT
+        CONSTANT's literal or expression)."""
+        value = self.coerce(self.expr(e), e, t)
+        return _call("_ItemRef", py.List([value], py.Load()), _const(0), _const(_wrap_spec(t)))
 
     def ref_to(self, e, negated: bool = False) -> py.expr:
         """A reference object for an output or in-out argument, or REF(x) (runtime.helpers)."""

@@ -23,6 +23,8 @@ class ModuleGen:
         self.p = program.project
         self.blocks = program.blocks
         self.writes = program.writes
+        self.initial_orders = program.initial_orders
+        self.unbound_in_outs = program.unbound_in_outs
         self.sink = sink
         self.tmp = 0
         self.coverage = coverage

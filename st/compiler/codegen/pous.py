@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import ast as py
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from ...model import types as T
 from .. import ast as A
+from ..check.rules.initialization_order import Step
 from ..lower.fb_init import Constructor
 from ..lower.walk import walk_stmts
 from ..names import mangle
@@ -50,7 +51,10 @@ class FuncGen(StmtGen):
         pou = self.pou
         d = decl_of(pou)
         by_ref = _by_ref_names(d.body)
-        self.boxed = {v for v in by_ref if v.owner is pou and not T.unalias(v.type).is_aggregate}
+        # (a method's VAR_INST lives in the instance, not in a local: it is reached as an attribute)
+        self.boxed = {
+            v for v in by_ref if v.owner is pou and v.section != "VAR_INST" and not T.unalias(v.type).is_aggregate
+        }
         self.boxed |= {
             v
             for v in pou.vars.values()
@@ -108,9 +112,22 @@ class FuncGen(StmtGen):
         locals_init = []
         if pou.return_type is not None:
             locals_init.append(self.result_init(InitGen(self.mod).initial(pou.return_type, None)))
-        for v in pou.vars.values():
-            if v.section in ("VAR", "VAR_TEMP"):
-                locals_init.append(_set_lines(box(v, InitGen(self.mod).initial(v.type, v.init)), v.span.line))
+        steps = self.mod.initial_orders.get(pou)
+        if steps is None:
+            for v in pou.vars.values():
+                if v.section in ("VAR", "VAR_TEMP"):
+                    locals_init.append(_set_lines(box(v, InitGen(self.mod).initial(v.type, v.init)), v.span.line))
+        else:  # initial values that name the function's variables (lower/initial_values.py)
+            init = InitGen(self.mod, gen=self)
+            for step in steps:
+                v = step.var
+                if step.part == "construct":
+                    ut, ctor = cast(T.POUType, T.unalias(v.type)), cast(A.CtorInit, v.init)
+                    made = init.constructor_call(self.var_load(v), ut, ctor)
+                    locals_init.append(_set_lines(py.Expr(made), v.span.line))
+                else:
+                    value = init.initial(v.type, v.init, construct=step.part == "all")
+                    locals_init.append(_set_lines(box(v, value), v.span.line))
         body = self.stmts(d.body)
         ret = py.Return(self.result_load() if pou.return_type is not None else None)
         end_line = d.end_span.line if d.end_span else d.span.line
@@ -190,12 +207,18 @@ class BodyGen(StmtGen):
         edges = [v for v in pou.vars.values() if v.edge]
         slots += ["_e_" + v.pyname for v in edges]
         init_body: list[py.stmt] = []
-        for v in block.variables:
-            init_body.append(
-                _set_lines(
-                    py.Assign([_attr(_name("self"), v.pyname, py.Store())], init.initial(v.type, v.init)), v.span.line
-                )
-            )
+        steps = self.mod.initial_orders.get(pou)
+        for step in steps if steps is not None else [Step(v) for v in block.variables]:
+            v = step.var
+            if step.part == "construct":  # FB_init with arguments that name variables (lower/initial_values.py)
+                ut, ctor = cast(T.POUType, T.unalias(v.type)), cast(A.CtorInit, v.init)
+                made = init.constructor_call(_attr(_name("self"), v.pyname), ut, ctor)
+                init_body.append(_set_lines(py.Expr(made), v.span.line))
+                continue
+            value = init.initial(v.type, v.init, construct=step.part == "all")
+            if v in self.mod.unbound_in_outs:
+                value = _const(None)  # a VAR_IN_OUT that __ISVALIDREF tests: unbound until a call gives it
+            init_body.append(_set_lines(py.Assign([_attr(_name("self"), v.pyname, py.Store())], value), v.span.line))
         for v in edges:
             init_body.append(
                 _set_lines(

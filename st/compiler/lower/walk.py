@@ -56,6 +56,12 @@ def inner_bodies(s) -> Iterator[list]:
             yield s.orelse
     elif isinstance(s, (A.For, A.CountedFor, A.While, A.Repeat)):
         yield s.body
+    elif isinstance(s, A.Try):
+        yield s.body
+        if s.handler is not None:
+            yield s.handler
+        if s.final is not None:
+            yield s.final
 
 
 def walk_stmts(body: list) -> Iterator:
@@ -116,8 +122,8 @@ def rewrite_exprs(body: list, fn: Callable) -> None:
         elif isinstance(v, dict):
             for k in v:
                 v[k] = value(v[k])
-        elif isinstance(v, (A.Stmt, A.Arg, A.CaseBranch)):
-            fields(v)
+        elif isinstance(v, (A.Stmt, A.Arg, A.CaseBranch, A.CtorInit, A.StructInit, A.ArrayInit, A.RepeatInit)):
+            fields(v)  # (initializers: FB_init arguments of __NEW, initial values that name variables)
         elif isinstance(v, CallTarget):  # frozen: a target whose expressions changed is made anew
             changed = {}
             for f in dataclass_fields(v):

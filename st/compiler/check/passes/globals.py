@@ -32,8 +32,8 @@ def declare_globals(sem: Semantics) -> None:
     for decl, t in ctx.deferred_inits:
         sem.decls.check_initializer(decl.init, t, None)
     ctx.deferred_inits = []
-    for decl, t, scope in ctx.deferred_pou_inits:
-        sem.decls.check_initializer(decl.init, t, scope)
+    for decl, t, scope, variables in ctx.deferred_pou_inits:
+        sem.decls.check_initializer(decl.init, t, scope, variables)
     ctx.deferred_pou_inits = []
     _bind_externals(ctx)
 

@@ -40,3 +40,9 @@ def check_feature(ctx: CheckContext, kind: str, span: Span, what: str) -> bool:
         f"choose --dialect {' or '.join(others)} (or a {{dialect '…'}} pragma) to use it",
     )
     return False
+
+
+def presets_with(kind: str) -> str:
+    """The presets that allow the constructs of `kind`, for a hint: 'codesys and twincat'."""
+    names = [n for n, p in PRESETS.items() if (p.oop if kind == "oop" else p.vendor_extensions)]
+    return " and ".join(names)

@@ -1,0 +1,468 @@
+"""Bindings TwinCAT and CODESYS accept and IEC does not (issue 34): a literal or an expression for a
+VAR_IN_OUT CONSTANT, initial values and FB_init arguments that name variables (in the order their
+values need), ADR of a VAR CONSTANT, a literal 0 for a POINTER, __ISVALIDREF of a REFERENCE TO
+member and of a VAR_IN_OUT, __NEW with FB_init arguments. Each runs with exact values under the
+codesys and twincat presets and the default, and is refused where iec (or openplc) refuses it."""
+
+from __future__ import annotations
+
+import pytest
+
+from helpers import errors, run
+
+VENDOR = [None, "codesys", "twincat"]
+
+# ---------------------------------------------------------------- VAR_IN_OUT CONSTANT
+
+IN_OUT_CONSTANT = """
+TYPE Pair : STRUCT a : INT; b : INT; END_STRUCT END_TYPE
+FUNCTION_BLOCK Otg
+  VAR _msg : STRING; _id : INT; calls : INT; END_VAR
+  METHOD PROTECTED AbortErrorId
+    VAR_INPUT errorId : INT; END_VAR
+    VAR_IN_OUT CONSTANT message : STRING; END_VAR
+    _msg := message;
+    _id := errorId;
+    calls := calls + 1;
+  END_METHOD
+  METHOD Check
+    VAR_INPUT x : INT; END_VAR
+    IF x < 0 THEN
+      AbortErrorId(3, 'maximum jerk limit should be larger than or equal to zero');
+    ELSE
+      AbortErrorId(errorId := 0, message := CONCAT('ok ', INT_TO_STRING(x)));
+    END_IF
+  END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Scaler
+  VAR_IN_OUT CONSTANT factor : DINT; END_VAR
+  VAR_INPUT x : DINT; END_VAR
+  VAR_OUTPUT y : DINT; END_VAR
+  y := x * factor;
+END_FUNCTION_BLOCK
+FUNCTION MkPair : Pair
+  VAR_INPUT x : INT; END_VAR
+  MkPair.a := x; MkPair.b := x + 1;
+END_FUNCTION
+FUNCTION SumPair : INT
+  VAR_IN_OUT CONSTANT p : Pair; k : INT; END_VAR
+  SumPair := p.a + p.b + k;
+END_FUNCTION
+PROGRAM main
+  VAR CONSTANT K : INT := 40; END_VAR
+  VAR
+    otg : Otg; sc : Scaler; pr : Pair := (a := 1, b := 2);
+    m1, m2 : STRING; id1, id2 : INT; r1, r2, r3 : INT; y1 : DINT; n : INT := 2;
+  END_VAR
+  otg.Check(-1); m1 := otg._msg; id1 := otg._id;
+  otg.Check(7); m2 := otg._msg; id2 := otg._id;
+  r1 := SumPair(MkPair(5), K);          (* a call's result, a constant *)
+  r2 := SumPair(MkPair(n), n * 3);      (* an expression *)
+  r3 := SumPair(pr, n);                 (* variables: by reference, as before *)
+  sc(factor := n + 1, x := 7); y1 := sc.y;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_a_literal_or_an_expression_goes_to_a_var_in_out_constant_through_a_temporary(dialect):
+    plc = run(IN_OUT_CONSTANT, 1, dialect)
+    assert (plc["main.m1"], plc["main.id1"]) == ("maximum jerk limit should be larger than or equal to zero", 3)
+    assert (plc["main.m2"], plc["main.id2"], plc["main.otg.calls"]) == ("ok 7", 0, 2)
+    assert (plc["main.r1"], plc["main.r2"], plc["main.r3"]) == (5 + 6 + 40, 2 + 3 + 6, 1 + 2 + 2)
+    assert plc["main.y1"] == 21
+    assert (plc["main.n"], plc["main.pr"]) == (2, {"a": 1, "b": 2})  # nothing written back
+
+
+def test_a_var_in_out_constant_is_not_written_inside_its_pou():
+    src = """
+FUNCTION F : INT
+  VAR_IN_OUT CONSTANT s : STRING; END_VAR
+  s := 'x';
+  F := LEN(s);
+END_FUNCTION
+PROGRAM main VAR r : INT; END_VAR r := F('abc'); END_PROGRAM
+"""
+    for dialect in VENDOR:
+        assert "t.st:4:3: error[E018]: 's' is a CONSTANT" in errors(src, dialect)
+
+
+def test_a_plain_var_in_out_still_needs_a_variable():
+    src = """
+FUNCTION F : INT
+  VAR_IN_OUT s : STRING; END_VAR
+  F := LEN(s);
+END_FUNCTION
+PROGRAM main VAR r : INT; END_VAR r := F('abc'); END_PROGRAM
+"""
+    for dialect in VENDOR:
+        assert "t.st:6:42: error[E031]: VAR_IN_OUT 's' needs a variable, not an expression" in errors(src, dialect)
+
+
+@pytest.mark.parametrize("dialect", ["iec", "openplc"])
+def test_iec_and_openplc_pass_only_variables_to_a_var_in_out_constant(dialect):
+    src = """
+FUNCTION F : INT
+  VAR_IN_OUT CONSTANT s : STRING; END_VAR
+  F := LEN(s);
+END_FUNCTION
+PROGRAM main VAR r : INT; END_VAR r := F('abc'); END_PROGRAM
+"""
+    out = errors(src, dialect)
+    assert "t.st:6:42: error[E031]: VAR_IN_OUT 's' needs a variable, not an expression" in out
+    assert "hint: codesys and twincat pass an expression to a VAR_IN_OUT CONSTANT" in out
+
+
+# ---------------------------------------------------------------- initial values that name variables
+
+BUILDER = """
+INTERFACE I_State
+  METHOD Name : STRING END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK FB_Off IMPLEMENTS I_State
+  VAR_INPUT pMachine : POINTER TO Machine; END_VAR
+  METHOD Name : STRING Name := 'off'; END_METHOD
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; pMachine : POINTER TO Machine; END_VAR
+    THIS^.pMachine := pMachine;
+  END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Machine
+  VAR_OUTPUT ipState : I_State := fbOff; END_VAR    (* an instance declared below *)
+  VAR fbOff : FB_Off(THIS); serial : INT := 17; END_VAR
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Builder
+  VAR specs : ARRAY[1..2] OF STRING; n : INT := 7; seen : INT; END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; s : ARRAY[1..2] OF STRING; k : INT; END_VAR
+    VAR blockSize : UDINT := SIZEOF(INT) * INT_TO_UDINT(k); END_VAR   (* a method's local from its input *)
+    specs := s;
+    seen := n;          (* the declared value, set before FB_init runs *)
+    n := k + UDINT_TO_INT(blockSize);
+    s[1] := 'changed';  (* a copy: the caller's array keeps its value *)
+  END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION Scaled : DINT
+  VAR_INPUT x : INT; END_VAR
+  VAR b : DINT := a + 1; a : DINT := x * 10; END_VAR   (* at every call, b after a *)
+  Scaled := b;
+END_FUNCTION
+PROGRAM main
+  VAR
+    specs1 : ARRAY[1..2] OF STRING := ['Red', 'Sedan'];
+    b1 : Builder(s := specs1, k := base + 1);
+    self : Builder(s := specs1, k := self.n);   (* its own declared value *)
+    a : INT := b + 1; b : INT := c * 2; c : INT := base - 36;
+    base : INT := 41;
+    m : Machine;
+    name : STRING; back : INT; r1, r2 : DINT;
+  END_VAR
+  name := m.ipState.Name();
+  back := m.fbOff.pMachine^.serial;
+  r1 := Scaled(4); r2 := Scaled(-2);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_fb_init_arguments_and_initial_values_name_variables_in_the_order_their_values_need(dialect):
+    plc = run(BUILDER, 2, dialect)
+    # b1's FB_init got a copy of specs1 and base + 1 = 42 (base is declared below it); its local
+    # blockSize = SIZEOF(INT) * 42 = 84; it saw n's declared value 7
+    assert (plc["main.b1.specs"], plc["main.b1.n"], plc["main.b1.seen"]) == (["Red", "Sedan"], 42 + 84, 7)
+    assert plc["main.specs1"] == ["Red", "Sedan"]
+    assert (plc["main.self.n"], plc["main.self.seen"]) == (7 + 14, 7)  # k := self.n read its declared 7
+    assert (plc["main.a"], plc["main.b"], plc["main.c"]) == (11, 10, 5)
+    # an interface initialised with an instance declared below it; THIS as an FB_init argument
+    assert (plc["main.name"], plc["main.back"], plc["main.m.ipState"]) == ("off", 17, "FB_Off")
+    assert (plc["main.r1"], plc["main.r2"]) == (41, -19)
+
+
+def test_initial_values_that_need_each_other_are_an_error():
+    src = "PROGRAM main\nVAR\n  p : INT := q + 1;\n  q : INT := p;\nEND_VAR\np := q;\nEND_PROGRAM\n"
+    for dialect in VENDOR:
+        assert "t.st:3:3: error[E029]: the initial values of p → q → p need each other's values" in errors(src, dialect)
+    # an instance's FB_init arguments that need the instance's own constructed value
+    src = """
+FUNCTION_BLOCK FB
+  VAR_OUTPUT n : INT; END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; k : INT; END_VAR
+    n := k;
+  END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR x : FB(k := y); y : INT := x.n; END_VAR
+y := x.n;
+END_PROGRAM
+"""
+    assert "t.st:10:5: error[E029]: the initial values of x → y → x need each other's values" in errors(src)
+
+
+def test_iec_keeps_initial_values_constant():
+    out = errors(BUILDER.replace("ARRAY[1..2] OF STRING := ['Red', 'Sedan'];", "ARRAY[1..2] OF STRING;"), "iec")
+    assert "error[E029]: an initial value must be a constant; 'a' is a variable" in out  # Scaled's b
+    assert "error[E029]: an initial value must be a constant; 'x' is a variable" in out  # Scaled's a
+    assert "error[E029]: an initial value must be a constant; 'b' is a variable" in out  # main's a
+    assert "error[E029]: an initial value must be a constant; THIS is the instance" in out
+    assert "error[E029]: 'fbOff' is declared below; initial values are set in declaration order" in out
+
+
+# ---------------------------------------------------------------- ADR of a VAR CONSTANT
+
+ADR_OF_CONSTANT = """
+FUNCTION IsInf : BOOL
+  VAR_INPUT val : LREAL; END_VAR
+  VAR CONSTANT InfinityBits : ULINT := ULINT#16#7FF0000000000000; END_VAR
+  VAR InfinityPtr : POINTER TO LREAL := ADR(InfinityBits); END_VAR
+  IsInf := val = InfinityPtr^ OR val = -InfinityPtr^;
+END_FUNCTION
+FUNCTION LrealBits : ULINT
+  VAR_INPUT x : LREAL; END_VAR
+  VAR b : POINTER TO ULINT := ADR(x); END_VAR
+  LrealBits := b^;
+END_FUNCTION
+FUNCTION LrealFromBits : LREAL
+  VAR_INPUT b : ULINT; END_VAR
+  VAR x : POINTER TO LREAL := ADR(b); END_VAR
+  LrealFromBits := x^;
+END_FUNCTION
+PROGRAM main
+  VAR CONSTANT K : INT := 7; END_VAR
+  VAR p : POINTER TO INT; v, w, z : INT; i1, i2 : BOOL; bits : ULINT; big : LREAL; END_VAR
+  p := ADR(K);
+  v := p^;
+  p^ := 99;        (* that memory changes; K's uses are its value *)
+  w := K + p^;
+  z := K;
+  bits := LrealBits(1.0);
+  big := LrealFromBits(ULINT#16#4059000000000000);
+  i1 := IsInf(LrealFromBits(ULINT#16#FFF0000000000000));
+  i2 := IsInf(big);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_adr_of_a_constant_reads_its_value_and_a_write_through_it_leaves_the_constant(dialect):
+    plc = run(ADR_OF_CONSTANT, 1, dialect)
+    assert (plc["main.v"], plc["main.w"], plc["main.z"]) == (7, 7 + 99, 7)
+    assert (plc["main.bits"], plc["main.big"]) == (0x3FF0000000000000, 100.0)
+    assert (plc["main.i1"], plc["main.i2"]) == (True, False)
+
+
+def test_ref_of_a_constant_stays_refused():
+    src = "PROGRAM main\nVAR CONSTANT K : INT := 7; END_VAR\nVAR r : REF_TO INT; END_VAR\nr := REF(K);\nEND_PROGRAM\n"
+    for dialect in [*VENDOR, "iec"]:
+        assert "t.st:4:10: error[E018]: 'K' is a CONSTANT" in errors(src, dialect)
+
+
+# ---------------------------------------------------------------- a literal 0 for a POINTER
+
+ZERO_POINTER = """
+TYPE Node : STRUCT v : INT; next : POINTER TO Node := 0; END_STRUCT END_TYPE
+FUNCTION Get : INT
+  VAR_INPUT p : POINTER TO INT; dflt : INT; END_VAR
+  IF p = 0 THEN Get := dflt; ELSE Get := p^; END_IF
+END_FUNCTION
+FUNCTION_BLOCK Holder
+  VAR_INPUT p : POINTER TO INT; END_VAR
+  VAR_OUTPUT isNull : BOOL; END_VAR
+  isNull := p = 0;
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR x : INT := 5; q : POINTER TO INT := 0; h : Holder; n : Node; a, b : INT; c, d, e : BOOL; END_VAR
+  a := Get(0, -1);
+  b := Get(ADR(x), -1);
+  h(p := ADR(x)); c := h.isNull;
+  h(p := 0); d := h.isNull;
+  e := q = 0 AND n.next = 0;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_a_literal_0_passed_or_given_as_a_pointer_is_null(dialect):
+    plc = run(ZERO_POINTER, 1, dialect)
+    assert (plc["main.a"], plc["main.b"], plc["main.c"], plc["main.d"], plc["main.e"]) == (-1, 5, False, True, True)
+    assert (plc["main.q"], plc["main.h.p"]) == (None, None)
+
+
+def test_only_the_literal_0_is_a_null_pointer():
+    src = ZERO_POINTER.replace("a := Get(0, -1);", "a := Get(5, -1);")
+    for dialect in VENDOR:
+        assert "t.st:14:12: error[E013]: type mismatch: cannot pass integer literal to POINTER TO INT" in errors(
+            src, dialect
+        )
+
+
+def test_iec_passes_no_literal_0_for_a_reference():
+    src = """
+FUNCTION Get : INT
+  VAR_INPUT r : REF_TO INT; END_VAR
+  IF r <> NULL THEN Get := r^; END_IF
+END_FUNCTION
+PROGRAM main VAR a : INT; END_VAR a := Get(0); END_PROGRAM
+"""
+    assert run(src, 1, "codesys")["main.a"] == 0
+    assert "t.st:6:44: error[E013]: type mismatch: cannot pass integer literal to REF_TO INT" in errors(src, "iec")
+
+
+# ---------------------------------------------------------------- __ISVALIDREF
+
+IS_VALID_REF = """
+FUNCTION_BLOCK Hoist
+  VAR_OUTPUT moves : INT; END_VAR
+  METHOD Down moves := moves + 1; END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Command
+  VAR refHoist : REFERENCE TO Hoist; END_VAR
+  VAR_OUTPUT valid : BOOL; END_VAR
+  METHOD Bind VAR_INPUT h : REFERENCE TO Hoist; END_VAR refHoist REF= h; END_METHOD
+  METHOD Execute
+    valid := __ISVALIDREF(THIS^.refHoist);    (* the reference, not the block it refers to *)
+    IF __ISVALIDREF(THIS^.refHoist) THEN THIS^.refHoist.Down(); END_IF
+  END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Acc
+  VAR_IN_OUT io : INT; END_VAR
+  VAR_OUTPUT bound : BOOL; END_VAR
+  METHOD Check : BOOL Check := __ISVALIDREF(io); END_METHOD
+  bound := __ISVALIDREF(io);
+  IF bound THEN io := io + 1; END_IF
+END_FUNCTION_BLOCK
+FUNCTION Inc : BOOL
+  VAR_IN_OUT x : INT; END_VAR
+  Inc := __ISVALIDREF(x);
+  x := x + 1;
+END_FUNCTION
+PROGRAM main
+  VAR
+    h : Hoist; c1, c2 : Command; acc : Acc; n : INT := 10;
+    cv1, cv2, outside1, outside2, v1, v2, v3, v4, f : BOOL;
+  END_VAR
+  c1.Execute(); cv1 := c1.valid; outside1 := __ISVALIDREF(c1.refHoist);
+  c2.Bind(h); c2.Execute(); cv2 := c2.valid; outside2 := __ISVALIDREF(c2.refHoist);
+  v1 := acc.Check();            (* never given: FALSE, no fault *)
+  acc(); v2 := acc.bound;
+  acc(io := n); v3 := acc.bound; v4 := acc.Check();
+  f := Inc(n);
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_isvalidref_checks_a_reference_member_and_a_var_in_out_themselves(dialect):
+    plc = run(IS_VALID_REF, 1, dialect)
+    assert (plc["main.cv1"], plc["main.outside1"], plc["main.cv2"], plc["main.outside2"]) == (False, False, True, True)
+    assert plc["main.h.moves"] == 1
+    assert (plc["main.v1"], plc["main.v2"], plc["main.v3"], plc["main.v4"], plc["main.f"]) == (
+        False,
+        False,
+        True,
+        True,
+        True,
+    )
+    assert plc["main.n"] == 12  # the block's call and the function's both added 1
+
+
+def test_isvalidref_needs_a_reference():
+    src = "PROGRAM main\nVAR x : INT; b : BOOL; END_VAR\nb := __ISVALIDREF(x);\nEND_PROGRAM\n"
+    assert "t.st:3:19: error[E013]: __ISVALIDREF needs a reference, not INT" in errors(src, "codesys")
+    assert "t.st:3:6: error[E044]: __ISVALIDREF is not part of the iec dialect" in errors(src, "iec")
+
+
+# ---------------------------------------------------------------- __NEW with FB_init arguments
+
+NEW_WITH_ARGS = """
+FUNCTION_BLOCK FB_Runner
+  VAR_OUTPUT n : INT; label : STRING; END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; a : INT; name : STRING; END_VAR
+    n := a; label := name;
+  END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR p, q : POINTER TO FB_Runner; k : INT := 5; m1, m2 : INT; l1, l2 : STRING; END_VAR
+  p := __NEW(FB_Runner(a := k + 1, name := 'first'));
+  q := __NEW(FB_Runner(k * 3, 'second'));
+  m1 := p^.n; l1 := p^.label;
+  m2 := q^.n; l2 := q^.label;
+  __DELETE(p);
+  k := k + 1;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_new_passes_fb_init_arguments_evaluated_where_it_runs(dialect):
+    plc = run(NEW_WITH_ARGS, 2, dialect)  # the second scan: k = 6
+    assert (plc["main.m1"], plc["main.l1"], plc["main.m2"], plc["main.l2"]) == (7, "first", 18, "second")
+    assert plc["main.p"] is None
+
+
+def test_new_with_arguments_names_fb_init_inputs():
+    src = NEW_WITH_ARGS.replace("a := k + 1", "b := k + 1")
+    assert "FB_init of FB_Runner has no input 'b' to set here" in errors(src, "codesys")
+
+
+def test_new_in_a_method_passes_the_instance_s_own_address():
+    src = """
+FUNCTION_BLOCK Snapshot
+  VAR_OUTPUT title : STRING; owner : POINTER TO Editor; END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; pEditor : POINTER TO Editor; sTitle : STRING; END_VAR
+    owner := pEditor; title := sTitle;
+  END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Editor
+  VAR sTitle : STRING := 'recipe 1'; pSnapshot : POINTER TO Snapshot; n : INT := 3; END_VAR
+  METHOD Save
+    THIS^.pSnapshot := __NEW(Snapshot(pEditor := ADR(THIS^), sTitle := THIS^.sTitle));
+  END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR e : Editor; t : STRING; back : INT; x : INT := 4; px, py : POINTER TO INT; END_VAR
+  e.Save();
+  t := e.pSnapshot^.title;
+  back := e.pSnapshot^.owner^.n;
+  px := ADR(x); py := ADR(px^);   (* what px points at: x *)
+  py^ := 9;
+END_PROGRAM
+"""
+    for dialect in VENDOR:
+        plc = run(src, 1, dialect)
+        assert (plc["main.t"], plc["main.back"], plc["main.x"]) == ("recipe 1", 3, 9)
+
+
+def test_initial_values_and_new_arguments_read_properties_and_qualified_globals():
+    src = """{gvl 'GVL'}
+{attribute 'qualified_only'}
+VAR_GLOBAL
+  gX : INT := 5;
+END_VAR
+FUNCTION_BLOCK FB_P
+  VAR _v : INT := 3; END_VAR
+  PROPERTY P : INT
+    GET P := _v * 2; END_GET
+  END_PROPERTY
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK FB_R
+  VAR_OUTPUT n : INT; END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; a : INT; END_VAR
+    n := a;
+  END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+  VAR
+    fp : FB_P; a : INT := GVL.gX + 1; b : INT := fp.P; r : FB_R(a := fp.P + GVL.gX);
+    pr : POINTER TO FB_R; m : INT;
+  END_VAR
+  pr := __NEW(FB_R(a := fp.P * GVL.gX));
+  m := pr^.n;
+END_PROGRAM
+"""
+    for dialect in VENDOR:
+        plc = run(src, 1, dialect)
+        assert (plc["main.a"], plc["main.b"], plc["main.r.n"], plc["main.m"]) == (6, 6, 11, 30)
