@@ -29,6 +29,7 @@ GROUPS = {
     "ANY_BIT": ["BYTE", "LWORD", "BOOL"],
     "ANY_NUM": ["DINT", "LREAL", "UDINT"],
     "ANY_MAGNITUDE": ["DINT", "LREAL", "TIME"],
+    "ANY_DATE": ["DATE", "TOD", "DT"],
     "ANY_STRING": ["STRING"],
     "ANY_CHARS": ["STRING"],
     "ANY_ELEMENTARY": ["DINT", "LREAL", "STRING", "TIME"],
@@ -103,6 +104,11 @@ def _sweep(cases: list):
                     plc.reset_fault()
 
 
+def _types_of(constraint: str) -> list[str]:
+    """The types a parameter's constraint allows ("ANY_MAGNITUDE or ANY_DATE": either family)."""
+    return [t for part in constraint.split(" or ") for t in GROUPS.get(part, [part])]
+
+
 def _functions():
     """Per standard function, its calls over the type combinations its parameters allow."""
     lib = default_library()
@@ -110,7 +116,7 @@ def _functions():
         if name.startswith("__"):
             continue
         calls = []
-        for types in itertools.product(*[GROUPS.get(p.constraint, [p.constraint]) for p in sig.params]):
+        for types in itertools.product(*[_types_of(p.constraint) for p in sig.params]):
             if len({t for t, p in zip(types, sig.params) if p.group}) <= 1:
                 calls.append((f"{name}({', '.join('{' + str(i) + '}' for i in range(len(types)))})", types))
         yield calls

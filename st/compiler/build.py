@@ -32,12 +32,14 @@ from .build_parts import (
     Accessor,
     CaseLabel,
     CaseLabels,
+    Catch,
     Chain,
     Edge,
     Else,
     ElsIf,
     Extends,
     FieldValue,
+    Finally,
     Implements,
     Location,
     Modifier,
@@ -74,7 +76,9 @@ _OPNAME = {"&": "AND"}
 # identifier where no keyword is expected). Soft keywords (ON, STEP, BY, ...) and type names (DT is
 # a common name for a time step) are not here: the grammar tells them apart by context.
 # CODESYS and TwinCAT let a program name a variable R_EDGE or F_EDGE (IEC and MatIEC do not)
-EDGE_NAMES = frozenset({"R_EDGE", "F_EDGE"})
+# keywords CODESYS and TwinCAT do not have, so their code uses them as names (a property
+# `Configuration`, TcLog): names there, keywords under iec and openplc
+VENDOR_NAMES = frozenset({"R_EDGE", "F_EDGE", "CONFIGURATION", "RESOURCE"})
 RESERVED = frozenset(
     """
 TYPE END_TYPE STRUCT END_STRUCT ARRAY OF STRING WSTRING REF_TO POINTER REFERENCE TO END_VAR CONSTANT RETAIN
@@ -252,10 +256,10 @@ class AstBuilder(Transformer[Token, A.Unit]):
         return A.NamedType(self.sp(c[0]), str(c[0]))
 
     def ctor_type(self, c: list[Any]) -> A.NamedType:
-        name: Token
-        args: list[FieldValue]
-        name, *args = c
-        return A.NamedType(self.sp(name), str(name), [(n, sp, v) for n, sp, v in args])
+        parts = [x for x in c if isinstance(x, Token)]  # Lib.FB: the (qualified) type's name
+        args: list[FieldValue] = [x for x in c if not isinstance(x, Token)]
+        name = ".".join(str(p) for p in parts)
+        return A.NamedType(self.sp(parts[0]), name, [(n, sp, v) for n, sp, v in args])
 
     def ctor_positional(self, c: list[A.Expr]) -> FieldValue:
         return ("", c[0].span, c[0])  # the checker names it: the n-th input of FB_init
@@ -839,6 +843,24 @@ class AstBuilder(Transformer[Token, A.Unit]):
     def repeat_stmt(self, c: list[Any]) -> A.Repeat:
         i_until = next(i for i, x in enumerate(c) if isinstance(x, Token) and x.type == "UNTIL")
         return A.Repeat(self.sp(c[0]), self._stmts(c[1:i_until]), c[i_until + 1])
+
+    def try_stmt(self, c: list[Any]) -> A.Try:
+        kw: Token = c[0]
+        out = A.Try(self.sp(kw), self._stmts(c[1:]))
+        for x in c[1:]:
+            match x:
+                case Catch(var, body):
+                    out.catch_var, out.handler = var, body
+                case Finally(body):
+                    out.final = body
+        return out
+
+    def catch_clause(self, c: list[Any]) -> Catch:
+        _, var, *body = c
+        return Catch(var, self._stmts(body))
+
+    def finally_clause(self, c: list[Any]) -> Finally:
+        return Finally(self._stmts(c[1:]))
 
     def exit_stmt(self, c: list[Token]) -> A.Exit:
         return A.Exit(self.sp(c[0]))

@@ -129,6 +129,21 @@ class CaseLabels:
     labels: list[CaseLabelValue]
 
 
+@dataclass(frozen=True, slots=True)
+class Catch:
+    """`__CATCH(var) statements` of a __TRY."""
+
+    var: A.Expr
+    body: list[A.Stmt]
+
+
+@dataclass(frozen=True, slots=True)
+class Finally:
+    """`__FINALLY statements` of a __TRY."""
+
+    body: list[A.Stmt]
+
+
 # ------------------------------------------------------------------ SFC
 
 

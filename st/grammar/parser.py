@@ -139,6 +139,7 @@ _HARD_OPENERS = {
     "FOR": "END_FOR",
     "WHILE": "END_WHILE",
     "REPEAT": "END_REPEAT",
+    "TRY": "END_TRY",
     "VAR_KIND": "END_VAR",
     "STRUCT": "END_STRUCT",
     "UNION": "END_UNION",

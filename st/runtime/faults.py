@@ -57,6 +57,34 @@ _PY_KINDS = {
 }
 
 
+# __TRY/__CATCH (CODESYS, TwinCAT): the fault kinds a __CATCH handles and the __SYSTEM.ExceptionCode
+# each gives (st/stdlib/vendor/vendor.st: CODESYS's runtime codes). The others are not caught: a
+# WATCHDOG (a runaway loop still stops the PLC), LOOP (a FOR that never ends), TEST (the test runner's).
+EXCEPTION_CODES = {
+    "DIV0": 0x102,  # RTSEXCPT_DIVIDEBYZERO
+    "INDEX": 0x101,  # RTSEXCPT_ARRAYBOUNDS
+    "RANGE": 0x101,  # RTSEXCPT_ARRAYBOUNDS: a subrange or a string position outside its bounds
+    "NULL": 0x51,  # RTSEXCPT_ACCESS_VIOLATION
+    "MEMORY": 0x51,  # RTSEXCPT_ACCESS_VIOLATION: bytes beyond a variable
+    "RECURSION": 0x54,  # RTSEXCPT_STACK_OVERFLOW
+    "OVERFLOW": 0x155,  # RTSEXCPT_FPU_OVERFLOW
+    "CONVERSION": 0x154,  # RTSEXCPT_FPU_INVALID_OPERATION: NaN or infinity to an integer, a value out of range
+}
+
+# what a __CATCH's Python `except` names: the exceptions that may carry a fault it handles
+CATCHABLE: tuple[type[BaseException], ...] = (PLCFault, *_PY_KINDS)
+
+
+def exception_code(exc: BaseException) -> int | None:
+    """The __SYSTEM.ExceptionCode a __CATCH gives for `exc`, or None: not handled (the PLC faults)."""
+    if isinstance(exc, PLCFault):
+        return EXCEPTION_CODES.get(exc.kind)
+    for cls, (kind, _) in _PY_KINDS.items():
+        if isinstance(exc, cls):
+            return EXCEPTION_CODES.get(kind)
+    return None
+
+
 # the native tier's modules: their source file's name → {line: (ST file, ST line, POU)}
 NATIVE_LINES: dict[str, dict[int, tuple[str, int, str]]] = {}
 

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any, NoReturn
 
 from . import byteimage
-from .faults import PLCFault
+from .faults import CATCHABLE, PLCFault, exception_code
 
 _F32 = struct.Struct("<f")
 _pack, _unpack = _F32.pack, _F32.unpack
@@ -512,4 +512,6 @@ BASE_NAMESPACE: dict[str, Any] = {
     "_str": str,
     "_bool": bool,
     "_PLCFault": PLCFault,
+    "_catchable": CATCHABLE,
+    "_exc_code": exception_code,
 }

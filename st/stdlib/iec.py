@@ -126,7 +126,22 @@ def _arith(name, op, extensible):
         result = _mul_div_result(name)
     if op == "MOD":
         params = [_p("IN1", "ANY_INT", "T"), _p("IN2", "ANY_INT", "T")]
-    return FuncSig(name, params, result, extensible=extensible, emit=emit, min_args=2)
+    if op == "-":
+        # SUB of two dates of one type (DT, TOD, DATE) is the TIME between them, as `-` is (IEC 61131-3
+        # overloads SUB for the time types; SUB_DT_DT and its kin are the typed forms)
+        params = [_p("IN1", "ANY_MAGNITUDE or ANY_DATE", "T"), _p("IN2", "ANY_MAGNITUDE or ANY_DATE", "T")]
+    sig = FuncSig(name, params, result, extensible=extensible, emit=emit, min_args=2)
+    if op == "-":
+        sig.group_result = _date_difference
+    return sig
+
+
+def _date_difference(t: T.Type) -> T.Type:
+    """The type SUB gives for arguments of the common type `t`: a date's is a TIME (LTIME for the long ones)."""
+    b = T.base_of(t)
+    if isinstance(b, T.ElemType) and b.kind in ("dt", "tod", "date"):
+        return T.LTIME if b.long else T.TIME
+    return t
 
 
 def _mul_div_result(name):

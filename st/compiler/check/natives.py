@@ -257,7 +257,9 @@ class _NativeCall:
                 return True, T.default_type_for_literal(rt)
             return True, rt
         if res in groups:
-            return True, groups[res]
+            # the group's type, or what the function makes of it (SUB of two dates: a TIME)
+            of_group = getattr(self.sig, "group_result", None)
+            return True, groups[res] if of_group is None else of_group(groups[res])
         if res is None:
             return True, None
         return True, T.ELEMENTARY[res]

@@ -16,6 +16,7 @@ from .rules import (
     access,
     assignment_attempt,
     conditions,
+    exception_variable,
     exit_outside_loop,
     for_counter,
     for_loop,
@@ -103,6 +104,17 @@ class Statements(Part):
         scope.loop_depth += 1
         self.stmt_list(body, scope)
         scope.loop_depth -= 1
+
+    def _try(self, s: A.Try, scope: Scope) -> None:
+        allowed = self.feature("vendor", s.span, "exception handling (__TRY … __ENDTRY)")
+        self.stmt_list(s.body, scope)
+        if s.catch_var is not None:
+            t = self.lvalue(s.catch_var, scope)
+            if allowed:  # (elsewhere __SYSTEM.ExceptionCode is no type either: reported once, as E044)
+                exception_variable.check_exception_variable(self.ctx, s.catch_var, t)
+        for body in (s.handler, s.final):
+            if body:
+                self.stmt_list(body, scope)
 
     def _exit(self, s: A.Exit | A.Continue, scope: Scope) -> None:
         exit_outside_loop.check_exit(self.ctx, s, scope.loop_depth)
@@ -352,6 +364,7 @@ _HANDLERS: dict[type, Callable[..., None]] = {
     A.For: Statements._for,
     A.While: Statements._while,
     A.Repeat: Statements._repeat,
+    A.Try: Statements._try,
     A.Exit: Statements._exit,
     A.Continue: Statements._exit,
     A.Return: Statements._nothing,

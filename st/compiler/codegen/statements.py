@@ -311,6 +311,10 @@ class StmtGen(ExprGen):
                             self.conformant_arg(self.expr(a.value), a.value.ty, p.type),
                         )
                     )
+                elif a.temporary:  # VAR_IN_OUT CONSTANT := expression: its value, nothing to copy back
+                    out.append(
+                        py.Assign([_attr(inst, p.pyname, py.Store())], self.coerce(self.expr(a.value), a.value, p.type))
+                    )
                 else:
                     out.append(py.Assign([_attr(inst, p.pyname, py.Store())], self.expr(a.value)))
                     after.extend(
@@ -438,6 +442,29 @@ class StmtGen(ExprGen):
         cond = self.cond(s.cond)
         br = _set_lines(py.If(cond, [py.Break()], []), s.cond.span.line)
         return [py.While(_const(True), body + [br], [])]
+
+    def s_Try(self, s: A.Try) -> list:
+        """`__TRY`: a Python try. Its `except` takes what may carry a fault (`_catchable`); one a
+        __CATCH does not handle (`_exc_code` gives None: the watchdog's, an endless FOR's) is raised
+        again as it was, so the PLC faults where it happened. __FINALLY is the `finally`."""
+        body = self.block(s.body)
+        handlers = []
+        if s.handler is not None:
+            exc, code = self.new_tmp(), self.new_tmp()
+            catch = [
+                py.Assign([_name(code, py.Store())], _call("_exc_code", _name(exc))),
+                py.If(py.Compare(_name(code), [py.Is()], [_const(None)]), [py.Raise()], []),
+            ]
+            if s.catch_var is not None:
+                catch += self.assign(s.catch_var, _name(code), None)
+                for n in catch:
+                    _set_lines(n, s.catch_var.span.line)
+            catch += self.stmts(s.handler)
+            handlers.append(py.ExceptHandler(_name("_catchable"), exc, catch))
+        final = self.stmts(s.final) if s.final else []
+        if not handlers and not final:
+            return body
+        return [py.Try(body, handlers, [], final)]
 
     def s_CountedFor(self, s: A.CountedFor) -> list:
         """A FOR in the form lower/loops.py chose: a Python `for` over `_range` (the counter ends
@@ -638,6 +665,9 @@ def _has_continue(body) -> bool:
         if isinstance(s, A.Case):
             if any(_has_continue(b.body) for b in s.branches) or _has_continue(s.orelse or []):
                 return True
+        if isinstance(s, A.Try):
+            if any(_has_continue(b or []) for b in (s.body, s.handler, s.final)):
+                return True
     return False
 
 
@@ -715,6 +745,8 @@ def _walk_exprs_in(body):
             stack.append(s.cond)
         elif isinstance(s, A.Repeat):
             stack.append(s.cond)
+        elif isinstance(s, A.Try):
+            stack.append(s.catch_var)
         elif isinstance(s, A.Mock):
             stack.append(s.target)
         elif isinstance(s, A.MockFunction):
@@ -757,7 +789,9 @@ def _by_ref_names(body) -> set:
             case FunctionCall(pou=pou, bind=bind) | MethodCall(pou=pou, bind=bind):
                 for key, a in bind["params"].items():
                     p = pou.vars[key]
-                    if p.section == "VAR_OUTPUT" or (p.section == "VAR_IN_OUT" and not T.unalias(p.type).is_aggregate):
+                    if p.section == "VAR_OUTPUT" or (
+                        p.section == "VAR_IN_OUT" and not T.unalias(p.type).is_aggregate and not a.temporary
+                    ):
                         root_of(a.value)
             case QueryItfCall(dst=dst):
                 root_of(dst)

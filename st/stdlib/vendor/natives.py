@@ -58,6 +58,29 @@ def _vd_digits(value: int, precision: int, a: Any, b: Any = None) -> str:
     return out.rjust(max(0, precision), "0")[-255:] if out or precision > 0 else ""
 
 
+def _vd_wstring_to_string2(dest: Any, src: Any, size: int, room: int) -> bool:
+    """WSTRING_TO_STRING2: the WSTRING at `src` into the STRING at `dest` (`size` bytes there, its NUL
+    included; `room` characters the variable holds). Characters a STRING cannot hold (outside
+    Latin-1, its byte image) are skipped; FALSE when the rest does not fit and is cut."""
+    text = "".join(c for c in str(_get(src)) if ord(c) < 256)
+    return _put_text(dest, text, min(size - 1, room))
+
+
+def _vd_string_to_wstring2(dest: Any, src: Any, size: int, room: int) -> bool:
+    """STRING_TO_WSTRING2: the STRING at `src` into the WSTRING at `dest` (`size` bytes, two a
+    character, the NUL included); FALSE when it does not fit and is cut."""
+    return _put_text(dest, str(_get(src)), min(size // 2 - 1, room))
+
+
+def _put_text(dest: Any, text: str, fits: int) -> bool:
+    if not isinstance(_get(dest), str):  # (a NULL destination faults in _get)
+        raise PLCFault("the destination of a string conversion is no STRING or WSTRING variable", "MEMORY")
+    if fits < 0:
+        return False
+    _set(dest, text[:fits])
+    return len(text) <= fits
+
+
 # ------------------------------------------------------------------ the PLC log
 
 
@@ -293,6 +316,12 @@ def _fill_layout(types, _rt):
     return [(size, esize, spec, None, T.byte_layout(d))]
 
 
+def _string_room(types, _rt):
+    """How many characters the destination's STRING / WSTRING variable holds."""
+    t = T.unalias(_target(types[0]))
+    return [t.length if isinstance(t, T.StringType) else 0]  # (not a string: refused when called)
+
+
 def _now_ticks(ctx, args, types, rt):
     return py.BinOp(py.Name("_now", py.Load()), py.FloorDiv(), const(100))
 
@@ -321,6 +350,19 @@ def signatures() -> list[FuncSig]:
         _adslog("ADSLOGDINT", "dintArg", "DINT", "d"),
         _adslog("ADSLOGLREAL", "lrealArg", "LREAL", "f"),
     ]
+    for name, dst, src, helper in (
+        ("WSTRING_TO_STRING2", "pDstString", "pSrcWString", "_vd_wstring_to_string2"),
+        ("STRING_TO_WSTRING2", "pDstWString", "pSrcString", "_vd_string_to_wstring2"),
+    ):
+        out.append(
+            FuncSig(
+                name,
+                [Param(dst, "ANY_POINTER"), Param(src, "ANY_POINTER"), Param("nDstSize", "ANY_INT")],
+                "BOOL",
+                helper=helper,
+                extra=_string_room,
+            )
+        )
     for name in ("MEMCPY", "MEMMOVE"):
         out.append(
             FuncSig(
@@ -378,4 +420,6 @@ HELPERS = {
     "_vd_memcpy": _vd_memcpy,
     "_vd_memset": _vd_memset,
     "_vd_memcmp": _vd_memcmp,
+    "_vd_wstring_to_string2": _vd_wstring_to_string2,
+    "_vd_string_to_wstring2": _vd_string_to_wstring2,
 }
