@@ -30,6 +30,7 @@ from .diagnostics import Code, CompileError, render_all
 from .errors_doc import explain as explanation_of
 
 _DIALECT = None  # the --dialect of this command line (set by the @dialect decorator)
+_LIBS: tuple[str, ...] = ()  # its --lib paths (the same decorator)
 
 
 def _compile(
@@ -47,6 +48,7 @@ def _compile(
         use_cache=use_cache,
         raise_on_error=False,
         dialect=_DIALECT,
+        lib_path=_LIBS,
     )
 
 
@@ -92,14 +94,23 @@ _dialect_options = [
         default=False,
         help="F_TRIG pulses on the first scan when CLK is FALSE (MatIEC).",
     ),
+    click.option(
+        "--lib",
+        "lib_paths",
+        multiple=True,
+        type=InputFile(dirs=True),
+        metavar="PATH",
+        help="Where the libraries a .plcproj references are: a library .plcproj, or a folder searched "
+        "for them (repeatable; then $ST_LIBPATH).",
+    ),
 ]
 
 
 def dialect(f):
     @functools.wraps(f)
-    def with_dialect(*args, dialect_name=None, **kw):
-        global _DIALECT
-        _DIALECT = dialect_name
+    def with_dialect(*args, dialect_name=None, lib_paths=(), **kw):
+        global _DIALECT, _LIBS
+        _DIALECT, _LIBS = dialect_name, tuple(lib_paths)
         return f(*args, **kw)
 
     for opt in reversed(_dialect_options):
@@ -507,6 +518,8 @@ def run(
         time_unit=time_unit,
         f_trig_first_scan=f_trig_first_scan,
         compiled_mtimes=seen,
+        dialect=_DIALECT,
+        lib_path=_LIBS,
     )
     sys.exit(run_plc(result, opts))
 
@@ -587,15 +600,33 @@ def _check_run_options(ctx: click.Context) -> None:
 @click.option(
     "--cov-html", type=OUTPUT_DIR, default=None, metavar="DIR", help="Also write the coverage report as HTML into DIR."
 )
+@click.option(
+    "--max-cycles",
+    type=click.IntRange(min=1),
+    default=10_000,
+    show_default=True,
+    help="TcUnit: scans before the tests not finished fail.",
+)
 @dialect
-def test_cmd(files, keyword, exitfirst, quiet, timeout, cov, cov_html, time_unit, f_trig_first_scan):
+def test_cmd(files, keyword, exitfirst, quiet, timeout, cov, cov_html, max_cycles, time_unit, f_trig_first_scan):
     """Run the TEST blocks of ST files (STruC++ syntax). A file test_X.st is compiled with X.st beside it.
 
     Prints PASS/FAIL per test and ends with `N passed, M failed`; exit code 0 when all pass,
-    1 when a test failed, 2 when the sources do not compile, 5 when there is no test to run."""
-    from .testing.runner import TestSuite, resolve_sources
+    1 when a test failed, 2 when the sources do not compile, 5 when there is no test to run.
+
+    A TwinCAT project (.plcproj or TwinCAT files; or ST files with TcUnit suites and no TEST block)
+    runs its TcUnit test suites instead: on virtual time until TcUnit reports them finished (at most
+    --max-cycles scans), each TEST('name') a PASS/FAIL/SKIP with TcUnit's messages, then TcUnit's
+    summary; --lib finds its libraries (TcUnit's project)."""
+    from .compiler.twincat import is_twincat
+    from .testing import tcunit
+    from .testing.runner import TestSuite, is_test_file, resolve_sources
 
     paths = resolve_sources(files)
+    if any(is_twincat(f) for f in files) or (
+        not any(is_test_file(p) for p in paths) and any(tcunit.uses_tcunit(p) for p in paths)
+    ):
+        sys.exit(tcunit.command(files, _LIBS, keyword=keyword, quiet=quiet, max_cycles=max_cycles, dialect=_DIALECT))
     measure = cov or cov_html is not None
     try:
         from .api import compile_paths
@@ -607,6 +638,7 @@ def test_cmd(files, keyword, exitfirst, quiet, timeout, cov, cov_html, time_unit
             raise_on_error=False,
             coverage=measure,
             dialect=_DIALECT,
+            lib_path=_LIBS,
         )
     except CompileError as e:
         click.echo(e.render(), err=True)

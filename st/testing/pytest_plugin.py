@@ -7,6 +7,11 @@
 - The `plc` fixture is a factory of `TestPLC`s (virtual time, helpers to drive inputs).
 - `--st-cov` measures ST line and branch coverage (also of PLCs made by the fixture),
   `--st-cov-html DIR` writes it as HTML; with xdist the workers' data is merged.
+- TcUnit: a TwinCAT project (`.plcproj`) whose code has a TcUnit test suite is collected when
+  asked for (`--st-tcunit`, ini `st_tcunit = true`, or the .plcproj named on the command line):
+  every literal `TEST('name')` of a suite instance is an item `Project.plcproj::PRG.suite::name`;
+  the project runs once (st.testing.tcunit) the first time one of its items runs, with the
+  libraries of `--st-lib`, ini `st_libs` and ST_LIBPATH.
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ from .runner import TestSuite, is_test_file, resolve_sources
 
 _BUILDS_KEY = pytest.StashKey[list]()  # every CompiledProgram with coverage probes, this process
 _SUITES_KEY = pytest.StashKey[dict]()  # resolved file list → TestSuite (or the compile error)
+_TCUNIT_KEY = pytest.StashKey[dict]()  # .plcproj path → TcUnitProject (or why it cannot run)
 
 
 def pytest_addoption(parser):
@@ -39,11 +45,40 @@ def pytest_addoption(parser):
         default=[],
         help="ST source files (globs, relative to the ini file) compiled with every ST test file",
     )
+    group.addoption(
+        "--st-tcunit",
+        action="store_true",
+        default=None,
+        help="collect TwinCAT projects (.plcproj) with TcUnit test suites: each TEST('name') an item",
+    )
+    group.addoption(
+        "--st-lib",
+        action="append",
+        default=[],
+        metavar="PATH",
+        help="a library project (.plcproj) or a folder of them, for TcUnit projects (repeatable)",
+    )
+    group.addoption(
+        "--st-tcunit-max-cycles",
+        type=int,
+        default=None,
+        metavar="N",
+        help="scans a TcUnit project may take before its unfinished tests fail (default 10000)",
+    )
+    parser.addini("st_tcunit", type="bool", default=False, help="collect TwinCAT projects with TcUnit suites")
+    parser.addini(
+        "st_libs",
+        type="linelist",
+        default=[],
+        help="library projects (.plcproj, folders; globs relative to the ini file) for TcUnit projects",
+    )
+    parser.addini("st_tcunit_max_cycles", default="10000", help="scans a TcUnit project may take (default 10000)")
 
 
 def pytest_configure(config):
     config.stash[_BUILDS_KEY] = []
     config.stash[_SUITES_KEY] = {}
+    config.stash[_TCUNIT_KEY] = {}
 
 
 def _measuring(config) -> bool:
@@ -64,6 +99,11 @@ def _ini_sources(config) -> list:
 def pytest_collect_file(file_path: Path, parent):
     if is_test_file(file_path):
         return StFile.from_parent(parent, path=file_path)
+    if file_path.suffix.lower() == ".plcproj" and _collect_tcunit(parent.config, file_path):
+        from .tcunit import uses_tcunit
+
+        if uses_tcunit(file_path):
+            return TcUnitProjectFile.from_parent(parent, path=file_path)
     return None
 
 
@@ -150,6 +190,140 @@ def format_failure(result, sources: dict, context: int = 12) -> str:
     return "\n".join(out)
 
 
+# ---------------------------------------------------------------------- TcUnit projects
+
+
+def _collect_tcunit(config, path: Path) -> bool:
+    """Opted in (--st-tcunit, ini st_tcunit), or this .plcproj named on the command line."""
+    opt = config.getoption("st_tcunit")
+    if opt or (opt is None and config.getini("st_tcunit")):
+        return True
+    here = path.resolve()
+    for arg in config.args:
+        try:
+            if Path(str(arg).split("::")[0]).resolve() == here:
+                return True
+        except OSError:
+            continue
+    return False
+
+
+def _libs(config) -> list:
+    """The library search path: --st-lib, then ini st_libs (globs relative to the ini file); the
+    compiler reads ST_LIBPATH after them."""
+    base = Path(config.inipath).parent if config.inipath else Path(config.rootpath)
+    out = [str(p) for p in config.getoption("st_lib")]
+    for pattern in config.getini("st_libs"):
+        matches = sorted(base.glob(pattern)) if not Path(pattern).is_absolute() else [Path(pattern)]
+        if not matches and not any(c in pattern for c in "*?["):
+            raise pytest.UsageError(f"st_libs: {pattern} does not exist (relative to {base})")
+        out.extend(str(m) for m in matches)
+    return out
+
+
+def _max_cycles(config) -> int:
+    opt = config.getoption("st_tcunit_max_cycles")
+    return int(opt) if opt is not None else int(config.getini("st_tcunit_max_cycles"))
+
+
+class TcUnitProjectFile(pytest.File):
+    """A .plcproj with TcUnit suites: one collector per suite instance, one item per TEST name."""
+
+    def project(self):
+        cache = self.config.stash[_TCUNIT_KEY]
+        key = str(self.path)
+        if key not in cache:
+            from .tcunit import NotATcUnitProject, TcUnitProject
+
+            try:
+                cache[key] = TcUnitProject.load([_rel(self.config, self.path)], _libs(self.config))
+            except CompileError as e:
+                cache[key] = self.CollectError(e.render())
+            except NotATcUnitProject as e:
+                cache[key] = self.CollectError(
+                    f"{_rel(self.config, self.path)}: {e} (is its TcUnit library given? --st-lib, ini st_libs, ST_LIBPATH)"
+                )
+        got = cache[key]
+        if isinstance(got, Exception):
+            raise got
+        return got
+
+    def collect(self):
+        for suite in self.project().suites:
+            yield TcUnitSuiteNode.from_parent(self, name=suite.path, suite=suite)
+
+    def tcunit_run(self):
+        """The project's run, once: only the suites of the items this session runs."""
+        prj = self.project()
+        if prj._ran is None:
+            mine = {
+                it.parent.name
+                for it in self.session.items
+                if isinstance(it, TcUnitItem) and it.parent is not None and it.parent.parent is self
+            }
+            run = prj.run(max_cycles=_max_cycles(self.config), suites=mine or None)
+            self.config.stash.setdefault(_TCUNIT_RUNS_KEY, []).append((_rel(self.config, self.path), run))
+            extra = [t for t in run.tests if not t.file and t.status == "failed"]
+            if extra:
+                import warnings
+
+                warnings.warn(
+                    f"{_rel(self.config, self.path)}: failed TcUnit tests whose names are not literal TEST('…') "
+                    f"names (not items): {', '.join(t.nodeid for t in extra)}",
+                    stacklevel=1,
+                )
+        return prj._ran
+
+
+_TCUNIT_RUNS_KEY = pytest.StashKey[list]()  # (project, Run) of this process, for the summary
+
+
+class TcUnitSuiteNode(pytest.Collector):
+    def __init__(self, *, suite, **kw):
+        super().__init__(**kw)
+        self.suite = suite
+
+    def collect(self):
+        for name, (_file, _line, _disabled) in self.suite.tests.items():
+            yield TcUnitItem.from_parent(self, name=name)
+
+
+class TcUnitTestFailure(Exception):
+    def __init__(self, result, text):
+        super().__init__(text)
+        self.result = result
+        self.text = text
+
+
+class TcUnitItem(pytest.Item):
+    def runtest(self):
+        from .tcunit import SKIPPED, format_failure
+
+        project = self.parent.parent
+        run = project.tcunit_run()
+        suite = self.parent.suite.path
+        r = run.result(suite, self.name)
+        if r is None:
+            pytest.fail(f"{suite}@{self.name}: TcUnit did not run this suite", pytrace=False)
+        if r.status == SKIPPED:
+            why = "disabled in TcUnit (its TEST name starts with disabled_)" if r.registered else "not run"
+            raise pytest.skip.Exception(r.failures[0].text if r.failures else why, _use_item_location=True)
+        if r.status != "passed":
+            for f in r.failures:
+                f.file = _rel(self.config, f.file) if f.file else f.file
+            sources = {_rel(self.config, k): v for k, v in project.project().compiled.sources.items()}
+            raise TcUnitTestFailure(r, format_failure(r, sources))
+
+    def repr_failure(self, excinfo, style=None):
+        if isinstance(excinfo.value, TcUnitTestFailure):
+            return excinfo.value.text
+        return super().repr_failure(excinfo, style=style)
+
+    def reportinfo(self):
+        file, line, _d = self.parent.suite.tests.get(self.name, ("", 0, False))
+        return (Path(file) if file else self.path), max(line - 1, 0), f"{self.parent.name}::{self.name}"
+
+
 # ---------------------------------------------------------------------- the plc fixture
 
 
@@ -209,6 +383,17 @@ def pytest_testnodedown(node, error):
 
 
 def pytest_terminal_summary(terminalreporter, config):
+    runs = config.stash.get(_TCUNIT_RUNS_KEY, [])
+    if runs:
+        terminalreporter.section("TcUnit")
+        for name, run in runs:
+            c = run.counts()
+            per = run.wall / run.cycles if run.cycles else 0.0
+            terminalreporter.write_line(
+                f"{name}: {len(run.suites)} suites, {len(run.tests)} tests ({c['passed']} passed, {c['failed']} failed, "
+                f"{c['skipped']} skipped) in {run.cycles} scans, {run.plc_time / 1e9:g} s of PLC time, "
+                f"{run.wall:.1f} s ({per * 1000:.1f} ms a scan)" + ("" if run.finished else f"; {run.limit_note}")
+            )
     if not _measuring(config) or hasattr(config, "workeroutput"):
         return
     from .covreport import html_report, terminal_report
