@@ -30,3 +30,24 @@ def test_a_qualified_block_type_takes_fb_init_arguments():
 def test_an_unknown_qualifier_is_named():
     text = helpers.errors(helpers.program("", "a : Nowhere.Otg(cycletime := 0.001);"), "twincat")
     assert "t.st:4:5: error[E012]: 'Nowhere.Otg': no library 'Nowhere' is available" in text
+
+
+def test_a_qualified_type_behind_pointer_to_and_reference_to():
+    """struckig's benchmark: `otg : REFERENCE TO Struckig.Otg;` (the pass that drops qualifiers
+    skipped the types a POINTER TO / REFERENCE TO points at)."""
+    src = LIBRARY_BLOCK + """
+FUNCTION_BLOCK User
+METHOD Check : LREAL
+VAR_INPUT
+  otg : REFERENCE TO Struckig.Otg;
+  p : POINTER TO Struckig.Otg;
+END_VAR
+Check := otg.cyc + p^.cyc;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR o : Struckig.Otg(cycletime := 0.25, dofs := 1); u : User; r : LREAL; END_VAR
+r := u.Check(o, ADR(o));
+END_PROGRAM
+"""
+    assert helpers.run(src, 1, "twincat")["main.r"] == 0.5

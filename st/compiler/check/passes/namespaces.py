@@ -16,7 +16,7 @@ from ... import ast as A
 from ..context import CheckContext
 
 _NAMESPACE = re.compile(r"\{\s*namespace\s+'([A-Za-z_][A-Za-z0-9_]*)'\s*\}", re.I)
-_SKIP = frozenset({"span", "ty", "const", "sym", "name_span", "end_span", "target"})
+_SKIP = frozenset({"span", "ty", "const", "sym", "name_span", "end_span"})  # (a call's target: not set yet)
 _KEEP = frozenset({"__system.iqueryinterface"})  # CODESYS's root interface: known by its full name
 _fields: dict[type, tuple[str, ...]] = {}
 
