@@ -1428,3 +1428,29 @@ def test_configuration_and_resource_stay_keywords_in_iec_and_matiec(dialect):
     text = errors(CONFIGURATION_NAMES, dialect)
     assert "t.st:3:10: error[E001]: 'Configuration' is a reserved keyword and cannot be a name" in text
     assert "t.st:10:26: error[E001]: 'resource' is a reserved keyword and cannot be a name" in text
+
+
+STRICT_READ = """{attribute 'strict'}
+TYPE State : (Idle, Busy := 5, Error) INT; END_TYPE
+FUNCTION_BLOCK Check
+VAR_INPUT want : INT; END_VAR
+VAR_OUTPUT ok : INT; END_VAR
+ok := want;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR s : State := State.Error; c : Check; n : INT; END_VAR
+c(want := State.Busy);
+n := s;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", ["codesys", "twincat"])
+def test_a_strict_enumeration_is_read_as_its_integer_but_nothing_goes_into_it(dialect):
+    """Beckhoff's attribute 'strict' forbids arithmetic and integers into the enumeration, not an
+    enumeration value passed to an INT input (struckig's AssertEquals_INT(TrajectoryState.Error, ...))."""
+    plc = run(STRICT_READ, 1, dialect)
+    assert (plc["main.c.ok"], plc["main.n"]) == (5, 6)
+    text = errors(STRICT_READ.replace("n := s;", "s := n;\nn := s + 1;"), dialect)
+    assert "t.st:11:6: error[E013]: type mismatch: cannot assign INT to State" in text
+    assert "t.st:12:6: error[E014]: operator + cannot combine State and integer literal" in text

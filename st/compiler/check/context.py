@@ -114,6 +114,12 @@ class CheckContext:
             and t.name.lower() not in self.strict_enums
         )
 
+    def enum_read_as_int(self, t) -> bool:
+        """May this enumeration's value be kept in an integer (assigned to one, passed to an integer
+        input)? codesys/twincat: yes, 'strict' too (it forbids arithmetic and integers INTO the
+        enumeration, not reading it as its number: Beckhoff's attribute 'strict')."""
+        return self.dialect is not None and self.dialect.enum_as_int and isinstance(t, T.EnumType)
+
     # ---------------------------------------------------------------- libraries
     def native(self, key: str) -> FuncSig | None:
         """The signature of a library's native function of this (lower-case) name, or None."""

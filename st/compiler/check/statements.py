@@ -304,9 +304,10 @@ class Statements(Part):
         return None
 
     def _enum_as_int(self, s: T.Type, d: T.Type) -> bool:
-        """CODESYS: a (non-strict) enumeration value as its integer, an integer into one."""
+        """CODESYS: an enumeration value as its integer (a 'strict' one too), an integer into a
+        non-strict one."""
         if (
-            self.ctx.enum_as_int(s)
+            self.ctx.enum_read_as_int(s)
             and (d.is_intlike or d.is_real)
             and (cast(T.EnumType, s).base is d or T.widens_to(cast(T.EnumType, s).base, d) or d.is_real)
         ):
