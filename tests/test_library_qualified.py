@@ -35,7 +35,9 @@ def test_an_unknown_qualifier_is_named():
 def test_a_qualified_type_behind_pointer_to_and_reference_to():
     """struckig's benchmark: `otg : REFERENCE TO Struckig.Otg;` (the pass that drops qualifiers
     skipped the types a POINTER TO / REFERENCE TO points at)."""
-    src = LIBRARY_BLOCK + """
+    src = (
+        LIBRARY_BLOCK
+        + """
 FUNCTION_BLOCK User
 METHOD Check : LREAL
 VAR_INPUT
@@ -50,4 +52,5 @@ VAR o : Struckig.Otg(cycletime := 0.25, dofs := 1); u : User; r : LREAL; END_VAR
 r := u.Check(o, ADR(o));
 END_PROGRAM
 """
+    )
     assert helpers.run(src, 1, "twincat")["main.r"] == 0.5
