@@ -466,3 +466,86 @@ END_PROGRAM
     for dialect in VENDOR:
         plc = run(src, 1, dialect)
         assert (plc["main.a"], plc["main.b"], plc["main.r.n"], plc["main.m"]) == (6, 6, 11, 30)
+
+
+ANY_HANDED_ON = """
+FUNCTION Inner : UDINT
+VAR_INPUT v : ANY; END_VAR
+Inner := TO_UDINT(v.diSize) * 100 + TO_UDINT(v.TypeClass);
+END_FUNCTION
+FUNCTION Outer : UDINT
+VAR_INPUT data : ANY; END_VAR
+Outer := Inner(data);
+END_FUNCTION
+FUNCTION OnlyNum : UDINT
+VAR_INPUT n : ANY_NUM; END_VAR
+OnlyNum := Inner(n);
+END_FUNCTION
+PROGRAM main
+VAR d : DINT := 7; s : STRING := 'ab'; a, b, c : UDINT; END_VAR
+a := Outer(d);
+b := Outer(s);
+c := OnlyNum(d);
+END_PROGRAM
+"""
+
+
+def test_an_any_input_handed_on_to_another_keeps_the_first_callers_descriptor():
+    """TcLog's AnyToString(data) inside a method whose `data` is ANY: the callee sees the first
+    caller's value (DINT: 4 bytes, class 8; STRING: 81 bytes, class 16)."""
+    for dialect in ("twincat", "codesys", None):
+        plc = run(ANY_HANDED_ON, 1, dialect)
+        assert (plc["main.a"], plc["main.b"], plc["main.c"]) == (408, 8116, 408)
+    bad = ANY_HANDED_ON.replace("VAR_INPUT v : ANY; END_VAR", "VAR_INPUT v : ANY_NUM; END_VAR")
+    text = errors(bad, "twincat")
+    assert "t.st:8:16: error[E013]: 'v' is ANY_NUM; an ANY input cannot be handed on to it" in text
+
+
+ZERO_CONSTANT = """
+INTERFACE ILog
+METHOD Log : BOOL
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK Logger IMPLEMENTS ILog
+METHOD Log : BOOL
+Log := TRUE;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR CONSTANT Invalid : UDINT := 0; One : UDINT := 1; END_VAR
+VAR l : Logger; used : ILog; before, after : BOOL; END_VAR
+before := used <> Invalid;
+used := l;
+after := used <> Invalid AND used <> 0;
+END_PROGRAM
+"""
+
+
+def test_an_interface_compared_with_an_integer_constant_that_is_zero():
+    """TcLog: `IF _usedLogger <> InvalidLoggerReference` (a VAR CONSTANT UDINT := 0) tests for NULL."""
+    for dialect in ("twincat", "codesys", None):
+        plc = run(ZERO_CONSTANT, 1, dialect)
+        assert (plc["main.before"], plc["main.after"]) == (False, True)
+    text = errors(ZERO_CONSTANT.replace("used <> Invalid AND", "used <> One AND"), "twincat")
+    assert "t.st:16:10: error[E014]: operator <> cannot combine ILog and UDINT" in text
+
+
+QUALIFIED_LIST = """{attribute 'qualified_only'}
+{gvl 'Constants'}
+VAR_GLOBAL CONSTANT
+  Overhead : UDINT := 10;
+  BufferSize : UDINT := 100 * (80 + Overhead);
+END_VAR
+PROGRAM main
+VAR n : UDINT; END_VAR
+n := Constants.BufferSize;
+END_PROGRAM
+"""
+
+
+def test_a_qualified_only_list_names_its_own_constants_plainly_in_its_initial_values():
+    """TcLog's CONSTANTS.TcGVL: `BufferSize : UDINT := 100 * (MAX_STRING_LENGTH + FifoOverhead)`."""
+    for dialect in ("twincat", "codesys", None):
+        assert run(QUALIFIED_LIST, 1, dialect)["main.n"] == 9000
+    text = errors(QUALIFIED_LIST.replace("n := Constants.BufferSize;", "n := BufferSize;"), "twincat")
+    assert "t.st:9:6: error[E010]: 'BufferSize' belongs to Constants, a {attribute 'qualified_only'} list" in text

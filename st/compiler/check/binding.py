@@ -169,6 +169,15 @@ class _Binder:
         vt = self.part.exprs.expr(a.value, self.scope)
         if vt is None:
             return
+        handed_on = passed_on_any(a.value)
+        if handed_on is not None:  # an ANY input handed on: its descriptor as it is (CODESYS)
+            if p.any_input != "ANY" and handed_on != p.any_input:
+                self.part.err(
+                    Code.TYPE_MISMATCH,
+                    a.value.span,
+                    f"'{p.name}' is {p.any_input}; an {handed_on} input cannot be handed on to it",
+                )
+            return
         if isinstance(T.base_of(vt), T.LiteralType):
             vt = T.default_type_for_literal(T.base_of(vt))
             a.value.ty = vt
@@ -213,3 +222,10 @@ def _fits_conformant(arg, param) -> bool:
     """An array for an ARRAY[*] parameter: as many dimensions, the same element type."""
     a, p = T.unalias(arg), cast(T.ArrayType, T.unalias(param))
     return isinstance(a, T.ArrayType) and len(a.dims) == len(p.dims) and same_type(a.element, p.element)
+
+
+def passed_on_any(e: A.Expr) -> str | None:
+    """The family of the caller's own ANY input that `e` names (handed on to another ANY input as
+    its descriptor, pValue still pointing at the first caller's value), else None."""
+    sym = e.sym if isinstance(e, A.Name) else None
+    return sym.any_input if isinstance(sym, T.VarSym) and sym.any_input else None

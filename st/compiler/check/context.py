@@ -54,7 +54,12 @@ class CheckContext:
     """Named global variable lists: lower list name → lower variable name → symbol (`GVL_Main.x`)."""
     """VAR_GLOBAL blocks: (scope prefix, block); the prefix is '' or a configuration/resource path."""
     qualified_only: set[int] = field(default_factory=set)
-    """Globals of a {attribute 'qualified_only'} list (ids of their symbols): reachable only as GVL.x."""
+    """Globals of a {attribute 'qualified_only'} list (ids of their symbols): reachable only as GVL.x
+    (but by their plain names in their own list's initial values: `current_gvl`)."""
+    gvl_of_decl: dict[int, str] = field(default_factory=dict)
+    """id(VarDecl) of a named list's variable → the list's lower name."""
+    current_gvl: str | None = None
+    """The named list whose initial values are being checked, if any."""
     namespaces: dict[str, str] = field(default_factory=dict)
     """Library and project namespaces, lower name → name: `Tc2_Standard.TON` is TON (passes/namespaces.py)."""
     program_instances: dict[str, T.VarSym] = field(default_factory=dict)

@@ -267,7 +267,10 @@ class Expressions(Part):
         if key == "super" and scope.fb is not None and scope.fb.base is not None and self.ctx.feature_quiet("oop"):
             return SUPER
         gs = self.p.global_names.get(key)
-        if gs and id(gs[0]) not in self.ctx.qualified_only:
+        if gs and (
+            id(gs[0]) not in self.ctx.qualified_only
+            or (self.ctx.current_gvl is not None and self.ctx.gvls.get(self.ctx.current_gvl, {}).get(key) is gs[0])
+        ):
             return gs[0]
         pou = self.p.pous.get(key)
         if pou is not None and pou.pou_kind == "PROGRAM" and self.ctx.feature_quiet("vendor"):
@@ -774,8 +777,9 @@ def _comparable_links(op: str, a, b) -> bool:
 
 
 def _zero_pointer(ctx: CheckContext, e, other) -> bool:
-    """The literal 0 where a POINTER, a REF_TO or an interface is compared or assigned: NULL, as
-    CODESYS and TwinCAT write it (a vendor extension)."""
+    """The literal 0 (or an integer constant that is 0: TcLog's `_logger <> InvalidLoggerReference`)
+    where a POINTER, a REF_TO or an interface is compared or assigned: NULL, as CODESYS and TwinCAT
+    write it (a vendor extension)."""
     u = T.unalias(other) if other is not None else None
     is_link = (
         isinstance(u, T.RefType)
@@ -783,7 +787,15 @@ def _zero_pointer(ctx: CheckContext, e, other) -> bool:
         or isinstance(u, T.POUType)
         and u.pou_kind == "INTERFACE"
     )
-    return isinstance(e, A.Literal) and e.value == 0 and e.kind == "int" and is_link and ctx.feature_quiet("vendor")
+    zero = (isinstance(e, A.Literal) and e.value == 0 and e.kind == "int") or (
+        isinstance(e, A.Name)
+        and isinstance(e.sym, T.VarSym)
+        and e.sym.constant
+        and e.sym.const_value == 0
+        and T.base_of(e.sym.type).is_intlike
+        and not T.base_of(e.sym.type).is_bool
+    )
+    return zero and is_link and ctx.feature_quiet("vendor")
 
 
 def _null_at(e) -> A.Name:

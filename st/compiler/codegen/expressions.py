@@ -20,6 +20,7 @@ from ..check import (
     RefCall,
     SizeofCall,
 )
+from ..check.binding import passed_on_any
 from ..check.rules.initialization_order import names_variables
 
 if TYPE_CHECKING:
@@ -844,6 +845,8 @@ class ExprGen:
         """The AnyType for an ANY input: over the argument variable's bytes (so pValue reads the
         caller's variable, as CODESYS passes its address), or over a temporary for an expression."""
         t = e.ty
+        if passed_on_any(e) is not None:  # the caller's own ANY input, handed on as it is
+            return self.expr(e)
         if isinstance(e, (A.Name, A.Field, A.Index, A.Deref)):
             ref = self.ref_to(e)
         else:

@@ -30,7 +30,9 @@ def declare_globals(sem: Semantics) -> None:
     # initial values of the POUs' variables met so far
     ctx.globals_declared = True
     for decl, t in ctx.deferred_inits:
+        ctx.current_gvl = ctx.gvl_of_decl.get(id(decl))  # its own list's names need no qualifier
         sem.decls.check_initializer(decl.init, t, None)
+    ctx.current_gvl = None
     ctx.deferred_inits = []
     for decl, t, scope, variables in ctx.deferred_pou_inits:
         sem.decls.check_initializer(decl.init, t, scope, variables)
@@ -66,6 +68,7 @@ def _declare_block(sem: Semantics, prefix: str, block, declared: dict) -> None:
         ctx.project.global_names.setdefault(key, []).append(sym)
         gvl = ctx.gvl_of_block.get(id(block))
         if gvl:
+            ctx.gvl_of_decl.update((id(d), gvl.rstrip("!").lower()) for d in block.decls)
             if gvl.endswith("!"):  # {attribute 'qualified_only'}
                 gvl = gvl[:-1]
                 ctx.qualified_only.add(id(sym))
