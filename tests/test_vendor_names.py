@@ -538,3 +538,18 @@ def test_sub_of_a_date_and_something_else_is_refused():
     text = errors(program("t := SUB(d, TRUE); u := SUB(t, d);", "d : DT; t : TIME; u : TIME;"), "twincat")
     assert "argument 2 of SUB must be ANY_MAGNITUDE or ANY_DATE, not BOOL" in text
     assert "arguments of SUB have incompatible types" in text
+
+
+def test_getcpuaccount_counts_the_plc_clock_in_100_ns_ticks():
+    src = """
+PROGRAM main
+VAR c : Tc2_System.GETCPUACCOUNT; first, d : UDINT; n : INT; END_VAR
+c();
+IF n = 0 THEN first := c.cpuAccountDW; END_IF
+n := n + 1;
+d := c.cpuAccountDW - first;
+END_PROGRAM
+"""
+    plc = PLC(compile_text(src, "t.st", dialect="twincat", use_cache=False), cycle="10ms")
+    plc.scan(3)
+    assert plc["main.d"] == 200_000  # two 10 ms cycles
