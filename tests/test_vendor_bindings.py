@@ -549,3 +549,40 @@ def test_a_qualified_only_list_names_its_own_constants_plainly_in_its_initial_va
         assert run(QUALIFIED_LIST, 1, dialect)["main.n"] == 9000
     text = errors(QUALIFIED_LIST.replace("n := Constants.BufferSize;", "n := BufferSize;"), "twincat")
     assert "t.st:9:6: error[E010]: 'BufferSize' belongs to Constants, a {attribute 'qualified_only'} list" in text
+
+
+def test_a_block_called_and_its_method_called_through_a_reference_to_it():
+    """struckig's benchmark: `otg : REFERENCE TO Struckig.Otg; otg();` (the variable is named like
+    its type), and a REFERENCE TO input of a block called with arguments."""
+    src = """
+FUNCTION_BLOCK Otg
+VAR_INPUT step : INT := 1; END_VAR
+VAR_OUTPUT n : INT; END_VAR
+n := n + step;
+METHOD Twice : INT
+Twice := 2 * n;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Holder
+VAR_INPUT r : REFERENCE TO Otg; END_VAR
+VAR_OUTPUT t : INT; END_VAR
+r(step := 5);
+t := r.Twice();
+END_FUNCTION_BLOCK
+FUNCTION Run : INT
+VAR_INPUT otg : REFERENCE TO Otg; END_VAR
+otg();
+otg(step := 10);
+Run := otg.Twice();
+END_FUNCTION
+PROGRAM main
+VAR o : Otg; h : Holder; r, t : INT; END_VAR
+r := Run(o);
+h(r := o);
+t := h.t;
+END_PROGRAM
+"""
+    for dialect in ("twincat", "codesys", None):
+        plc = run(src, 1, dialect)
+        # Run: n = 1 (step 1), then 11 (step 10), Twice 22; Holder: n = 16 (step 5), Twice 32
+        assert (plc["main.r"], plc["main.o.n"], plc["main.t"]) == (22, 16, 32)

@@ -40,7 +40,7 @@ class Calls(Part):
         sym = self.exprs.lookup(key, scope)
         if (
             isinstance(sym, T.VarSym)
-            and not isinstance(T.unalias(sym.type), T.POUType)
+            and not _an_instance(sym.type)
             and (key in self.p.pous or self.ctx.native(key) is not None)
         ):
             sym = None  # LEN(x) is the function even where a variable is called len
@@ -144,6 +144,8 @@ class Calls(Part):
 
     def _fb_call(self, c: A.Call, t: T.Type, scope: Scope, statement: bool):
         fb = T.unalias(t)
+        if isinstance(fb, T.RefType) and fb.ref_kind == "REFERENCE":  # a REFERENCE TO a block: the block
+            fb = T.unalias(fb.target)
         if (
             not isinstance(fb, T.POUType)
             or fb.pou_kind in ("FUNCTION", "INTERFACE")
@@ -180,3 +182,12 @@ class Calls(Part):
 
 
 size_of = T.size_of  # (bytes, alignment) of a type, as SIZEOF counts: for libraries (MEMCPY's layouts)
+
+
+def _an_instance(t: T.Type) -> bool:
+    """A block instance, or a REFERENCE TO one (`otg : REFERENCE TO Otg; otg();`: the variable is
+    called, not the type of the same name)."""
+    u = T.unalias(t)
+    if isinstance(u, T.RefType) and u.ref_kind == "REFERENCE":
+        u = T.unalias(u.target)
+    return isinstance(u, T.POUType)
