@@ -586,3 +586,86 @@ END_PROGRAM
         plc = run(src, 1, dialect)
         # Run: n = 1 (step 1), then 11 (step 10), Twice 22; Holder: n = 16 (step 5), Twice 32
         assert (plc["main.r"], plc["main.o.n"], plc["main.t"]) == (22, 16, 32)
+
+
+VAR_INST_FROM_BLOCK = """
+INTERFACE IGen
+METHOD Next : INT
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK Gen IMPLEMENTS IGen
+VAR seed, v : INT; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; s : INT; END_VAR
+seed := s;
+END_METHOD
+METHOD Next : INT
+v := v + seed;
+Next := v;
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Wrap
+VAR g : IGen; END_VAR
+METHOD FB_init : BOOL
+VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; gen : IGen; END_VAR
+g := gen;
+END_METHOD
+METHOD Draw : INT
+Draw := g.Next();
+END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK Suite
+VAR
+  dist : Gen(s := 3);
+  base : INT := 10;
+END_VAR
+METHOD Test : INT
+VAR_INST
+  w : Wrap(dist);
+  k : INT := base + 1;
+END_VAR
+VAR
+  local : INT := base * 2;
+END_VAR
+Test := w.Draw() + k + local;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR s : Suite; r, r2 : INT; END_VAR
+r := s.Test();
+r2 := s.Test();
+END_PROGRAM
+"""
+
+
+def test_a_method_s_var_inst_is_initialised_from_the_block_s_variables():
+    """struckig's RandomTest: `p : Randomizer(_positionDist);` in a METHOD's VAR_INST names an
+    instance variable of the block (given to FB_init as an interface: the same instance)."""
+    src = VAR_INST_FROM_BLOCK
+    for dialect in ("twincat", "codesys", None):
+        plc = run(src, 1, dialect)
+        # Draw: dist.Next() = 3, then 6; k = base + 1 = 11; local = base * 2 = 20
+        assert (plc["main.r"], plc["main.r2"], plc["main.s.dist.v"]) == (34, 37, 6)
+    assert "error[E010]: undeclared identifier 'base'" in errors(src.replace("  base : INT := 10;\n", ""), "twincat")
+
+
+def test_adr_of_an_array_of_structures_into_a_pointer_to_its_element():
+    """struckig's SecondaryFeaturesTest: `profiles : POINTER TO ProfileDesc := ADR(otg._profiles);`."""
+    src = """TYPE P : STRUCT x : INT := 4; END_STRUCT END_TYPE
+FUNCTION_BLOCK Otg
+VAR _profiles : ARRAY[0..3] OF P := [(x := 1), (x := 20)]; END_VAR
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK T
+METHOD M : INT
+VAR_INST otg : Otg; END_VAR
+VAR profiles : POINTER TO P := ADR(otg._profiles); END_VAR
+M := profiles^.x + (profiles + SIZEOF(otg._profiles[0]))^.x;
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR t : T; r : INT; END_VAR
+r := t.M();
+END_PROGRAM
+"""
+    for dialect in ("twincat", "codesys", None):
+        assert run(src, 1, dialect)["main.r"] == 21

@@ -4,6 +4,7 @@ is resolved when first met, so declarations may come in any order."""
 
 from __future__ import annotations
 
+from collections import ChainMap
 from collections.abc import Callable, Mapping
 from typing import cast
 
@@ -543,7 +544,10 @@ class Declarations(Part):
         mt.pyname = "_m_" + mangle(m.name)
         mt.owner_fb = fb
         mt.resolved = True
-        scope = Scope(mt, mt.vars)
+        # its initial values see its own variables, then the instance's (CODESYS: a VAR_INST
+        # `p : Randomizer(_positionDist);` names a variable of the block)
+        scope = Scope(mt, ChainMap(mt.vars, fb.vars))
+        scope.fb = fb
         if m.return_type is not None:
             mt.return_type = self.resolve_type(m.return_type, scope)
         self.declare_blocks(m.var_blocks, mt.vars, scope, mt)
@@ -857,7 +861,8 @@ def _evaluated_in_place(kind: str, owner) -> bool:
     it may name have values: an instance variable of a block or program (when the instance is
     created), a local of a FUNCTION or METHOD (at every call)?"""
     if owner is None or getattr(owner, "owner_fb", None) is not None or owner.pou_kind == "FUNCTION":
-        return owner is not None and kind in ("VAR", "VAR_TEMP")
+        # (a METHOD's VAR_INST: when the instance is created, after the block's own variables)
+        return owner is not None and (kind in ("VAR", "VAR_TEMP") or kind == "VAR_INST" and owner.owner_fb is not None)
     return owner.pou_kind in ("FUNCTION_BLOCK", "PROGRAM") and kind in ("VAR", "VAR_INPUT", "VAR_OUTPUT")
 
 

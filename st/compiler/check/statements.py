@@ -334,6 +334,8 @@ class Statements(Part):
         st_, dt_ = T.unalias(s.target), T.unalias(d.target)
         if isinstance(st_, T.POUType) and isinstance(dt_, T.POUType) and T.implements(st_, dt_):
             return True  # a reference to a derived block is a reference to its base
+        if d.ref_kind == "POINTER" and isinstance(st_, T.ArrayType) and same_type(st_.element, dt_):
+            return self.ctx.feature_quiet("vendor")  # ADR(arr) as a POINTER TO its first element
         # ADR(x) into a POINTER TO BYTE: its bytes (CODESYS)
         return d.ref_kind == "POINTER" and T.pointer_view(st_, dt_) is not None and self.ctx.feature_quiet("vendor")
 

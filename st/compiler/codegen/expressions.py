@@ -21,6 +21,7 @@ from ..check import (
     SizeofCall,
 )
 from ..check.binding import passed_on_any
+from ..check.common import same_type
 from ..check.rules.initialization_order import names_variables
 
 if TYPE_CHECKING:
@@ -254,6 +255,9 @@ class ExprGen:
         d = T.base_of(dst)
         s = T.base_of(src) if src is not None else None
         if isinstance(d, T.RefType) and isinstance(s, T.RefType) and d.ref_kind == "POINTER":
+            arr = T.unalias(s.target)
+            if isinstance(arr, T.ArrayType) and same_type(arr.element, d.target):
+                return _call("_ptr_elems", node)  # ADR(arr) as a POINTER TO its element: the first one
             view = T.pointer_view(s.target, d.target)
             if view is None:
                 return node
