@@ -4,7 +4,7 @@ targets: targets.py)."""
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, MutableMapping
 
 from ...model import types as T
 from ...model.addresses import AddressError, parse_address
@@ -38,7 +38,7 @@ STEP = StepType()
 
 
 class Scope:
-    def __init__(self, pou: T.POUType | None, vars: dict, *, library: str = ""):
+    def __init__(self, pou: T.POUType | None, vars: MutableMapping, *, library: str = ""):
         self.pou = pou
         self.vars = vars
         self.loop_depth = 0
