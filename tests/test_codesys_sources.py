@@ -230,8 +230,9 @@ def test_fb_init_runs_once_per_instance_with_declaration_arguments_base_first():
     assert (plc["main.a.id"], plc["main.a.log"]) == (9, "B+")
     assert (plc["main.b.id"], plc["main.b.log"]) == (5, "B+")
     # the base's FB_init gets the inputs it declares (nId), then the derived one runs; the
-    # declared initial values (gain := 10.0) are in place before either
-    assert (plc["main.d.id"], plc["main.d.log"], plc["main.d.scale"]) == (7, "B+D", 30.0)
+    # declaration's values for the instance's variables (gain := 10.0) are set after FB_init, as
+    # CODESYS and TwinCAT do (struckig's tests rely on it): FB_init saw gain's default 1.0
+    assert (plc["main.d.id"], plc["main.d.log"], plc["main.d.scale"], plc["main.d.gain"]) == (7, "B+D", 3.0, 10.0)
     assert (plc["main.d.inner.id"], plc["main.d.inner.log"]) == (4, "B+")
     assert [plc[f"main.arr[{i}].scale"] for i in range(2)] == [2.0, 2.0]
     assert plc["main.arr[1].id"] == 9 and plc["main.calls"] == 3

@@ -71,18 +71,29 @@ class InitGen:
             if ctor is not None:
                 init = ctor.inner
             obj = _call(ut.pyname)
-            if isinstance(init, A.StructInit):
-                obj = self._with_fields(obj, init, lambda n: _member_of_pou(ut, n))
             if construct:
                 obj = self.constructor_call(obj, ut, ctor)
+            if isinstance(init, A.StructInit):
+                # the declaration's values for its variables are set after FB_init ran (CODESYS,
+                # TwinCAT: they are not yet there inside FB_init, and what FB_init set is replaced)
+                obj = self._with_fields(obj, init, lambda n: _member_of_pou(ut, n))
             return obj
         if init is None or _zero_link(init, ut):
             return _const(default_value(t))  # (a POINTER's, a REF_TO's: NULL, as a literal 0 there)
         return ExprGen.constant_expr(self.mod, init, t)
 
+    def constructed_later(self, obj: py.expr, ut: T.POUType, ctor: A.CtorInit) -> py.expr:
+        """An instance made before (`initial(..., construct=False)`) constructed now: FB_init with
+        the declaration's arguments, then the declaration's values for its variables again (they
+        come after FB_init)."""
+        made = self.constructor_call(obj, ut, ctor)
+        if isinstance(ctor.inner, A.StructInit) and made is not obj:
+            made = self._with_fields(made, ctor.inner, lambda n: _member_of_pou(ut, n))
+        return made
+
     def constructor_call(self, obj: py.expr, ut: T.POUType, ctor: A.CtorInit | None) -> py.expr:
         """`obj._ctor({...})` with the declaration's FB_init arguments where the block has an FB_init
-        chain (it runs once the values are set), else `obj`."""
+        chain, else `obj`."""
         block = self.mod.blocks.get(ut)
         if block is None or block.constructor is None:
             return obj

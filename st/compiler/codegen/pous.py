@@ -123,7 +123,7 @@ class FuncGen(StmtGen):
                 v = step.var
                 if step.part == "construct":
                     ut, ctor = cast(T.POUType, T.unalias(v.type)), cast(A.CtorInit, v.init)
-                    made = init.constructor_call(self.var_load(v), ut, ctor)
+                    made = init.constructed_later(self.var_load(v), ut, ctor)
                     locals_init.append(_set_lines(py.Expr(made), v.span.line))
                 else:
                     value = init.initial(v.type, v.init, construct=step.part == "all")
@@ -212,7 +212,7 @@ class BodyGen(StmtGen):
             v = step.var
             if step.part == "construct":  # FB_init with arguments that name variables (lower/initial_values.py)
                 ut, ctor = cast(T.POUType, T.unalias(v.type)), cast(A.CtorInit, v.init)
-                made = init.constructor_call(_attr(_name("self"), v.pyname), ut, ctor)
+                made = init.constructed_later(_attr(_name("self"), v.pyname), ut, ctor)
                 init_body.append(_set_lines(py.Expr(made), v.span.line))
                 continue
             value = init.initial(v.type, v.init, construct=step.part == "all")
