@@ -80,9 +80,10 @@ def test_an_unchanged_array_of_elementary_values_is_moved_not_copied():
 def test_an_array_of_unchanged_structures_is_moved_and_given_the_new_classes_in_the_background():
     plc = make()
     recs = plc.instances["main"][1].recs
-    change(plc, constant="2.0")
-    new_cls = plc.ns["_st_Rec"]
-    assert plc.instances["main"][1].recs is recs and type(recs[0]) is not new_cls  # moved as they are
+    with releaser().held():  # (the background must not have given them their classes yet)
+        change(plc, constant="2.0")
+        new_cls = plc.ns["_st_Rec"]
+        assert plc.instances["main"][1].recs is recs and type(recs[0]) is not new_cls  # moved as they are
     assert releaser().flush()  # the background work handed over so far is done
     assert all(type(r) is new_cls for r in recs) and type(recs[7].inner) is plc.ns["_st_Pair"]
     assert (plc["main.recs[11].a"], plc["main.recs[7].inner.y"]) == (11, 77)

@@ -23,7 +23,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from ..model import types as T
 from ..model.compiled import CompiledProgram
@@ -427,6 +427,11 @@ def _relink(plc: PLC, b: Build, moved: Moved) -> None:
 # ---------------------------------------------------------------------------- releasing what is left
 
 
+class _Hold(NamedTuple):
+    reached: threading.Event  # the releaser waits at the hold
+    go: threading.Event  # and goes on when this is set
+
+
 class _Releaser:
     """One background thread per process that frees what online changes leave behind (started
     beside the scan, when a change is prepared: starting a thread at the swap would make the scan
@@ -443,11 +448,27 @@ class _Releaser:
             if isinstance(job, threading.Event):
                 job.set()
                 continue
+            if isinstance(job, _Hold):
+                job.reached.set()
+                job.go.wait()
+                continue
             try:
                 with beside_the_scan():
                     _release(*job)
             except Exception:  # noqa: BLE001 - what is left is then freed the ordinary way; the thread goes on
                 continue
+
+    @contextlib.contextmanager
+    def held(self) -> Iterator[None]:
+        """Nothing handed over while the block runs is released before it ends (tests: what an
+        online change leaves to the background, seen before the background does it)."""
+        hold = _Hold(threading.Event(), threading.Event())
+        self.queue.put(hold)  # type: ignore[arg-type]
+        hold.reached.wait(30.0)
+        try:
+            yield
+        finally:
+            hold.go.set()
 
     def flush(self, timeout: float = 30.0) -> bool:
         """Wait until what was handed over so far is released (tests, an orderly exit)."""
