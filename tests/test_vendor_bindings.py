@@ -669,3 +669,33 @@ END_PROGRAM
 """
     for dialect in ("twincat", "codesys", None):
         assert run(src, 1, dialect)["main.r"] == 21
+
+
+ASSIGNING_CONDITIONS = """
+FUNCTION Next : BOOL
+VAR_IN_OUT n : INT; END_VAR
+n := n + 1;
+Next := n < 4;
+END_FUNCTION
+PROGRAM main
+VAR n, m, k, rounds, r2 : INT; b, c, d : BOOL; which : INT; END_VAR
+IF b := Next(n) THEN which := 1; END_IF
+IF FALSE THEN which := 9; ELSIF c := (n = 1) THEN which := which + 10; ELSE which := which + 100; END_IF
+IF TRUE THEN which := which + 1000; ELSIF d := TRUE THEN which := 0; END_IF
+WHILE b := Next(m) DO rounds := rounds + 1; END_WHILE
+REPEAT r2 := r2 + 1; UNTIL c := NOT Next(k) END_REPEAT
+END_PROGRAM
+"""
+
+
+def test_a_condition_that_assigns_assigns_where_it_is_evaluated():
+    """CODESYS/TwinCAT (ExST): `IF b := f() THEN`, in ELSIF (only when reached), WHILE (before each
+    round) and UNTIL (after each round)."""
+    for dialect in ("twincat", "codesys", None):
+        plc = run(ASSIGNING_CONDITIONS, 1, dialect)
+        got = [plc[f"main.{x}"] for x in ("n", "which", "m", "rounds", "k", "r2", "b", "c", "d")]
+        # d: its ELSIF is never reached, so it is never assigned
+        assert got == [1, 1011, 4, 3, 4, 4, False, True, False]
+    text = errors(ASSIGNING_CONDITIONS, "iec")
+    assert "t.st:9:4: error[E044]: an assignment as a condition (IF b := f() THEN) is not part of the iec" in text
+    assert text.count("error[E044]") == 5

@@ -167,6 +167,7 @@ class Assign(Stmt):
     value: Expr
     kind: str = ":="  # ":=", "S=", "R=", "?=", "REF="
     chained: bool = False  # the leftmost of `a := b := c` (a vendor extension), for the dialect check
+    in_condition: bool = False  # from `IF b := f() THEN` (a vendor extension), for the dialect check
     attempt: tuple[str, bool, bool] | None = (
         None  # for "?=": (kind name, source is a reference, destination is a reference)
     )

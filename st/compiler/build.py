@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import Any, cast
 
 from lark import Token, Transformer
 
@@ -30,6 +30,7 @@ from ..source import Span
 from . import ast as A
 from .build_parts import (
     Accessor,
+    AssignCondition,
     CaseLabel,
     CaseLabels,
     Catch,
@@ -747,11 +748,11 @@ class AstBuilder(Transformer[Token, A.Unit]):
     def _stmts(items: Iterable[Any]) -> list[A.Stmt]:
         return [s for s in flat(items) if isinstance(s, A.Stmt)]
 
-    def if_stmt(self, c: list[Any]) -> A.If:
+    def if_stmt(self, c: list[Any]) -> A.If | Chain:
         kw: Token
-        cond: A.Expr
+        cond: A.Expr | AssignCondition
         kw, cond, _, *rest = c
-        branches = [(cond, self._stmts(rest))]
+        branches: list[tuple[A.Expr | AssignCondition, list[A.Stmt]]] = [(cond, self._stmts(rest))]
         orelse = None
         for x in rest:
             match x:
@@ -759,7 +760,27 @@ class AstBuilder(Transformer[Token, A.Unit]):
                     branches.append((elsif_cond, body))
                 case Else(body):
                     orelse = body
-        return A.If(self.sp(kw), branches, orelse)
+        return self._if_chain(self.sp(kw), branches, orelse)
+
+    def _if_chain(
+        self, span: Span, branches: list[tuple[A.Expr | AssignCondition, list[A.Stmt]]], orelse: list[A.Stmt] | None
+    ) -> A.If | Chain:
+        """An IF whose conditions may assign (`IF b := f() THEN`): the branches before the first such
+        condition, then, in their ELSE, the assignment and an IF of the rest testing `b` (so it is
+        made only where TwinCAT evaluates that condition)."""
+        k = next((i for i, (cnd, _) in enumerate(branches) if isinstance(cnd, AssignCondition)), None)
+        if k is None:
+            return A.If(span, cast(list[tuple[A.Expr, list[A.Stmt]]], branches), orelse)
+        first = cast(AssignCondition, branches[k][0])
+        rest = self._if_chain(first.span, [(first.test(), branches[k][1])] + branches[k + 1 :], orelse)
+        tail: list[A.Stmt] = [first.assign(), *(rest if isinstance(rest, Chain) else [rest])]
+        if k == 0:
+            return Chain(cast(list[A.Assign], tail))
+        return A.If(span, cast(list[tuple[A.Expr, list[A.Stmt]]], branches[:k]), tail)
+
+    def assign_condition(self, c: list[Any]) -> AssignCondition:
+        target, _, value = c
+        return AssignCondition(target.span, target, value)
 
     def elsif_clause(self, c: list[Any]) -> ElsIf:
         _, cond, _, *body = c
@@ -836,13 +857,21 @@ class AstBuilder(Transformer[Token, A.Unit]):
 
     def while_stmt(self, c: list[Any]) -> A.While:
         kw: Token
-        cond: A.Expr
+        cond: A.Expr | AssignCondition
         kw, cond, _, *body = c
+        if isinstance(cond, AssignCondition):  # WHILE b := f() DO: assigned and tested before each round
+            test = A.If(cond.span, [(A.Unary(cond.span, "NOT", cond.test()), [A.Exit(cond.span)])])
+            true = A.Literal(cond.span, "bool", True, "", "TRUE")
+            return A.While(self.sp(kw), true, [cond.assign(), test, *self._stmts(body)])
         return A.While(self.sp(kw), cond, self._stmts(body))
 
     def repeat_stmt(self, c: list[Any]) -> A.Repeat:
         i_until = next(i for i, x in enumerate(c) if isinstance(x, Token) and x.type == "UNTIL")
-        return A.Repeat(self.sp(c[0]), self._stmts(c[1:i_until]), c[i_until + 1])
+        cond = c[i_until + 1]
+        body = self._stmts(c[1:i_until])
+        if isinstance(cond, AssignCondition):  # UNTIL b := f(): assigned after each round, then tested
+            return A.Repeat(self.sp(c[0]), [*body, cond.assign()], cond.test())
+        return A.Repeat(self.sp(c[0]), body, cond)
 
     def try_stmt(self, c: list[Any]) -> A.Try:
         kw: Token = c[0]

@@ -5,6 +5,7 @@ or `match`. Private to the builder: none of these reaches the AST.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -21,6 +22,25 @@ CaseLabelValue = tuple[A.Expr, A.Expr | None]  # a CASE label: a value (hi None)
 class Chain(list[A.Assign]):
     """Several statements from one piece of text (a chained assignment), spliced into the
     statement list around it by `flat`."""
+
+
+@dataclass(frozen=True, slots=True)
+class AssignCondition:
+    """`b := f()` where a condition stands (IF, ELSIF, WHILE, UNTIL): the builder makes it the
+    assignment, before the test of `b` (AstBuilder._conditional)."""
+
+    span: Span
+    target: A.Expr
+    value: A.Expr
+
+    def assign(self) -> A.Assign:
+        out = A.Assign(self.span, self.target, self.value)
+        out.in_condition = True
+        return out
+
+    def test(self) -> A.Expr:
+        """The target again, as the condition (a node of its own)."""
+        return copy.deepcopy(self.target)
 
 
 def flat(items: Iterable[Any]) -> Iterator[Any]:

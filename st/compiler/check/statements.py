@@ -55,6 +55,8 @@ class Statements(Part):
             return self._attempt_assign(s, scope)
         if s.chained:
             self.feature("vendor", s.span, "chained assignment (a := b := c)")
+        if s.in_condition:
+            self.feature("vendor", s.span, "an assignment as a condition (IF b := f() THEN)")
         tt = self.lvalue(s.target, scope)
         if s.kind in ("S=", "R="):
             vt = self.exprs.expr(s.value, scope, T.BOOL)
