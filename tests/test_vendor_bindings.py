@@ -699,3 +699,27 @@ def test_a_condition_that_assigns_assigns_where_it_is_evaluated():
     text = errors(ASSIGNING_CONDITIONS, "iec")
     assert "t.st:9:4: error[E044]: an assignment as a condition (IF b := f() THEN) is not part of the iec" in text
     assert text.count("error[E044]") == 5
+
+
+def test_delete_this_releases_an_instance_made_by_new():
+    """The design-pattern course's Disposable: `METHOD Dispose ... __DELETE(THIS);`."""
+    src = """
+FUNCTION_BLOCK Disposable
+VAR_OUTPUT disposed : INT; END_VAR
+METHOD Dispose
+disposed := disposed + 1;
+__DELETE(THIS);
+END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR p : POINTER TO Disposable; n, made : INT; END_VAR
+IF p = 0 THEN p := __NEW(Disposable); made := made + 1; END_IF
+p^.Dispose();
+n := p^.disposed;
+__DELETE(p);
+END_PROGRAM
+"""
+    for dialect in ("twincat", "codesys", None):
+        plc = run(src, 2, dialect)
+        assert (plc["main.n"], plc["main.made"], plc["main.p"]) == (1, 2, None)  # a fresh instance each scan
+    assert "error[E044]: __DELETE is not part of the iec dialect" in errors(src, "iec")

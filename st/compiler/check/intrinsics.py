@@ -155,6 +155,12 @@ def _delete(part: Part, c: A.Call, key: str, scope: Scope, statement: bool) -> T
         return None
     arg = c.args[0].value
     call_without_value.check_statement_call(part.ctx, c, statement, "__DELETE(p) is a statement; it has no value")
+    if isinstance(arg, A.Name) and arg.name.upper() == "THIS" and scope.fb is not None:
+        # __DELETE(THIS) (CODESYS: an instance made by __NEW releasing itself): nothing to set to
+        # NULL here; the instance is freed once nothing refers to it any more
+        part.exprs.expr(arg, scope)
+        c.target = DeleteCall(arg, itself=True)
+        return None
     t = part.stmts.lvalue(arg, scope)
     u = T.unalias(t) if t is not None else None
     if t is not None and not (isinstance(u, T.RefType) and u.ref_kind == "POINTER"):

@@ -104,9 +104,10 @@ class NewCall(CallTarget):
 
 @dataclass(frozen=True, eq=False)
 class DeleteCall(CallTarget):
-    """__DELETE(p)."""
+    """__DELETE(p); `itself`: __DELETE(THIS), a method's instance releasing itself."""
 
     arg: A.Expr
+    itself: bool = False
 
 
 @dataclass(frozen=True, eq=False)

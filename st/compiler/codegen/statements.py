@@ -272,6 +272,8 @@ class StmtGen(ExprGen):
                 body = [py.Expr(call)]
                 bind["en"] = en
                 return self._en_wrap(en, eno, body, "eno" in bind["params"])
+            case DeleteCall(itself=True):
+                return []  # __DELETE(THIS): freed once nothing refers to it (check/intrinsics.py)
             case DeleteCall(arg=arg):
                 return self.assign(arg, _const(None), None)
             case TestCall() as tgt:
