@@ -456,3 +456,16 @@ def test_memcpy_of_a_few_bytes_into_and_out_of_a_large_buffer():
     assert plc["main.small"] == [13, 14, 15, 16]
     big = plc["main.big"]
     assert big[:3] == [7, 7, 2] and big[65533:] == [13, 14, 15] and big[65532] == 252
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_bare_pi_is_tc2_systems_constant_beside_a_qualified_only_pi(dialect):
+    """struckig's example: its library's Constants.Pi is qualified_only, so a bare PI is Tc2_System's."""
+    gvl = "{gvl 'Constants'}\n{attribute 'qualified_only'}\nVAR_GLOBAL CONSTANT\n  Pi : LREAL := 3.0;\nEND_VAR\n"
+    plc = run(gvl + program("a := PI; b := Constants.Pi;", "a : LREAL; b : LREAL;"), 1, dialect)
+    assert (plc["main.a"], plc["main.b"]) == (3.141592653589793, 3.0)
+
+
+def test_a_user_global_pi_wins_over_tc2_systems():
+    plc = run("VAR_GLOBAL CONSTANT\n  PI : LREAL := 3.0;\nEND_VAR\n" + program("a := PI;", "a : LREAL;"), 1, "twincat")
+    assert plc["main.a"] == 3.0

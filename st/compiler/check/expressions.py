@@ -266,12 +266,12 @@ class Expressions(Part):
             return scope.fb.properties[key]
         if key == "super" and scope.fb is not None and scope.fb.base is not None and self.ctx.feature_quiet("oop"):
             return SUPER
-        gs = self.p.global_names.get(key)
-        if gs and (
-            id(gs[0]) not in self.ctx.qualified_only
-            or (self.ctx.current_gvl is not None and self.ctx.gvls.get(self.ctx.current_gvl, {}).get(key) is gs[0])
-        ):
-            return gs[0]
+        own = self.ctx.gvls.get(self.ctx.current_gvl, {}) if self.ctx.current_gvl is not None else {}
+        for g in self.p.global_names.get(key, ()):
+            # a {attribute 'qualified_only'} list's member is reachable bare only inside its own list;
+            # another global of the name (a library's: Tc2_System's PI beside struckig's Constants.Pi) is
+            if id(g) not in self.ctx.qualified_only or own.get(key) is g:
+                return g
         pou = self.p.pous.get(key)
         if pou is not None and pou.pou_kind == "PROGRAM" and self.ctx.feature_quiet("vendor"):
             return self.ctx.program_instance(pou)  # CODESYS, TwinCAT: a PROGRAM's name is its instance

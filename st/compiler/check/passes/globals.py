@@ -45,10 +45,14 @@ def _declare_block(sem: Semantics, prefix: str, block, declared: dict) -> None:
     ctx = sem.ctx
     table: dict = {}
     sem.decls.declare_block(block, table, None, None)
+    gvl = ctx.gvl_of_block.get(id(block))
     for key, sym in table.items():
         sym.section = "VAR_GLOBAL"
         sym.is_global = True
         scope = prefix.split(".") if prefix else []
+        if gvl and gvl.endswith("!"):
+            # a qualified_only list's member is its own: beside a library global of its name
+            scope.append(gvl[:-1])
         sym.pyname = "_g_" + qualified(*scope, sym.name)
         uniq = sym.pyname.lower()
         other = declared.get(uniq)
@@ -66,13 +70,11 @@ def _declare_block(sem: Semantics, prefix: str, block, declared: dict) -> None:
         declared[uniq] = sym
         ctx.project.globals[sym.pyname] = sym
         ctx.project.global_names.setdefault(key, []).append(sym)
-        gvl = ctx.gvl_of_block.get(id(block))
         if gvl:
             ctx.gvl_of_decl.update((id(d), gvl.rstrip("!").lower()) for d in block.decls)
             if gvl.endswith("!"):  # {attribute 'qualified_only'}
-                gvl = gvl[:-1]
                 ctx.qualified_only.add(id(sym))
-            ctx.gvls.setdefault(gvl.lower(), {})[key] = sym
+            ctx.gvls.setdefault(gvl.rstrip("!").lower(), {})[key] = sym
 
 
 def _bind_externals(ctx: CheckContext) -> None:
