@@ -199,6 +199,64 @@ END_PROGRAM
     assert "t.st:10:5: error[E029]: the initial values of x → y → x need each other's values" in errors(src)
 
 
+LATE_DEFAULTS = """
+FUNCTION_BLOCK Builder
+  VAR_OUTPUT n : INT; END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; n0 : INT; END_VAR
+    n := n0;
+  END_METHOD
+END_FUNCTION_BLOCK
+FUNCTION Twice : INT
+  VAR_INPUT a : INT := k * 2; END_VAR
+  VAR k : INT := 4; END_VAR
+  Twice := a + k;
+END_FUNCTION
+FUNCTION_BLOCK Director
+  VAR_OUTPUT made : INT; viaMethod : INT; END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; inB : Builder(n0 := dflt); END_VAR
+    VAR dflt : INT := 9; END_VAR
+    made := inB.n;
+  END_METHOD
+  METHOD Build : INT
+    VAR_INPUT b : Builder(n0 := base + 1); END_VAR
+    VAR base : INT := 20; END_VAR
+    Build := b.n;
+  END_METHOD
+  viaMethod := Build();
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR
+  d : Director;
+  mine : Builder(n0 := 3);
+  d2 : Director(inB := mine);
+  x : INT; y : INT; z : INT; w : INT;
+END_VAR
+d();
+x := Twice();
+y := Twice(a := 1);
+z := d.Build(b := mine);
+w := d2.made;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_an_omitted_input_whose_default_names_the_callees_variables_is_computed_by_the_callee(dialect):
+    """The design-pattern course's Director: FB_init's `inB : Builder(specs := defaultArray)` with
+    defaultArray a local of FB_init declared below it."""
+    plc = run(LATE_DEFAULTS, 1, dialect)
+    got = [plc[f"main.{n}"] for n in ("d.made", "d.viamethod", "x", "y", "z", "w")]
+    assert got == [9, 21, 12, 5, 3, 3]
+
+
+def test_iec_refuses_an_input_default_naming_a_variable():
+    src = LATE_DEFAULTS[LATE_DEFAULTS.index("FUNCTION Twice") : LATE_DEFAULTS.index("FUNCTION_BLOCK Director")]
+    out = errors(src + "PROGRAM main VAR x : INT; END_VAR x := Twice(); END_PROGRAM\n", "iec")
+    assert "t.st:2:24: error[E029]: an initial value must be a constant; 'k' is a variable" in out
+
+
 def test_iec_keeps_initial_values_constant():
     out = errors(BUILDER.replace("ARRAY[1..2] OF STRING := ['Red', 'Sedan'];", "ARRAY[1..2] OF STRING;"), "iec")
     assert "error[E029]: an initial value must be a constant; 'a' is a variable" in out  # Scaled's b

@@ -265,6 +265,19 @@ class _FB:
         return new
 
 
+class _LateDefault:
+    """Passed for an omitted input whose default names the callee's own variables (a METHOD's
+    `inB : Builder(specs := tmp)` with `tmp` a local): the callee computes it where those have values."""
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return "_LATE"
+
+
+_LATE = _LateDefault()
+
+
 def _copy(v: Any) -> Any:
     if isinstance(v, list):
         if v and isinstance(v[0], (list, _Struct, _FB)):
@@ -490,6 +503,7 @@ BASE_NAMESPACE: dict[str, Any] = {
     "_Struct": _Struct,
     "_FB": _FB,
     "_copy": _copy,
+    "_LATE": _LATE,
     "_assign": _assign,
     "_init_fields": _init_fields,
     "_fill": _fill,

@@ -859,10 +859,12 @@ _TYPE_SPECS: dict[type, Callable[..., T.Type]] = {
 def _evaluated_in_place(kind: str, owner) -> bool:
     """Is the initial value of a variable of section `kind` of `owner` evaluated where the variables
     it may name have values: an instance variable of a block or program (when the instance is
-    created), a local of a FUNCTION or METHOD (at every call)?"""
+    created), a local or an input's default of a FUNCTION or METHOD (at every call)?"""
     if owner is None or getattr(owner, "owner_fb", None) is not None or owner.pou_kind == "FUNCTION":
         # (a METHOD's VAR_INST: when the instance is created, after the block's own variables)
-        return owner is not None and (kind in ("VAR", "VAR_TEMP") or kind == "VAR_INST" and owner.owner_fb is not None)
+        return owner is not None and (
+            kind in ("VAR", "VAR_TEMP", "VAR_INPUT") or kind == "VAR_INST" and owner.owner_fb is not None
+        )
     return owner.pou_kind in ("FUNCTION_BLOCK", "PROGRAM") and kind in ("VAR", "VAR_INPUT", "VAR_OUTPUT")
 
 

@@ -22,7 +22,7 @@ from ..check import (
 )
 from ..check.binding import passed_on_any
 from ..check.common import same_type
-from ..check.rules.initialization_order import names_variables
+from ..check.rules.initialization_order import late_default, names_variables
 
 if TYPE_CHECKING:
     from .module import ModuleGen
@@ -822,7 +822,10 @@ class ExprGen:
             a = bind.get(p.name.lower())
             if p.section == "VAR_INPUT":
                 if a is None:
-                    args.append(InitGen(self.mod).initial(p.type, p.init))
+                    if late_default(p):
+                        args.append(_name("_LATE"))  # the callee computes it (pous.py)
+                    else:
+                        args.append(InitGen(self.mod).initial(p.type, p.init))
                 elif p.any_input:
                     args.append(self.any_arg(a.value, p))
                 elif T.is_reference(p.type):  # bound to the argument

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, cast
 
 from ...model import types as T
 from .. import ast as A
-from ..check.rules.initialization_order import Step
+from ..check.rules.initialization_order import Step, late_default
 from ..lower.fb_init import Constructor
 from ..lower.walk import walk_stmts
 from ..names import mangle
@@ -121,7 +121,12 @@ class FuncGen(StmtGen):
             init = InitGen(self.mod, gen=self)
             for step in steps:
                 v = step.var
-                if step.part == "construct":
+                if v.section == "VAR_INPUT":  # its default, where the caller omitted it
+                    if step.part != "create":
+                        value = init.initial(v.type, v.init)
+                        late = py.Compare(self.var_load(v), [py.Is()], [_name("_LATE")])
+                        locals_init.append(_set_lines(py.If(late, [box(v, value)], []), v.span.line))
+                elif step.part == "construct":
                     ut, ctor = cast(T.POUType, T.unalias(v.type)), cast(A.CtorInit, v.init)
                     made = init.constructed_later(self.var_load(v), ut, ctor)
                     locals_init.append(_set_lines(py.Expr(made), v.span.line))
@@ -139,7 +144,11 @@ class FuncGen(StmtGen):
         if gl:
             main.insert(0, py.Global(gl))
         # BodyFacts.params: the IEC type of a parameter that receives a value (not a reference or a box)
-        by_value = {p.pyname: p.type for p in pou.params() if p.section == "VAR_INPUT" and p not in self.boxed}
+        by_value = {
+            p.pyname: p.type
+            for p in pou.params()
+            if p.section == "VAR_INPUT" and p not in self.boxed and not late_default(p)  # (_LATE: an object)
+        }
         self.param_facts = [(name, by_value.get(name)) for name in params]
         fn = py.FunctionDef(pou.pyname, _args(params), main, [], None, None)
         return _set_lines(fn, d.span.line)
@@ -329,7 +338,8 @@ class BodyGen(StmtGen):
         def arg(a):
             if isinstance(a, bool):
                 return _const(a)
-            return _call(_attr(_name("a"), "get"), _const(a.name.lower()), init.initial(a.type, a.init))
+            default = _name("_LATE") if late_default(a) else init.initial(a.type, a.init)
+            return _call(_attr(_name("a"), "get"), _const(a.name.lower()), default)
 
         body: list[py.stmt] = [
             py.Expr(

@@ -20,7 +20,7 @@ from __future__ import annotations
 from ...model import types as T
 from .. import ast as A
 from ..check import IsValidRefCall
-from ..check.rules.initialization_order import names_variables, plan
+from ..check.rules.initialization_order import late_default, names_variables, plan
 from .walk import rewrite_exprs
 
 
@@ -32,13 +32,19 @@ def initial_orders(project) -> dict:
         if pou.decl is None or pou.pou_kind == "INTERFACE":
             continue
         if pou.pou_kind == "FUNCTION":
-            _add(out, pou, [v for v in pou.vars.values() if v.section in ("VAR", "VAR_TEMP")])
+            _add(out, pou, _call_variables(pou))
             continue
         _add(out, pou, [v for v in pou.vars.values() if v.section not in ("VAR_EXTERNAL", "VAR_TEMP", "VAR_STAT")])
         for mt in pou.methods.values():
             if mt.owner_fb is pou:
-                _add(out, mt, [v for v in mt.vars.values() if v.section in ("VAR", "VAR_TEMP")])
+                _add(out, mt, _call_variables(mt))
     return out
+
+
+def _call_variables(pou: T.POUType) -> list:
+    """A FUNCTION's or METHOD's variables initialised at each call: its locals, and its inputs whose
+    default names variables (computed when the caller omits them: codegen/pous.py)."""
+    return [v for v in pou.vars.values() if v.section in ("VAR", "VAR_TEMP") or late_default(v)]
 
 
 def _add(out: dict, pou: T.POUType, variables: list) -> None:

@@ -43,6 +43,20 @@ def names_variables(init) -> bool:
     return False
 
 
+def late_default(p: T.VarSym) -> bool:
+    """Is `p` an input of a FUNCTION or METHOD whose default names variables (TwinCAT:
+    `inB : Builder(specs := tmp);` with `tmp` a local of the method)? An omitted argument is then
+    computed by the callee, in its initialisation order, not by the caller."""
+    owner = p.owner
+    return (
+        p.section == "VAR_INPUT"
+        and p.init is not None
+        and isinstance(owner, T.POUType)
+        and (owner.pou_kind == "FUNCTION" or owner.owner_fb is not None)
+        and names_variables(p.init)
+    )
+
+
 def _is_variable(sym) -> bool:
     return isinstance(sym, T.VarSym) and not (sym.global_ref or sym).constant
 
