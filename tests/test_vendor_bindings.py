@@ -781,3 +781,47 @@ END_PROGRAM
         plc = run(src, 2, dialect)
         assert (plc["main.n"], plc["main.made"], plc["main.p"]) == (1, 2, None)  # a fresh instance each scan
     assert "error[E044]: __DELETE is not part of the iec dialect" in errors(src, "iec")
+
+
+# ---------------------------------------------------------------- arrays of blocks with FB_init arguments
+
+ARRAY_CTORS = """
+TYPE E_Runner : (RUNNER_START, R1, R2, R3, RUNNER_END); END_TYPE
+FUNCTION_BLOCK FB_Runner
+  VAR_OUTPUT name : STRING; n : INT; k : INT; END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; instanceName : STRING; num : INT; END_VAR
+    name := instanceName;
+    n := num;
+  END_METHOD
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR
+  runners : ARRAY[E_Runner.RUNNER_START + 1 .. E_Runner.RUNNER_END - 1] OF FB_Runner[
+    (instanceName := 'one', num := 1), (instanceName := 'two'), ('three', 3)];
+  same : ARRAY[0..1] OF FB_Runner('s', 7) := [(k := 5), (k := 6)];
+  part : ARRAY[1..3] OF FB_Runner[(num := 4)] := [2((k := 8))];
+END_VAR
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_an_array_of_blocks_gets_fb_init_arguments_for_every_element_or_element_by_element(dialect):
+    plc = run(ARRAY_CTORS, 1, dialect)
+    runners = [(plc[f"main.runners[{i}].name"], plc[f"main.runners[{i}].n"]) for i in (1, 2, 3)]
+    assert runners == [("one", 1), ("two", 0), ("three", 3)]
+    same = [(plc[f"main.same[{i}].name"], plc[f"main.same[{i}].n"], plc[f"main.same[{i}].k"]) for i in (0, 1)]
+    assert same == [("s", 7, 5), ("s", 7, 6)]
+    part = [(plc[f"main.part[{i}].n"], plc[f"main.part[{i}].k"]) for i in (1, 2, 3)]
+    assert part == [(4, 8), (0, 8), (0, 0)]
+
+
+def test_an_array_of_blocks_fb_init_arguments_have_their_form():
+    src = ARRAY_CTORS.replace("[(num := 4)] := [2((k := 8))]", "[(num := 4), (num := 5), (num := 6), (num := 7)]")
+    src = src.replace("('s', 7) := [(k := 5), (k := 6)]", "('s', 7) := 3")
+    out = errors(src, "twincat")
+    assert "t.st:15:46: error[E057]: an array of function blocks takes an array initializer ([...])" in out
+    assert "t.st:16:10: error[E057]: 4 FB_init argument lists for an array of 3 elements" in out
+    out = errors(ARRAY_CTORS, "iec")
+    assert "t.st:13:13: error[E044]: FB_init arguments in a declaration is not part of the iec dialect" in out

@@ -469,3 +469,12 @@ def test_bare_pi_is_tc2_systems_constant_beside_a_qualified_only_pi(dialect):
 def test_a_user_global_pi_wins_over_tc2_systems():
     plc = run("VAR_GLOBAL CONSTANT\n  PI : LREAL := 3.0;\nEND_VAR\n" + program("a := PI;", "a : LREAL;"), 1, "twincat")
     assert plc["main.a"] == 3.0
+
+
+@pytest.mark.parametrize("dialect", VENDOR)
+def test_enumeration_values_bound_an_array(dialect):
+    src = "TYPE E_R : (S, R1, R2, R3, EN); END_TYPE\n" + program(
+        "k := UPPER_BOUND(a, 1) * 100 + LOWER_BOUND(b, 1) * 10 + UPPER_BOUND(b, 1);",
+        "a : ARRAY[E_R.R1 .. E_R.R3] OF INT; b : ARRAY[E_R.S + 1 .. E_R.EN - 1] OF INT; k : DINT;",
+    )
+    assert run(src, 1, dialect)["main.k"] == 313

@@ -153,6 +153,19 @@ class CtorInit(Syntax):
     inner: Any = None
 
 
+@dataclass(slots=True, eq=False)
+class ArrayCtorInit(Syntax):
+    """`a : ARRAY[1..2] OF FB(x := 1)` (`each`: every element's FB_init arguments) or
+    `ARRAY[1..2] OF FB[(x := 1), (x := 2)]` (`elements`: element by element), plus an ordinary
+    array initializer (`inner`) if one is given too. The checker expands it into an ArrayInit of
+    CtorInits, one per element (check/declarations.py)."""
+
+    span: Span
+    each: list | None
+    elements: list | None
+    inner: Any = None
+
+
 # --------------------------------------------------------------------------- statements
 
 

@@ -30,11 +30,13 @@ from ..source import Span
 from . import ast as A
 from .build_parts import (
     Accessor,
+    ArrayCtor,
     AssignCondition,
     CaseLabel,
     CaseLabels,
     Catch,
     Chain,
+    CtorArgs,
     Edge,
     Else,
     ElsIf,
@@ -262,6 +264,23 @@ class AstBuilder(Transformer[Token, A.Unit]):
         name = ".".join(str(p) for p in parts)
         return A.NamedType(self.sp(parts[0]), name, [(n, sp, v) for n, sp, v in args])
 
+    def array_ctor(self, c: list[Any]) -> ArrayCtor:
+        kw: Token = c[0]
+        last = c[-1]
+        ranges: list[Range | None] = [x for x in c[1:-1] if not isinstance(x, Token)]  # without OF
+        if isinstance(last, A.NamedType):  # OF FB(args): the same for every element
+            args, last.ctor_args = last.ctor_args, None
+            return ArrayCtor(A.ArrayType(self.sp(kw), ranges, last), args, None)
+        spec, lists = last
+        return ArrayCtor(A.ArrayType(self.sp(kw), ranges, spec), None, lists)
+
+    def ctor_elements(self, c: list[Any]) -> tuple[A.NamedType, list[list[FieldValue]]]:
+        name: Token = c[0]
+        return A.NamedType(self.sp(name), str(name)), [x.args for x in c[1:]]
+
+    def ctor_args(self, c: list[Any]) -> CtorArgs:
+        return CtorArgs(list(c))
+
     def ctor_positional(self, c: list[A.Expr]) -> FieldValue:
         return ("", c[0].span, c[0])  # the checker names it: the n-th input of FB_init
 
@@ -325,10 +344,13 @@ class AstBuilder(Transformer[Token, A.Unit]):
         edge = ""
         init = None
         spec: A.TypeSpec | None = None
+        array_ctor: ArrayCtor | None = None
         for x in c[1:]:
             match x:
                 case A.TypeSpec() if spec is None:
                     spec = x
+                case ArrayCtor() if spec is None:
+                    spec, array_ctor = x.spec, x
                 case Location(address):
                     location = address
                 case Edge(kind):
@@ -338,6 +360,8 @@ class AstBuilder(Transformer[Token, A.Unit]):
         if isinstance(spec, A.NamedType) and spec.ctor_args:
             init = A.CtorInit(spec.span, spec.ctor_args, init)
             spec.ctor_args = None
+        if array_ctor is not None:
+            init = A.ArrayCtorInit(spec.span, array_ctor.each, array_ctor.elements, init)
         assert spec is not None  # the grammar gives every declaration a type
         return A.VarDecl(self.sp(names[0]), [(str(n), self.sp(n)) for n in names], spec, init, location, edge)
 

@@ -102,6 +102,23 @@ class Location:
 
 
 @dataclass(frozen=True, slots=True)
+class ArrayCtor:
+    """`ARRAY[1..2] OF FB(a := 1)` (every element's FB_init arguments: `each`) or
+    `ARRAY[1..2] OF FB[(a := 1), (a := 2)]` (element by element: `elements`)."""
+
+    spec: A.ArrayType
+    each: list | None
+    elements: list | None
+
+
+@dataclass(frozen=True, slots=True)
+class CtorArgs:
+    """`(a := 1, b := 2)`: one element's FB_init arguments in `ARRAY[..] OF FB[...]`."""
+
+    args: list
+
+
+@dataclass(frozen=True, slots=True)
 class Edge:
     """R_EDGE or F_EDGE after a VAR_INPUT's type, upper case."""
 

@@ -21,6 +21,10 @@ class Constants(Part):
         if isinstance(e.sym, T.EnumType):
             return e.const
         if isinstance(e.base, A.Name) and (scope is None or e.base.name.lower() not in scope.vars):
+            et = self.p.types.get(e.base.name.lower())
+            if isinstance(et, T.EnumType):  # E_Axis.Z, before the expression is typed (array bounds)
+                m = et.members.get(e.name.lower())
+                return m[1] if m else None
             return self._raw_global_constant(e.name.lower(), e.base.name.lower())  # GVL_Param.N
         return None
 

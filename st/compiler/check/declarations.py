@@ -690,6 +690,13 @@ class Declarations(Part):
         once the globals are, if they are not yet: it may name a global constant)."""
         if decl.init is None or kind == "VAR_EXTERNAL":
             return
+        if isinstance(decl.init, A.ArrayCtorInit):  # FB_init arguments element by element
+            decl.init = initializers.expand_array_ctor(self.ctx, decl.init, t)
+            for n, _ in decl.names:
+                if n.lower() in table:
+                    table[n.lower()].init = decl.init
+            if decl.init is None:
+                return
         if owner is None:
             self.ctx.deferred_inits.append((decl, t))
             return

@@ -66,3 +66,31 @@ def check_single_value(ctx: CheckContext, init: A.Expr, t: T.Type) -> bool:
         _bad(ctx, init, f"an array needs an initializer in brackets, e.g. [{init.text}]")
         return False
     return True
+
+
+def expand_array_ctor(ctx: CheckContext, init: A.ArrayCtorInit, t: T.Type) -> A.ArrayInit | None:
+    """`ARRAY[..] OF FB(args)` / `ARRAY[..] OF FB[(args), (args)]` (CODESYS, TwinCAT): the array
+    initializer it stands for, one CtorInit per element (with that element's value from the
+    ordinary initializer, if any); None where its form is wrong (reported here)."""
+    at = T.unalias(t)
+    if not isinstance(at, T.ArrayType):
+        _bad(ctx, init, f"FB_init arguments for each element need an array of function blocks, not {t}")
+        return None
+    inner = init.inner
+    values: list = []
+    if isinstance(inner, A.ArrayInit):
+        for item in inner.items:
+            values.extend(item.items * item.count if isinstance(item, A.RepeatInit) else [item])
+    elif inner is not None:
+        _bad(ctx, inner, "an array of function blocks takes an array initializer ([...]) besides its FB_init arguments")
+        return None
+    n = at.size
+    lists = [init.each] * n if init.each is not None else list(init.elements or [])
+    if len(lists) > n:
+        _bad(ctx, init, f"{len(lists)} FB_init argument lists for an array of {n} elements")
+        return None
+    items: list = []
+    for i in range(max(len(lists), len(values))):
+        value = values[i] if i < len(values) else None
+        items.append(A.CtorInit(init.span, list(lists[i]), value) if i < len(lists) else value)
+    return A.ArrayInit(inner.span if isinstance(inner, A.ArrayInit) else init.span, items)
