@@ -360,9 +360,9 @@ class AstBuilder(Transformer[Token, A.Unit]):
         if isinstance(spec, A.NamedType) and spec.ctor_args:
             init = A.CtorInit(spec.span, spec.ctor_args, init)
             spec.ctor_args = None
+        assert spec is not None  # the grammar gives every declaration a type
         if array_ctor is not None:
             init = A.ArrayCtorInit(spec.span, array_ctor.each, array_ctor.elements, init)
-        assert spec is not None  # the grammar gives every declaration a type
         return A.VarDecl(self.sp(names[0]), [(str(n), self.sp(n)) for n in names], spec, init, location, edge)
 
     def var_decl(self, c: list[Any]) -> A.VarDecl:
