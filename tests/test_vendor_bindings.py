@@ -825,3 +825,64 @@ def test_an_array_of_blocks_fb_init_arguments_have_their_form():
     assert "t.st:16:10: error[E057]: 4 FB_init argument lists for an array of 3 elements" in out
     out = errors(ARRAY_CTORS, "iec")
     assert "t.st:13:13: error[E044]: FB_init arguments in a declaration is not part of the iec dialect" in out
+
+
+# ---------------------------------------------------------------- blark's samples, completed
+
+BLARK_FORMS = """
+TYPE someColor : (off := 0, red := 5, green := 9) DINT; END_TYPE
+{attribute 'qualified_only'}
+TYPE color : (
+  off := ANY_TO_DINT(someColor.off),
+  red := ANY_TO_DINT(someColor.red),
+  green := TO_DINT(someColor.green) + 1
+) DINT;
+END_TYPE
+TYPE grp : STRUCT someValue : INT; END_STRUCT END_TYPE
+FUNCTION_BLOCK FB_Sample
+  VAR_INPUT nInput : INT; END_VAR
+  VAR_OUTPUT init : INT; prop : INT; END_VAR
+  METHOD FB_init : BOOL
+    VAR_INPUT bInitRetains : BOOL; bInCopyCode : BOOL; nInitParam : INT; END_VAR
+    init := nInitParam;
+  END_METHOD
+  PROPERTY nMyProperty : INT
+    GET nMyProperty := prop; END_GET
+    SET prop := nMyProperty * 10; END_SET
+  END_PROPERTY
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK class_SomethingCool
+  VAR
+    _object : ARRAY[1..3] OF grp := [(someValue := 1), (someValue := 2), (someValue := 3)];
+    currentChannel : ARRAY[1..3] OF POINTER TO grp := [ADR(_object[1]), ADR(_object[2]), ADR(_object[3])];
+  END_VAR
+  VAR_OUTPUT s : INT; END_VAR
+  s := currentChannel[2]^.someValue + currentChannel[3]^.someValue;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR
+  fbSample : FB_Sample(nInitParam := 1) := (nInput := 2, nMyProperty := 3);
+  c : color := color.red;
+  cool : class_SomethingCool;
+  k : DINT; s : INT;
+END_VAR
+k := color.green;
+cool();
+s := cool.s;
+END_PROGRAM
+"""
+
+
+@pytest.mark.parametrize("dialect", ["codesys", "twincat"])  # (the default: an enumeration is no DINT)
+def test_blark_sample_forms_with_their_declarations(dialect):
+    """Forms from blark's parser samples, with the declarations the samples leave out: enumeration
+    values converted from another enumeration's, a property given its value in a declaration
+    (through SET, after FB_init), an array of pointers initialised with ADR of elements."""
+    plc = run(BLARK_FORMS, 1, dialect)
+    got = [plc[f"main.{n}"] for n in ("k", "c", "fbsample.init", "fbsample.ninput", "fbsample.prop", "s")]
+    assert got == [10, "red", 1, 2, 30, 5]
+
+
+def test_a_property_without_set_gets_no_initial_value():
+    src = BLARK_FORMS.replace("    SET prop := nMyProperty * 10; END_SET\n", "")
+    assert "error[E023]: property nMyProperty of FB_Sample has no SET to give it a value" in errors(src, "twincat")

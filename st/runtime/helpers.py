@@ -316,6 +316,13 @@ def _init_fields(obj: Any, pairs: Any) -> Any:
     return obj
 
 
+def _init_props(obj: Any, pairs: Any) -> Any:
+    """A block instance's declared values for its properties: each SET called, in order."""
+    for setter, value in pairs:
+        getattr(obj, setter)(value)
+    return obj
+
+
 # ------------------------------------------------------------------ references
 
 
@@ -506,6 +513,7 @@ BASE_NAMESPACE: dict[str, Any] = {
     "_LATE": _LATE,
     "_assign": _assign,
     "_init_fields": _init_fields,
+    "_init_props": _init_props,
     "_fill": _fill,
     "_AttrRef": _AttrRef,
     "_ObjRef": _ObjRef,

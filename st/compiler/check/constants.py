@@ -92,6 +92,25 @@ class Constants(Part):
         except (ZeroDivisionError, OverflowError):
             return None
 
+    def _call(self, e: A.Call, scope: Scope | None):
+        """SIZEOF, or a type conversion of a constant (`ANY_TO_DINT(Color.Red)`, `INT_TO_DINT(N)`,
+        `TO_UDINT(5)`: enumeration values computed from another's, TwinCAT) whose value the target
+        type holds as it is."""
+        if not (isinstance(e.callee, A.Name) and len(e.args) == 1 and not e.args[0].name):
+            return None
+        fn = e.callee.name.upper()
+        if fn == "SIZEOF":
+            return self._sizeof(e, scope)
+        target = T.ELEMENTARY.get(fn.rpartition("TO_")[2]) if "TO_" in fn else None
+        if not isinstance(target, T.ElemType) or not fn.endswith("TO_" + target.name):
+            return None
+        v = self.value(e.args[0].value, scope)
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            return None
+        if target.is_intlike:
+            return v if isinstance(v, int) and target.lo <= v <= target.hi else None
+        return float(v) if target.name in ("REAL", "LREAL") else None
+
     def _sizeof(self, e: A.Call, scope: Scope | None):
         """SIZEOF(type or variable) in a constant expression (CODESYS: array bounds from sizes)."""
         if not (isinstance(e.callee, A.Name) and e.callee.name.upper() == "SIZEOF" and len(e.args) == 1):
@@ -171,7 +190,7 @@ _OPERATORS: dict[str, Callable] = {
 _EVALUATE: dict[type, Callable] = {
     A.Field: Constants._field,
     A.Literal: Constants._literal,
-    A.Call: Constants._sizeof,
+    A.Call: Constants._call,
     A.EnumLit: Constants._enum_lit,
     A.Name: Constants._name,
     A.Unary: Constants._unary,

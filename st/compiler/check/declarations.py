@@ -819,6 +819,14 @@ class Declarations(Part):
             return
         for name, sp, val in init.fields:
             m = fields.get(name.lower())
+            if m is None and isinstance(bt, T.POUType) and name.lower() in bt.properties:
+                ps = bt.properties[name.lower()]  # TwinCAT: a property given its value through SET
+                if ps.set is None:
+                    self.err(Code.BAD_ACCESS, sp, f"property {ps.name} of {bt.name} has no SET to give it a value")
+                    continue
+                self.feature("oop", sp, "a property's initial value")
+                self.check_initializer(val, ps.type, scope, variables)
+                continue
             if m is None:
                 self.err(Code.BAD_ACCESS, sp, f"'{t}' has no {what} '{name}'")
                 continue

@@ -124,15 +124,21 @@ class InitGen:
         return value
 
     def _with_fields(self, obj: py.expr, init: A.StructInit, lookup) -> py.expr:
-        # _init_fields(obj, (('name', value), ...)) returns obj
+        # _init_fields(obj, (('name', value), ...)) returns obj; a block's properties are then
+        # given theirs through their SET: _init_props(obj, (('_ps_name', value), ...))
         pairs: list[py.expr] = []
+        props: list[py.expr] = []
         for name, _sp, val in init.fields:
             m = lookup(name)
+            if isinstance(m, T.PropSym) and m.set is not None:
+                props.append(py.Tuple([_const(m.set.pyname), self.initial(m.type, val)], py.Load()))
+                continue
             if m is None:
                 continue
             mt = m.type
             pairs.append(py.Tuple([_const(m.pyname), self.initial(mt, val)], py.Load()))
-        return _call("_init_fields", obj, py.Tuple(pairs, py.Load()))
+        made = _call("_init_fields", obj, py.Tuple(pairs, py.Load()))
+        return _call("_init_props", made, py.Tuple(props, py.Load())) if props else made
 
     def array(self, at: T.ArrayType, init) -> py.expr:
         n = at.size
@@ -182,7 +188,8 @@ def _zero_link(init, ut: T.Type) -> bool:
 
 
 def _member_of_pou(pou: T.POUType, name: str):
-    return pou.vars.get(name.lower())
+    """A block's variable (or property) that a declaration's `(name := value)` gives a value."""
+    return pou.vars.get(name.lower()) or pou.properties.get(name.lower())
 
 
 class ExprGen:
