@@ -30,7 +30,8 @@ def libraries(options: CompileOptions | None = None) -> list:
     and the default (not under iec and openplc, whose programs know none of its names)."""
     options = options or CompileOptions()
     matiec = options.dialect is not None and options.dialect.matiec_errors
-    libs = [default_library(options.f_trig_first_scan, options.time_unit, matiec), plcopen_library()]
+    p0 = options.dialect is not None and options.dialect.position_zero
+    libs = [default_library(options.f_trig_first_scan, options.time_unit, matiec, p0), plcopen_library()]
     if options.dialect is None or options.dialect.vendor_library:
         libs.append(vendor_library())
     return libs

@@ -201,7 +201,7 @@ def test_python_text_in_a_fault_is_a_raw_fault_defect(monkeypatch):
     def leaky(x):
         raise ValueError("math domain error")
 
-    monkeypatch.setitem(default_library(False, "ms", False).helpers, "_std_sin", leaky)  # the one compiles use
+    monkeypatch.setitem(default_library(False, "ms", False, False).helpers, "_std_sin", leaky)  # the one compiles use
     o = run_one(PROGRAM.format("x := LREAL_TO_DINT(SIN(DINT_TO_LREAL(x)));"))
     assert (o.cls, o.signature) == ("raw-fault", "[FAULT] ValueError: math domain error")
 

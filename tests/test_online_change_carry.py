@@ -108,7 +108,7 @@ def _walks_of_a_change(n: int) -> int:
 
 def test_the_swap_walks_no_array_element():
     # the same few steps for 100 values as for 200,000 (and the 100 records are not walked either)
-    assert _walks_of_a_change(100) == _walks_of_a_change(BIG) < 60
+    assert _walks_of_a_change(100) == _walks_of_a_change(BIG) < 80  # (the library's classes count too)
 
 
 def test_members_blocks_and_changed_structures_are_carried():

@@ -407,3 +407,29 @@ def test_tcunit_s_verifier_passes_and_fails_as_tcunit_documents():
     assert sum(1 for m in run.messages if m.startswith("FAILED TEST")) == len(failures)
     placed = sum(1 for f in failures if f.line)
     print(f"failed assertions: {len(failures)}, placed at their Assert call: {placed}")
+
+
+TCLOG = CORPORA / "bengeisler-TcLog/src/TcLogProj"
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not TCLOG.exists(), reason=f"TcLog is not checked out at {TCLOG}")
+def test_tclog_s_own_suites_pass_writing_their_log_file(tmp_path, monkeypatch):
+    """TcLog's TcUnit suites (TcLogTEST with the TcLog library project and TcUnit): its logger on
+    the vendor library's file blocks, FB_StringRingBuffer and Tc3_DynamicMemory; the test's
+    `c:\\UnitTest\\` is a folder under the file root, as it must exist on the target."""
+    from st.stdlib.vendor import sysfile
+
+    (tmp_path / "C" / "UnitTest").mkdir(parents=True)
+    monkeypatch.setattr(sysfile, "FILE_ROOT", tmp_path)
+    project = tcunit.TcUnitProject.load([TCLOG / "TcLogTEST/TcLogTEST.plcproj"], [TCUNIT / "TcUnit", TCLOG / "TcLog"])
+    run = project.run()
+    assert run.finished
+    c = run.counts()
+    assert (c["passed"], c["failed"], c["skipped"]) == (21, 0, 1)
+    # the one skipped is written but never called by its suite's body
+    assert [t.name for t in run.tests if t.status == "skipped"] == ["ConvertAnyDWordToString"]
+    (log,) = (tmp_path / "C" / "UnitTest").iterdir()
+    lines = log.read_text().splitlines()
+    assert len(lines) == 50 * 51  # 50 cycles of 51 messages
+    assert lines[0].endswith("|3|Cycle: 0, Message: 0") and lines[-1].endswith("|3|Cycle: 49, Message: 50")

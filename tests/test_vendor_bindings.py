@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from helpers import errors, run
+from helpers import errors, program, run
 
 VENDOR = [None, "codesys", "twincat"]
 
@@ -886,3 +886,10 @@ def test_blark_sample_forms_with_their_declarations(dialect):
 def test_a_property_without_set_gets_no_initial_value():
     src = BLARK_FORMS.replace("    SET prop := nMyProperty * 10; END_SET\n", "")
     assert "error[E023]: property nMyProperty of FB_Sample has no SET to give it a value" in errors(src, "twincat")
+
+
+@pytest.mark.parametrize("dialect", [None, "iec", "twincat"])
+def test_a_stray_semicolon_between_declarations_is_nothing(dialect):
+    src = "(* a comment *);\nFUNCTION_BLOCK F\nVAR_OUTPUT x : INT; END_VAR\nx := 7;\nEND_FUNCTION_BLOCK;\n"
+    plc = run(src + program("f(); k := f.x;", "f : F; k : INT;"), 1, dialect)
+    assert plc["main.k"] == 7

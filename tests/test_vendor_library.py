@@ -226,7 +226,7 @@ def test_an_unknown_library_is_a_located_error():
     assert (
         "t.st:3:7: error[E012]: 'Tc3_Nothing.TON': no library 'Tc3_Nothing' is available (namespaces here: "
         "__SYSTEM, CmpErrors, IBaseLibrary, Standard, SysDir, SysFile, SysTypes, Tc2_Standard, Tc2_System, "
-        "Tc2_Utilities, Util)"
+        "Tc2_Utilities, Tc3_DynamicMemory, Util)"
     ) in errors(src, "twincat")
 
 

@@ -76,6 +76,10 @@ class Dialect:
     # LTIME#213503d23h34m33s709ms551us615ns is accepted and held as the same 64 bits in st's signed
     # LTIME; IEC leaves LTIME's range to the implementation and st's is signed (E021 beyond it)
     unsigned_ltime: bool = True
+    # DELETE and REPLACE with P = 0 address the first character with L one less, as CODESYS's
+    # Standard library documents (and TwinCAT code relies on: FIND's 0 for "not found" passed on);
+    # IEC's positions start at 1 and st faults (RANGE) below
+    position_zero: bool = False
 
 
 PRESETS = {
@@ -108,6 +112,7 @@ PRESETS = {
     "codesys": Dialect(
         "codesys",
         attribute_pragmas=True,
+        position_zero=True,
         writable_inputs=True,
         enum_as_int=True,
         bits_as_numbers=True,
@@ -116,6 +121,7 @@ PRESETS = {
     "twincat": Dialect(
         "twincat",
         attribute_pragmas=True,
+        position_zero=True,
         writable_inputs=True,
         enum_as_int=True,
         bits_as_numbers=True,

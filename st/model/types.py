@@ -695,7 +695,9 @@ def byte_layout(t: Type) -> tuple[Any, ...] | None:
     if u.kind == "real":
         return ("f", u.bits // 8)
     if u.kind in _TIME_UNIT:
-        return ("i", 8, True, 1) if u.long else ("i", 4, u.kind == "time", _TIME_UNIT[u.kind])
+        # TIME in 32 bits is an unsigned count of ms (CODESYS, TwinCAT: T#49d17h2m47s295ms is the
+        # largest); LTIME's 64 bits are read as st's signed ns
+        return ("i", 8, True, 1) if u.long else ("i", 4, False, _TIME_UNIT[u.kind])
     if u.kind in ("int", "bit", "char"):
         return ("i", u.bits // 8, u.signed and u.kind == "int", 1)
     return None

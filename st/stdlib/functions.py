@@ -187,6 +187,21 @@ def _std_replace(s1, s2, n, p):
     return s1[: p - 1] + s2 + s1[p - 1 + max(n, 0) :]
 
 
+def _std_delete_p0(s, n, p):
+    """DELETE as CODESYS's Standard library does it: P = 0 addresses the first character too, with
+    L one less (its documented quirk, kept for compatibility)."""
+    if p == 0:
+        return _std_delete(s, n - 1, 1)
+    return _std_delete(s, n, p)
+
+
+def _std_replace_p0(s1, s2, n, p):
+    """REPLACE as CODESYS's Standard library does it: P = 0 as P = 1 with L one less."""
+    if p == 0:
+        return _std_replace(s1, s2, n - 1, 1)
+    return _std_replace(s1, s2, n, p)
+
+
 def _std_find(s1, s2):
     return s1.find(s2) + 1 if s2 else 0
 

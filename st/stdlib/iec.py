@@ -295,13 +295,21 @@ def _trunc_sig(name, dst):
     return sig
 
 
-def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", matiec_errors: bool = False) -> Library:
+def build_library(
+    *,
+    f_trig_first_scan: bool = False,
+    time_unit: str = "ms",
+    matiec_errors: bool = False,
+    position_zero: bool = False,
+) -> Library:
     """The IEC standard library. `time_unit`: what TIME_TO_<int> counts (ms, or s as MatIEC).
     `matiec_errors`: where IEC calls a case an error and leaves the reaction open, do what MatIEC
-    does (a MUX selector out of range gives the type's default value) instead of a PLC fault."""
+    does (a MUX selector out of range gives the type's default value) instead of a PLC fault.
+    `position_zero`: DELETE and REPLACE take P = 0 as CODESYS's Standard library does (the first
+    character, L one less) instead of a RANGE fault."""
     lib = Library(
         "iec61131",
-        version=f"1-{int(f_trig_first_scan)}-{time_unit}-{int(matiec_errors)}",
+        version=f"1-{int(f_trig_first_scan)}-{time_unit}-{int(matiec_errors)}-{int(position_zero)}",
         namespaces=("Standard", "Tc2_Standard"),
         inline_blocks=True,
     )
@@ -311,6 +319,9 @@ def build_library(*, f_trig_first_scan: bool = False, time_unit: str = "ms", mat
     lib.helpers.update(functions.NAMESPACE)
     if matiec_errors:  # REAL → integer rounds as MatIEC does: halfway cases to even
         lib.helpers["_real_to_int"] = functions._real_to_int_matiec
+    if position_zero:
+        lib.helpers["_std_delete"] = functions._std_delete_p0
+        lib.helpers["_std_replace"] = functions._std_replace_p0
     add = lib.add
     # numeric
     add(FuncSig("ABS", [_p("IN", "ANY_NUM", "T")], "T", emit=_abs_emit))
@@ -740,7 +751,14 @@ def _mux_default(arg_types, result_type):
 
 
 @lru_cache(maxsize=8)
-def default_library(f_trig_first_scan: bool = False, time_unit: str = "ms", matiec_errors: bool = False) -> Library:
-    lib = build_library(f_trig_first_scan=f_trig_first_scan, time_unit=time_unit, matiec_errors=matiec_errors)
+def default_library(
+    f_trig_first_scan: bool = False, time_unit: str = "ms", matiec_errors: bool = False, position_zero: bool = False
+) -> Library:
+    lib = build_library(
+        f_trig_first_scan=f_trig_first_scan,
+        time_unit=time_unit,
+        matiec_errors=matiec_errors,
+        position_zero=position_zero,
+    )
     lib.helpers.update(NAMESPACE_EXTRA)
     return lib

@@ -40,6 +40,7 @@ from .rules import (
     storage_limits,
 )
 from .rules.openplc_address import openplc_address
+from .targets import SizeofCall
 
 # the sections each kind of POU may declare
 _SECTIONS = {
@@ -841,7 +842,15 @@ class Declarations(Part):
         if _zero_pointer(self.ctx, init, t):
             return  # a literal 0 for a POINTER, a REF_TO or an interface (CODESYS): NULL
         st = self.exprs.expr(init, scope or Scope(None, {}), t)
+        sized = {
+            id(n)
+            for c in A.walk_nodes(init)
+            if isinstance(c, A.Call) and isinstance(c.target, SizeofCall)
+            for n in _names_in(c.args)
+        }  # SIZEOF(buffer): its size, a constant, not its value
         for n in _names_in([init]):
+            if id(n) in sized:
+                continue
             if n.sym is THIS and not variables:
                 self.err(Code.NOT_CONSTANT, n.span, "an initial value must be a constant; THIS is the instance")
                 return

@@ -351,7 +351,7 @@ class Expressions(Part):
             return T.RefType(scope.fb)
         if isinstance(sym, T.PropSym):
             e.sym = sym
-            return sym.type
+            return _through_reference(sym.type)
         e.sym = SUPER
         base = scope.fb.base if scope.fb is not None else None
         assert base is not None  # lookup gives SUPER inside a block that extends another only
@@ -666,7 +666,7 @@ class Expressions(Part):
                 access.check_access(
                     self.ctx, decl_of(acc).modifiers, ps.owner, f"property {ps.name}", scope, e.name_span
                 )
-            return ps.type
+            return _through_reference(ps.type)
         if v is None:
             if key in b.actions or key in b.methods:
                 kind = "an action" if key in b.actions else "a method"
@@ -832,3 +832,9 @@ def _is_address(e: A.Expr, t) -> bool:
 def _is_pointer(t) -> bool:
     u = T.unalias(t) if t is not None else None
     return isinstance(u, T.RefType) and u.ref_kind == "POINTER"
+
+
+def _through_reference(t: T.Type) -> T.Type:
+    """A property of a REFERENCE TO type reads (and writes) what it refers to (TcLog's
+    `logger.Error.Info`); codegen dereferences the GET's result."""
+    return cast(T.RefType, T.unalias(t)).target if T.is_reference(t) else t

@@ -498,9 +498,13 @@ class ExprGen:
         """A property's accessor on its instance (`args`: SET's value); non-virtual: the base's."""
         acc = e.accessor
         if e.nonvirtual:
-            return _call(_attr(_name(acc.owner_fb.pyname), acc.pyname), self.this(), *args)
-        obj = self.this() if e.obj is None else self.expr(e.obj)
-        return _call(_attr(obj, acc.pyname), *args)
+            node = _call(_attr(_name(acc.owner_fb.pyname), acc.pyname), self.this(), *args)
+        else:
+            obj = self.this() if e.obj is None else self.expr(e.obj)
+            node = _call(_attr(obj, acc.pyname), *args)
+        if not args and T.is_reference(acc.return_type):  # a REFERENCE TO property: what it refers to
+            return _call(_attr(node, "get"))
+        return node
 
     def _bit_read(self, base: py.expr, n: int, t) -> py.expr:
         return py.Compare(py.BinOp(base, py.BitAnd(), _const(1 << n)), [py.NotEq()], [_const(0)])

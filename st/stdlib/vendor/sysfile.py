@@ -5,7 +5,8 @@
 Files are the host's. A relative file name is taken from the file root: `FILE_ROOT` when set (a
 path; tests set it), else the process's current directory at the time of the call. An absolute
 name is used as it is. On a POSIX host a backslash separates directories too (TwinCAT code writes
-Windows paths). An open file is a small handle number (1, 2, …, the lowest free one); the files
+Windows paths), and a drive letter is a directory under the file root (`C:\\Logs\\a.txt` is
+`<root>/C/Logs/a.txt`). An open file is a small handle number (1, 2, …, the lowest free one); the files
 stay open until SysFileClose (or the end of the process), across PLCs. No OS error leaves a native
 as a Python exception: it becomes the CmpErrors code the function returns or writes to *pResult
 (a NULL pResult is allowed: nothing is written). A NULL buffer with a size above 0, or a size
@@ -58,6 +59,8 @@ def close_all() -> None:
 def _path(name: str) -> Path:
     if os.sep == "/":
         name = name.replace("\\", "/")
+        if len(name) >= 2 and name[1] == ":" and name[0].isalpha():
+            name = name[0].upper() + "/" + name[2:].lstrip("/")  # C:\Logs\a.txt: C/Logs/a.txt under the root
     p = Path(name)
     if p.is_absolute():
         return p
