@@ -225,6 +225,24 @@ JUDGED = [
     ("E004", "%…: only bit addresses", "", "a", "%IW0.0 read as %IW0 (OpenPLC's glue; new)"),
     ("E004", "%… is outside the process image", "", "a", "%ML1024+ special functions (new)"),
     ("E001", "syntax error: unexpected ''s working''", "", "b", "'' is not an escape ($')"),
+    # TwinCAT (issue 34): what is still refused, and why that is right
+    ("E003", "this METHOD is outside any", "klauer-blark", "b", "a METHOD alone, cut from its block's .TcPOU"),
+    ("E012", "", "klauer-blark", "b", "a parser sample naming declarations it does not hold"),
+    ("E010", "", "klauer-blark", "b", "a parser sample naming declarations it does not hold"),
+    ("E013", "", "klauer-blark", "b", "cascade of an undeclared name"),
+    ("E020", "", "klauer-blark", "b", "cascade of an undeclared name"),
+    ("E022", "", "klauer-blark", "b", "cascade of an undeclared constant"),
+    ("E023", "", "klauer-blark", "b", "cascade of an undeclared name"),
+    ("E029", "", "klauer-blark", "b", "cascade of an undeclared constant"),
+    ("E057", "", "klauer-blark", "b", "cascade of an undeclared type or constant"),
+    ("E012", "unknown type '…'", "Command_Pattern", "b", "Tc2_MC2's NC axis blocks (MC_Jog)"),
+    ("E016", "", "Command_Pattern", "b", "Tc2_MC2's MC_* parameters"),
+    ("E020", "", "Command_Pattern", "b", "cascade of Tc2_MC2"),
+    ("E023", "", "Command_Pattern", "b", "Tc2_MC2's AXIS_REF (NcToPlc)"),
+    ("E012", "unknown type '…'", "Visitor", "b", "Tc3_XML_Utility (FB_XmlDomParser)"),
+    ("E023", "", "Visitor", "b", "cascade of Tc3_XML_Utility"),
+    ("E047", "", "Abstract_Factory", "b", "an override that does not match, in a block nothing uses"),
+    ("E010", "undeclared identifier '…'", "Abstract_Factory", "b", "the same unused block's body"),
 ]
 
 

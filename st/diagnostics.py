@@ -294,7 +294,8 @@ class Code(str, Enum):
         "E060",
         (
             "Two declarations of one variable disagree on its type: a VAR_EXTERNAL and the VAR_GLOBAL it "
-            "names, or a VAR_CONFIG entry and the variable of the program instance it configures."
+            "names, a VAR_CONFIG entry and the variable of the program instance it configures, or a "
+            "VAR_ACCESS path and the variable it reaches."
         ),
     )
     ABSTRACT = (

@@ -382,6 +382,20 @@ class VarDecl(Syntax):
 
 
 @dataclass(slots=True, eq=False)
+class AccessDecl(Syntax):
+    """`name : R.inst.x : INT READ_WRITE;` in a configuration's or resource's VAR_ACCESS: a name
+    under which the variable at `path` (names, or a resource's name and a %address) is reached from
+    outside the program (an HMI, a client, plc["name"])."""
+
+    span: Span
+    names: list  # [(name, span)]: one (as a VarDecl's, so that code walking declarations reads it)
+    path: list[str]  # ["R", "inst", "x"], ["%IX1.1"], ["R", "%IX1.1"]
+    type: TypeSpec
+    read_only: bool = True  # IEC: READ_ONLY unless READ_WRITE is written
+    init: Any = None  # (none: an access path has no initial value)
+
+
+@dataclass(slots=True, eq=False)
 class VarBlock(Syntax):
     span: Span
     kind: str  # VAR, VAR_INPUT, ... (upper case)

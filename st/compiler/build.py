@@ -330,7 +330,19 @@ class AstBuilder(Transformer[Token, A.Unit]):
     def var_block(self, c: list[Any]) -> A.VarBlock:
         kw: Token = c[0]
         quals = [q for q in c[1:] if isinstance(q, Token) and q.type in _QUALIFIERS]
-        decls = [d for d in c if isinstance(d, A.VarDecl)]
+        decls = [d for d in c if isinstance(d, (A.VarDecl, A.AccessDecl))]
+        if str(kw).upper() != "VAR_ACCESS":
+            for d in decls:
+                if isinstance(d, A.AccessDecl):
+                    self.errors.append(BuildError(d.span, "an access path is declared in VAR_ACCESS", Code.SYNTAX))
+            decls = [d for d in decls if isinstance(d, A.VarDecl)]
+        else:
+            for d in decls:
+                if isinstance(d, A.VarDecl):
+                    self.errors.append(
+                        BuildError(d.span, "VAR_ACCESS declares access paths: name : path : type;", Code.SYNTAX)
+                    )
+            decls = [d for d in decls if isinstance(d, A.AccessDecl)]
         return A.VarBlock(self.sp(kw), str(kw).upper(), [str(q).upper() for q in quals], decls)
 
     def var_qualifier(self, c: list[Token]) -> Token:
@@ -384,6 +396,26 @@ class AstBuilder(Transformer[Token, A.Unit]):
         d.span = self.sp(path[0])
         d.path = [str(p) for p in path]
         return d
+
+    def access_decl(self, c: list[Any]) -> A.AccessDecl:
+        names: list[Token] = c[0]
+        path: list[str] = c[1]
+        spec: A.TypeSpec = c[2]
+        direction = str(c[3]).upper() if len(c) > 3 and c[3] is not None else "READ_ONLY"
+        if len(names) > 1:
+            self.errors.append(BuildError(self.sp(names[1]), "an access path has one name", Code.SYNTAX))
+        return A.AccessDecl(
+            self.sp(names[0]), [(str(names[0]), self.sp(names[0]))], path, spec, direction == "READ_ONLY"
+        )
+
+    def access_path(self, c: list[Any]) -> list[str]:
+        out: list[str] = []
+        for x in c:
+            if isinstance(x, Token) and x.type == "DIRECT_VAR":
+                out.append(str(x).upper())
+            elif x is not None:
+                out.extend(str(x).split("."))  # itf_name: one dotted token
+        return out
 
     def edge(self, c: list[Token]) -> Edge:
         return Edge(str(c[0]).upper())

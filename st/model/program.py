@@ -64,6 +64,18 @@ class ConfigModel:
 
 
 @dataclass(eq=False)
+class AccessPath:
+    """A VAR_ACCESS entry: `name` reaches the variable at `target` (a path the runtime resolves,
+    "inst.x", "g_count.field", or a %address), of `type`; READ_ONLY refuses writes from outside."""
+
+    name: str
+    target: str
+    type: Type
+    read_only: bool
+    span: Span | None = None
+
+
+@dataclass(eq=False)
 class StepModel:
     name: str
     index: int
@@ -104,6 +116,7 @@ class Project:
     tests: list[TestModel] = field(default_factory=list)  # checked
     test_asserts: list[AssertInfo] = field(default_factory=list)  # index = id in generated code
     libraries: Sequence[LibrarySources] = field(default_factory=list)  # compiler: Library; artefact: LibraryInfo
+    access_paths: dict[str, AccessPath] = field(default_factory=dict)  # lower name → VAR_ACCESS entry
 
     def user_pous(self) -> list[POUType]:
         return [p for p in self.pous.values() if not p.library]

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 from ..model import types as T
 from . import refnames
 from .helpers import _AttrRef, _ItemRef
-from .paths import norm_addr, read, resolve, write
+from .paths import norm_addr, read, resolve, through_access_path, write
 from .process_image import AddressError, from_raw, parse_address, to_raw
 from .values import ValueError_, _nest, from_python, to_json, to_python
 from .varref import VarRef
@@ -22,7 +22,16 @@ if TYPE_CHECKING:
     from .plc import PLC
 
 
+def _writable(plc: PLC, path: str) -> str:
+    """`path`, or the variable's a VAR_ACCESS name reaches; a READ_ONLY access path refused."""
+    target, ap = through_access_path(plc, path)
+    if ap is not None and ap.read_only:
+        raise ValueError_(f"{path}: '{ap.name}' is a READ_ONLY access path")
+    return target
+
+
 def get(plc: PLC, path: str) -> Any:
+    path = through_access_path(plc, path)[0]
     if path.strip().startswith("%"):
         return _image_read(plc, path)
     container, key, t = resolve(plc, path)
@@ -30,6 +39,7 @@ def get(plc: PLC, path: str) -> Any:
 
 
 def set_(plc: PLC, path: str, value: Any) -> None:
+    path = _writable(plc, path)
     if path.strip().startswith("%"):
         _image_write(plc, path, value)
         return
@@ -47,6 +57,9 @@ def ref(plc: PLC, path: str) -> VarRef:
 
 
 def force(plc: PLC, path: str, value: Any) -> None:
+    _writable(plc, path)
+    if through_access_path(plc, path)[0].strip().startswith("%"):
+        path = through_access_path(plc, path)[0]
     if path.strip().startswith("%"):
         binds = plc.bindings.get(norm_addr(path))
         if not binds:

@@ -71,8 +71,27 @@ class BitHolder:
         )
 
 
+def through_access_path(src: Program, path: str) -> tuple[str, Any]:
+    """A path that starts with a VAR_ACCESS name, as the path of the variable it reaches (what
+    follows the name kept: `counter.field`), and its AccessPath; other paths as they are, None."""
+    aps = getattr(src.project, "access_paths", None)
+    if not aps:
+        return path, None
+    m = re.match(r"\s*([A-Za-z_][A-Za-z0-9_]*)", path)
+    ap = aps.get(m.group(1).lower()) if m else None
+    if (
+        ap is None
+        or m is None
+        or m.group(1).lower() in src.instances
+        or src.project.global_names.get(m.group(1).lower())
+    ):
+        return path, None
+    return ap.target + path[m.end() :], ap
+
+
 def resolve(src: Program, path: str) -> tuple[Any, Any, Any]:
     """path → (container, key, type) in `src`; KeyError saying what is wrong with the path."""
+    path = through_access_path(src, path)[0]
     toks = list(tokens(path))
     if not toks:
         raise KeyError(f"empty variable path {path!r}")

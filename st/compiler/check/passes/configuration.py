@@ -1,4 +1,4 @@
-"""Configurations: tasks, program instances and their connections, VAR_CONFIG; without a
+"""Configurations: tasks, program instances and their connections, VAR_CONFIG, VAR_ACCESS; without a
 CONFIGURATION, an implicit one runs every PROGRAM in one task."""
 
 from __future__ import annotations
@@ -7,7 +7,8 @@ from typing import TYPE_CHECKING
 
 from ....diagnostics import Code
 from ....model import types as T
-from ....model.program import ConfigModel, InstanceModel, TaskModel
+from ....model.addresses import canonical
+from ....model.program import AccessPath, ConfigModel, InstanceModel, TaskModel
 from ... import ast as A
 from ...syntax import decl_of
 from ..common import _SECTIONS_PARAM, Scope
@@ -45,12 +46,67 @@ def _check_configuration(sem: Semantics, cfg: A.Configuration) -> None:
             im = _program_instance(sem, cm, res, pc, scope)
             if im is not None:
                 cm.instances.append(im)
+    configured: dict[str, T.Type] = {}  # %address → the type of the variable VAR_CONFIG places there
     for b in cfg.var_blocks:
         if b.kind == "VAR_CONFIG":
             for d in b.decls:
-                if _config_path_type(sem, cm, d) is not None:
+                t = _config_path_type(sem, cm, d)
+                if t is not None:
                     cm.var_config.append((d.path or [], d.location, d.init, d.type, d.span))
+                    if d.location:
+                        configured[canonical(d.location)] = t
+    for b in cfg.var_blocks + [b for r in cfg.resources for b in r.var_blocks]:
+        if b.kind == "VAR_ACCESS":
+            for d in b.decls:
+                _access_path(sem, cfg, cm, configured, d)
     ctx.project.configs.append(cm)
+
+
+def _access_path(sem: Semantics, cfg: A.Configuration, cm: ConfigModel, configured: dict, d: A.AccessDecl) -> None:
+    """`name : [R.]inst.var : T [READ_ONLY|READ_WRITE];` (or a global, or a %address): registered in
+    the project's access paths when its variable is found and has the declared type."""
+    ctx = sem.ctx
+    name = d.names[0][0]
+    path = list(d.path)
+    shown = ".".join(path)
+    if len(path) > 1 and any(r.name.lower() == path[0].lower() for r in cfg.resources):
+        path = path[1:]  # the resource's name: its instances and globals are the configuration's here
+    if name.lower() in ctx.project.access_paths or ctx.project.global_names.get(name.lower()):
+        ctx.err(Code.DECLARED_TWICE, d.span, f"'{name}' is declared twice (an access path's name must be new)")
+        return
+    t: T.Type | None
+    if path[0].startswith("%"):
+        found = (configured.get(canonical(path[0])) or _located(ctx, canonical(path[0]))) if len(path) == 1 else None
+        if found is None:
+            ctx.err(Code.UNDECLARED, d.span, f"VAR_ACCESS: no located variable at {shown}")
+            return
+        t, target = found, canonical(path[0])
+    else:
+        inst = next((i for i in cm.instances if i.name.lower() == path[0].lower()), None)
+        gs = ctx.project.global_names.get(path[0].lower()) if inst is None else None
+        if inst is None and not gs:
+            ctx.err(Code.UNDECLARED, d.span, f"VAR_ACCESS: {shown}: no program instance or global named '{path[0]}'")
+            return
+        t = inst.type if inst is not None else gs[0].type if gs else T.INT
+        for part in path[1:]:
+            ut = T.unalias(t)
+            member: T.VarSym | T.Member | None = None
+            if isinstance(ut, T.POUType):
+                sym = ut.vars.get(part.lower())
+                member = sym if sym is not None and sym.section != "VAR_TEMP" else None
+            elif isinstance(ut, T.StructType):
+                member = ut.members.get(part.lower())
+            else:
+                member = None
+            if member is None:
+                ctx.err(Code.UNDECLARED, d.span, f"VAR_ACCESS: {shown}: '{part}' is not a variable of {ut}")
+                return
+            t = member.type
+        target = ".".join(path)
+    want = sem.decls.resolve_type(d.type, None)
+    if want is None or not declaration_mismatch.check_access_entry(ctx, d, want, t):
+        return
+    ctx.project.access_paths[name.lower()] = AccessPath(name, target, t, d.read_only, d.span)
 
 
 def _task_parameter(sem: Semantics, tm: TaskModel, k: str, v: A.Expr, scope: Scope) -> None:
@@ -110,6 +166,14 @@ def _program_instance(sem: Semantics, cm: ConfigModel, res, pc, scope: Scope) ->
             sem.stmts.assignable(a.value, vt, p.type, a.value.span, "pass")
         im.args.append((p, a.value, a.output))
     return im
+
+
+def _located(ctx, address: str) -> T.Type | None:
+    """The type of a variable located at `address` (a global's, or a program's or block's own)."""
+    for sym in list(ctx.project.globals.values()) + [v for p in ctx.project.user_pous() for v in p.vars.values()]:
+        if sym.location and canonical(sym.location) == address:
+            return sym.type
+    return None
 
 
 def _config_path_type(sem: Semantics, cm: ConfigModel, d: A.VarDecl):

@@ -24,7 +24,7 @@ def declare_globals(sem: Semantics) -> None:
                 ctx.global_blocks.append((cfg.name + "." + r.name, b))
     declared: dict = {}  # scope + lower-case name → symbol (ST names ignore case)
     for prefix, block in ctx.global_blocks:
-        if block.kind != "VAR_CONFIG":
+        if block.kind not in ("VAR_CONFIG", "VAR_ACCESS"):
             _declare_block(sem, prefix, block, declared)
     # global initializers may name other globals: check them once all are declared; so may the
     # initial values of the POUs' variables met so far

@@ -1,5 +1,6 @@
 """Two declarations of one variable agree on its type: a VAR_EXTERNAL and the VAR_GLOBAL it names,
-a VAR_CONFIG entry and the variable of the program instance it configures. Under every preset.
+a VAR_CONFIG entry and the variable of the program instance it configures, a VAR_ACCESS path and
+the variable it reaches. Under every preset.
 
 Codes: E060.
 """
@@ -29,4 +30,17 @@ def check_config_entry(ctx: CheckContext, d: A.VarDecl, path: list, declared: T.
     if same_type(declared, t):
         return True
     ctx.err(Code.DECLARATION_MISMATCH, d.type.span, f"VAR_CONFIG: {'.'.join(path)} is {t}, not {declared}")
+    return False
+
+
+def check_access_entry(ctx: CheckContext, d: A.AccessDecl, declared: T.Type, t: T.Type) -> bool:
+    """The VAR_ACCESS entry `d`, declared `declared`, for a variable of type `t`: reported (False)
+    when they differ."""
+    if same_type(declared, t):
+        return True
+    ctx.err(
+        Code.DECLARATION_MISMATCH,
+        d.type.span,
+        f"VAR_ACCESS: {'.'.join(d.path)} is {t}, not {declared}",
+    )
     return False
