@@ -203,7 +203,7 @@ JUDGED = [
     ("E010", "undeclared identifier '…'", "plcopen/CAN_", "b", "C block's placeholder body: undeclared name"),
     ("E010", "undeclared function or function block '…'", "time_types", "b", "TIME_TO_US: STruC++ only"),
     ("E010", "undeclared function or function block 'TIME'", "", "a", "TIME() (rule 4)"),
-    ("E013", "'%…' is N bit(s) wide", "", "b", "%ML as DWORD: MatIEC refuses it too (location size)"),
+    ("E058", "'%…' is N bit(s) wide", "", "b", "%ML as DWORD: MatIEC refuses it too (location size)"),
     ("E017", "… takes N argument(s), not N", "String Functions", "b", "MatIEC did not build it"),
     ("E017", "… takes one argument", "", "a", "__NEW(T, n) (new, CODESYS)"),
     ("E026", "", "fb_", "a", "THIS.M() (IEC ed. 3; new)"),

@@ -67,6 +67,7 @@ _PRETTY = {
     "SET_ASSIGN": "'S='",
     "RESET_ASSIGN": "'R='",
     "REF_ASSIGN": "'REF='",
+    "ACCESS_DIRECTION": "'READ_ONLY'",
     "WS": "white space",
     "$END": "end of file",
 }
@@ -451,6 +452,8 @@ class StParser:
 
     def _expected(self, names: Iterable[str]) -> str:
         wanted = set(names)
+        if "$END" in wanted:
+            wanted.discard("SEMICOLON")  # between declarations a stray ';' is allowed, not wanted
         shown = set()
         if _EXPR_START <= wanted:
             wanted -= _EXPR_ONLY

@@ -414,6 +414,7 @@ class _Sources:
         self.sources = compiled.sources
         self._clean: dict[str, str] = {}
         self._regions: dict[str, list[_Region]] = {}
+        self._calls: dict[tuple[int, int, int], list[_Call]] = {}  # (region, start, end) → its Assert calls
 
     def text(self, file: str) -> str:
         if file not in self._clean:
@@ -488,7 +489,14 @@ class _Sources:
                 return
 
     def _asserts(self, r: _Region, start: int, end: int) -> list[_Call]:
-        """Each Assert call in range: its place, method, Message literal and Expected text."""
+        """Each Assert call in range: its place, method, Message literal and Expected text (read
+        once per range: a suite's failures all look among the same calls)."""
+        key = (id(r), start, end)
+        if key not in self._calls:
+            self._calls[key] = self._read_asserts(r, start, end)
+        return self._calls[key]
+
+    def _read_asserts(self, r: _Region, start: int, end: int) -> list[_Call]:
         out = []
         text = r.text
         for m in _ASSERT_CALL.finditer(text, start, end):

@@ -359,6 +359,10 @@ class ExprGen:
             return I.point(int(e.value)) if isinstance(e.value, (int, bool)) else None
         if isinstance(e.const, int):
             return I.point(e.const)
+        if isinstance(e, (A.Name, A.Field)) and isinstance(e.sym, T.VarSym):
+            c = e.sym.global_ref or e.sym  # a CONSTANT's known value (GVL_Param.N, a VAR_EXTERNAL CONSTANT)
+            if c.constant and isinstance(c.const_value, int):
+                return I.point(int(c.const_value))
         t = T.base_of(e.ty) if e.ty is not None else None
         if t is None:
             return None

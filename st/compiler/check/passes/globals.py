@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from ....diagnostics import Code
+from ... import ast as A
 from ...names import qualified
 from ..context import CheckContext
 from ..rules import declaration_mismatch
@@ -23,9 +24,12 @@ def declare_globals(sem: Semantics) -> None:
             for b in r.var_blocks:
                 ctx.global_blocks.append((cfg.name + "." + r.name, b))
     declared: dict = {}  # scope + lower-case name → symbol (ST names ignore case)
+    constants = []  # (declaration, its symbols) of every VAR_GLOBAL CONSTANT
     for prefix, block in ctx.global_blocks:
         if block.kind not in ("VAR_CONFIG", "VAR_ACCESS"):
-            _declare_block(sem, prefix, block, declared)
+            table = _declare_block(sem, prefix, block, declared)
+            if "CONSTANT" in block.qualifiers:
+                constants += [(d, [table[n.lower()] for n, _ in d.names if n.lower() in table]) for d in block.decls]
     # global initializers may name other globals: check them once all are declared; so may the
     # initial values of the POUs' variables met so far
     ctx.globals_declared = True
@@ -34,14 +38,20 @@ def declare_globals(sem: Semantics) -> None:
         sem.decls.check_initializer(decl.init, t, None)
     ctx.current_gvl = None
     ctx.deferred_inits = []
+    for decl, syms in constants:  # their values, for the code that reads them (inlined as literals)
+        ctx.current_gvl = ctx.gvl_of_decl.get(id(decl))
+        value = sem.consts.value(decl.init, None) if isinstance(decl.init, A.Expr) else None
+        for sym in syms:
+            sym.const_value = value
+    ctx.current_gvl = None
     for decl, t, scope, variables in ctx.deferred_pou_inits:
         sem.decls.check_initializer(decl.init, t, scope, variables)
     ctx.deferred_pou_inits = []
     _bind_externals(ctx)
 
 
-def _declare_block(sem: Semantics, prefix: str, block, declared: dict) -> None:
-    """The variables of one VAR_GLOBAL block, under its scope's name (`prefix`)."""
+def _declare_block(sem: Semantics, prefix: str, block, declared: dict) -> dict:
+    """The variables of one VAR_GLOBAL block, under its scope's name (`prefix`): {lower name: symbol}."""
     ctx = sem.ctx
     table: dict = {}
     sem.decls.declare_block(block, table, None, None)
@@ -75,6 +85,7 @@ def _declare_block(sem: Semantics, prefix: str, block, declared: dict) -> None:
             if gvl.endswith("!"):  # {attribute 'qualified_only'}
                 ctx.qualified_only.add(id(sym))
             ctx.gvls.setdefault(gvl.rstrip("!").lower(), {})[key] = sym
+    return table
 
 
 def _bind_externals(ctx: CheckContext) -> None:
