@@ -71,7 +71,8 @@ def _access_path(sem: Semantics, cfg: A.Configuration, cm: ConfigModel, configur
     shown = ".".join(path)
     if len(path) > 1 and any(r.name.lower() == path[0].lower() for r in cfg.resources):
         path = path[1:]  # the resource's name: its instances and globals are the configuration's here
-    if name.lower() in ctx.project.access_paths or ctx.project.global_names.get(name.lower()):
+    taken = any(i.name.lower() == name.lower() for i in cm.instances) or ctx.project.global_names.get(name.lower())
+    if name.lower() in ctx.project.access_paths or taken:
         ctx.err(Code.DECLARED_TWICE, d.span, f"'{name}' is declared twice (an access path's name must be new)")
         return
     t: T.Type | None
