@@ -313,6 +313,26 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
     help="A password that signs in too (besides the printed token); also $ST_WEB_PASSWORD.",
 )
 @click.option(
+    "--web-host",
+    "web_hosts",
+    multiple=True,
+    metavar="NAME",
+    help="A name the page is reached by besides its address (e.g. plc1.plant.local); repeatable. "
+    "Requests naming another host are refused.",
+)
+@click.option(
+    "--web-insecure",
+    is_flag=True,
+    help="Serve --web beyond this machine without a --web-password (refused otherwise).",
+)
+@click.option(
+    "--web-cert",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Serve the page over HTTPS: the certificate (PEM).",
+)
+@click.option("--web-key", type=click.Path(dir_okay=False), default=None, help="The private key of --web-cert (PEM).")
+@click.option(
     "--modbus",
     type=ENDPOINT,
     default=None,
@@ -435,6 +455,10 @@ def run(
     web,
     web_read_only,
     web_password,
+    web_hosts,
+    web_insecure,
+    web_cert,
+    web_key,
     modbus,
     modbus_map,
     modbus_read_only,
@@ -497,6 +521,10 @@ def run(
         web=web,
         web_read_only=web_read_only,
         web_password=web_password,
+        web_hosts=list(web_hosts),
+        web_insecure=web_insecure,
+        web_cert=web_cert,
+        web_key=web_key,
         modbus=modbus,
         modbus_map=modbus_map,
         modbus_read_only=modbus_read_only,
@@ -529,6 +557,10 @@ _RUN_NEEDS = {
     "dump_all": "dump_json",
     "web_read_only": "web",
     "web_password": "web",
+    "web_hosts": "web",
+    "web_insecure": "web",
+    "web_cert": "web",
+    "web_key": "web",
     "modbus_map": "modbus",
     "modbus_read_only": "modbus",
     "modbus_writable": "modbus",

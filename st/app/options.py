@@ -33,6 +33,10 @@ class RunOptions:
     web: str | None = None  # "[HOST:]PORT" of the online mode's page
     web_read_only: bool = False
     web_password: str | None = None
+    web_hosts: list = field(default_factory=list)  # --web-host names
+    web_insecure: bool = False  # --web beyond loopback without a password
+    web_cert: str | None = None  # HTTPS
+    web_key: str | None = None
     modbus: str | None = None  # "[HOST:]PORT"
     modbus_map: str | None = None
     modbus_read_only: bool = False

@@ -247,19 +247,40 @@ def start_web(stack: ExitStack, plc: PLC, o: RunOptions):
 
     try:
         host, port = parse_endpoint(o.web or "")
+    except ValueError as e:
+        raise StartRefused(f"error: cannot start the web server: {e}") from None
+    if not is_loopback(host) and not o.web_password and not o.web_insecure:
+        raise StartRefused(
+            f"error: --web {o.web} serves the PLC beyond this machine: give it a --web-password (and "
+            "--web-cert/--web-key for HTTPS, docs/web.md), or --web-insecure to serve it without"
+        )
+    if bool(o.web_cert) != bool(o.web_key):
+        raise StartRefused("error: --web-cert and --web-key go together (a certificate and its private key)")
+    try:
         token = secrets.token_urlsafe(18)
         name = ", ".join(Path(f).name for f in o.files)
-        web = WebLink(plc, name, host, port, token, o.web_password or "", o.web_read_only)
+        web = WebLink(
+            plc,
+            name,
+            host,
+            port,
+            token,
+            o.web_password or "",
+            o.web_read_only,
+            names=tuple(o.web_hosts),
+            cert=o.web_cert or "",
+            key=o.web_key or "",
+        )
         stack.callback(web.stop)
         web.start()
     except (ValueError, OSError) as e:
         raise StartRefused(f"error: cannot start the web server: {e}") from None
     shown = f"[{host}]" if ":" in host else host
-    err(
-        f"web: http://{shown}:{web.port}/?token={token}"
-        + (" (read-only)" if o.web_read_only else "")
-        + ("" if is_loopback(host) else "  -- listening beyond this machine")
-    )
+    scheme = "https" if o.web_cert else "http"
+    beyond = "" if is_loopback(host) else "  -- listening beyond this machine"
+    if beyond and scheme == "http":
+        beyond += " over plain HTTP (--web-cert/--web-key serve HTTPS)"
+    err(f"web: {scheme}://{shown}:{web.port}/?token={token}" + (" (read-only)" if o.web_read_only else "") + beyond)
     return web
 
 

@@ -33,9 +33,27 @@ LOG_KEPT = 200
 class WebConfig:
     """What the server process needs (pickled to it on stdin)."""
 
-    def __init__(self, host: str, port: int, token: str, password: str, read_only: bool, channel: str, pid: int):
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        token: str,
+        password: str,
+        read_only: bool,
+        channel: str,
+        pid: int,
+        names: tuple[str, ...] = (),
+        cert: str = "",
+        key: str = "",
+    ):
         self.host, self.port, self.token, self.password = host, port, token, password
         self.read_only, self.channel, self.pid = read_only, channel, pid
+        self.names = names  # --web-host: the names the server answers to besides its address
+        self.cert, self.key = cert, key  # --web-cert / --web-key: HTTPS
+
+    @property
+    def scheme(self) -> str:
+        return "https" if self.cert else "http"
 
 
 class WebLink:
@@ -50,9 +68,12 @@ class WebLink:
         read_only: bool = False,
         period: float = 0.1,
         log_path: str | None = None,
+        names: tuple[str, ...] = (),
+        cert: str = "",
+        key: str = "",
     ):
         self.plc, self.name, self.read_only, self.period = plc, name, read_only, period
-        self.cfg = WebConfig(host, port, token, password, read_only, "", os.getpid())
+        self.cfg = WebConfig(host, port, token, password, read_only, "", os.getpid(), names, cert, key)
         self.log_path = log_path
         self.ch: Channel | None = None
         self.proc: subprocess.Popen[bytes] | None = None
@@ -166,6 +187,9 @@ class WebLink:
         if kind == "subscribe":  # the server's union of every page's watch list and view
             self.paths = [str(p) for p in msg.get("paths", [])][:5000]
             self.views = [str(p) for p in msg.get("pous", [])][:64]
+            return True
+        if kind == "note":  # the server's word for the PLC's log (wrong secrets, refusals)
+            self.plc.log.add(self.plc.time, 0x02, str(msg.get("text", ""))[:300])
             return True
         if kind in ("write", "force", "unforce", "control"):
             ok, error = self._change(msg)

@@ -6,10 +6,11 @@ watches, and queues the pages' requests for the PLC.
 
 Security: the server listens on loopback unless told otherwise. A browser gets in with the
 token printed at start (`/?token=…`, as Jupyter does) or the configured password; it then
-holds a random session cookie (HttpOnly, SameSite=Strict). Everything but the login page and
-the static files needs that session. The WebSocket also checks that its Origin is this
-server, so another site's page cannot drive it (the changes travel only over it). Each change
-carries its origin (the client's address) into the PLC's log.
+holds a random session cookie (HttpOnly, SameSite=Strict, Secure over HTTPS). Everything but
+the login page and the static files needs that session. Every request must name this server in
+its Host header, the login post and the WebSocket must come from one of its pages (Origin), and
+every secret goes through one rate limiter (guard.py). The changes travel only over the
+WebSocket; each carries its origin (the client's address) into the PLC's log.
 """
 
 from __future__ import annotations
@@ -25,12 +26,12 @@ import secrets
 from bisect import bisect_right
 from pathlib import Path
 from typing import Any
-from urllib.parse import parse_qs, urlsplit
+from urllib.parse import parse_qs
 
 import uvicorn
 from starlette.applications import Starlette
 from starlette.requests import Request
-from starlette.responses import HTMLResponse, JSONResponse, RedirectResponse, Response
+from starlette.responses import HTMLResponse, JSONResponse, PlainTextResponse, RedirectResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
@@ -38,6 +39,7 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 from ..model import types as T
 from ..runtime.values import to_st_literal
 from .channel import FAILED, SERVING, Channel
+from .guard import Limiter, Site
 from .link import WebConfig
 
 STATIC = Path(__file__).with_name("static")
@@ -85,6 +87,12 @@ class Hub:
         self.subscribed: tuple[list[str], list[str]] | None = None
         self.last_doc: bytes | None = None
         self.hist: dict[str, dict] = {}  # task → the histograms of its latencies and execution times
+        self.site = Site(cfg.host, cfg.port, cfg.scheme, tuple(cfg.names))  # port: the bound one, once bound
+        self.limiter = Limiter(log=self.note)
+
+    def note(self, text: str) -> None:
+        """A line for the PLC's log (and so the pages' and st run's): the limiter's reports."""
+        self.ch.requests.put(json.dumps({"type": "note", "text": text}).encode())
 
     # ------------------------------------------------------------------ sessions
     def check_secret(self, secret: str) -> bool:
@@ -304,15 +312,33 @@ def _find(nodes: list, path: str) -> dict | None:
     return None
 
 
-def _same_origin(ws: WebSocket) -> bool:
-    origin = ws.headers.get("origin")
-    if origin is None:
-        return True  # not a browser (browsers always send Origin on a WebSocket)
-    host = ws.headers.get("host", "")
-    return urlsplit(origin).netloc.lower() == host.lower()
+def _peer(conn: Request | WebSocket) -> str:
+    return conn.client.host if conn.client else "?"
 
 
-def make_app(hub: Hub) -> Starlette:
+class HostGuard:
+    """ASGI middleware: a request whose Host header does not name this server gets 421 (HTTP) or
+    its WebSocket closed with 4403, before any route sees it."""
+
+    def __init__(self, app: Any, hub: Hub):
+        self.app, self.hub = app, hub
+
+    async def __call__(self, scope: dict, receive: Any, send: Any) -> None:
+        if scope["type"] in ("http", "websocket"):
+            host = next((v.decode("latin-1") for k, v in scope.get("headers", []) if k == b"host"), None)
+            if not self.hub.site.host_ok(host):
+                if scope["type"] == "http":
+                    await PlainTextResponse("misdirected request: this server is not that host", 421)(
+                        scope, receive, send
+                    )
+                else:
+                    await receive()  # websocket.connect
+                    await send({"type": "websocket.close", "code": 4403})
+                return
+        await self.app(scope, receive, send)
+
+
+def make_app(hub: Hub) -> Any:
     def login_page(error: str = "", status: int = 200) -> HTMLResponse:
         password = " or the password" if hub.cfg.password else ""
         err = f'<p class="err" data-testid="login-error">{error}</p>' if error else ""
@@ -320,26 +346,33 @@ def make_app(hub: Hub) -> Starlette:
 
     def signed_in(location: str = "./") -> Response:
         r = RedirectResponse(location, status_code=303)
-        r.set_cookie(COOKIE, hub.new_session(), httponly=True, samesite="strict", path="/")
+        secure = hub.site.scheme == "https"
+        r.set_cookie(COOKIE, hub.new_session(), httponly=True, samesite="strict", path="/", secure=secure)
         return r
+
+    async def try_secret(request: Request, secret: str, what: str) -> Response:
+        """The one way a token or password is looked at (guard.Limiter)."""
+        ok = await hub.limiter.check(_peer(request), lambda: hub.check_secret(secret), what)
+        if ok:
+            return signed_in("./")
+        if ok is None:
+            return login_page("Too many wrong secrets lately: try again in a minute.", 429)
+        return login_page("Wrong token or password." if what == "password" else "That token is not this server's.", 401)
 
     async def index(request: Request) -> Response:
         token = request.query_params.get("token")
         if token is not None:
-            if hub.check_secret(token):
-                return signed_in("./")
-            return login_page("That token is not this server's.", 401)
+            return await try_secret(request, token, "token")
         if not hub.authed(request.cookies):
             return login_page()
         return HTMLResponse((STATIC / "index.html").read_text(encoding="utf-8"), headers={"Cache-Control": "no-store"})
 
     async def login(request: Request) -> Response:
+        if not hub.site.origin_ok(request.headers.get("origin"), request.headers.get("host")):
+            return PlainTextResponse("a sign-in from another site's page is refused", 403)
         body = (await request.body())[:4096].decode("utf-8", "replace")  # a urlencoded form of one field
         secret = parse_qs(body).get("secret", [""])[0]
-        if hub.check_secret(secret):
-            return signed_in("./")
-        await asyncio.sleep(0.5)  # a wrong secret costs time
-        return login_page("Wrong token or password.", 401)
+        return await try_secret(request, secret, "password")
 
     async def program(request: Request) -> Response:
         if not hub.authed(request.cookies):
@@ -349,7 +382,8 @@ def make_app(hub: Hub) -> Starlette:
 
     async def ws_endpoint(ws: WebSocket) -> None:
         await ws.accept()
-        if not hub.authed(ws.cookies) or not _same_origin(ws):  # closed before anything is sent
+        same_origin = hub.site.origin_ok(ws.headers.get("origin"), ws.headers.get("host"))
+        if not hub.authed(ws.cookies) or not same_origin:  # closed before anything is sent
             await ws.close(code=4401 if not hub.authed(ws.cookies) else 4403)
             return
         hub._numbers += 1
@@ -378,7 +412,7 @@ def make_app(hub: Hub) -> Starlette:
         WebSocketRoute("/ws", ws_endpoint),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
     ]
-    return Starlette(routes=routes)
+    return HostGuard(Starlette(routes=routes), hub)
 
 
 async def _watch_parent(pid: int, server: uvicorn.Server) -> None:
@@ -394,7 +428,15 @@ async def _watch_parent(pid: int, server: uvicorn.Server) -> None:
 
 async def _serve(cfg: WebConfig) -> None:
     hub = Hub(cfg)
-    config = uvicorn.Config(make_app(hub), host=cfg.host, port=cfg.port, log_level="warning", ws_max_size=1 << 20)
+    config = uvicorn.Config(
+        make_app(hub),
+        host=cfg.host,
+        port=cfg.port,
+        log_level="warning",
+        ws_max_size=1 << 20,
+        ssl_certfile=cfg.cert or None,
+        ssl_keyfile=cfg.key or None,
+    )
     server = uvicorn.Server(config)
     task = asyncio.create_task(server.serve())
     while not server.started and not task.done():
@@ -405,7 +447,7 @@ async def _serve(cfg: WebConfig) -> None:
             await task
         return
     sock = server.servers[0].sockets[0]
-    hub.ch.port = sock.getsockname()[1]
+    hub.ch.port = hub.site.port = sock.getsockname()[1]
     hub.ch.state = SERVING
     pump = asyncio.create_task(hub.pump())
     parent = asyncio.create_task(_watch_parent(cfg.pid, server))
