@@ -101,11 +101,11 @@ def to_st_literal(v: Any, t: T.Type | None) -> str:
     if isinstance(v, float):
         if v != v or v in (math.inf, -math.inf):
             return str(v)
-        if bt is T.REAL:
+        if bt is T.REAL:  # the fewest digits that give this single-precision value back
             for digits in range(1, 10):
                 text = f"{v:.{digits}g}"
                 if round_f32(float(text)) == v:
-                    return _real_text(text)
+                    return _real_text(repr(float(text)))
         return _real_text(repr(v))
     if isinstance(bt, T.ElemType) and bt.kind in ("time", "date", "tod", "dt"):
         return str(_json_leaf(v, bt))
@@ -113,7 +113,12 @@ def to_st_literal(v: Any, t: T.Type | None) -> str:
 
 
 def _real_text(text: str) -> str:
-    return text if any(c in text for c in ".eEn") else text + ".0"
+    """Python's shortest text of a float as an IEC real literal: 40.0, 0.1, 1.5E-5, 1.0E30 (a
+    fraction always, an exponent without '+' or leading zeros)."""
+    mantissa, e, exponent = text.lower().partition("e")
+    if "." not in mantissa:
+        mantissa += ".0"
+    return f"{mantissa}E{int(exponent)}" if e else mantissa
 
 
 def _nest(flat: list[Any], dims: list[tuple[int, int]]) -> list[Any]:
