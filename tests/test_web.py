@@ -276,3 +276,19 @@ def test_an_online_change_sends_the_pages_the_new_program(web):
             plc, link, ws, lambda m: m["type"] == "snapshot" and int(m["values"]["line.count"]["text"]) > before
         )
         assert int(snap["values"]["line.count"]["text"]) >= before + 1000  # the new body runs, the value kept
+
+
+@pytest.mark.slow  # (a whole st run with its server process)
+def test_a_web_run_exits_without_shared_memory_warnings():
+    import subprocess
+    import sys
+
+    r = subprocess.run(
+        [sys.executable, "-m", "st", "run", str(LINE), "--web", "127.0.0.1:0", "--duration", "1s", "--no-rt"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert r.returncode == 0, r.stderr
+    assert "web: http://127.0.0.1:" in r.stderr
+    assert "leaked" not in r.stderr and "resource_tracker" not in r.stderr

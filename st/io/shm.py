@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Callable
-from multiprocessing import shared_memory
+from multiprocessing import resource_tracker, shared_memory
 from typing import TypeVar
 
 T = TypeVar("T")
@@ -29,6 +29,14 @@ class SharedBlock:
 
     def __init__(self, size: int, name: str | None = None, create: bool = False):
         self.shm = shared_memory.SharedMemory(name=name, create=create, size=size if create else 0)
+        if not create:
+            # the creator owns and unlinks it: an attaching process's resource tracker must not
+            # (Python < 3.13 registers every attach; at exit it would unlink the block and warn
+            # "leaked shared_memory")
+            try:
+                resource_tracker.unregister(self.shm._name, "shared_memory")  # type: ignore[attr-defined]
+            except Exception:  # noqa: BLE001 - best effort: at worst the warning comes back
+                pass
         buf = self.shm.buf
         assert buf is not None  # None only once closed
         if create:

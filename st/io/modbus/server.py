@@ -456,15 +456,8 @@ class Connection(asyncio.Protocol):
 
 def serve(cfg: ServerConfig, shm_name: str, parent_pid: int) -> None:
     """Entry point of the server process."""
-    from multiprocessing import resource_tracker
-
     logging.basicConfig(level=os.environ.get("ST_MODBUS_LOG", "WARNING"), format="st modbus: %(levelname)s %(message)s")
-    ex = Exchange(shm_name)
-    try:
-        # the PLC owns and unlinks it; the tracker knows it by its private "/name"
-        resource_tracker.unregister(ex.shm._name, "shared_memory")  # type: ignore[attr-defined]
-    except Exception:  # noqa: BLE001 - best effort
-        pass
+    ex = Exchange(shm_name)  # (attached: the PLC owns and unlinks it, st/io/shm.py)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C goes to the PLC, which stops us
     try:
         asyncio.run(_main(cfg, ex, parent_pid))
