@@ -149,10 +149,11 @@ def test_a_page_gets_what_it_watches_and_the_lines_of_the_last_scan(web):
         assert snap["state"] == "RUN" and snap["fault"] is None
         assert snap["lines"] == {"pou": "line", "hit": [17, 18, 19, 20, 21, 24]}  # not 22: the motor is off
         values = snap["values"]
-        assert values["line.dwell"] == {"text": "T#200ms", "num": 200000000.0}
-        assert values["line.delay.Q"] == {"text": "FALSE", "num": 0.0}  # a block's member, for `delay.Q`
-        assert values["line.speed"] == {"text": "1.5", "num": 1.5}
-        assert values["line.nothing"]["text"] is None and "nothing" in values["line.nothing"]["error"]
+        assert values["line.dwell"] == {"text": "T#200ms", "num": 200.0, "type": "TIME"}  # charted in ms
+        assert values["line.delay.Q"] == {"text": "FALSE", "num": 0.0, "type": "BOOL"}  # for `delay.Q`
+        assert values["line.speed"] == {"text": "1.5", "num": 1.5, "type": "REAL"}
+        nothing = values["line.nothing"]  # the server's word for a path the program does not have
+        assert nothing["text"] is None and nothing["error"] == "line.nothing: line has no variable 'nothing'"
         assert int(values["line.count"]["text"]) >= 1
         (task,) = snap["tasks"]
         assert task["jobs"] >= 1 and task["mk"]["met"] is True

@@ -31,6 +31,7 @@ def enter_fault(plc: PLC, info: FaultInfo) -> None:
     plc.state = FAULT
     plc.fault = info
     plc.faults.append(info)
+    plc.log.add(plc.time, 0x04, str(info))  # in the PLC's log too: the online mode's, st run's
     safe_outputs(plc)
     if plc.retain_store is not None:
         # as a PLC's retain memory: the values as the faulting scan left them, nothing lost

@@ -65,6 +65,7 @@ def _pou(pou: T.POUType, compiled: Any) -> dict:
         while first > 1 and not re.search(r"\b(PROGRAM|FUNCTION_BLOCK|FUNCTION)\b", lines[first - 1], re.I):
             first -= 1  # the keyword may stand on a line above the name
         last = next((i + 1 for i in range(span.line - 1, len(lines)) if _END.match(lines[i])), len(lines))
+        last = max(last, _members_after(pou, span.file, last, lines))
         out.update(file=span.file, first_line=first, source=lines[first - 1 : last])
     for v in pou.vars.values():
         if v.section not in _SECTIONS:
@@ -73,7 +74,7 @@ def _pou(pou: T.POUType, compiled: Any) -> dict:
         out["vars"].append(
             {
                 "name": v.name,
-                "type": _type_name(v.type),
+                "type": type_text(v.type),
                 "section": v.section,
                 "location": v.location or None,
                 "output": (v.location or "").upper().startswith("%Q"),
@@ -83,12 +84,37 @@ def _pou(pou: T.POUType, compiled: Any) -> dict:
     return out
 
 
-def _type_name(t: T.Type) -> str:
+_MEMBER_END = re.compile(r"^\s*END_(METHOD|PROPERTY|ACTION)\b", re.IGNORECASE)
+
+
+def _members_after(pou: T.POUType, file: str, last: int, lines: list[str]) -> int:
+    """The last line of the block's METHODs, PROPERTYs and ACTIONs written after its END_FUNCTION_BLOCK
+    (as TwinCAT and CODESYS text exports place them), or `last` when there are none."""
+    starts = []
+    for m in [*pou.methods.values(), *pou.actions.values()]:
+        span = getattr(getattr(m, "decl", m), "span", None)
+        if getattr(m, "owner_fb", pou) is pou and span is not None and span.file == file and span.line > last:
+            starts.append(span.line)
+    for ps in pou.properties.values():
+        if ps.owner is pou and ps.span is not None and ps.span.file == file and ps.span.line > last:
+            starts.append(ps.span.line)
+    end = last
+    for start in starts:
+        end = max(end, next((i + 1 for i in range(start - 1, len(lines)) if _MEMBER_END.match(lines[i])), start))
+    return end
+
+
+def type_text(t: T.Type) -> str:
+    """A type as the page names it: INT, TrafficPhase, STRING(80), ARRAY[1..5] OF INT, POINTER TO X."""
+    if isinstance(t, T.StringType):
+        return str(t)
     name = getattr(t, "name", None)
     if name:
         return str(name)
     ut = T.unalias(t)
     if isinstance(ut, T.ArrayType):
         dims = ", ".join(f"{lo}..{hi}" for lo, hi in ut.dims)
-        return f"ARRAY[{dims}] OF {_type_name(ut.element)}"
+        return f"ARRAY[{dims}] OF {type_text(ut.element)}"
+    if isinstance(ut, T.RefType):
+        return str(ut)
     return type(ut).__name__

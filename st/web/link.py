@@ -22,7 +22,7 @@ from ..model import types as T
 from ..runtime.lifecycle import FAULT, RUN, STOP
 from ..runtime.values import from_st_text, to_st_literal
 from .channel import FAILED, SERVING, STARTING, Channel
-from .describe import describe
+from .describe import describe, type_text
 
 _PLAIN = (bool, int, float, str)  # what marshal takes as it is (bool before int: a bool is an int)
 SAMPLES_KEPT = 5000  # a task's latencies and execution times handed over per snapshot, at most
@@ -80,6 +80,7 @@ class WebLink:
         self.paths: list[str] = []  # what the pages watch or view
         self.views: list[str] = []  # POUs whose lines are marked
         self._refs: dict[str, Any] = {}
+        self.type_names: dict[str, str] = {}  # path → its type's name (ARRAY element rows have no other)
         self._compiled: Any = None
         self._next = 0.0
         self._cost = 0.0  # the last snapshot's cost (s)
@@ -266,6 +267,7 @@ class WebLink:
             t, v = self._value(path)
             types.append(t)
             values.append(v)
+        type_names = {p: self.type_names[p] for p in self.paths if p in self.type_names}
         fault = plc.fault if plc.state == FAULT else None
         io = io_status(plc)
         log = [(m.time, m.kind, m.text) for m in plc.log.since(max(plc.log.total - LOG_KEPT, 0))]
@@ -280,6 +282,7 @@ class WebLink:
             "tasks": [self._task(t) for t in plc.tasks],
             "paths": list(self.paths),
             "types": types,
+            "type_names": type_names,  # each path's declared type, as the page shows it
             "values": values,
             "forced": plc.forced,
             "lines": self._last_lines,  # (measured after one job; the last measure otherwise)
@@ -293,20 +296,28 @@ class WebLink:
 
     def _value(self, path: str) -> tuple[str, Any]:
         """(how the server formats it, the value): an elementary type's name and the raw value;
-        "=" and the text for anything else (formatted here); "!" and why for a path that fails."""
+        "#" and (its ordinal, its literal) for an enumeration value; "=" and the text for anything
+        else (formatted here); "!" and why for a path that fails."""
         entry = self._refs.get(path)
         try:
             if entry is None:
                 ref = self.plc.ref(path)
                 bt = T.base_of(ref.type)
                 name = getattr(bt, "name", "")
-                elementary = T.ELEMENTARY.get(name) is bt and not isinstance(T.unalias(ref.type), T.EnumType)
-                entry = self._refs[path] = (ref, name if elementary else "=")
+                enum = isinstance(T.unalias(ref.type), T.EnumType)
+                elementary = T.ELEMENTARY.get(name) is bt and not enum
+                entry = self._refs[path] = (ref, name if elementary else "#" if enum else "=")
+                self.type_names[path] = type_text(ref.type)
             ref, kind = entry
             v = ref.get()
         except Exception as e:  # noqa: BLE001 - a path the program does not have (any more)
             self._refs.pop(path, None)
             return "!", str(e.args[0] if e.args else e)
+        if kind == "#":
+            return kind, (int(v), to_st_literal(v, ref.type)) if isinstance(v, int) else (
+                "=",
+                to_st_literal(v, ref.type),
+            )
         if kind != "=" and type(v) in _PLAIN:
             return kind, v
         if kind != "=" and isinstance(v, _PLAIN):  # an int subclass (an IntEnum), …: its plain value
@@ -344,7 +355,12 @@ class WebLink:
             "jobs": jobs,
             "overruns": s.overruns,
             "skipped": s.skipped,
-            "latency_ns": {"min": s.lat_min if jobs else 0, "mean": s.lat_sum / jobs if jobs else 0, "max": s.lat_max},
+            "latency_ns": {
+                "min": s.lat_min if jobs else 0,
+                "mean": s.lat_sum / jobs if jobs else 0,
+                "max": s.lat_max,
+                "last": s.latencies[-1] if s.latencies else 0,
+            },
             "exec_ns": {
                 "min": s.exec_min if jobs else 0,
                 "mean": s.exec_sum / jobs if jobs else 0,

@@ -232,13 +232,15 @@ class Hub:
     def for_client(self, c: Client, snap: dict) -> dict:
         """The snapshot a page gets: its values formatted, its lines, its results, its new log."""
         index = snap.setdefault("_index", {p: i for i, p in enumerate(snap["paths"])})
-        skip = ("paths", "types", "values", "lines", "results", "log", "log_total", "_index", "number")
+        skip = ("paths", "types", "type_names", "values", "lines", "results", "log", "log_total", "_index", "number")
         out = {k: v for k, v in snap.items() if k not in skip}
         out["type"] = "snapshot"
         out["tasks"] = [self.task_view(t) for t in snap["tasks"]]
-        types, raw = snap["types"], snap["values"]
+        types, raw, names = snap["types"], snap["values"], snap.get("type_names", {})
         out["values"] = {
-            p: format_value(types[index[p]], raw[index[p]]) for p in (*c.paths, *c.view_paths) if p in index
+            p: {**format_value(types[index[p]], raw[index[p]]), "type": names.get(p)}
+            for p in (*c.paths, *c.view_paths)
+            if p in index
         }
         lines = snap.get("lines")
         out["lines"] = (
@@ -290,15 +292,24 @@ def _hist(counts: list[int]) -> dict:
     return {"edges_ns": EDGES[a : b + 1], "counts": counts[a:b]}
 
 
+_MS = ("TIME", "LTIME", "TIME_OF_DAY", "TOD", "LTIME_OF_DAY", "LTOD")  # charted in ms (their values are ns)
+
+
 def format_value(kind: str, v: Any) -> dict:
-    """A value as the page shows it: its ST text and a number for charts (see link._value)."""
+    """A value as the page shows it: its IEC literal and a number for charts (see link._value):
+    TIME-like values in ms, an enumeration value as its ordinal (the literal names it)."""
     if kind == "!":
         return {"text": None, "num": None, "error": v}
     if kind == "=":
         return {"text": v, "num": None}
+    if kind == "#":
+        ordinal, text = v
+        return {"text": text, "num": ordinal}
     num = float(v) if isinstance(v, (bool, int, float)) else None
     if num is not None and (math.isnan(num) or math.isinf(num)):
         num = None
+    if num is not None and kind in _MS:
+        num /= 1e6
     return {"text": to_st_literal(v, T.ELEMENTARY[kind]), "num": num}
 
 

@@ -49,6 +49,14 @@
     return Math.round(x).toLocaleString('en-US');
   }
 
+  /** A log axis's tick in µs, short: 0.5, 19, 310, 1.2k, 79k. */
+  function fmtTick(v) {
+    if (v == null) return '';
+    if (v < 10) return String(+v.toFixed(1));
+    if (v < 1000) return String(Math.round(v));
+    return (v < 10000 ? +(v / 1000).toFixed(1) : Math.round(v / 1000)) + 'k';
+  }
+
   function fmtSec(ns) { return (ns / 1e9).toFixed(1) + ' s'; }
 
   function fmtInterval(ns) {
@@ -187,10 +195,18 @@
       else if (msg.type === 'result') onResult(msg);
       else if (msg.type === 'program') location.reload();  // an online change: the new program (the watch list stays)
     };
-    ws.onclose = () => {
+    ws.onclose = (ev) => {
       if (C.ws !== ws) return;
       C.ws = null; C.open = false; C.pending.clear();
       setConn(false);
+      if (ev.code === 4401 || ev.code === 4403) {
+        // the server is up but does not know this page's session: the PLC (st run) was restarted,
+        // with a new token, or the session ended; reconnecting cannot help, signing in does
+        sessionEnded(ev.code === 4401
+          ? 'The PLC was restarted, or this page\'s session ended: sign in again to go on.'
+          : 'The server refused this page (another host or origin).');
+        return;
+      }
       scheduleReconnect();
     };
     ws.onerror = () => { /* onclose follows */ };
@@ -226,6 +242,24 @@
     e.classList.toggle('bad', !open);
     e.title = open ? 'Connected to the PLC' : 'Connection lost; reconnecting…';
     document.body.classList.toggle('offline', !open);
+    if (!open) {  // the last state seen is no longer known to hold
+      const st = $('state');
+      st.textContent = '?';
+      st.className = 'state state-unknown';
+      st.title = 'Not connected: the PLC\'s state is unknown';
+      S.lastState = null;
+      localLog('warning', 'connection to the PLC lost; reconnecting…');
+    } else if (S.everOpen) {
+      localLog('log', 'connected to the PLC again');
+    }
+    if (open) S.everOpen = true;
+  }
+
+  function sessionEnded(text) {
+    $('session-text').textContent = text;
+    $('session-banner').hidden = false;
+    $('conn').textContent = 'signed out';
+    localLog('error', text);
   }
 
   // ------------------------------------------------------------------ snapshots & render loop
@@ -235,6 +269,11 @@
     S.forced = new Set(snap.forced || []);
     histPush(snap, prev);
     appendLog(snap.log || []);
+    if (S.lastState && S.lastState !== snap.state) {
+      localLog(snap.state === 'FAULT' ? 'error' : 'log', `state ${S.lastState} → ${snap.state}` +
+        (snap.state === 'FAULT' && snap.fault ? `: ${faultText(snap.fault)}` : ''), snap.time_ns);
+    }
+    S.lastState = snap.state;
     // a view whose subject appeared after the program was described (axes register on first use)
     for (const [tab, on] of [['motion', snap.axes && snap.axes.length], ['ethercat', snap.ethercat], ['modbus', snap.modbus]]) {
       if (on) document.querySelector(`[data-tab="${tab}"]`).hidden = false;
@@ -256,7 +295,11 @@
 
   // ------------------------------------------------------------------ history
   const WINDOW_MAX_S = 125;
-  const Hist = { t: [], series: new Map() };
+  const Hist = { t: [], series: new Map(), names: new Map() };  // names: an enumeration's ordinal → its literal
+
+  const ENUM_TEXT = /^[A-Za-z_]\w*#[A-Za-z_]\w*$/;
+  const TIME_PREFIX = /^(T|TIME|LT|LTIME|D|DATE|LD|LDATE|TOD|TIME_OF_DAY|LTOD|DT|DATE_AND_TIME|LDT)#/i;
+  function isEnumText(text) { return typeof text === 'string' && ENUM_TEXT.test(text) && !TIME_PREFIX.test(text); }
 
   function histKeys(snap) {
     const keys = [];
@@ -280,6 +323,11 @@
       if (!arr) { arr = new Array(len - 1).fill(null); Hist.series.set(key, arr); }
       const num = val && typeof val.num === 'number' ? val.num : null;
       arr.push(num);
+      if (num != null && isEnumText(val.text)) {
+        let names = Hist.names.get(key);
+        if (!names) { names = new Map(); Hist.names.set(key, names); }
+        names.set(num, val.text.slice(val.text.indexOf('#') + 1));
+      }
     }
     for (const arr of Hist.series.values()) while (arr.length < len) arr.push(null);
     let drop = 0;
@@ -293,6 +341,7 @@
   function histClear() {
     Hist.t.length = 0;
     Hist.series.clear();
+    Hist.names.clear();
   }
 
   /** Data for uPlot: [t, ...series] over the last `win` seconds. */
@@ -325,6 +374,17 @@
       if (ok) send({ type: 'control', action: 'reset_cold' }, 'Reset (cold)');
     };
     $('fault-banner').onclick = showFaultLocation;
+    $('forced-btn').onclick = () => { renderForcedList(); $('forced-dialog').showModal(); };
+    $('forced-close').onclick = () => $('forced-dialog').close();
+    $('unforce-all').onclick = async () => {
+      const n = S.forced.size;
+      if (!n) { $('forced-dialog').close(); return; }
+      $('forced-dialog').close();
+      const ok = await confirmDialog('Unforce all',
+        `Release all ${n} forced variable${n > 1 ? 's' : ''}? The program (and the inputs) set them again from the next scan.`,
+        'Unforce all');
+      if (ok) send({ type: 'unforce', path: '' }, 'Unforce all');
+    };
     if (S.prog.read_only) {
       document.body.classList.add('read-only');
       $('ro-badge').hidden = false;
@@ -335,6 +395,13 @@
     const st = $('state');
     setText(st, snap.state);
     st.className = 'state state-' + String(snap.state).toLowerCase();
+    st.title = 'The PLC\'s state';
+    const n = S.forced.size;
+    const fb = $('forced-btn');
+    setText(fb, `${n} forced`);
+    fb.classList.toggle('has-forced', n > 0);
+    $('stop-banner').hidden = snap.state !== 'STOP';
+    if ($('forced-dialog').open) renderForcedList();
     $('btn-start').classList.toggle('active', snap.state === 'RUN');
     $('btn-stop').classList.toggle('active', snap.state === 'STOP');
     setText($('clock'), `${fmtSec(snap.time_ns)} · ${Number(snap.scans || 0).toLocaleString('en-US')} scans`);
@@ -342,6 +409,17 @@
     const f = snap.state === 'FAULT' ? snap.fault : null;
     banner.hidden = !f;
     if (f) setText(banner, faultText(f));
+  }
+
+  function renderForcedList() {
+    const paths = [...S.forced].sort();
+    $('forced-none').hidden = paths.length > 0;
+    $('unforce-all').disabled = !paths.length || document.body.classList.contains('read-only');
+    $('forced-list').replaceChildren(...paths.map((p) => {
+      const val = valueOf(p);
+      return h('tr', { 'data-testid': 'forced-row' }, h('td', { text: p }), h('td', { text: val ? val.text : '' }),
+        h('td', null, h('button', { type: 'button', text: 'Unforce', onclick: () => doUnforce(p) })));
+    }));
   }
 
   function faultText(f) {
@@ -704,14 +782,22 @@
     render();
   }
 
-  function placeholderFor(v) {
-    if (!v) return 'ST literal';
-    const t = v.type.toUpperCase();
+  /** An example literal of the row's type for its New value field (the type from the program's
+   *  description or, for an array element or a global, from the server). */
+  function placeholderFor(type, val) {
+    if (!type) return 'ST literal';
+    const t = type.toUpperCase();
+    if (t.startsWith('ARRAY')) return 'an element: [i]';
     if (t === 'BOOL') return 'TRUE / FALSE';
-    if (t.includes('TIME')) return 'T#1s500ms';
+    if (t === 'TIME' || t === 'LTIME') return 'T#1s500ms';
+    if (t === 'TOD' || t === 'TIME_OF_DAY') return 'TOD#12:00:00';
+    if (t === 'DATE') return 'D#2024-01-31';
+    if (t === 'DT' || t === 'DATE_AND_TIME') return 'DT#2024-01-31-12:00:00';
     if (t.includes('REAL')) return '1.5';
     if (t.includes('STRING')) return "'text'";
-    return '42';
+    if (/^(U?[SDL]?INT|BYTE|L?D?WORD)$/.test(t)) return '42';
+    if (val && val.text && val.text.includes('#')) return val.text;  // an enumeration: Type#Member
+    return 'ST literal';
   }
 
   function watchRow(path) {
@@ -720,7 +806,7 @@
     const forcedCell = h('td', { class: 'c-forced' });
     const input = h('input', {
       type: 'text', class: 'new-value', 'data-testid': 'new-value', spellcheck: 'false',
-      placeholder: placeholderFor(v), 'aria-label': `New value for ${path}`,
+      placeholder: placeholderFor(v && v.type), 'aria-label': `New value for ${path}`,
     });
     const trend = h('input', { type: 'checkbox', class: 'trend', 'data-testid': 'trend-check', title: 'Show in Trends' });
     trend.checked = S.trend.has(path);
@@ -728,7 +814,7 @@
     const tr = h('tr', { 'data-testid': 'watch-row', 'data-path': path },
       h('td', { class: 'c-path' }, h('span', { class: 'path', text: path }),
         v && v.location ? h('span', { class: 'addr' + (v.output ? ' out' : ''), text: v.location }) : null),
-      h('td', { class: 'c-type', text: v ? v.type : '' }),
+      h('td', { class: 'c-type', 'data-testid': 'watch-type', text: v ? v.type : '' }),
       h('td', { class: 'c-value' }, value),
       forcedCell,
       h('td', { class: 'c-new change' }, input),
@@ -737,14 +823,14 @@
         btn('btn-force', 'Force', 'Force the value (held every scan)', () => doForce(path, input), 'force'),
         btn('btn-unforce', 'Unforce', 'Release the forced value', () => doUnforce(path))),
       h('td', { class: 'c-trend' }, trend),
-      h('td', { class: 'c-remove' }, btn('btn-remove', 'Remove', 'Remove from the watch list', () => removeWatch(path), 'remove')));
+      h('td', { class: 'c-remove' }, btn('btn-remove', '✕', `Remove ${path} from the watch list`, () => removeWatch(path), 'remove')));
     input.addEventListener('keydown', (ev) => { if (ev.key === 'Enter') doWrite(path, input); });
     trend.addEventListener('change', () => {
       if (trend.checked) S.trend.add(path); else S.trend.delete(path);
       saveWatch();
       Trends.dirty = true;
     });
-    Watch.rows.set(path, { tr, value, forcedCell, input, forced: null });
+    Watch.rows.set(path, { tr, value, forcedCell, input, forced: null, typeCell: tr.querySelector('.c-type'), seen: false });
     return tr;
   }
 
@@ -755,8 +841,24 @@
   }
 
   function updateWatch(snap) {
-    for (const [path, row] of Watch.rows) {
+    for (const [path, row] of [...Watch.rows]) {
       const val = snap.values ? snap.values[path] : undefined;
+      if (val && val.error) {
+        if (!row.seen) {  // never had a value: the path is not the program's
+          removeWatch(path);
+          toast(`Not watched: ${val.error}`);
+          continue;
+        }
+        val.text = `(${val.error})`;
+      } else if (val) {
+        row.seen = true;
+        if (val.type && !row.typeCell.textContent) {
+          row.typeCell.textContent = val.type;
+          row.input.placeholder = placeholderFor(val.type, val);
+        } else if (val.type && row.input.placeholder === 'ST literal') {
+          row.input.placeholder = placeholderFor(val.type, val);
+        }
+      }
       const text = val ? val.text : '…';
       if (row.value._text !== text) {
         row.value.textContent = text; row.value._text = text;
@@ -852,12 +954,21 @@
     const anyBool = Trends.keys.some(isBool);
     const anyNum = Trends.keys.some((p) => !isBool(p));
     const series = [{ label: 't', value: (u, v) => (v == null ? '–' : v.toFixed(1) + ' s') }];
+    const typeOf = (p) => { const v = varOf(p); const val = valueOf(p); return ((v && v.type) || (val && val.type) || '').toUpperCase(); };
     Trends.keys.forEach((p, k) => {
       const b = isBool(p);
+      const t = typeOf(p);
+      const timeLike = /^(L?TIME|L?TOD|TIME_OF_DAY|LTIME_OF_DAY)$/.test(t);  // charted in ms
+      const val = valueOf(p);
+      const enumLike = Hist.names.has(p) || (val && isEnumText(val.text));  // its ordinal; the name on hover
+      let fmt = (u, v) => fmtNum(v);
+      if (b) fmt = (u, v) => (v == null ? '–' : v ? 'TRUE' : 'FALSE');
+      else if (timeLike) fmt = (u, v) => (v == null ? '–' : fmtNum(v) + ' ms');
+      else if (enumLike) fmt = (u, v) => { const n = Hist.names.get(p); return v == null ? '–' : (n && n.get(v)) || String(v); };
       series.push({
-        label: p, stroke: COLORS[k % COLORS.length], width: 1.5, scale: b ? 'bool' : 'y',
-        paths: b ? uPlot.paths.stepped({ align: 1 }) : undefined, points: { show: false },
-        value: b ? (u, v) => (v == null ? '–' : v ? 'TRUE' : 'FALSE') : (u, v) => fmtNum(v),
+        label: p + (timeLike ? ' (ms)' : ''), stroke: COLORS[k % COLORS.length], width: 1.5, scale: b ? 'bool' : 'y',
+        paths: b || enumLike ? uPlot.paths.stepped({ align: 1 }) : undefined, points: { show: false },
+        value: fmt,
       });
     });
     const axes = [{ ...AXIS, values: (u, ticks) => ticks.map((v) => +v.toFixed(1) + ' s') }];
@@ -920,7 +1031,7 @@
           h('thead', null, h('tr', null, h('th', { text: 'µs' }),
             ['min', 'mean', 'p99', 'max', 'last'].map((k) => h('th', { class: 'num', text: k })))),
           h('tbody', null,
-            statRow('Latency', 'lat_', ['min', 'mean', 'p99', 'max']),
+            statRow('Latency', 'lat_', ['min', 'mean', 'p99', 'max', 'last']),
             statRow('Execution', 'exec_', ['min', 'mean', 'p99', 'max', 'last'])))),
       h('div', { class: 'hists' }, histBox('exec', 'Execution time (µs)'), histBox('latency', 'Latency (µs)')));
     const cells = {};
@@ -946,8 +1057,10 @@
       ...chartSize(box, 150),
       legend: { show: false },
       cursor: { drag: { x: false, y: false }, points: { show: false } },
-      scales: { x: { time: false, range: [edges[0] / 1000, edges[edges.length - 1] / 1000] }, y: { range: (u, lo, hi) => [0, Math.max(1, hi * 1.05)] } },
-      axes: [{ ...AXIS, values: (u, ticks) => ticks.map((v) => +v.toFixed(2)) }, { ...AXIS, size: labelSize }],
+      // the bins are four per octave: a log x axis gives each its width, so one far spike does not
+      // squash the rest into one bar
+      scales: { x: { time: false, distr: 3, log: 2, range: [Math.max(edges[0], 1) / 1000, edges[edges.length - 1] / 1000] }, y: { range: (u, lo, hi) => [0, Math.max(1, hi * 1.05)] } },
+      axes: [{ ...AXIS, values: (u, ticks) => ticks.map(fmtTick) }, { ...AXIS, size: labelSize }],
       series: [{}, { label: 'count', fill: color + '99', stroke: color, width: 1, paths: uPlot.paths.bars({ size: [0.92, 80], align: 0 }), points: { show: false } }],
     };
     const chart = new uPlot(opts, [[], []], box);
@@ -974,7 +1087,7 @@
       set('utility', t.mk.utility == null ? '–' : (+t.mk.utility).toFixed(3));
     } else { set('mk', '–'); set('utility', '–'); }
     const lat = t.latency_ns || {}, ex = t.exec_ns || {};
-    for (const k of ['min', 'mean', 'p99', 'max']) set('lat_' + k, fmtUs(lat[k]));
+    for (const k of ['min', 'mean', 'p99', 'max', 'last']) set('lat_' + k, fmtUs(lat[k]));
     for (const k of ['min', 'mean', 'p99', 'max', 'last']) set('exec_' + k, fmtUs(ex[k]));
     for (const [kind, color] of [['exec', '#1f6fd1'], ['latency', '#e07b00']]) {
       const hist = t.hist && t.hist[kind];
@@ -1104,8 +1217,16 @@
   // ------------------------------------------------------------------ log
   const LOG_MAX = 200;
 
+  /** A line of the page's own (a state change, the connection) in the log, at the PLC time it saw. */
+  function localLog(kind, text, timeNs) {
+    const t = timeNs != null ? timeNs : (S.snap ? S.snap.time_ns : null);
+    appendLog([{ time_ns: t, kind, text }]);
+  }
+
   function appendLog(entries) {
     if (!entries.length) return;
+    const empty = $('log-empty');
+    if (empty) empty.remove();
     const log = $('log');
     const atBottom = log.scrollHeight - log.scrollTop - log.clientHeight < 30;
     const frag = document.createDocumentFragment();
