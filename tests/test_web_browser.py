@@ -173,6 +173,8 @@ def test_a_write_and_a_force_reach_the_plc_and_show(browser, line_run, shots):
     time.sleep(1.0)  # a second of history on the chart
     page.screenshot(path=str(shots / "web-trends.png"))
     page.get_by_test_id("tab-tasks").click()
+    for k in ("lat_last", "exec_last", "lat_p99"):  # every cell of the table filled, latency's last too
+        sync_api.expect(page.locator(f'.task-card [data-k="{k}"]')).to_have_text(re.compile(r"^[\d.,]+$"), timeout=20000)
     time.sleep(0.5)
     page.screenshot(path=str(shots / "web-tasks.png"))
     assert errors == []
@@ -422,8 +424,8 @@ def test_a_restarted_plc_asks_the_page_to_sign_in_again(browser):
 
 def test_trends_plot_time_in_ms_and_an_enumeration_by_its_ordinal_named_in_the_legend(browser, cell_run, shots):
     page, errors = _page(browser, cell_run)
-    _watch(page, "cell.mixer.ticks", "cell.mixer.phase", "cell.hold")
-    for path in ("cell.mixer.phase", "cell.hold"):
+    _watch(page, "cell.mixer.ticks", "cell.mixer.phase", "cell.hold", "cell.levels[2]")
+    for path in ("cell.mixer.phase", "cell.hold", "cell.levels[2]"):
         sync_api.expect(_row(page, path).locator(".value")).not_to_have_text("…", timeout=20000)
         _row(page, path).get_by_test_id("trend-check").check()
     page.get_by_test_id("tab-trends").click()
@@ -433,6 +435,7 @@ def test_trends_plot_time_in_ms_and_an_enumeration_by_its_ordinal_named_in_the_l
     values = [v.strip() for v in legend.locator(".u-value").all_inner_texts()]
     assert re.fullmatch(r"\d+(\.\d+)? ms", values[2]), values  # TIME in ms
     assert values[1] in ("IDLE", "FILLING", "MIXING", "DRAINING"), values  # the member's name
+    assert values[3] == "20.0", values  # a REAL as its literal
     page.screenshot(path=str(shots / "web-trends-enum.png"))
     assert errors == []
     page.close()

@@ -6,6 +6,10 @@ from __future__ import annotations
 
 import asyncio
 import http.client
+import shutil
+import socket
+import ssl
+import subprocess
 import urllib.parse
 from pathlib import Path
 
@@ -202,3 +206,74 @@ def test_st_run_refuses_an_unprotected_or_half_configured_web_server(args, messa
 def test_every_web_option_needs_web():
     r = CliRunner().invoke(main, ["run", str(LINE), "--virtual", "--scans", "1", "--web-insecure"])
     assert r.exit_code == 2 and "--web-insecure" in r.output and "--web" in r.output
+
+
+@pytest.mark.slow  # (the server process)
+@pytest.mark.skipif(shutil.which("openssl") is None, reason="openssl is not installed (to make a test certificate)")
+def test_web_cert_and_key_serve_https_with_a_secure_cookie(tmp_path):
+    cert, key = tmp_path / "plc.crt", tmp_path / "plc.key"
+    subprocess.run(
+        [
+            "openssl",
+            "req",
+            "-x509",
+            "-newkey",
+            "rsa:2048",
+            "-sha256",
+            "-days",
+            "2",
+            "-nodes",
+            "-keyout",
+            str(key),
+            "-out",
+            str(cert),
+            "-subj",
+            "/CN=127.0.0.1",
+            "-addext",
+            "subjectAltName=IP:127.0.0.1",
+        ],
+        check=True,
+        capture_output=True,
+    )
+    plc = PLC(compile_paths([str(LINE)]), retain=str(tmp_path / "line.db"))
+    link = WebLink(plc, "line.st", "127.0.0.1", 0, token=TOKEN, cert=str(cert), key=str(key)).start()
+    try:
+        ctx = ssl.create_default_context(cafile=str(cert))
+        conn = http.client.HTTPSConnection("127.0.0.1", link.port, timeout=10, context=ctx)
+        conn.request("GET", f"/?token={TOKEN}")
+        r = conn.getresponse()
+        cookie = r.getheader("set-cookie") or ""
+        assert r.status == 303
+        assert "st_session=" in cookie and "Secure" in cookie and "HttpOnly" in cookie and "SameSite=strict" in cookie
+        conn.close()
+        with pytest.raises(http.client.RemoteDisconnected):  # no plain HTTP on that port
+            plain = http.client.HTTPConnection("127.0.0.1", link.port, timeout=10)
+            plain.request("GET", "/")
+            plain.getresponse()
+    finally:
+        link.stop()
+        plc.close()
+
+
+@pytest.mark.slow  # (the server process)
+def test_the_websocket_refuses_a_rebound_host_and_a_foreign_scheme_even_with_a_session(web):
+    """DNS rebinding's shape: Host and Origin both evil.example (they agree), with a valid cookie."""
+    from websockets.exceptions import ConnectionClosed, InvalidStatus
+    from websockets.sync.client import connect
+
+    _plc, link = web
+    conn = http.client.HTTPConnection("127.0.0.1", link.port, timeout=10)
+    conn.request("GET", f"/?token={TOKEN}", headers={"Host": f"127.0.0.1:{link.port}"})
+    cookie = (conn.getresponse().getheader("set-cookie") or "").split(";")[0]
+    conn.close()
+    evil = f"evil.example:{link.port}"
+    for host, origin in ((evil, f"http://{evil}"), (f"127.0.0.1:{link.port}", f"https://127.0.0.1:{link.port}")):
+        sock = socket.create_connection(("127.0.0.1", link.port), timeout=5)  # the name resolves here
+        headers = {"Cookie": cookie, "Origin": origin}
+        try:
+            with connect(f"ws://{host}/ws", sock=sock, additional_headers=headers, open_timeout=5) as ws:
+                with pytest.raises(ConnectionClosed) as e:
+                    ws.recv(timeout=5)
+                assert e.value.rcvd is not None and e.value.rcvd.code == 4403, host  # (the foreign scheme)
+        except InvalidStatus as refused:  # the rebound Host: refused before the upgrade
+            assert refused.response.status_code == 403 and host == evil

@@ -49,6 +49,14 @@
     return Math.round(x).toLocaleString('en-US');
   }
 
+  /** A REAL as its literal writes it: a fraction always (40.0, 1.5, 1.0E30). */
+  function realText(x) {
+    if (!Number.isFinite(x)) return String(x);
+    const s = String(+x.toPrecision(7));
+    if (/e/i.test(s)) { const [m, e] = s.split(/e/i); return (m.includes('.') ? m : m + '.0') + 'E' + (+e); }
+    return s.includes('.') ? s : s + '.0';
+  }
+
   /** A log axis's tick in µs, short: 0.5, 19, 310, 1.2k, 79k. */
   function fmtTick(v) {
     if (v == null) return '';
@@ -962,6 +970,7 @@
       const val = valueOf(p);
       const enumLike = Hist.names.has(p) || (val && isEnumText(val.text));  // its ordinal; the name on hover
       let fmt = (u, v) => fmtNum(v);
+      if (t.includes('REAL')) fmt = (u, v) => (v == null ? '–' : realText(v));  // 40.0, as the IEC literal
       if (b) fmt = (u, v) => (v == null ? '–' : v ? 'TRUE' : 'FALSE');
       else if (timeLike) fmt = (u, v) => (v == null ? '–' : fmtNum(v) + ' ms');
       else if (enumLike) fmt = (u, v) => { const n = Hist.names.get(p); return v == null ? '–' : (n && n.get(v)) || String(v); };
