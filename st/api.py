@@ -1,9 +1,11 @@
-"""The public Python API: compile ST and get a PLC (`st.PLC` is the runtime's PLC with constructors
-that compile first).
+"""The public Python API: compile ST (`compile_text`, `compile_paths`, the libraries they use).
+`st.PLC`, the runtime's PLC with constructors that compile first, is st/facade.py's:
 
     from st import PLC
     plc = PLC.from_source(text, cycle="10ms")
     plc.scan(); plc.advance("2.5s"); plc["main.x"]
+
+Compiling loads no runtime (`st check` starts at once).
 """
 
 from __future__ import annotations
@@ -16,10 +18,8 @@ from .compiler.options import CompileOptions
 from .diagnostics import CompileError
 from .model.compiled import CompiledProgram
 from .model.program import Project
-from .runtime import plc as runtime_plc
 from .source import SourceFile
 from .stdlib.iec import default_library
-from .stdlib.plcopen import AxisView, axis_view
 from .stdlib.plcopen import library as plcopen_library
 from .stdlib.vendor import library as vendor_library
 
@@ -118,29 +118,10 @@ def _compile(sources: list[SourceFile], raise_on_error: bool, **options) -> Comp
     return compile_sources(sources, libraries(chosen), chosen, raise_on_error=raise_on_error)
 
 
-class PLC(runtime_plc.PLC):
-    """The runtime's PLC, made from ST source text or files: the compile options among `kw`
-    (f_trig_first_scan, time_unit, use_cache, coverage, native, dialect; lib_path for files) go to the
-    compiler, the rest to the PLC."""
-
-    @classmethod
-    def from_source(cls, text: str, cycle=None, *, name: str = "<source>.st", **kw) -> PLC:
-        return cls(compile_text(text, name, **_compile_kw(kw)), cycle, **kw)
-
-    @classmethod
-    def from_files(cls, *paths: str, cycle=None, lib_path: Sequence[str | os.PathLike] = (), **kw) -> PLC:
-        """The PLC of ST files; `lib_path`: where a .plcproj's referenced libraries are (see compile_paths)."""
-        return cls(compile_paths(list(paths), lib_path=lib_path, **_compile_kw(kw)), cycle, **kw)
-
-    def axis(self, name: str | int) -> AxisView:
-        """A PLCopen axis as the blocks saw it in the last scan (st.stdlib.plcopen.AxisView): by
-        its configured name, its AxisNo or the path of an AXIS_REF variable."""
-        return axis_view(self, name)
-
-
-def _compile_kw(kw: dict) -> dict:
-    out = {}
-    for k in ("f_trig_first_scan", "time_unit", "use_cache", "coverage", "native", "dialect"):
-        if k in kw:
-            out[k] = kw.pop(k)
-    return out
+def compile_again(compiled: CompiledProgram, **options) -> CompiledProgram:
+    """The program `compiled` was made from, compiled again with other `options` (native=True): its
+    own source texts, as they were then (not the files as they are now: an edit since is not in
+    it), without raising (see the result's diagnostics)."""
+    library_paths = {path for lib in compiled.project.libraries for path, _text in lib.sources}
+    sources = [s for path, s in compiled.sources.items() if path not in library_paths]
+    return _compile(sources, False, **options)

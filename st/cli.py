@@ -428,6 +428,13 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
 )
 @click.option("--quiet", "-q", is_flag=True, help="No live status line and no summary.")
 @_NATIVE
+@click.option(
+    "--python",
+    "python_only",
+    is_flag=True,
+    help="Stay on the Python tier (by default the program is also built compiled to C in the background and "
+    "swapped in at a scan boundary when ready; --native waits for that build instead).",
+)
 @dialect
 def run(
     files,
@@ -477,6 +484,7 @@ def run(
     ethercat_capture,
     quiet,
     native,
+    python_only,
     time_unit,
     f_trig_first_scan,
 ):
@@ -543,6 +551,7 @@ def run(
         ethercat_capture=ethercat_capture,
         quiet=quiet,
         native=native,
+        python=python_only,
         time_unit=time_unit,
         f_trig_first_scan=f_trig_first_scan,
         compiled_mtimes=seen,

@@ -30,10 +30,11 @@ ALLOWED: dict[str, set[str]] = {
     "stdlib": {"source", "diagnostics", "model", "compiler", "runtime"},
     "io": {"source", "diagnostics", "model", "runtime", "stdlib"},
     "api": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib"},
-    "testing": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api"},
+    "facade": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api"},
+    "testing": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api", "facade"},
     "web": {"source", "diagnostics", "model", "runtime", "stdlib", "io"},
-    "app": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "web"},
-    "experiments": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "app"},
+    "app": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "facade", "web"},
+    "experiments": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "facade", "app"},
     "cli": {
         "source",
         "diagnostics",
@@ -44,11 +45,12 @@ ALLOWED: dict[str, set[str]] = {
         "stdlib",
         "io",
         "api",
+        "facade",
         "app",
         "testing",
         "experiments",
     },
-    "__init__": {"api", "runtime", "diagnostics"},
+    "__init__": {"facade", "runtime", "diagnostics"},
     "__main__": {"cli"},
 }
 

@@ -498,3 +498,19 @@ def test_retain_variables_inside_block_instances_survive_a_restart(tmp_path):
         "main.deep.c.n",
         "g.n",
     }
+
+
+def test_a_change_planned_against_a_program_that_no_longer_runs_is_refused_as_stale():
+    from st.runtime.online_change import STALE
+
+    plc = _running()
+    first = plc.prepare_change(
+        compile_text(BASE.replace("n := n + step", "n := n + 2 * step"), "v2.st", use_cache=False)
+    )
+    plc.online_change(compile_text(BASE.replace("n := n + step", "n := n + 3 * step"), "v3.st", use_cache=False))
+    n = plc["main.c.n"]
+    with pytest.raises(OnlineChangeRefused) as info:
+        plc.apply_change(first)  # planned against v1: v3 runs now
+    assert info.value.reasons == [STALE]
+    plc.scan()
+    assert plc["main.c.n"] == n + 3  # v3 goes on

@@ -174,7 +174,9 @@ def test_a_write_and_a_force_reach_the_plc_and_show(browser, line_run, shots):
     page.screenshot(path=str(shots / "web-trends.png"))
     page.get_by_test_id("tab-tasks").click()
     for k in ("lat_last", "exec_last", "lat_p99"):  # every cell of the table filled, latency's last too
-        sync_api.expect(page.locator(f'.task-card [data-k="{k}"]')).to_have_text(re.compile(r"^[\d.,]+$"), timeout=20000)
+        sync_api.expect(page.locator(f'.task-card [data-k="{k}"]')).to_have_text(
+            re.compile(r"^[\d.,]+$"), timeout=20000
+        )
     time.sleep(0.5)
     page.screenshot(path=str(shots / "web-tasks.png"))
     assert errors == []

@@ -55,6 +55,7 @@ class RunOptions:
     ethercat_capture: str | None = None
     quiet: bool = False
     native: bool = False  # --native: loop bodies compiled to C (also for --watch's online changes)
+    python: bool = False  # --python: no native build in the background (app/native_upgrade.py)
     time_unit: str = "ms"
     f_trig_first_scan: bool = False
     compiled_mtimes: dict | None = None  # the sources as compiled (see --watch)

@@ -9,16 +9,13 @@ created where it is asked for (nothing is created here: a probe file is made and
 
 from __future__ import annotations
 
-import ipaddress
 import os
 import re
-import tempfile
 from typing import Any, NoReturn
 
 import click
 
 from ..model.addresses import AddressError, parse_address
-from ..runtime.values import parse_duration_arg
 
 _NUMBER = re.compile(r"[+-]?(\d[\d_]*)?(\.\d*)?([eE][+-]?\d+)?$")
 
@@ -44,6 +41,8 @@ class Duration(_Type):
         text = str(value).strip()
         if text and _NUMBER.match(text) and any(c.isdigit() for c in text):
             self.refuse(value, f"a duration needs a unit, e.g. {text.lstrip('+')}s or {text.lstrip('+')}ms")
+        from ..runtime.values import parse_duration_arg  # (when used: `st --help` loads no runtime)
+
         try:
             ns = parse_duration_arg(text)
         except ValueError:
@@ -165,6 +164,8 @@ def is_loopback(host: str) -> bool:
     if h == "localhost":
         return True
     try:
+        import ipaddress
+
         return ipaddress.ip_address(h).is_loopback
     except ValueError:
         return False
@@ -343,6 +344,8 @@ def _probe(folder: str) -> str | None:
     """Create and remove a file in `folder`: what permissions, a read-only file system or the
     root user's privileges really allow (os.access answers yes to root everywhere)."""
     try:
+        import tempfile
+
         with tempfile.NamedTemporaryFile(dir=folder, prefix=".st-probe-"):
             pass
     except OSError as e:

@@ -16,6 +16,7 @@ from ..runtime.faults import PLCFaultError
 from ..runtime.lifecycle import FAULT
 from ..runtime.plc import PLC
 from ..runtime.values import parse_duration_arg
+from .native_upgrade import start_native_upgrade
 from .options import RunOptions
 from .output import err
 from .report import report, write_traces
@@ -73,6 +74,7 @@ def run_plc(compiled, o: RunOptions) -> int:
         install_signals(process, stop, plc)
         status = start_status(front, plc, o)
         watcher = start_watcher(plc, o)
+        upgrade = start_native_upgrade(plc, o)
         if o.virtual:
             code = _run_virtual(plc, o, stop)
         else:
@@ -81,7 +83,7 @@ def run_plc(compiled, o: RunOptions) -> int:
                 err(f"running in real time: {len(plc.tasks)} task(s), base tick {plc.tick / 1e6:g} ms; Ctrl-C stops")
                 if watcher is not None:
                     err(f"watching {len(o.files)} file(s): an edit is compiled and swapped in at a scan boundary")
-            code = _run_real(plc, o, stop, status, watcher, web)
+            code = _run_real(plc, o, stop, status, watcher, web, upgrade)
     written = report(plc, o)
     if traces:
         written = write_traces(traces, o) and written
@@ -120,7 +122,7 @@ def _run_virtual(plc: PLC, o: RunOptions, stop) -> int:
     return 3 if plc.state == FAULT else 0
 
 
-def _run_real(plc: PLC, o: RunOptions, stop, status, watcher, web=None) -> int:
+def _run_real(plc: PLC, o: RunOptions, stop, status, watcher, web=None, upgrade=None) -> int:
     end_time = None
     if o.duration is not None:
         end_time = plc.time + parse_duration_arg(o.duration)
@@ -139,6 +141,8 @@ def _run_real(plc: PLC, o: RunOptions, stop, status, watcher, web=None) -> int:
             status.update()
         if watcher is not None:
             watcher.poll()
+        if upgrade is not None:
+            upgrade.poll()
         if web is not None:
             web.poll()
 

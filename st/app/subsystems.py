@@ -41,6 +41,11 @@ def check_options(o: RunOptions) -> None:
         raise StartRefused("error: --virtual needs --duration or --scans (virtual time runs as fast as the CPU allows)")
     if o.virtual and o.web:
         raise StartRefused("error: --web needs a run in real time (not --virtual)")
+    if o.native and o.python:
+        raise StartRefused(
+            "error: --native and --python exclude each other (--native: C from the start; "
+            "--python: never; neither: C once it is built)"
+        )
 
 
 # ---------------------------------------------------------------------------- retained data

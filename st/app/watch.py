@@ -8,7 +8,7 @@ import time
 
 from ..api import compile_paths
 from ..diagnostics import CompileError
-from ..runtime.online_change import Change, OnlineChangeRefused, beside_the_scan
+from ..runtime.online_change import STALE, Change, OnlineChangeRefused, beside_the_scan
 from ..runtime.plc import PLC
 from .options import RunOptions
 from .output import err
@@ -83,4 +83,7 @@ class Watcher:
         try:
             err("\n" + self.plc.apply_change(prepared))
         except OnlineChangeRefused as e:
+            if e.reasons == [STALE]:
+                self.mtimes = {}  # (the native build came in meanwhile) the edit is built again
+                return
             err(f"\n{e}")

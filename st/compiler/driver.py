@@ -15,23 +15,23 @@ import threading
 from collections.abc import Collection, Sequence
 from pathlib import Path
 from types import CodeType
+from typing import TYPE_CHECKING
 
 from ..diagnostics import Code, CompileError, Diagnostic, DiagnosticSink, Severity
 from ..model.compiled import CompiledProgram
 from ..model.program import Project
 from ..source import SourceFile, Span
-from . import ast as A
-from . import cache, libpath, plcopen_xml, twincat, twincat_tasks
-from .artefact import artefact, libraries_only
-from .build import VENDOR_NAMES, AstBuilder
-from .check import Checker
-from .codegen import ModuleGen
-from .codegen.source import python_text
+from . import cache, libpath
 from .library import Library
-from .lower import LoweredProgram, lower
-from .native import build_native
 from .options import CompileOptions
 from .stages import Checked, Generated, NativeBuild, Parsed
+
+# The stages' modules are imported where they run: a compile answered from the cache (`st check`
+# of an unchanged file, every `st run` after the first) loads neither the grammar nor the checker,
+# the code generator or the native tier.
+if TYPE_CHECKING:
+    from . import ast as A
+    from .lower import LoweredProgram
 
 _parser_lock = threading.Lock()
 _parser = None
@@ -42,6 +42,7 @@ def _get_parser():
     global _parser, _builder
     if _parser is None:
         from ..grammar.parser import StParser
+        from .build import AstBuilder
 
         _builder = AstBuilder("")
         _parser = StParser(_builder)
@@ -75,6 +76,8 @@ def parse_source(
     """Parse one file; every problem becomes a diagnostic of that file (never an exception).
     `nested_comments`: see grammar.comments.strip_comments; `vendor_names`: R_EDGE, F_EDGE,
     CONFIGURATION and RESOURCE may be names (CODESYS, TwinCAT, the default)."""
+    from .build import VENDOR_NAMES
+
     with _parser_lock:
         parser, builder = _get_parser()
         builder.path = src.path
@@ -150,6 +153,10 @@ def _compile_sources(
         hit = cache.load(cdir, key, sources=all_sources, helpers=helpers)
         if hit is not None:
             return hit
+    from .artefact import artefact, libraries_only
+    from .lower import lower
+    from .native import build_native
+
     sink = DiagnosticSink()
     parsed = parse(sources, libraries, options, sink)
     project = Project()
@@ -263,6 +270,8 @@ def parse(sources: list[SourceFile], libraries: list[Library], options: CompileO
 
 def check(parsed: Parsed, options: CompileOptions, sink: DiagnosticSink) -> Checked:
     """Check the parsed units (every problem a diagnostic in `sink`)."""
+    from .check import Checker
+
     project = Checker(sink, parsed.libraries, options).run(parsed.units, set(parsed.library_paths))
     return Checked(project, parsed.libraries)
 
@@ -270,6 +279,9 @@ def check(parsed: Parsed, options: CompileOptions, sink: DiagnosticSink) -> Chec
 def generate(lowered: LoweredProgram, checked: Checked, options: CompileOptions, sink: DiagnosticSink) -> Generated:
     """Python modules and their code objects (none if code generation reported an error)."""
     inline_files = frozenset(path for lib in checked.libraries if lib.inline_blocks for path, _ in lib.sources)
+    from .codegen import ModuleGen
+    from .codegen.source import python_text
+
     gen = ModuleGen(lowered, sink, coverage=options.coverage, inline_files=inline_files)
     py_modules = gen.generate()
     coverage = gen.cov_points if options.coverage else None
@@ -288,6 +300,8 @@ def generate(lowered: LoweredProgram, checked: Checked, options: CompileOptions,
 
 def _type_names(units, with_pous: bool = False) -> dict[str, A.TypeDecl | A.POU | A.Interface]:
     """The TYPEs the units declare by (lower) name, and their POUs and interfaces if asked."""
+    from . import ast as A
+
     names: dict[str, A.TypeDecl | A.POU | A.Interface] = {}
     for u in units:
         for item in u.items:
@@ -370,6 +384,8 @@ def load_files(paths: list[str], lib_path: Sequence[str] = (), provided: Collect
     compiles, and the library projects it references (libpath.py: found among the projects named and
     in the search path `lib_path` + ST_LIBPATH, transitively, each once; `provided`: lower-case
     names of the libraries st stands in for, never searched for)."""
+    from . import twincat
+
     paths = [str(p) for p in paths]
     projects = [p for p in paths if p.lower().endswith(twincat.PROJECT_SUFFIX)]
     found = libpath.resolve(projects, lib_path, provided) if projects else libpath.Resolution()
@@ -383,6 +399,8 @@ def load_files(paths: list[str], lib_path: Sequence[str] = (), provided: Collect
 
 
 def _load_file(p: str) -> SourceFile:
+    from . import plcopen_xml, twincat
+
     text = _read_text(p)
     problems: list[Diagnostic] = []
     if twincat.is_twincat(p):
@@ -398,6 +416,8 @@ def _load_project(p: str, found: libpath.Resolution, tasks: bool = False) -> lis
     (E000 at the element, its name matched ignoring case first, as on Windows), a library not found
     (W014 at the reference); with `tasks` (a project named, not a library found), the CONFIGURATION
     its .TcTTO task files mean (twincat_tasks.py), after the XML's last line."""
+    from . import twincat, twincat_tasks
+
     xml = _read_text(p)
     out = []
     problems = list(found.warnings.get(p, []))

@@ -13,11 +13,14 @@ from __future__ import annotations
 import ast as py
 from dataclasses import dataclass, field
 from types import CodeType
+from typing import TYPE_CHECKING
 
 from ..model.compiled import NativeModule
 from ..model.program import Project
-from . import ast as A
 from .library import Library
+
+if TYPE_CHECKING:
+    from . import ast as A
 
 
 @dataclass(frozen=True, slots=True)

@@ -7,7 +7,8 @@ from __future__ import annotations
 import tomllib
 from pathlib import Path
 
-from ..api import PLC, compile_paths
+from ..api import compile_paths
+from ..facade import PLC
 from ..io.ethercat.config import from_dict
 from ..io.ethercat.driver import EtherCATDriver
 from ..stdlib.plcopen import axis_of, configure_axes

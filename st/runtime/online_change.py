@@ -74,12 +74,16 @@ class OnlineChangeRefused(ValueError):
         self.reasons = list(reasons)
 
 
+STALE = "the running program changed while this change was built (it is built again)"
+
+
 class Change:
     """An online change made ready beside the running program: the new build and its carry plan."""
 
-    def __init__(self, b: Build, carry: Carry):
+    def __init__(self, b: Build, carry: Carry, base: Any = None):
         self.build = b
         self.carry = carry
+        self.base = base  # the program it was planned against (a change to another is stale)
 
 
 def prepare_change(plc: PLC, compiled: CompiledProgram) -> Change:
@@ -93,13 +97,17 @@ def prepare_change(plc: PLC, compiled: CompiledProgram) -> Change:
     except PLCStartError as e:
         raise OnlineChangeRefused([f"the new program cannot start: {e}"]) from None
     releaser()  # running before the swap, which only hands it work
-    return Change(b, Carry(plc, b))
+    return Change(b, Carry(plc, b), plc.compiled)
 
 
 def apply_change(plc: PLC, change: Change | Build) -> str:
     if isinstance(change, Build):  # built by a caller of its own: plan now
         change = Change(change, Carry(plc, change))
     b = change.build
+    if change.base is not None and change.base is not plc.compiled:
+        # another change (an edit, the native build) came in while this one was built: its carry
+        # plan is for a program that no longer runs
+        raise OnlineChangeRefused([STALE])
     try:
         moved = change.carry.run(plc, b)
         _relink(plc, b, moved)

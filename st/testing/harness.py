@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..api import PLC
 from ..compiler.codegen.pyast import default_value
+from ..facade import PLC
 from ..model import types as T
 from ..runtime.values import from_python, parse_duration_arg, to_python
 

@@ -18,7 +18,22 @@ reference, an action or an SFC) stay attributes.
 Libraries emit code through the public API of `emit.py` (`call`, `const`, `wrap`).
 """
 
-from .module import ModuleGen
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 from .pyast import f32
 
+if TYPE_CHECKING:
+    from .module import ModuleGen
+
 __all__ = ["ModuleGen", "f32"]
+
+
+def __getattr__(name: str) -> Any:
+    """ModuleGen, imported when code is generated (a library's `emit` helpers need only emit.py)."""
+    if name == "ModuleGen":
+        from .module import ModuleGen
+
+        return ModuleGen
+    raise AttributeError(f"module 'st.compiler.codegen' has no attribute {name!r}")

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import ast as py
 
-from .expressions import wrap as _wrap
 from .pyast import _call, _const
 
 __all__ = ["call", "const", "wrap"]
@@ -28,4 +27,6 @@ def const(value) -> py.Constant:
 
 def wrap(node: py.expr, elem) -> py.expr:
     """`node` wrapped to the width of the integer type `elem` (two's complement when signed)."""
+    from .expressions import wrap as _wrap  # (when code is generated: libraries load without it)
+
     return _wrap(node, elem)

@@ -13,7 +13,6 @@ from __future__ import annotations
 import ast as py
 from typing import Any
 
-from ...compiler.check.calls import size_of
 from ...compiler.codegen.emit import call, const
 from ...compiler.library import FuncSig, Param
 from ...model import types as T
@@ -282,9 +281,9 @@ def _target(t) -> T.Type:
 
 def _pair_layout(types, _rt):
     d, s = _target(types[0]), _target(types[1])
-    dsize, ssize = size_of(d)[0], size_of(s)[0]
+    dsize, ssize = T.size_of(d)[0], T.size_of(s)[0]
     ud, us = T.unalias(d), T.unalias(s)
-    esize = size_of(ud.element)[0] if isinstance(ud, T.ArrayType) else 0
+    esize = T.size_of(ud.element)[0] if isinstance(ud, T.ArrayType) else 0
     return [(str(ud) == str(us), dsize, ssize, esize, T.byte_layout(ud), T.byte_layout(us))]
 
 
@@ -299,7 +298,7 @@ def _fill_spec(t) -> tuple | None:
     if u is T.BOOL:
         return ("bool", 1)
     kind = getattr(u, "kind", "")
-    size = size_of(u)[0]
+    size = T.size_of(u)[0]
     if kind == "real":
         return ("real", size)
     if kind in ("int", "bit", "time", "date", "tod", "dt"):
@@ -309,9 +308,9 @@ def _fill_spec(t) -> tuple | None:
 
 def _fill_layout(types, _rt):
     d = T.unalias(_target(types[0]))
-    size = size_of(d)[0]
+    size = T.size_of(d)[0]
     elem = d.element if isinstance(d, T.ArrayType) else d
-    esize = size_of(elem)[0] if isinstance(d, T.ArrayType) else 0
+    esize = T.size_of(elem)[0] if isinstance(d, T.ArrayType) else 0
     spec = _fill_spec(elem)
     return [(size, esize, spec, None, T.byte_layout(d))]
 
