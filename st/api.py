@@ -118,10 +118,20 @@ def _compile(sources: list[SourceFile], raise_on_error: bool, **options) -> Comp
     return compile_sources(sources, libraries(chosen), chosen, raise_on_error=raise_on_error)
 
 
+def own_sources(compiled: CompiledProgram) -> list[SourceFile]:
+    """The source texts `compiled` was made from (its libraries' left out), as they were then."""
+    library_paths = {path for lib in compiled.project.libraries for path, _text in lib.sources}
+    return [s for path, s in compiled.sources.items() if path not in library_paths]
+
+
+def compile_sources_again(sources: list[SourceFile], **options) -> CompiledProgram:
+    """Source texts already read (`own_sources`) compiled with `options`, without raising (see the
+    result's diagnostics): the same cache entry as any other compile of those texts."""
+    return _compile(sources, False, **options)
+
+
 def compile_again(compiled: CompiledProgram, **options) -> CompiledProgram:
     """The program `compiled` was made from, compiled again with other `options` (native=True): its
     own source texts, as they were then (not the files as they are now: an edit since is not in
     it), without raising (see the result's diagnostics)."""
-    library_paths = {path for lib in compiled.project.libraries for path, _text in lib.sources}
-    sources = [s for path, s in compiled.sources.items() if path not in library_paths]
-    return _compile(sources, False, **options)
+    return compile_sources_again(own_sources(compiled), **options)

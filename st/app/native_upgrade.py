@@ -1,20 +1,25 @@
 """The native tier by default (issue 36): `st run` starts at once on the Python tier, builds the
-same program (the very texts it runs) compiled to C in a background thread (beside the scan, as an online change is
-built), and swaps it in at a scan boundary through the online-change path, its state carried
-over. `--native` waits for the build before starting instead; `--python` stays on the Python
-tier. Where Cython or a C compiler is missing, or a body cannot be compiled, the Python tier
-goes on and one line says why. Not under `--virtual` (a run on virtual time is a test: the same
-program throughout) nor `--web` (its line marks need the Python tier's probes: `--native` there). With `--watch` an edit is swapped
-in on the Python tier at once, then built natively in its turn.
+same program (the very texts it runs) compiled to C in a process of its own (native_build.py:
+Cython and the C compiler never hold this process's interpreter), reads the build from st's
+cache beside the scan, and swaps it in at a scan boundary through the online-change path, its
+state carried over. `--native` waits for the build before starting instead; `--python` stays on
+the Python tier. Where Cython or a C compiler is missing, or a body cannot be compiled, the
+Python tier goes on and one line says why. Not under `--virtual` (a run on virtual time is a
+test: the same program throughout) nor `--web` (its line marks need the Python tier's probes:
+`--native` there). With `--watch` an edit is swapped in on the Python tier at once, then built
+natively in its turn.
 """
 
 from __future__ import annotations
 
+import pickle
+import subprocess
+import sys
 import threading
 import time
 from typing import Any
 
-from ..api import compile_again
+from ..api import compile_sources_again, own_sources
 from ..diagnostics import Code
 from ..runtime.online_change import STALE, OnlineChangeRefused, beside_the_scan
 from .options import RunOptions
@@ -46,15 +51,22 @@ class NativeUpgrade:
 
     def _build(self) -> None:
         base = self.plc.compiled  # what runs now: its own texts are built (an edit since is --watch's)
+        options = {
+            "time_unit": self.o.time_unit,
+            "f_trig_first_scan": self.o.f_trig_first_scan,
+            "native": True,
+            "dialect": self.o.dialect,
+        }
+        sources = own_sources(base)
+        # Cython and the C compiler in a process of their own (native_build.py: into st's cache),
+        # then the build read from the cache here, beside the scan
+        payload = pickle.dumps(([(s.path, s.text) for s in sources], options))
+        subprocess.run(
+            [sys.executable, "-m", "st.app.native_build"], input=payload, capture_output=True, check=False
+        )
         with beside_the_scan():
             try:
-                compiled = compile_again(
-                    base,
-                    time_unit=self.o.time_unit,
-                    f_trig_first_scan=self.o.f_trig_first_scan,
-                    native=True,
-                    dialect=self.o.dialect,
-                )
+                compiled = compile_sources_again(sources, **options)
                 self.built_in = time.monotonic() - self.started
                 if not compiled.native:
                     why = next((d.message for d in compiled.diagnostics if d.code == Code.NATIVE_UNAVAILABLE.value), "")
