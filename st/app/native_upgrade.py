@@ -61,9 +61,7 @@ class NativeUpgrade:
         # Cython and the C compiler in a process of their own (native_build.py: into st's cache),
         # then the build read from the cache here, beside the scan
         payload = pickle.dumps(([(s.path, s.text) for s in sources], options))
-        subprocess.run(
-            [sys.executable, "-m", "st.app.native_build"], input=payload, capture_output=True, check=False
-        )
+        subprocess.run([sys.executable, "-m", "st.app.native_build"], input=payload, capture_output=True, check=False)
         with beside_the_scan():
             try:
                 compiled = compile_sources_again(sources, **options)
