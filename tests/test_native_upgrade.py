@@ -48,6 +48,8 @@ def test_the_native_build_is_swapped_in_at_a_scan_boundary_with_the_state(tmp_pa
 
 
 def test_no_background_build_when_native_already_opted_out_virtual_or_with_web():
+    from contextlib import ExitStack
+
     plc = object()
     for o in (
         RunOptions(files=["x.st"], native=True),
@@ -55,7 +57,7 @@ def test_no_background_build_when_native_already_opted_out_virtual_or_with_web()
         RunOptions(files=["x.st"], virtual=True),
         RunOptions(files=["x.st"], web="127.0.0.1:0"),
     ):
-        assert start_native_upgrade(plc, o) is None
+        assert start_native_upgrade(ExitStack(), plc, o) is None
 
 
 def test_native_and_python_exclude_each_other():

@@ -38,7 +38,17 @@ class NativeUpgrade:
         self.note = ""
         self.attempts = 0
         self.current = plc.compiled  # the program this build is for
+        self.proc: subprocess.Popen[bytes] | None = None
+        self.closed = False
         self._start()
+
+    def close(self) -> None:
+        """The run ends: a build still going is stopped (no compiler left running after st)."""
+        self.closed = True
+        proc = self.proc
+        if proc is not None and proc.poll() is None:
+            proc.kill()
+            proc.wait()
 
     def _start(self) -> None:
         self.attempts += 1
@@ -61,7 +71,20 @@ class NativeUpgrade:
         # Cython and the C compiler in a process of their own (native_build.py: into st's cache),
         # then the build read from the cache here, beside the scan
         payload = pickle.dumps(([(s.path, s.text) for s in sources], options))
-        subprocess.run([sys.executable, "-m", "st.app.native_build"], input=payload, capture_output=True, check=False)
+        if self.closed:
+            return
+        try:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "st.app.native_build"],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+            self.proc.communicate(payload)
+        except OSError:
+            pass  # (then built here, below)
+        if self.closed:
+            return
         with beside_the_scan():
             try:
                 compiled = compile_sources_again(sources, **options)
@@ -112,8 +135,11 @@ class NativeUpgrade:
         self.current = self.plc.compiled
 
 
-def start_native_upgrade(plc: Any, o: RunOptions) -> NativeUpgrade | None:
-    """The background build, unless the run is native already, opted out, or cannot use it."""
+def start_native_upgrade(stack: Any, plc: Any, o: RunOptions) -> NativeUpgrade | None:
+    """The background build (stopped by `stack` when the run ends), unless the run is native
+    already, opted out, or cannot use it."""
     if o.native or o.python or o.virtual or o.web:
         return None
-    return NativeUpgrade(plc, o)
+    upgrade = NativeUpgrade(plc, o)
+    stack.callback(upgrade.close)
+    return upgrade

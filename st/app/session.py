@@ -74,7 +74,7 @@ def run_plc(compiled, o: RunOptions) -> int:
         install_signals(process, stop, plc)
         status = start_status(front, plc, o)
         watcher = start_watcher(plc, o)
-        upgrade = start_native_upgrade(plc, o)
+        upgrade = start_native_upgrade(front, plc, o)
         if o.virtual:
             code = _run_virtual(plc, o, stop)
         else:
