@@ -314,10 +314,9 @@ class WebLink:
             self._refs.pop(path, None)
             return "!", str(e.args[0] if e.args else e)
         if kind == "#":
-            return kind, (int(v), to_st_literal(v, ref.type)) if isinstance(v, int) else (
-                "=",
-                to_st_literal(v, ref.type),
-            )
+            if isinstance(v, int):
+                return kind, (int(v), to_st_literal(v, ref.type))
+            return "=", to_st_literal(v, ref.type)
         if kind != "=" and type(v) in _PLAIN:
             return kind, v
         if kind != "=" and isinstance(v, _PLAIN):  # an int subclass (an IntEnum), …: its plain value

@@ -328,8 +328,8 @@ def _peer(conn: Request | WebSocket) -> str:
 
 
 class HostGuard:
-    """ASGI middleware: a request whose Host header does not name this server gets 421 (HTTP) or
-    its WebSocket closed with 4403, before any route sees it."""
+    """ASGI middleware: a request whose Host header does not name this server gets 421, and such a
+    WebSocket is refused at its handshake (403), before any route sees it."""
 
     def __init__(self, app: Any, hub: Hub):
         self.app, self.hub = app, hub
