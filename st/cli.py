@@ -387,6 +387,43 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
     help="Answer only these unit ids, e.g. 1,255 (others: exception 0x0B). Default: all.",
 )
 @click.option(
+    "--opcua",
+    type=ENDPOINT,
+    default=None,
+    is_flag=False,
+    flag_value="127.0.0.1:4840",
+    metavar="[HOST:]PORT",
+    help="Serve the program's variables over OPC UA (default 127.0.0.1:4840; docs/opcua.md). Published: "
+    "inputs, outputs, globals and located variables, read-only, unless the symbol configuration says otherwise.",
+)
+@click.option(
+    "--opcua-map",
+    type=INPUT_FILE,
+    default=None,
+    help='TOML [symbols] table of "pattern" = "read" | "readwrite" | "none" (what is published, writable).',
+)
+@click.option(
+    "--opcua-users",
+    type=INPUT_FILE,
+    default=None,
+    help="The users who may sign in, with their roles (read, operate, engineer): `st opcua-user` writes it.",
+)
+@click.option("--opcua-anonymous", is_flag=True, help="Let clients in without a user (role read).")
+@click.option(
+    "--opcua-security",
+    default="sign,encrypt",
+    show_default=True,
+    metavar="MODES",
+    help="Security modes offered, of none, sign, encrypt (Basic256Sha256); none only when named.",
+)
+@click.option(
+    "--opcua-pki",
+    type=click.Path(file_okay=False),
+    default=None,
+    help="The server's certificate (made on first start) and its trusted/ and rejected/ client "
+    "certificates (default ~/.local/share/st/opcua).",
+)
+@click.option(
     "--axes",
     type=INPUT_FILE,
     default=None,
@@ -474,6 +511,12 @@ def run(
     modbus_idle_timeout,
     modbus_rate,
     modbus_unit_ids,
+    opcua,
+    opcua_map,
+    opcua_users,
+    opcua_anonymous,
+    opcua_security,
+    opcua_pki,
     axes,
     trace,
     trace_plot,
@@ -541,6 +584,12 @@ def run(
         modbus_idle_timeout=modbus_idle_timeout,
         modbus_rate=modbus_rate,
         modbus_unit_ids=modbus_unit_ids,
+        opcua=opcua,
+        opcua_map=opcua_map,
+        opcua_users=opcua_users,
+        opcua_anonymous=opcua_anonymous,
+        opcua_security=opcua_security,
+        opcua_pki=opcua_pki,
         axes=axes,
         trace=list(trace),
         trace_plot=trace_plot,
@@ -577,6 +626,11 @@ _RUN_NEEDS = {
     "modbus_idle_timeout": "modbus",
     "modbus_rate": "modbus",
     "modbus_unit_ids": "modbus",
+    "opcua_map": "opcua",
+    "opcua_users": "opcua",
+    "opcua_anonymous": "opcua",
+    "opcua_security": "opcua",
+    "opcua_pki": "opcua",
     "ethercat_backend": "ethercat",
     "ethercat_iface": "ethercat",
     "ethercat_capture": "ethercat",
@@ -782,6 +836,62 @@ def modbus_map(files, map_file, old_map_file, time_unit, f_trig_first_scan):
         "other addresses in OpenPLC's ranges (coils and discrete inputs 0-8191, input registers "
         "0-1023, holding registers 0-8191) read 0 and keep what is written; beyond them: exception 02"
     )
+
+
+@main.group()
+def opcua():
+    """The OPC UA server (see `st run --opcua`, docs/opcua.md)."""
+
+
+@opcua.command("symbols")
+@click.argument("files", nargs=-1, required=True, type=INPUT_FILE)
+@click.option("--opcua-map", "map_file", type=INPUT_FILE, default=None, help="A map file to apply (as on `st run`).")
+@dialect
+def opcua_symbols(files, map_file, time_unit, f_trig_first_scan):
+    """Print what `st run --opcua` publishes: each variable's node, IEC and OPC UA type, access and comment."""
+    from .opcua.symbols import MapError, describe, load_map
+    from .runtime.plc import PLC
+
+    result = _compile_or_exit(files, time_unit=time_unit, f_trig_first_scan=f_trig_first_scan)
+    try:
+        rules = load_map(map_file) if map_file else []
+        doc = describe(PLC(result), "st", rules)
+    except MapError as e:
+        click.echo(str(e), err=True)
+        sys.exit(2)
+    head = ("node", "IEC type", "OPC UA type", "access", "comment")
+    body = [
+        (f"ns=2;s={n['id']}", n["iec"], n["ua"] + ("[]" if n["dims"] else ""), n["access"], n["desc"])
+        for n in doc["nodes"]
+        if n["kind"] == "var"
+    ]
+    widths = [max(len(x[i]) for x in [head] + body) for i in range(len(head))]
+    for line in [head] + body:
+        click.echo("  ".join(c.ljust(w) for c, w in zip(line, widths)).rstrip())
+
+
+@opcua.command("user")
+@click.argument("users_file", type=click.Path(dir_okay=False))
+@click.argument("name")
+@click.option("--role", type=click.Choice(["read", "operate", "engineer"]), required=True, help="What the user may do.")
+@click.option("--password-stdin", is_flag=True, help="Read the password from standard input instead of asking.")
+def opcua_user(users_file, name, role, password_stdin):
+    """Add a user to an OPC UA users file (made if missing), or change one's role and password."""
+    from .opcua.users import UsersError, add_user
+
+    if password_stdin:
+        password = sys.stdin.readline().rstrip("\n")
+    else:
+        password = click.prompt("password", hide_input=True, confirmation_prompt=True)
+    if len(password) < 8:
+        click.echo("error: the password needs at least 8 characters", err=True)
+        sys.exit(2)
+    try:
+        add_user(users_file, name, role, password)
+    except UsersError as e:
+        click.echo(str(e), err=True)
+        sys.exit(2)
+    click.echo(f"{name} ({role}) is in {users_file}")
 
 
 @main.command("experiment")

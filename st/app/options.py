@@ -39,6 +39,12 @@ class RunOptions:
     web_key: str | None = None
     modbus: str | None = None  # "[HOST:]PORT"
     modbus_map: str | None = None
+    opcua: str | None = None  # "[HOST:]PORT" of the OPC UA server
+    opcua_map: str | None = None
+    opcua_users: str | None = None
+    opcua_anonymous: bool = False
+    opcua_security: str = "sign,encrypt"
+    opcua_pki: str | None = None
     modbus_read_only: bool = False
     modbus_writable: Any = None  # {table: [(first, end)]} or "holding:0-99,coil:0-15"
     modbus_max_connections: int = 16

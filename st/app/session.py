@@ -32,6 +32,7 @@ from .subsystems import (
     start_ethercat,
     start_modbus,
     start_motion,
+    start_opcua,
     start_plc,
     start_realtime,
     start_status,
@@ -65,6 +66,7 @@ def run_plc(compiled, o: RunOptions) -> int:
             traces = start_motion(plc, o)
             start_ethercat(drivers, plc, o)
             start_modbus(drivers, plc, o)
+            opcua = start_opcua(drivers, plc, o)
             web = start_web(front, plc, o)
         except StartRefused as e:
             err(str(e))
@@ -76,14 +78,14 @@ def run_plc(compiled, o: RunOptions) -> int:
         watcher = start_watcher(plc, o)
         upgrade = start_native_upgrade(front, plc, o)
         if o.virtual:
-            code = _run_virtual(plc, o, stop)
+            code = _run_virtual(plc, o, stop, opcua)
         else:
             start_realtime(process, o)
             if not o.quiet:
                 err(f"running in real time: {len(plc.tasks)} task(s), base tick {plc.tick / 1e6:g} ms; Ctrl-C stops")
                 if watcher is not None:
                     err(f"watching {len(o.files)} file(s): an edit is compiled and swapped in at a scan boundary")
-            code = _run_real(plc, o, stop, status, watcher, web, upgrade)
+            code = _run_real(plc, o, stop, status, watcher, web, upgrade, opcua)
     written = report(plc, o)
     if traces:
         written = write_traces(traces, o) and written
@@ -103,13 +105,15 @@ class _LogPrinter:
         self.seen = log.total
 
 
-def _run_virtual(plc: PLC, o: RunOptions, stop) -> int:
+def _run_virtual(plc: PLC, o: RunOptions, stop, opcua=None) -> int:
     show = _LogPrinter(plc)
     try:
         end = plc.time + (o.scans * plc.tick if o.scans is not None else parse_duration_arg(o.duration))
         while plc.time < end and not stop.is_set():
             try:
                 plc.advance(min(end - plc.time, 1_000_000_000))
+                if opcua is not None:
+                    opcua.poll()
                 show()
             except PLCFaultError as e:
                 show()
@@ -122,7 +126,7 @@ def _run_virtual(plc: PLC, o: RunOptions, stop) -> int:
     return 3 if plc.state == FAULT else 0
 
 
-def _run_real(plc: PLC, o: RunOptions, stop, status, watcher, web=None, upgrade=None) -> int:
+def _run_real(plc: PLC, o: RunOptions, stop, status, watcher, web=None, upgrade=None, opcua=None) -> int:
     end_time = None
     if o.duration is not None:
         end_time = plc.time + parse_duration_arg(o.duration)
@@ -145,6 +149,8 @@ def _run_real(plc: PLC, o: RunOptions, stop, status, watcher, web=None, upgrade=
             upgrade.poll()
         if web is not None:
             web.poll()
+        if opcua is not None:
+            opcua.poll()
 
     while not stop.is_set():
         remaining = None if end_time is None else end_time - plc.time

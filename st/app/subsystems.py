@@ -239,6 +239,53 @@ def modbus_warning(host: str, port: int, read_only: bool) -> str:
     )
 
 
+def start_opcua(stack: ExitStack, plc: PLC, o: RunOptions):
+    """--opcua: the OPC UA server's process and shared memory (st/opcua), stopped by `stack`."""
+    if not o.opcua:
+        return None
+    from ..io.modbus import parse_endpoint
+    from ..opcua import OpcUaServer
+    from ..opcua.symbols import MapError
+    from ..opcua.users import UsersError
+
+    modes = tuple(m.strip().lower() for m in (o.opcua_security or "").split(",") if m.strip())
+    try:
+        host, port = parse_endpoint(o.opcua)
+        server = OpcUaServer(
+            plc,
+            host,
+            port,
+            map_file=o.opcua_map,
+            anonymous=o.opcua_anonymous,
+            users=o.opcua_users,
+            security=modes,
+            pki=o.opcua_pki,
+            name=Path(o.files[0]).stem if o.files else "st",
+        )
+        stack.callback(server.stop)
+        server.start()
+    except (MapError, UsersError) as e:
+        raise StartRefused(str(e)) from None
+    except (ValueError, OSError) as e:
+        raise StartRefused(f"error: cannot start the OPC UA server: {e}") from None
+    if not o.quiet:
+        offered = ", ".join(
+            {"none": "None", "sign": "Basic256Sha256 Sign", "encrypt": "Basic256Sha256 SignAndEncrypt"}[m]
+            for m in modes
+        )
+        who = ("users of " + o.opcua_users if o.opcua_users else "") + (
+            " and " if o.opcua_users and o.opcua_anonymous else ""
+        )
+        who += "anonymous (read)" if o.opcua_anonymous else ""
+        err(f"opcua: {server.endpoint} ({offered}; {who}); client certificates: {server.cfg.pki}/trusted")
+    if not is_loopback(host) and ("none" in modes or o.opcua_anonymous):
+        err(
+            f"warning: the OPC UA server on {host}:{server.port} is reachable from other machines "
+            + ("without security (--opcua-security none)" if "none" in modes else "with anonymous access")
+        )
+    return server
+
+
 # ---------------------------------------------------------------------------- around the scan
 
 

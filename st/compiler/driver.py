@@ -255,7 +255,8 @@ def parse(sources: list[SourceFile], libraries: list[Library], options: CompileO
     in_use = _libraries_in_use(libraries, lib_units, units, sink)
     lib_paths = {path for lib in in_use for path, _ in lib.sources}
     units = [u for lib, u in lib_units if lib in in_use] + units
-    # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat
+    # pragmas a dialect knows are not "ignored" news: {dialect '…'} always, {attribute '…'} in codesys/twincat,
+    # {attribute 'symbol' := …} everywhere (the OPC UA server's symbol configuration: st/opcua/symbols.py)
     known = {"dialect", "gvl", "namespace"}
     if options.dialect is not None and options.dialect.attribute_pragmas:
         known.add("attribute")
@@ -263,7 +264,10 @@ def parse(sources: list[SourceFile], libraries: list[Library], options: CompileO
     sink.items = [
         d
         for d in sink.items
-        if not (d.code == Code.IGNORED_PRAGMA and (d.datum("pragma") in known or d.span.file in every_lib_path))
+        if not (
+            d.code == Code.IGNORED_PRAGMA
+            and (d.datum("pragma") in known or d.datum("attribute") == "symbol" or d.span.file in every_lib_path)
+        )
     ]
     return Parsed(units, frozenset(lib_paths), in_use)
 

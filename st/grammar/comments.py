@@ -16,6 +16,7 @@ from dataclasses import dataclass
 _TOKENS = re.compile(r"\(\*|\*\)|/\*|//|'|\"|\{")
 _BLANK = re.compile(r"[^\n]")
 _NAME = re.compile(r"\{\s*([A-Za-z_][A-Za-z0-9_]*)")
+_ATTRIBUTE = re.compile(r"\{\s*attribute\s+'([^']*)'", re.I)
 
 
 @dataclass(frozen=True, slots=True)
@@ -27,6 +28,12 @@ class Pragma:
     def name(self) -> str:
         """The pragma's first word, lower-case: 'dialect' for `{ dialect 'iec' }`, '' for none."""
         m = _NAME.match(self.text)
+        return m.group(1).lower() if m else ""
+
+    @property
+    def attribute(self) -> str:
+        """The attribute's name, lower-case: 'symbol' for `{attribute 'symbol' := 'read'}`, else ''."""
+        m = _ATTRIBUTE.match(self.text)
         return m.group(1).lower() if m else ""
 
     @property

@@ -928,7 +928,7 @@ class StParser:
                         Severity.WARNING,
                         src.span_at(p.offset),
                         f"pragma {p.text[:60]!r} is ignored",
-                        data=(("pragma", p.name),),
+                        data=(("pragma", p.name), ("attribute", p.attribute)),
                     )
                 )
 
