@@ -406,7 +406,7 @@ def compile(files, emit, native, time_unit, f_trig_first_scan):
     "--opcua-users",
     type=INPUT_FILE,
     default=None,
-    help="The users who may sign in, with their roles (read, operate, engineer): `st opcua-user` writes it.",
+    help="The users who may sign in, with their roles (read, operate, engineer): `st opcua user` writes it.",
 )
 @click.option("--opcua-anonymous", is_flag=True, help="Let clients in without a user (role read).")
 @click.option(

@@ -33,7 +33,8 @@ ALLOWED: dict[str, set[str]] = {
     "facade": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api"},
     "testing": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api", "facade"},
     "web": {"source", "diagnostics", "model", "runtime", "stdlib", "io"},
-    "app": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "facade", "web"},
+    "opcua": {"source", "diagnostics", "model", "runtime", "stdlib", "io", "web"},  # web: one naming of types
+    "app": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "facade", "web", "opcua"},
     "experiments": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "facade", "app"},
     "cli": {
         "source",
@@ -49,6 +50,7 @@ ALLOWED: dict[str, set[str]] = {
         "app",
         "testing",
         "experiments",
+        "opcua",
     },
     "__init__": {"facade", "runtime", "diagnostics"},
     "__main__": {"cli"},

@@ -54,7 +54,7 @@ class OpcUaServer(IODriverBase):
 
     host/port: where to listen (port 0 picks a free one: see `.port`); map_file: the symbol map
     (symbols.py); anonymous: let clients in without a user (role read); users: a users file
-    (users.py; `st opcua-user` writes one); security: of "none", "sign", "encrypt"
+    (users.py; `st opcua user` writes one); security: of "none", "sign", "encrypt"
     (Basic256Sha256); pki: the folder of the server's certificate (made on first start) and its
     trust list; name: the application's name in the address space."""
 
@@ -82,7 +82,7 @@ class OpcUaServer(IODriverBase):
         user_table = load_users(users) if users else {}
         if not anonymous and not user_table:
             raise ValueError(
-                "no client could sign in: give --opcua-users FILE (st opcua-user adds one) or --opcua-anonymous"
+                "no client could sign in: give --opcua-users FILE (st opcua user adds one) or --opcua-anonymous"
             )
         self.cfg = ServerConfig(
             host=host,

@@ -450,8 +450,11 @@ class Bridge:
         user = getattr(getattr(session, "user", None), "name", None)
         sid = getattr(session, "session_id", None)
         shown = sid.to_string() if isinstance(sid, ua.NodeId) else "?"
-        if getattr(session, "name", ""):
-            shown += f" {session.name!r}"
+        peer = getattr(session, "name", None)  # asyncua names a session after its peer's address
+        if isinstance(peer, tuple) and len(peer) >= 2:
+            shown += f" from {peer[0]}:{peer[1]}"
+        elif peer:
+            shown += f" {peer}"
         msg.update(id=rid, user=user or "anonymous", session=shown)
         fut = asyncio.get_running_loop().create_future()
         self.waiting[rid] = fut

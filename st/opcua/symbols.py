@@ -292,7 +292,7 @@ def _var(parent: str, name: str, path: str, t: T.Type, ua: str, access: str, des
     bt = T.base_of(t)
     node["time"] = getattr(bt, "kind", "") if getattr(bt, "kind", "") in ("time", "tod", "date", "dt") else ""
     if isinstance(ut, T.EnumType):
-        node["enum"] = sorted((v, n) for n, v in ut.members.values())
+        node["enum"] = sorted([v, n] for n, v in ut.members.values())
     elif isinstance(ut, T.SubrangeType):
         node["range"] = [ut.lo, ut.hi]
     elif isinstance(bt, T.ElemType) and bt.kind in ("int", "bit"):

@@ -2,7 +2,7 @@
 
 Roles: `read` (browse, read, subscribe), `operate` (and write the variables the symbol
 configuration makes writable), `engineer` (and the PLC's Start, Stop and Reset). Passwords are
-kept as scrypt hashes (`scrypt$n$r$p$salt$hash`, base64), never as text; `st opcua-user FILE
+kept as scrypt hashes (`scrypt$n$r$p$salt$hash`, base64), never as text; `st opcua user FILE
 NAME --role ROLE` adds or replaces a user.
 """
 
@@ -58,7 +58,7 @@ def load_users(path: str) -> dict[str, tuple[str, str]]:
         if len(parts) != 3 or not _NAME.match(parts[0]) or parts[1] not in ROLES or not parts[2].startswith("scrypt$"):
             raise UsersError(
                 f"error: {path}:{k}: expected NAME:ROLE:HASH with a role of {', '.join(ROLES)} "
-                "(st opcua-user writes these lines)"
+                "(st opcua user writes these lines)"
             )
         out[parts[0]] = (parts[1], parts[2])
     return out
@@ -72,7 +72,7 @@ def add_user(path: str, name: str, role: str, password: str) -> None:
         raise UsersError(f"error: role {role!r}: one of {', '.join(ROLES)}")
     users = load_users(path) if os.path.exists(path) else {}
     users[name] = (role, hash_password(password))
-    text = "# st OPC UA users: NAME:ROLE:scrypt hash (st opcua-user FILE NAME --role ROLE)\n"
+    text = "# st OPC UA users: NAME:ROLE:scrypt hash (st opcua user FILE NAME --role ROLE)\n"
     text += "".join(f"{n}:{r}:{h}\n" for n, (r, h) in users.items())
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     with os.fdopen(fd, "w", encoding="utf-8") as f:
