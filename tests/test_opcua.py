@@ -18,6 +18,7 @@ from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
 from cryptography.x509.oid import ExtendedKeyUsageOID
 
 from st import PLC
+from st.api import compile_text
 from st.opcua import OpcUaServer
 from st.opcua.users import add_user
 
@@ -80,11 +81,20 @@ class Running:
         self.srv = OpcUaServer(self.plc, "127.0.0.1", 0, **opts)
         self.srv.start()
         self.stop = threading.Event()
+        self.change = None  # a program to swap in at the next scan boundary (online change)
+        self.changed = threading.Event()
         self.thread = threading.Thread(target=self._run, daemon=True)
         self.thread.start()
 
     def _run(self):
-        self.plc.run_realtime(duration="300s", on_idle=lambda p: self.srv.poll(), stop=self.stop, gc_control=False)
+        self.plc.run_realtime(duration="300s", on_idle=self._idle, stop=self.stop, gc_control=False)
+
+    def _idle(self, plc):
+        if self.change is not None:
+            plc.online_change(self.change)
+            self.change = None
+            self.changed.set()
+        self.srv.poll()
 
     def close(self):
         self.stop.set()
@@ -377,3 +387,42 @@ def test_secure_by_default(secure, tmp_path):
     assert run(_secure_session(secure, cert, key, None, None)) != 1.5  # anonymous is off by default
     assert (secure.pki / "own" / "cert.der").exists()
     assert (secure.pki / "own" / "key.pem").stat().st_mode & 0o777 == 0o600
+
+
+async def _across_a_change(cell):
+    c = await connect(cell)
+    got = []
+
+    class Handler:
+        def datachange_notification(self, node, val, data):
+            got.append(val)
+
+    try:
+        sub = await c.create_subscription(50, Handler())
+        await sub.subscribe_data_change(c.get_node(nid("main.counter")))
+        await asyncio.sleep(0.5)
+        before = len(got)
+        # a new output and a comment: the running program changes at a scan boundary
+        text = SRC.replace("  level : REAL := 1.5;", "  level : REAL := 1.5;\n  extra : INT := 7;  (* added online *)")
+        cell.change = compile_text(text, "cell.st")
+        await asyncio.get_running_loop().run_in_executor(None, cell.changed.wait, 5)
+        extra = None
+        for _ in range(100):
+            try:
+                extra = await c.get_node(nid("main.extra")).read_value()
+                break
+            except ua.UaStatusCodeError:
+                await asyncio.sleep(0.05)
+        desc = (await c.get_node(nid("main.extra")).read_description()).Text
+        after = len(got)
+        await asyncio.sleep(0.5)
+        return before, after, len(got), extra, desc, got
+    finally:
+        await c.disconnect()
+
+
+def test_online_change_keeps_subscriptions(cell):
+    before, after, end, extra, desc, got = run(_across_a_change(cell))
+    assert (extra, desc) == (7, "added online")
+    assert before >= 5 and end >= after + 5  # the monitored item lives on across the change
+    assert got == sorted(got)  # the counter carried over: it never went back

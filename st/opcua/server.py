@@ -164,7 +164,8 @@ class Bridge:
         self.results_seen = 0
         self.waiting: dict[int, asyncio.Future] = {}
         self.next_id = 0
-        self.roots: list[Any] = []
+        self.nodes: dict[str, dict] = {}  # the description's nodes by id, as built
+        self.made: dict[str, Any] = {}  # … and their asyncua nodes
         self.status: dict[str, Any] = {}
         self.task_nodes: dict[str, dict[str, Any]] = {}
         self.tasks_folder: Any = None
@@ -263,37 +264,49 @@ class Bridge:
 
     # ------------------------------------------------------------------ the address space
     async def _build(self) -> None:
-        """(Re)build the program's nodes from the PLC's description."""
+        """Bring the program's nodes in line with the PLC's description: after an online change only
+        the nodes that changed are removed and made again, so the clients' monitored items on the
+        others carry on."""
         assert self.server is not None
         raw = self.ch.description()
         if not raw:
             return
         self.version = self.ch.description_version
         doc = json.loads(raw)
-        if self.roots:
-            await self.server.delete_nodes(self.roots, recursive=True)
-        self.roots = []
-        idx = self.idx
-        made: dict[str, Any] = {}
-        self.vars, self.node_ids, self.by_node, self.last = [], [], {}, []
-        objects = self.server.nodes.objects
+        new = {n["id"]: n for n in doc["nodes"]}
+        changed = {i for i, n in self.nodes.items() if new.get(i) != n}
+        # a changed object takes its descendants with it
         for n in doc["nodes"]:
-            parent = made.get(n["parent"], objects)
+            if n["parent"] in changed and n["id"] in self.nodes:
+                changed.add(n["id"])
+        gone = [self.made[i] for i in reversed(list(self.nodes)) if i in changed]
+        if gone:
+            await self.server.delete_nodes(gone)
+        for i in changed:
+            self.made.pop(i, None)
+        last = {n["id"]: v for n, v in zip(self.vars, self.last, strict=True)}
+        idx = self.idx
+        objects = self.server.nodes.objects
+        self.vars, self.node_ids, self.by_node, self.last = [], [], {}, []
+        for n in doc["nodes"]:
             nid = ua.NodeId(n["id"], idx)
-            qn = ua.QualifiedName(n["name"], idx)
-            if n["kind"] == "folder":
-                node = await parent.add_folder(nid, qn)
-                self.roots.append(node)
-            elif n["kind"] == "object":
-                node = await parent.add_object(nid, qn)
-            else:
-                node = await self._variable(parent, nid, qn, n)
+            if n["id"] not in self.made:
+                parent = self.made.get(n["parent"], objects)
+                qn = ua.QualifiedName(n["name"], idx)
+                if n["kind"] == "folder":
+                    node = await parent.add_folder(nid, qn)
+                elif n["kind"] == "object":
+                    node = await parent.add_object(nid, qn)
+                else:
+                    node = await self._variable(parent, nid, qn, n)
+                self.made[n["id"]] = node
+                await self._describe(node, n.get("desc", ""))
+            if n["kind"] == "var":
                 self.vars.append(n)
                 self.node_ids.append(nid)
                 self.by_node[nid] = n
-                self.last.append(None)
-            made[n["id"]] = node
-            await self._describe(node, n.get("desc", ""))
+                self.last.append(last.get(n["id"]))
+        self.nodes = new
 
     async def _variable(self, parent: Any, nid: ua.NodeId, qn: ua.QualifiedName, n: dict) -> Any:
         vt = _VTYPE[n["ua"]]
