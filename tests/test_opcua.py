@@ -10,6 +10,7 @@ import shutil
 import threading
 import time
 from datetime import UTC, datetime
+from pathlib import Path
 
 import pytest
 from asyncua import Client, ua
@@ -426,3 +427,72 @@ def test_online_change_keeps_subscriptions(cell):
     assert (extra, desc) == (7, "added online")
     assert before >= 5 and end >= after + 5  # the monitored item lives on across the change
     assert got == sorted(got)  # the counter carried over: it never went back
+
+
+async def _gantry(endpoint):
+    c = Client(endpoint, timeout=10)
+    c.set_user("op")
+    c.set_password("op-secret")
+    got = []
+
+    class Handler:
+        def datachange_notification(self, node, val, data):
+            got.append(val)
+
+    async with c:
+        [gantry] = await c.get_node(nid("Programs")).get_children()
+        names = {(await n.read_browse_name()).Name for n in await gantry.get_children()}
+        sub = await c.create_subscription(100, Handler())
+        await sub.subscribe_data_change(c.get_node(nid("gantry.strokes")))
+        for _ in range(100):  # the beam's first strokes (250 mm/s over 200 mm: about one a second)
+            if got and got[-1] >= 2:
+                break
+            await asyncio.sleep(0.1)
+        await c.get_node(nid("gantry.auto")).write_value(ua.Variant(False, ua.VariantType.Boolean))
+        await asyncio.sleep(2.5)  # the stroke under way ends; no new one starts without the button
+        held = await c.get_node(nid("gantry.strokes")).read_value()
+        await asyncio.sleep(1.5)
+        later = await c.get_node(nid("gantry.strokes")).read_value()
+        moving = await c.get_node(nid("%QX0.0")).read_value()
+        return names, got, held, later, moving
+
+
+def test_st_run_gantry_with_opcua(tmp_path):
+    """`st run programs/gantry.st --opcua`: browsed, subscribed and written, as the issue asks."""
+    import socket
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    users = tmp_path / "users"
+    add_user(str(users), "op", "operate", "op-secret")
+    (tmp_path / "map.toml").write_text('[symbols]\n"gantry.*" = "read"\n"gantry.auto" = "readwrite"\n')
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "st.cli", "run", str(root / "programs" / "gantry.st"), "--duration", "60s",
+         "--opcua", f"127.0.0.1:{port}", "--opcua-users", str(users), "--opcua-map", str(tmp_path / "map.toml"),
+         "--opcua-security", "none,sign,encrypt", "--opcua-pki", str(tmp_path / "pki"), "--python", "-q"],
+        stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        endpoint = f"opc.tcp://127.0.0.1:{port}/st/"
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                run(_endpoints(endpoint))
+                break
+            except (OSError, TimeoutError):
+                if time.monotonic() > deadline or proc.poll() is not None:
+                    raise
+                time.sleep(0.2)
+        names, got, held, later, moving = run(_gantry(endpoint))
+    finally:
+        proc.terminate()
+        _out, err = proc.communicate(timeout=20)
+    assert {"auto", "strokes", "step", "offset", "move1", "power1", "x1"} <= names
+    assert got == sorted(got) and got[0] <= 1 and got[-1] >= 2  # one notification per new stroke count
+    assert held == later  # auto off: the strokes stopped at a scan boundary and stay
+    assert moving is False
+    assert "write gantry.auto := FALSE" in err
