@@ -232,7 +232,7 @@ def test_a_clean_run_closes_the_plc_then_its_drivers_then_reports(seen):
 def test_an_exception_while_running_still_closes_everything(seen, monkeypatch):
     before = signal.getsignal(signal.SIGINT)
 
-    def fails(plc, o, stop):
+    def fails(plc, o, stop, *servers):
         assert signal.getsignal(signal.SIGINT) is not before  # the run's handler
         raise RuntimeError("boom")
 
