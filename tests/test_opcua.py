@@ -194,7 +194,7 @@ async def _values(cell):
 
 
 def test_values_and_source_timestamps(cell):
-    time.sleep(0.3)
+    time.sleep(1.2)  # no subscription: a sample a second
     out, a, b, state, jobs = run(_values(cell))
     assert out == {
         "main.level": 1.5,

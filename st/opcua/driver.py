@@ -1,19 +1,22 @@
 """The PLC side of the OPC UA server: starts the server process, samples the published variables,
 applies the clients' writes and commands.
 
-An I/O driver (st/runtime/iodriver.py), like the Modbus slave: at the end of a job the published
-variables are sampled into the shared snapshot when the fastest sampling interval a client asked
-for has passed in PLC time (so every value of one snapshot is from the same scan, stamped with
-that scan's PLC time); at the start of the next job the clients' writes are applied. Commands
-(Start, Stop, Reset) need the PLC between two jobs: `poll()`, called by `st run`'s idle hook
-(or by a program using the API), applies them and keeps the snapshot current while no job runs.
-Nothing here raises into the scan: a failure is logged once in the PLC's log.
+An I/O driver (st/runtime/iodriver.py), like the Modbus slave: the clients' writes are applied at
+the start of a job, and the published variables are sampled after one, all in one go, when the
+fastest subscription's publishing interval has passed in PLC time (so every value of one
+sample is from the same scan, stamped with that scan's PLC time). Under `st run` the sample is
+taken by `poll()`, between two jobs when there is slack, so it never lengthens a job; without
+`poll()` (the API on virtual time) at the end of the job. A write is answered after the job
+that applied it, with the written variable's value, without waiting for the next sample.
+Commands (Start, Stop, Reset) are applied by `poll()`. Nothing here raises into the scan: a
+failure is logged once in the PLC's log.
 """
 
 from __future__ import annotations
 
 import json
 import marshal
+import operator
 import os
 import subprocess
 import time
@@ -22,15 +25,15 @@ from typing import Any
 from ..io import server_process
 from ..runtime.iodriver import IODriverBase
 from ..runtime.lifecycle import FAULT, RUN, STOP
+from ..runtime.paths import resolve
 from ..runtime.scheduler import Task
 from ..runtime.values import to_st_literal
 from .channel import FAILED, SERVING, STARTING, Channel
 from .symbols import READWRITE, describe, load_map
 from .users import load_users
 
-DEFAULT_SAMPLING_NS = 100_000_000  # while no client asked for a sampling interval
+IDLE_SAMPLING_NS = 1_000_000_000  # while no client subscribes: what a Read gets is at most this old
 RESULTS_KEPT = 256
-_CONVERT = {"Boolean": bool, "Float": float, "Double": float, "String": str}
 
 
 class ServerConfig:
@@ -100,10 +103,18 @@ class OpcUaServer(IODriverBase):
         self.epoch = 0  # wall-clock ns at PLC time 0 (source timestamps)
         self.writes_applied = 0
         self._vars: list[dict] = []
-        self._getters: list[Any] = []
-        self._by_path: dict[str, dict] = {}
-        self._number = 0
+        self._sample: Any = None  # () → the published variables' values, in the description's order
+        self._by_path: dict[str, int] = {}  # lower path → index in _vars
+        self._number = 0  # documents published
+        self._samples = 0  # samples taken (a document that only answers writes repeats the last)
+        self._values: list[Any] = []
+        self._sample_time = 0
         self._last_sample: int | None = None
+        self._scan_time = 0  # the PLC time of the last job
+        self._due = False  # a job ran since the last sample
+        self._polled = False  # poll() is called between jobs: it samples
+        self._cost = 0.0  # the last sample's cost (s)
+        self._written: dict[int, Any] = {}  # variables written in this job: index → value
         self._next_wall = 0.0
         self._results: list[tuple[int, int, str, str]] = []  # (seq, request id, status name, text)
         self._seq = 0
@@ -126,7 +137,7 @@ class OpcUaServer(IODriverBase):
             self.stop()
             raise OSError(f"the OPC UA server could not listen on {self.cfg.host}:{self.cfg.port} ({why})")
         self.plc.io.append(self)
-        self._publish()
+        self._publish(sample=True)
         return self
 
     @property
@@ -159,18 +170,11 @@ class OpcUaServer(IODriverBase):
             return
         doc = describe(self.plc, self.cfg.name, self.rules)
         self._vars = [n for n in doc["nodes"] if n["kind"] == "var"]
-        self._by_path = {n["path"].lower(): n for n in self._vars}
-        self._getters = [self._getter(n) for n in self._vars]
+        self._by_path = {n["path"].lower(): k for k, n in enumerate(self._vars)}
+        self._sample = _sampler(self.plc, self._vars)
         self.ch.describe(json.dumps(doc, separators=(",", ":")).encode())
         self._last_sample = None
-
-    def _getter(self, node: dict) -> Any:
-        ref = self.plc.ref(node["path"])
-        get = ref.get
-        conv = _CONVERT.get(node["ua"], int)
-        if node["dims"]:
-            return lambda: [conv(x) for x in get()]
-        return lambda: conv(get())
+        self._due = True
 
     # ------------------------------------------------------------------ the job boundary
     def before_job(self, task: Task | None = None) -> None:
@@ -181,16 +185,20 @@ class OpcUaServer(IODriverBase):
         self._drain()
 
     def after_job(self, task: Task | None = None) -> None:
-        """Sample the published variables when the sampling interval has passed in PLC time."""
+        """Answer the writes of this job; sample here unless poll() samples between jobs."""
         if self.ch is None:
             return
-        t = self.plc.time
-        due = self._last_sample is None or t - self._last_sample >= self._interval()
-        if due or task is None or self._pending_results():
-            self._publish()
+        self._scan_time = self.plc.time
+        self._due = True
+        if self._pending_results():
+            self._publish(sample=False)
+        if not self._polled and self._sample_due():
+            self._publish(sample=True)
 
     def poll(self) -> None:
-        """Between two jobs: writes and commands, and a current snapshot while no job runs."""
+        """Between two jobs: writes and commands, and the sample when it is due and the next
+        release is far enough (at most a second late)."""
+        self._polled = True
         try:
             if self.ch is None:
                 return
@@ -200,15 +208,30 @@ class OpcUaServer(IODriverBase):
             for msg in commands:
                 self._command(msg)
             now = time.monotonic()
-            if commands or self.plc.state != self._state_seen or (self.plc.state != RUN and now >= self._next_wall):
-                self._publish()
+            plc = self.plc
+            if commands or plc.state != self._state_seen or (plc.state != RUN and now >= self._next_wall):
+                self._scan_time = plc.time
+                self._publish(sample=True)
+                self._next_wall = now + self._interval() / 1e9
+            elif self._pending_results():
+                self._publish(sample=False)
+            elif self._due and self._sample_due():
+                if plc.clock.real and plc.idle_slack < 1.5 * self._cost * 1e9 and now < self._next_wall + 1.0:
+                    return  # not now: the next release is too close
+                self._publish(sample=True)
                 self._next_wall = now + self._interval() / 1e9
         except Exception as e:  # noqa: BLE001 - the server's trouble is never the PLC's end
             self._fail(e)
 
+    def _sample_due(self) -> bool:
+        return self._last_sample is None or self._scan_time - self._last_sample >= self._interval()
+
     def _interval(self) -> int:
+        """The fastest publishing interval asked for (asyncua samples a monitored item at its
+        subscription's publishing interval, and sends each change: a faster sample would be a second
+        notification), or IDLE_SAMPLING_NS while nobody subscribes."""
         us = self.ch.sampling_us if self.ch is not None else 0
-        return us * 1000 if us else DEFAULT_SAMPLING_NS
+        return us * 1000 if us else IDLE_SAMPLING_NS
 
     def _pending_results(self) -> bool:
         return bool(self._results) and self._results[-1][0] > self._published_seq
@@ -236,9 +259,10 @@ class OpcUaServer(IODriverBase):
 
     def _write(self, msg: dict) -> None:
         path = str(msg.get("path", ""))
-        node = self._by_path.get(path.lower())
-        if node is None:
+        index = self._by_path.get(path.lower())
+        if index is None:
             return self._result(msg, "BadNodeIdUnknown", f"{path} is not published")
+        node = self._vars[index]
         if node["access"] != READWRITE:
             return self._result(msg, "BadNotWritable", f"{path} is published read-only")
         value = msg.get("value")
@@ -260,6 +284,7 @@ class OpcUaServer(IODriverBase):
         except TypeError as e:
             return self._result(msg, "BadTypeMismatch", str(e))
         self.writes_applied += 1
+        self._written[index] = _plain(plc.ref(path).get())
         plc.log.add(plc.time, 0x01, f"opcua {self._who(msg)}: write {path} := {shown}")
         self._result(msg, "Good", "")
 
@@ -292,42 +317,110 @@ class OpcUaServer(IODriverBase):
         del self._results[:-RESULTS_KEPT]
 
     # ------------------------------------------------------------------ the snapshot
-    def _publish(self) -> None:
+    def _publish(self, sample: bool) -> None:
+        """A document for the server: a new sample of every published variable (`sample`), or the
+        last sample again with the values written since and the writes' answers."""
         ch = self.ch
         if ch is None:
             return
         plc = self.plc
-        try:
-            values = [g() for g in self._getters]
-        except Exception as e:  # noqa: BLE001 - a path gone with a reload: describe again
-            self._fail(e)
-            self.rebind()
-            return
+        t0 = time.perf_counter()
+        if sample:
+            try:
+                self._values = self._sample()
+            except Exception as e:  # noqa: BLE001 - a path gone with a reload: describe again
+                self._fail(e)
+                self.rebind()
+                return
+            self._samples += 1
+            self._sample_time = self._scan_time
+            self._written.clear()
         self._number += 1
         fault = plc.fault if plc.state == FAULT else None
         doc = {
             "n": self._number,
+            "s": self._samples,
             "v": ch.description_version,
-            "t": plc.time,
+            "t": self._sample_time,
+            "tw": self._scan_time,
             "epoch": self.epoch,
             "state": plc.state,
             "fault": str(fault) if fault is not None else "",
             "scans": sum(t.runs for t in plc.tasks),
             "tasks": [_task(t) for t in plc.tasks],
-            "values": values,
+            "values": self._values,
+            "written": list(self._written.items()),
             "results": list(self._results),
         }
-        if not ch.publish(marshal.dumps(doc)):
+        try:
+            data = marshal.dumps(doc)
+        except ValueError:  # a value of an unusual Python type: as plain values
+            doc["values"] = self._values = [_plain(v) for v in self._values]
+            data = marshal.dumps(doc)
+        if not ch.publish(data):
             self._fail(ValueError("the values of one scan do not fit the shared snapshot"))
             return
-        self._last_sample = plc.time
         self._state_seen = plc.state
         self._published_seq = self._seq
+        if sample:
+            self._last_sample = self._sample_time
+            self._due = False
+            self._cost = time.perf_counter() - t0
 
     def _fail(self, e: Exception) -> None:
         if not self._failed:
             self._failed = True
             self.plc.log.add(self.plc.time, 0x04, f"opcua: {type(e).__name__}: {e} (values may be stale)")
+
+
+def _sampler(plc: Any, nodes: list[dict]) -> Any:
+    """() → the values of `nodes` in their order: one attrgetter/itemgetter per run of variables
+    that live in the same container (a program's or block's object, the globals), so a sample of a
+    thousand variables is a few dozen C calls."""
+    groups: list[tuple[Any, Any, int]] = []  # (container, getter, how many)
+    run: list[Any] = []
+    where: Any = None
+    kind = ""
+
+    def close() -> None:
+        if run:
+            getter = (operator.attrgetter if kind == "attr" else operator.itemgetter)(*run)
+            groups.append((where, getter, len(run)))
+
+    for n in nodes:
+        container, key, _t = resolve(plc, n["path"])
+        k = "attr" if isinstance(key, str) and not isinstance(container, dict) else "item"
+        if container is not where or k != kind:
+            close()
+            run, where, kind = [], container, k
+        run.append(key)
+    close()
+
+    arrays = [k for k, n in enumerate(nodes) if n["dims"]]
+
+    def sample() -> list[Any]:
+        out: list[Any] = []
+        for container, getter, count in groups:
+            got = getter(container)
+            if count == 1:
+                out.append(got)
+            else:
+                out.extend(got)
+        for k in arrays:  # a copy: the program goes on changing its array
+            out[k] = list(out[k])
+        return out
+
+    return sample
+
+
+def _plain(v: Any) -> Any:
+    """A value as a plain bool, int, float, str or list of them (what marshal takes)."""
+    for t in (bool, int, float, str):
+        if isinstance(v, t):
+            return t(v)
+    if isinstance(v, (list, tuple)) or hasattr(v, "__iter__"):
+        return [_plain(x) for x in v]
+    return v
 
 
 def _task(t: Any) -> dict:
