@@ -30,7 +30,7 @@ ALLOWED: dict[str, set[str]] = {
     "stdlib": {"source", "diagnostics", "model", "compiler", "runtime"},
     "io": {"source", "diagnostics", "model", "runtime", "stdlib"},
     "api": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib"},
-    "facade": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api"},
+    "facade": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api", "io", "opcua"},
     "testing": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api", "facade"},
     "web": {"source", "diagnostics", "model", "runtime", "stdlib", "io"},
     "opcua": {"source", "diagnostics", "model", "runtime", "stdlib", "io", "web"},  # web: one naming of types

@@ -496,3 +496,37 @@ def test_st_run_gantry_with_opcua(tmp_path):
     assert held == later  # auto off: the strokes stopped at a scan boundary and stay
     assert moving is False
     assert "write gantry.auto := FALSE" in err
+
+
+def test_api_plc_with_opcua_on_virtual_time(tmp_path):
+    """`PLC(..., opcua={...})`: served while it lives; writes and commands taken between scans."""
+    users = tmp_path / "users"
+    add_user(str(users), "eng", "engineer", "eng-secret")
+    (tmp_path / "map.toml").write_text(MAP)
+    opts = {"endpoint": "127.0.0.1:0", "users": str(users), "map_file": str(tmp_path / "map.toml")}
+    plc = PLC.from_source(SRC, opcua={**opts, "security": ("none",), "pki": str(tmp_path / "pki")})
+    results = {}
+
+    async def client():
+        c = Client(plc.opcua.endpoint, timeout=10)
+        c.set_user("eng")
+        c.set_password("eng-secret")
+        async with c:
+            await c.get_node(nid("main.setpoint")).write_value(ua.Variant(77, ua.VariantType.Int16))
+            results["scans at the write"] = await c.get_node(nid("PLC.Scans")).read_value()
+            await c.get_node(nid("PLC")).call_method(nid("PLC.Stop"))
+
+    t = threading.Thread(target=lambda: run(client()))
+    t.start()
+    try:
+        end = time.monotonic() + 20
+        while t.is_alive() and time.monotonic() < end:
+            plc.scan(10)  # virtual time: 100 ms of PLC time per call, polled after each
+            time.sleep(0.005)
+        t.join(1)
+        assert plc["main.setpoint"] == 77
+        assert plc.state == "STOP"
+        assert results["scans at the write"] > 0
+    finally:
+        plc.close()
+    assert plc.opcua is None
