@@ -838,6 +838,21 @@ def modbus_map(files, map_file, old_map_file, time_unit, f_trig_first_scan):
     )
 
 
+@main.command()
+@click.option(
+    "--lib",
+    "lib_path",
+    multiple=True,
+    type=click.Path(),
+    help="A library project or a folder of them, for a .plcproj's references (as on `st check`); repeatable.",
+)
+def lsp(lib_path):
+    """Run the language server on stdin/stdout (for editors: docs/editors.md)."""
+    from .lsp.server import main as serve
+
+    serve(list(lib_path))
+
+
 @main.group()
 def opcua():
     """The OPC UA server (see `st run --opcua`, docs/opcua.md)."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import bisect
+import re
 from dataclasses import dataclass, field
 
 
@@ -71,3 +72,24 @@ class SourceFile:
         start = starts[line - 1]
         end = self.text.find("\n", start)
         return self.text[start:] if end < 0 else self.text[start:end]
+
+
+_COMMENT = re.compile(r"\(\*(.*?)\*\)|//(.*)$|/\*(.*?)\*/")
+
+
+def comment_beside(lines: list[str], line: int, col: int) -> str:
+    """The comment written after a declaration on its line (after its `;`), else a comment alone
+    on the line above: what a declaration says about itself ("" when nothing). 1-based line, col."""
+    if not 0 < line <= len(lines):
+        return ""
+    text = lines[line - 1]
+    semi = text.find(";", max(col - 1, 0))
+    if semi >= 0:
+        m = _COMMENT.search(text, semi)
+        if m:
+            return " ".join(next(g for g in m.groups() if g is not None).split())
+    if line >= 2:
+        m = _COMMENT.fullmatch(lines[line - 2].strip())
+        if m:
+            return " ".join(next(g for g in m.groups() if g is not None).split())
+    return ""

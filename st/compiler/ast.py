@@ -379,6 +379,7 @@ class VarDecl(Syntax):
     location: str = ""  # "%IX0.0"
     edge: str = ""  # R_EDGE / F_EDGE
     path: list[str] | None = None  # VAR_CONFIG: instance path [names]
+    written_location: str = ""  # the address as written, when the checker reads it otherwise (W011)
 
 
 @dataclass(slots=True, eq=False)

@@ -235,8 +235,16 @@ def _compile_sources(
     return result
 
 
-def parse(sources: list[SourceFile], libraries: list[Library], options: CompileOptions, sink: DiagnosticSink) -> Parsed:
-    """Parse the libraries' sources and the user's."""
+def parse(
+    sources: list[SourceFile],
+    libraries: list[Library],
+    options: CompileOptions,
+    sink: DiagnosticSink,
+    units_of: dict[str, tuple[tuple[str, bool | None, bool], A.Unit | None, list[Diagnostic]]] | None = None,
+) -> Parsed:
+    """Parse the libraries' sources and the user's. `units_of` (the language server's): a file's
+    unit kept from the last parse while its text is the same (the checker gives the same answers
+    on a tree it checked before), filled as files are parsed."""
     lib_units: list[tuple[Library, A.Unit]] = []
     for lib in libraries:
         for path, text in lib.sources:
@@ -249,7 +257,17 @@ def parse(sources: list[SourceFile], libraries: list[Library], options: CompileO
     for s in sources:
         for d in s.load_diagnostics:
             sink.add(d)
-        u = parse_source(s, sink, nested, vendor_names)
+        if units_of is None:
+            u = parse_source(s, sink, nested, vendor_names)
+        else:
+            key = (s.text, nested, vendor_names)
+            kept = units_of.get(s.path)
+            if kept is None or kept[0] != key:
+                own = DiagnosticSink()
+                kept = units_of[s.path] = (key, parse_source(s, own, nested, vendor_names), list(own.items))
+            u = kept[1]
+            for d in kept[2]:
+                sink.add(d)
         if u is not None:
             units.append(u)
     in_use = _libraries_in_use(libraries, lib_units, units, sink)

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from ..model import types as T
+from ..source import comment_beside
 
 READ, READWRITE, NONE = "read", "readwrite", "none"
 ACCESS = (READ, READWRITE, NONE)
@@ -34,7 +35,6 @@ MAX_ELEMENTS = 1_000  # objects made for the elements of one array of blocks or 
 _STDLIB = str(Path(__file__).resolve().parents[1] / "stdlib")
 
 _SYMBOL = re.compile(r"\{\s*attribute\s+'symbol'\s*:=\s*'([^']*)'\s*\}", re.I)
-_LINE_COMMENT = re.compile(r"\(\*(.*?)\*\)|//(.*)$|/\*(.*?)\*/")
 
 # IEC elementary type → the OPC UA built-in type its value is published as
 UA_TYPES = {
@@ -132,28 +132,10 @@ class _Sources:
         return None
 
     def comment(self, span: Any) -> str:
-        """The comment after the declaration on its line, else a comment alone on the line above."""
+        """The comment beside the declaration (st.source.comment_beside)."""
         if span is None:
             return ""
-        lines = self.lines(span.file)
-        if not 0 < span.line <= len(lines):
-            return ""
-        line = lines[span.line - 1]
-        semi = line.find(";", max(span.col - 1, 0))
-        if semi >= 0:
-            m = _LINE_COMMENT.search(line, semi)
-            if m:
-                return _clean(next(g for g in m.groups() if g is not None))
-        if span.line >= 2:
-            above = lines[span.line - 2].strip()
-            m = _LINE_COMMENT.fullmatch(above)
-            if m:
-                return _clean(next(g for g in m.groups() if g is not None))
-        return ""
-
-
-def _clean(text: str) -> str:
-    return " ".join(text.split())
+        return comment_beside(self.lines(span.file), span.line, span.col)
 
 
 class _Walk:

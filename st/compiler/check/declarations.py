@@ -571,7 +571,11 @@ class Declarations(Part):
         for decl in block.decls:
             t, family = self._decl_type(decl, kind, scope, owner)
             if decl.location:
-                decl.location = openplc_address(self.ctx, decl.location, decl.names[0][1] if decl.names else decl.span)
+                # the address as written stays beside the one read (a tree checked again, as the
+                # language server does, reads the written one again, and warns again)
+                decl.written_location = decl.written_location or decl.location
+                where = decl.names[0][1] if decl.names else decl.span
+                decl.location = openplc_address(self.ctx, decl.written_location, where)
             for n, sp in decl.names:
                 self._declare_name(n, sp, decl, t, kind, block, access, family, table, owner)
             self._declare_init(decl, t, kind, block, table, scope, owner)
