@@ -567,9 +567,14 @@ class Unit(Syntax):
     path: str
     items: list  # TypeBlock, POU, Configuration, VarBlock, TestBlock
     pragmas: list = field(default_factory=list)
+    unqualified_for: frozenset = frozenset()  # the namespaces whose qualifiers were dropped (check/passes/namespaces.py)
 
 
 _NOT_CHILDREN = frozenset(("span", "name_span", "end_span", "ty", "const", "sym", "pou"))
+
+
+_CHILD_FIELDS: dict[type, tuple[str, ...]] = {}
+_LEAVES = (str, int, float, bool, type(None))
 
 
 def walk_nodes(body):
@@ -577,14 +582,26 @@ def walk_nodes(body):
     depth first, each once; not into what the checker attached (types, symbols, Call.target)."""
     stack = [body]
     seen: set = set()
+    module = __name__
+    fields_of = _CHILD_FIELDS
     while stack:
         x = stack.pop()
         if isinstance(x, (list, tuple)):
             stack.extend(reversed(x))
             continue
-        if type(x).__module__ != __name__ or id(x) in seen:  # a syntax node, not a type or symbol
+        cls = type(x)
+        if cls.__module__ != module or id(x) in seen:  # a syntax node, not a type or symbol
             continue
         seen.add(id(x))
         yield x
-        kids = [getattr(x, f, None) for f in x.__dataclass_fields__ if f not in _NOT_CHILDREN]
-        stack.extend(reversed([k for k in kids if isinstance(k, (list, tuple)) or type(k).__module__ == __name__]))
+        fields = fields_of.get(cls)
+        if fields is None:
+            fields = fields_of[cls] = tuple(f for f in cls.__dataclass_fields__ if f not in _NOT_CHILDREN)
+        kids = []
+        for f in fields:
+            k = getattr(x, f, None)
+            if isinstance(k, _LEAVES):
+                continue
+            if isinstance(k, (list, tuple)) or type(k).__module__ == module:
+                kids.append(k)
+        stack.extend(reversed(kids))

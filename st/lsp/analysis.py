@@ -9,6 +9,7 @@ checker's, which is what `st check` reports for a program that compiles.
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -27,9 +28,26 @@ class Analysis:
     user_files: set[str]
     diagnostics: dict[str, list[Diagnostic]]  # every user file, with [] when it has none
     project: Project | None
-    index: Index
     units: list[Any] = field(default_factory=list)
     seconds: float = 0.0
+    all_sources: dict[str, SourceFile] = field(default_factory=dict)  # the libraries' too
+    _index: Index | None = None
+    _lock: threading.Lock = field(default_factory=threading.Lock)
+
+    @property
+    def index(self) -> Index:
+        """Every name's definition and references: built on first use (the diagnostics are
+        published before it, so a keystroke's errors show without waiting for it)."""
+        with self._lock:
+            if self._index is None:
+                if self.project is None:
+                    self._index = Index()
+                else:
+                    try:
+                        self._index = build_index(self.project, self.units, self.all_sources, self.user_files)
+                    except Exception:  # noqa: BLE001 - an index that cannot be built: no navigation, no crash
+                        self._index = Index()
+            return self._index
 
 
 class Analyzer:
@@ -54,33 +72,31 @@ class Analyzer:
             del self._units[path]  # a file that left the project
         project = None
         units: list[Any] = []
+        all_sources = dict(by_path)
         try:
             parsed = parse(sources, libs, options, sink, self._units)
             units = parsed.units
             checked = check(parsed, options, sink)
             project = checked.project
-            all_sources = dict(by_path)
             for lib in parsed.libraries:
                 for path, text in lib.sources:
                     all_sources.setdefault(path, SourceFile(path, text))
-            index = build_index(project, units, all_sources, user)
         except RecursionError:
             first = sources[0].path if sources else "<input>"
             sink.error(Code.TOO_DEEP, Span(first, 1, 1), "this code is nested too deeply to check")
-            index = Index()
+            project = None
         except Exception as exc:  # noqa: BLE001 - a checker bug must not end the server
             first = sources[0].path if sources else "<input>"
             sink.error(Code.INTERNAL, Span(first, 1, 1), f"internal compiler error: {type(exc).__name__}: {exc}")
-            index = Index()
+            project = None
         out: dict[str, list[Diagnostic]] = {p: [] for p in user}
         for d in sink.sorted():
             if d.span.file in out:
                 out[d.span.file].append(d)
-        all_known = dict(by_path)
-        return Analysis(all_known, user, out, project, index, units, time.perf_counter() - t0)
+        return Analysis(dict(by_path), user, out, project, units, time.perf_counter() - t0, all_sources)
 
     def _refused(self, diags: list[Diagnostic], by_path: dict, user: set[str], t0: float) -> Analysis:
         out: dict[str, list[Diagnostic]] = {p: [] for p in user}
         for d in diags:
             out.setdefault(d.span.file, []).append(d)
-        return Analysis(by_path, user, out, None, Index(), [], time.perf_counter() - t0)
+        return Analysis(by_path, user, out, None, [], time.perf_counter() - t0)

@@ -118,10 +118,12 @@ class StServer(LanguageServer):
         async with lock:
             analyzer = self.analyzers.setdefault(key, Analyzer())
             sources = sources_of(key, self.overlays, self.lib_path)
-            a = await asyncio.get_running_loop().run_in_executor(None, analyzer.analyze, sources)
+            loop = asyncio.get_running_loop()
+            a = await loop.run_in_executor(None, analyzer.analyze, sources)
             self.analyses[key] = a
             self.publish(key, a)
-            return a
+        loop.run_in_executor(None, lambda: a.index)  # ready for the next request
+        return a
 
     async def analysis(self, path: str) -> Analysis:
         key = self.key(path)

@@ -34,10 +34,12 @@ def resolve_namespaces(ctx: CheckContext, units: list[A.Unit]) -> None:
     variables: set[str] = set()
     for u in units:
         _variables(u, variables)
-    known = {k for k in ctx.namespaces if k not in variables}
+    known = frozenset(k for k in ctx.namespaces if k not in variables)
     if known:
         for u in units:
-            _Rewrite(known).node(u)
+            if u.unqualified_for != known:  # (a tree checked again, by the language server: done)
+                _Rewrite(set(known)).node(u)
+                u.unqualified_for = known
 
 
 def unqualified(name: str, namespaces: set[str] | dict[str, str]) -> str:
