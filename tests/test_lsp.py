@@ -318,3 +318,69 @@ def test_the_checker_answers_the_same_on_a_tree_it_checked():
         assert [(d.code, str(d.span), d.message) for d in second.sorted()] == [
             (d.code, str(d.span), d.message) for d in first.sorted()
         ], f
+
+
+POU_XML = """<?xml version="1.0" encoding="utf-8"?>
+<TcPlcObject Version="1.1.0.1">
+  <POU Name="FB_Axis" Id="{00000000-0000-0000-0000-000000000001}" SpecialFunc="None">
+    <Declaration><![CDATA[FUNCTION_BLOCK FB_Axis
+VAR_INPUT
+    bEnable : BOOL; // switch the drive on
+END_VAR
+VAR
+    nCount : INT;
+END_VAR]]></Declaration>
+    <Implementation>
+      <ST><![CDATA[IF bEnable THEN
+    nCount := nCount + 1;
+END_IF]]></ST>
+    </Implementation>
+  </POU>
+</TcPlcObject>
+"""
+PROJ_XML = """<?xml version="1.0" encoding="utf-8"?>
+<Project DefaultTargets="Build" xmlns="http://schemas.microsoft.com/developer/msbuild/2003">
+  <PropertyGroup><Name>Axis</Name></PropertyGroup>
+  <ItemGroup>
+    <Compile Include="POUs\\FB_Axis.TcPOU"><SubType>Code</SubType></Compile>
+  </ItemGroup>
+</Project>
+"""
+
+
+@pytest.fixture(scope="module")
+def twincat(tmp_path_factory):
+    d = tmp_path_factory.mktemp("tc")
+    (d / "POUs").mkdir()
+    (d / "POUs" / "FB_Axis.TcPOU").write_text(POU_XML)
+    (d / "Axis.plcproj").write_text(PROJ_XML)
+    return d
+
+
+@pytest_lsp.fixture(config=ClientServerConfig(server_command=[sys.executable, "-m", "st.cli", "lsp"]))
+async def tc_client(lsp_client: LanguageClient, twincat):
+    params = L.InitializeParams(capabilities=client_capabilities("visual-studio-code"), root_uri=twincat.as_uri())
+    await lsp_client.initialize_session(params)
+    yield
+    await lsp_client.shutdown_session()
+
+
+@pytest.mark.asyncio
+async def test_a_twincat_file_of_its_project(tc_client: LanguageClient, twincat):
+    """A .TcPOU is checked with its .plcproj (twincat preset), positions in the XML's lines."""
+    path = twincat / "POUs" / "FB_Axis.TcPOU"
+    u = await open_doc(tc_client, twincat / "POUs", "FB_Axis.TcPOU")
+    assert [d.code for d in tc_client.diagnostics[u]] == []
+    broken = POU_XML.replace("nCount := nCount + 1;", "nCount := nCount + 'x';")
+    diags = await change(tc_client, u, 2, broken)
+    assert [(d.code, d.range.start.line, d.range.start.character) for d in diags] == [("E014", 12, 14)]
+    await change(tc_client, u, 3, POU_XML)
+    h = await tc_client.text_document_hover_async(
+        L.HoverParams(text_document=L.TextDocumentIdentifier(uri=u), position=at(POU_XML, "IF bEnable", 0, 4))
+    )
+    assert h.contents.value.startswith("```st\nVAR_INPUT bEnable : BOOL\n```")
+    assert "switch the drive on" in h.contents.value
+    d = await tc_client.text_document_definition_async(
+        L.DefinitionParams(text_document=L.TextDocumentIdentifier(uri=u), position=at(POU_XML, "nCount + 1", 0, 1))
+    )
+    assert d.uri == path.as_uri() and (d.range.start.line, d.range.start.character) == (8, 4)

@@ -258,7 +258,8 @@ def _in_scope(a: Analysis, pou: T.POUType | None) -> list[Item]:
 def _var_kind(v: T.VarSym) -> str:
     if v.constant:
         return "constant"
-    return "instance" if isinstance(T.unalias(v.type), T.POUType) else "variable"
+    ut = T.unalias(v.type)
+    return "instance" if isinstance(ut, T.POUType) and ut.pou_kind in ("FUNCTION_BLOCK", "PROGRAM") else "variable"
 
 
 def _enum_members(a: Analysis, type_name_: str) -> list[Item]:

@@ -196,7 +196,8 @@ class _Builder:
                     self.occur(v.span.file, line, col, len(v.name), g)
             return g
         ut = T.unalias(v.type)
-        kind = "constant" if v.constant else "instance" if isinstance(ut, T.POUType) else "variable"
+        block = isinstance(ut, T.POUType) and ut.pou_kind in ("FUNCTION_BLOCK", "PROGRAM")
+        kind = "constant" if v.constant else "instance" if block else "variable"
         if owner == "":
             kind = "constant" if v.constant else "global"
         return self.target(v, v.name, kind, v.span, owner, var_detail(v))

@@ -197,6 +197,14 @@ def _location(t: Target) -> L.Location:
 def make_server(lib_path: list[str] | None = None) -> StServer:
     server = StServer(lib_path)
 
+    @server.feature(L.INITIALIZE)
+    def initialize(ls: StServer, params: L.InitializeParams) -> None:
+        """`initializationOptions: {"libPath": [...]}`: library projects for a .plcproj's references
+        (as `st lsp --lib`, which it adds to)."""
+        got = params.initialization_options
+        if isinstance(got, dict):
+            ls.lib_path += [str(p) for p in got.get("libPath", []) if isinstance(p, str)]
+
     @server.feature(L.TEXT_DOCUMENT_DID_OPEN)
     async def did_open(ls: StServer, params: L.DidOpenTextDocumentParams) -> None:
         path = uri_to_path(params.text_document.uri)
