@@ -846,7 +846,8 @@ def modbus_map(files, map_file, old_map_file, time_unit, f_trig_first_scan):
     type=click.Path(),
     help="A library project or a folder of them, for a .plcproj's references (as on `st check`); repeatable.",
 )
-def lsp(lib_path):
+@click.option("--stdio", is_flag=True, hidden=True, help="Accepted and ignored: stdio is the only transport.")
+def lsp(lib_path, stdio):
     """Run the language server on stdin/stdout (for editors: docs/editors.md)."""
     from .lsp.server import main as serve
 

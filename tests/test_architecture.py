@@ -34,6 +34,7 @@ ALLOWED: dict[str, set[str]] = {
     "testing": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "api", "facade"},
     "web": {"source", "diagnostics", "model", "runtime", "stdlib", "io"},
     "opcua": {"source", "diagnostics", "model", "runtime", "stdlib", "io", "web"},  # web: one naming of types
+    "lsp": {"source", "diagnostics", "errors_doc", "model", "grammar", "compiler", "stdlib", "api"},
     "app": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "facade", "web", "opcua"},
     "experiments": {"source", "diagnostics", "model", "compiler", "runtime", "stdlib", "io", "api", "facade", "app"},
     "cli": {
@@ -51,6 +52,7 @@ ALLOWED: dict[str, set[str]] = {
         "testing",
         "experiments",
         "opcua",
+        "lsp",
     },
     "__init__": {"facade", "runtime", "diagnostics"},
     "__main__": {"cli"},

@@ -567,7 +567,9 @@ class Unit(Syntax):
     path: str
     items: list  # TypeBlock, POU, Configuration, VarBlock, TestBlock
     pragmas: list = field(default_factory=list)
-    unqualified_for: frozenset = frozenset()  # the namespaces whose qualifiers were dropped (check/passes/namespaces.py)
+    unqualified_for: frozenset = (
+        frozenset()
+    )  # the namespaces whose qualifiers were dropped (check/passes/namespaces.py)
 
 
 _NOT_CHILDREN = frozenset(("span", "name_span", "end_span", "ty", "const", "sym", "pou"))

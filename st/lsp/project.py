@@ -76,6 +76,8 @@ def project_of(path: str, workspace: str | None, overlays: Overlays) -> ProjectK
 def _plcproj(p: Path, workspace: str | None) -> Path | None:
     stop = Path(workspace).resolve() if workspace else None
     d = p.parent.resolve()
+    if stop is not None and stop != d and stop not in d.parents:
+        stop = None  # a document outside the workspace: its own folder only
     while True:
         try:
             projects = sorted(x for x in d.iterdir() if x.suffix.lower() == ".plcproj")
