@@ -6,6 +6,19 @@ import pytest
 
 pytest_plugins = ["pytester"]
 
+
+@pytest.fixture(autouse=True, scope="module")
+def _compiler_loaded():
+    """The in-process runs below drop the modules each imported (pytester restores sys.modules),
+    and the compiler imports its stages on first use: were a stage first imported inside a run, the
+    next run would import it again beside a parser cache holding the first one's syntax classes.
+    So every stage is loaded here, once, before any run."""
+    import st.testing.runner  # noqa: F401 - loaded for the same reason
+    from st.api import compile_text
+
+    compile_text("FUNCTION_BLOCK F VAR_INPUT a : INT; END_VAR a := a + 1; END_FUNCTION_BLOCK\n", use_cache=False)
+
+
 COUNTER = """
 FUNCTION_BLOCK Counter
   VAR_INPUT enable : BOOL; END_VAR

@@ -152,10 +152,15 @@ class StTestFailure(Exception):
 
 
 class StItem(pytest.Item):
+    # no fixtures; an empty `funcargs` as a test function's, for plugins that read it from every
+    # item (pytest-lsp's runtest wrapper returns without yielding from an item lacking it)
+    funcargs: dict = {}
+
     def __init__(self, *, case, suite, **kw):
         super().__init__(**kw)
         self.case = case
         self.suite = suite
+        self.funcargs = {}
 
     def runtest(self):
         result = self.suite.run(self.case)
@@ -296,6 +301,8 @@ class TcUnitTestFailure(Exception):
 
 
 class TcUnitItem(pytest.Item):
+    funcargs: dict = {}  # (see StItem)
+
     def runtest(self):
         from .tcunit import SKIPPED, format_failure
 
