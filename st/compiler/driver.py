@@ -15,7 +15,7 @@ import threading
 from collections.abc import Collection, Sequence
 from pathlib import Path
 from types import CodeType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..diagnostics import Code, CompileError, Diagnostic, DiagnosticSink, Severity
 from ..model.compiled import CompiledProgram
@@ -235,6 +235,12 @@ def _compile_sources(
     return result
 
 
+def parse_settings(options: CompileOptions) -> tuple[bool | None, bool]:
+    """How the options' dialect reads a file: (nested comments, vendor names); parse_source's."""
+    nested = options.dialect.nested_comments if options.dialect is not None else None
+    return nested, options.dialect is None or options.dialect.vendor_extensions
+
+
 def parse(
     sources: list[SourceFile],
     libraries: list[Library],
@@ -244,16 +250,24 @@ def parse(
 ) -> Parsed:
     """Parse the libraries' sources and the user's. `units_of` (the language server's): a file's
     unit kept from the last parse while its text is the same (the checker gives the same answers
-    on a tree it checked before), filled as files are parsed."""
+    on a tree it checked before), filled as files are parsed; a library source's too."""
     lib_units: list[tuple[Library, A.Unit]] = []
     for lib in libraries:
         for path, text in lib.sources:
-            u = parse_library_source(path, text, sink)
+            if units_of is None:
+                u = parse_library_source(path, text, sink)
+            else:
+                kept = units_of.get(path)
+                if kept is None or kept[0] != (text, None, False):
+                    own = DiagnosticSink()
+                    kept = units_of[path] = ((text, None, False), parse_library_source(path, text, own), own.items)
+                u = kept[1]
+                for d in kept[2]:
+                    sink.add(d)
             if u is not None:
                 lib_units.append((lib, u))
     units: list[A.Unit] = []
-    nested = options.dialect.nested_comments if options.dialect is not None else None
-    vendor_names = options.dialect is None or options.dialect.vendor_extensions
+    nested, vendor_names = parse_settings(options)
     for s in sources:
         for d in s.load_diagnostics:
             sink.add(d)
@@ -290,11 +304,12 @@ def parse(
     return Parsed(units, frozenset(lib_paths), in_use)
 
 
-def check(parsed: Parsed, options: CompileOptions, sink: DiagnosticSink) -> Checked:
-    """Check the parsed units (every problem a diagnostic in `sink`)."""
+def check(parsed: Parsed, options: CompileOptions, sink: DiagnosticSink, memo: Any = None, stop: Any = None) -> Checked:
+    """Check the parsed units (every problem a diagnostic in `sink`). `memo`, `stop`: the
+    language server's (check/context.py's CheckContext says what they are)."""
     from .check import Checker
 
-    project = Checker(sink, parsed.libraries, options).run(parsed.units, set(parsed.library_paths))
+    project = Checker(sink, parsed.libraries, options).run(parsed.units, set(parsed.library_paths), memo, stop)
     return Checked(project, parsed.libraries)
 
 

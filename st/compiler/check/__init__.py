@@ -12,13 +12,18 @@ and passes apply is a module of `rules/`, naming the diagnostic codes it raises.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from threading import Event
+from typing import Any
+
 from ...diagnostics import DiagnosticSink
 from ...model.program import Project
 from .. import ast as A
 from ..library import Library
 from ..options import CompileOptions
 from .common import _NULL, STEP, Scope, StepType
-from .context import CheckContext
+from .context import CheckCancelled, CheckContext
+from .memo import TreeMemo
 from .passes.bodies import check_bodies
 from .passes.collect import collect
 from .passes.configuration import check_configurations
@@ -52,6 +57,8 @@ from .targets import (
 
 __all__ = [
     "Checker",
+    "CheckCancelled",
+    "TreeMemo",
     "STEP",
     "StepType",
     "Scope",
@@ -83,7 +90,11 @@ class Checker:
         self.strict_enums: set = set(self.options.strict_types)  # {attribute 'strict'} enumerations (lower-case names)
         self.dialect = self.options.dialect
 
-    def run(self, units: list[A.Unit], library_units: set[str]) -> Project:
+    def run(
+        self, units: list[A.Unit], library_units: set[str], memo: TreeMemo | None = None, stop: Event | None = None
+    ) -> Project:
+        """Check the units. `memo`, `stop`: see CheckContext (the language server's); a stopped
+        check raises CheckCancelled."""
         ctx = CheckContext(
             self.sink,
             self.libraries,
@@ -91,17 +102,24 @@ class Checker:
             self.dialect,
             library_units=library_units,
             strict_enums=self.strict_enums,
+            memo=memo,
+            stop=stop,
         )
         sem = Semantics(ctx)
         resolve_namespaces(ctx, units)
         collect(ctx, units)
-        resolve_types(sem)
-        check_oop_rules(ctx)
-        declare_globals(sem)
-        check_storage_limits(ctx)
-        check_bodies(sem)
-        check_tests(sem)
-        check_cycles(ctx)
-        check_configurations(sem)
-        warn_unused(ctx)
+        steps: tuple[tuple[Callable[[Any], None], Any], ...] = (
+            (resolve_types, sem),
+            (check_oop_rules, ctx),
+            (declare_globals, sem),
+            (check_storage_limits, ctx),
+            (check_bodies, sem),
+            (check_tests, sem),
+            (check_cycles, ctx),
+            (check_configurations, sem),
+            (warn_unused, ctx),
+        )
+        for step, on in steps:
+            ctx.cancel_point()
+            step(on)
         return ctx.project

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from threading import Event
 from typing import Any
 
 from ...diagnostics import Code, DiagnosticSink
@@ -13,7 +14,13 @@ from .. import ast as A
 from ..dialect import Dialect
 from ..library import FuncSig, Library
 from ..names import mangle
+from .memo import TreeMemo
 from .rules import dialect_features
+
+
+class CheckCancelled(Exception):  # noqa: N818 - not a failure: the answer is not wanted any more
+    """The check was stopped (`CheckContext.stop`). Its trees may be checked again: every change a
+    check makes to a tree is one a later check finds made and leaves."""
 
 
 @dataclass
@@ -69,6 +76,16 @@ class CheckContext:
     called_programs: set[str] = field(default_factory=set)
     """PROGRAMs another POU calls by name (lower names): the implicit configuration's task does
     not run them itself (they run where they are called, as under a TwinCAT task calling MAIN)."""
+    memo: TreeMemo | None = None
+    """Answers kept from the last check of the same trees (the language server's; memo.py)."""
+    stop: Event | None = None
+    """Set when the check's answer is no longer wanted (an edit came): `Checker.run` raises
+    `CheckCancelled` between passes and `check_bodies` between bodies."""
+
+    def cancel_point(self) -> None:
+        """Raise CheckCancelled if the check was stopped."""
+        if self.stop is not None and self.stop.is_set():
+            raise CheckCancelled
 
     # ---------------------------------------------------------------- reporting
     def err(self, code: Code, span: Span, msg: str, hint: str = "") -> None:

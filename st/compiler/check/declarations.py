@@ -26,6 +26,7 @@ from .common import (
     take_address,
 )
 from .expressions import _zero_pointer
+from .memo import remembered
 from .part import Part
 from .passes.namespaces import unknown_namespace
 from .rules import (
@@ -396,7 +397,7 @@ class Declarations(Part):
     def _implicit_en_eno(self, pou: T.POUType) -> None:
         """EN and ENO are implicit in every function and FB; declared when the body uses them."""
         d = decl_of(pou)
-        mentioned = {n.name.lower() for n in _names_in(d.body)}
+        mentioned = remembered(self.ctx.memo, "names", (d.body,), lambda: {n.name.lower() for n in _names_in(d.body)})
         for key, section in (("en", "VAR_INPUT"), ("eno", "VAR_OUTPUT")):
             if key in mentioned and key not in pou.vars:
                 true = A.Literal(d.span, "bool", True, "", "TRUE")

@@ -19,6 +19,7 @@ if TYPE_CHECKING:
 def check_bodies(sem: Semantics) -> None:
     for pou in list(sem.ctx.project.pous.values()):
         if pou.decl is not None:
+            sem.ctx.cancel_point()
             _check_body(sem, pou)
 
 

@@ -17,6 +17,7 @@ Codes: E032, W013.
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 from ....diagnostics import Code
@@ -26,13 +27,15 @@ from ... import ast as A
 from ...syntax import decl_of, declared
 from ..common import SUPER, THIS
 from ..context import CheckContext
+from ..memo import TreeMemo, remembered
 from ..targets import ActionCall, FbCall, FunctionCall, MethodCall
 
 
 class _Graph:
     """The bodies of the program and the calls between them whose target the declarations show."""
 
-    def __init__(self, pous) -> None:
+    def __init__(self, pous, memo: TreeMemo | None = None) -> None:
+        self.memo = memo
         self.names: dict[int, str] = {}  # node → what a message calls it ("method FB_A.M")
         self.bodies: list[tuple[Any, list, Any]] = []  # (node, what runs, the block THIS is)
         self.blocks = [p for p in pous if p.pou_kind in ("FUNCTION_BLOCK", "PROGRAM")]
@@ -73,17 +76,11 @@ class _Graph:
         out: dict[int, list[tuple[int, Span]]] = {}
         for node, body, block in self.bodies:
             calls = out.setdefault(id(node), [])
-            written = set()  # (an assignment or an argument comes before its target in the walk)
-            for x in A.walk_nodes(body):
-                if isinstance(x, A.Assign):
-                    written.add(id(x.target))
-                elif isinstance(x, A.Arg):
-                    if x.output:
-                        written.add(id(x.value))
-                elif isinstance(x, (A.Call, A.Name, A.Field)):
-                    for target in self.targets(x, block, id(x) in written):
-                        if id(target) in self.names:
-                            calls.append((id(target), x.span))
+            sites = remembered(self.memo, "calls", tuple(body), partial(_call_sites, body))
+            for x, written in sites:
+                for target in self.targets(x, block, written):
+                    if id(target) in self.names:
+                        calls.append((id(target), x.span))
         return out
 
     def targets(self, x, block, written: bool) -> list:
@@ -133,6 +130,22 @@ class _Graph:
         return list(bodies.values()) if len(bodies) == 1 else []
 
 
+def _call_sites(body: list) -> list[tuple[Any, bool]]:
+    """The nodes of a body that may run another body (calls, names and fields: a property),
+    each with whether it is written (an assignment's target, an output argument's variable)."""
+    out = []
+    written = set()  # (an assignment or an argument comes before its target in the walk)
+    for x in A.walk_nodes(body):
+        if isinstance(x, A.Assign):
+            written.add(id(x.target))
+        elif isinstance(x, A.Arg):
+            if x.output:
+                written.add(id(x.value))
+        elif isinstance(x, (A.Call, A.Name, A.Field)):
+            out.append((x, id(x) in written))
+    return out
+
+
 def _is(obj, which) -> bool:
     """Is obj THIS (THIS^, THIS) or SUPER (SUPER^)?"""
     if isinstance(obj, A.Deref):
@@ -158,7 +171,7 @@ def _held_by_value(obj) -> bool:
 def check_recursion(ctx: CheckContext) -> None:
     """Every body that calls itself, directly or through others: E032 (or W013) where the call that
     closes the circle stands (one per body in a circle)."""
-    graph = _Graph(list(ctx.project.pous.values()))
+    graph = _Graph(list(ctx.project.pous.values()), ctx.memo)
     edges = graph.edges()
     circled = _in_circles(edges)
     for node, _body, _block in graph.bodies:
