@@ -15,6 +15,7 @@ from lsprotocol import types as L
 from pytest_lsp import ClientServerConfig, LanguageClient, client_capabilities
 
 from st.api import libraries, provided_libraries
+from st.compiler.check import TreeMemo
 from st.compiler.driver import check, load_files, parse
 from st.compiler.options import CompileOptions
 from st.diagnostics import CompileError, DiagnosticSink
@@ -29,6 +30,10 @@ END_STRUCT; END_TYPE
 VAR_GLOBAL
   g_total : DINT;  (* parts made since start *)
 END_VAR
+FUNCTION Twice : DINT
+VAR_INPUT v : DINT; END_VAR
+Twice := 2 * v;
+END_FUNCTION
 """
 STATION = """FUNCTION_BLOCK Station
 VAR_INPUT
@@ -55,7 +60,7 @@ END_VAR
 st1(start := TRUE);
 IF st1.busy THEN
   made := made + 1;
-  g_total := made;
+  g_total := Twice(made);
 END_IF;
 END_PROGRAM
 CONFIGURATION cell RESOURCE r ON PLC TASK t(INTERVAL := T#10ms); PROGRAM p WITH t : main; END_RESOURCE
@@ -138,7 +143,7 @@ async def test_diagnostics_follow_the_edits(client: LanguageClient, folder):
     assert [(d.code, d.range.start.line, d.severity) for d in diags] == [("E014", 7, L.DiagnosticSeverity.Error)]
     assert diags[0].source == "st" and diags[0].code_description.href.endswith("/E014.md")
     assert Path(diags[0].code_description.href.removeprefix("file://")).read_text().startswith("# E014")
-    unknown = MAIN.replace("g_total := made;", "g_totl := made;")
+    unknown = MAIN.replace("g_total := Twice(made);", "g_totl := Twice(made);")
     diags = await change(client, u, 3, unknown)
     assert [(d.code, d.range.start.line, d.range.start.character) for d in diags] == [("E010", 8, 2)]
     assert "g_totl" in diags[0].message
@@ -174,6 +179,10 @@ async def test_definition_and_references_across_files(client: LanguageClient, fo
         L.DefinitionParams(text_document=L.TextDocumentIdentifier(uri=u), position=at(MAIN, "g_total", 0, 1))
     )
     assert d.uri == uri(folder, "types.st") and d.range.start.line == 6
+    d = await client.text_document_definition_async(  # a function's name in its call
+        L.DefinitionParams(text_document=L.TextDocumentIdentifier(uri=u), position=at(MAIN, "Twice", 0, 2))
+    )
+    assert d.uri == uri(folder, "types.st") and (d.range.start.line, d.range.start.character) == (8, 9)
     refs = await client.text_document_references_async(
         L.ReferenceParams(
             text_document=L.TextDocumentIdentifier(uri=u),
@@ -228,6 +237,23 @@ async def test_completion_in_half_typed_statements(client: LanguageClient, folde
     assert labels == ["Idle", "Running", "Done"]
     labels = await _complete(client, u, STATION.replace(body, body + "\n    bu"), 14, "    bu")
     assert {"busy", "start", "recipe", "mode", "t", "g_total", "Station", "IF", "BOOL"} <= set(labels)
+
+
+@pytest.mark.asyncio
+async def test_a_half_typed_statement_keeps_the_rest_of_its_file(client: LanguageClient, folder):
+    """While station.st does not parse, its POU is still declared (from its last tree): main.st
+    has no error, and completion in the unfinished statement knows the block's variables."""
+    u = await open_doc(client, folder, "station.st")  # its project's other files are published too
+    m = uri(folder, "main.st")
+    body = "busy := t.Q;"
+    half = STATION.replace(body, body + "\n  mo")
+    client.diagnostics.pop(m, None)
+    diags = await change(client, u, 30, half)
+    assert [(d.code, d.range.start.line) for d in diags] == [("E001", 15)]
+    assert list(await diagnostics_for(client, m)) == []  # published again by that check
+    labels = await _complete(client, u, STATION.replace(body, body + "\n  mod"), 31, "  mod")
+    assert {"mode", "recipe", "start", "busy", "t"} <= set(labels)
+    assert [d.code for d in await change(client, u, 32, STATION)] == []
 
 
 @pytest.mark.asyncio
@@ -297,7 +323,8 @@ async def test_garbage_never_upsets_the_server(client: LanguageClient, folder):
 
 
 def test_the_checker_answers_the_same_on_a_tree_it_checked():
-    """What the server's parse cache relies on: checking a tree again gives the same diagnostics."""
+    """What the server's parse cache relies on: checking a tree again gives the same diagnostics
+    (also with what the first check kept in a TreeMemo)."""
     root = Path(__file__).resolve().parents[1]
     fixtures = sorted(glob.glob(str(root / "tests/fixtures/**/*.st"), recursive=True))
     files = fixtures[::4] + sorted(glob.glob(str(root / "programs/*.st")))  # a quarter: a parse is the cost
@@ -313,8 +340,9 @@ def test_the_checker_answers_the_same_on_a_tree_it_checked():
         parsed = parse(srcs, libs, opts, first)
         for d in first.items:
             second.add(d)
-        check(parsed, opts, first)
-        check(parsed, opts, second)
+        memo = TreeMemo()  # filled by the first check, read by the second
+        check(parsed, opts, first, memo)
+        check(parsed, opts, second, memo)
         assert [(d.code, str(d.span), d.message) for d in second.sorted()] == [
             (d.code, str(d.span), d.message) for d in first.sorted()
         ], f

@@ -198,7 +198,7 @@ _CALL = re.compile(r"([A-Za-z_][\w.]*)\s*\(([^()]*)$")
 def completion(a: Analysis, file: str, line: int, col: int, text: str) -> list[Item]:
     lines = text.splitlines()
     prefix = lines[line][:col] if line < len(lines) else ""
-    scope = a.index.scope_at(file, line)
+    scope = a.scope_at(file, line)
     pou = scope.pou if scope is not None else None
     m = _ENUM.search(prefix)
     if m:

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import bisect
 import re
+import threading
 from dataclasses import dataclass, field
 from typing import Any
 
 from ..compiler import ast as A
+from ..compiler.check import CheckCancelled
 from ..model import types as T
 from ..model.program import Project
 from ..source import SourceFile
@@ -218,10 +220,12 @@ class _Builder:
             self.target(t, name, "type", span, "", f"TYPE {name} : {type_name(getattr(t, 'base', t))}")
 
     # ------------------------------------------------------------------ the syntax
-    def units(self, units: list[A.Unit]) -> None:
+    def units(self, units: list[A.Unit], stop: threading.Event | None = None) -> None:
         for u in units:
             if u.path not in self.user_files:
                 continue
+            if stop is not None and stop.is_set():
+                raise CheckCancelled
             for item in u.items:
                 self.scope(u.path, item)
             for node in A.walk_nodes(u.items):
@@ -271,6 +275,11 @@ class _Builder:
                 self.occur(file, line, col, len(n.type_name), t)
         elif isinstance(n, A.Call):
             pou = getattr(n.target, "pou", None)
+            if isinstance(pou, T.POUType) and pou.pou_kind == "FUNCTION" and isinstance(n.callee, A.Name):
+                if n.callee.sym is None:  # a function's name in its call (the checker binds no symbol to it)
+                    t = self._sym_target(pou)
+                    if t is not None:
+                        self.occur(file, n.callee.span.line - 1, n.callee.span.col - 1, len(n.callee.name), t)
             if isinstance(pou, T.POUType):
                 for arg in n.args:
                     v = pou.vars.get(arg.name.lower()) if arg.name else None
@@ -339,10 +348,18 @@ class _Builder:
         return None
 
 
-def build_index(project: Project, units: list[A.Unit], sources: dict[str, SourceFile], user_files: set[str]) -> Index:
+def build_index(
+    project: Project,
+    units: list[A.Unit],
+    sources: dict[str, SourceFile],
+    user_files: set[str],
+    stop: threading.Event | None = None,
+) -> Index:
+    """Every name's definition and occurrences. `stop`: set when the index is no longer wanted
+    (an edit came): CheckCancelled is raised between files."""
     b = _Builder(project, sources, user_files)
     b.model(units)
-    b.units(units)
+    b.units(units, stop)
     idx = b.index
     for file, occ in idx.occurrences.items():
         unique = {(o.line, o.col): o for o in sorted(occ, key=lambda o: (o.line, o.col, not o.declaration))}

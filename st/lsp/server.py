@@ -1,18 +1,26 @@
 """`st lsp`: the language server over stdio (pygls).
 
-Documents are grouped into projects (project.py); each project is checked again 0.15 s after the
+Documents are grouped into projects (project.py); each project is checked again 0.1 s after the
 last keystroke in any of its documents (analysis.py, in a worker thread so that the server keeps
-answering), and its diagnostics are published for every file of it. Requests are answered from
-the project's last analysis and the document's current text (features.py), so completion works
-in a statement that does not parse yet.
+answering), and its diagnostics are published for every file of it. A keystroke while a check
+runs stops that check at its next pass (its answer would be about an old text); one check of a
+project runs at a time. Requests are answered from the project's last analysis and the document's
+current text (features.py), so completion works in a statement that does not parse yet; completion
+does not wait for the newest analysis's index while the previous one has its own.
+
+Garbage: the cyclic collector is off; the server collects after IDLE_GC_S without a check (a full
+collection of a large project takes a fifth of a second, which must not fall between a keystroke
+and its diagnostics).
 """
 
 from __future__ import annotations
 
 import asyncio
+import gc
 import logging
 import os
 import re
+import threading
 from pathlib import Path
 from typing import Any
 from urllib.parse import unquote, urlparse
@@ -20,13 +28,15 @@ from urllib.parse import unquote, urlparse
 from lsprotocol import types as L
 from pygls.lsp.server import LanguageServer
 
+from ..compiler.check import CheckCancelled
 from ..diagnostics import Diagnostic, Severity
 from . import features as F
 from .analysis import Analysis, Analyzer
 from .index import Target
 from .project import Overlays, ProjectKey, project_of, sources_of
 
-DEBOUNCE_S = 0.15
+DEBOUNCE_S = 0.1
+IDLE_GC_S = 2.0
 _TOKEN = re.compile(r"[A-Za-z_0-9%.#]+")  # what a diagnostic without an end covers
 _SEVERITY = {Severity.ERROR: L.DiagnosticSeverity.Error, Severity.WARNING: L.DiagnosticSeverity.Warning}
 _SYMBOL_KIND = {
@@ -84,8 +94,13 @@ class StServer(LanguageServer):
         self.overlays = Overlays()
         self.analyzers: dict[ProjectKey, Analyzer] = {}
         self.analyses: dict[ProjectKey, Analysis] = {}
+        self.indexed: dict[ProjectKey, Analysis] = {}  # the last analysis whose index is built
         self.locks: dict[ProjectKey, asyncio.Lock] = {}
         self.pending: dict[ProjectKey, asyncio.Task] = {}
+        self.stops: dict[ProjectKey, threading.Event] = {}  # the running check's
+        self.index_stops: dict[ProjectKey, threading.Event] = {}  # the index being built's
+        self.checks = 0  # analyses since the last collection
+        self.collector: asyncio.TimerHandle | None = None
         self.published: dict[ProjectKey, set[str]] = {}
         self.key_of: dict[str, ProjectKey] = {}
 
@@ -103,33 +118,99 @@ class StServer(LanguageServer):
         return k
 
     def schedule(self, path: str) -> None:
+        """Check path's project DEBOUNCE_S from now; stop the check that runs (its text is old)."""
         key = self.key(path)
         old = self.pending.get(key)
         if old is not None and not old.done():
             old.cancel()
+        for stops in (self.stops, self.index_stops):
+            stop = stops.pop(key, None)
+            if stop is not None:
+                stop.set()
+        if self.collector is not None:  # not while the user types
+            self.collector.cancel()
+            self.collector = asyncio.get_running_loop().call_later(IDLE_GC_S, self._collect)
         self.pending[key] = asyncio.get_running_loop().create_task(self._later(key))
 
     async def _later(self, key: ProjectKey) -> None:
         await asyncio.sleep(DEBOUNCE_S)
-        await self.analyze(key)
+        # cancelled from here on (a newer edit), the check itself goes on until its stop is seen:
+        # the next one waits for it (two checks must not work on the same trees at once)
+        await asyncio.shield(self._analyze_quietly(key))
+
+    async def _analyze_quietly(self, key: ProjectKey) -> None:
+        try:
+            await self.analyze(key)
+        except CheckCancelled:
+            pass
+        except Exception:  # a bug: logged, the server goes on (the next edit checks again)
+            logging.getLogger(__name__).exception("checking %s failed", key)
 
     async def analyze(self, key: ProjectKey) -> Analysis:
+        """Check the project now (after the one that runs) and publish its diagnostics; raises
+        CheckCancelled when an edit stopped it."""
         lock = self.locks.setdefault(key, asyncio.Lock())
         async with lock:
             analyzer = self.analyzers.setdefault(key, Analyzer())
             sources = sources_of(key, self.overlays, self.lib_path)
             loop = asyncio.get_running_loop()
-            a = await loop.run_in_executor(None, analyzer.analyze, sources)
+            stop = self.stops[key] = threading.Event()
+            try:
+                a = await loop.run_in_executor(None, analyzer.analyze, sources, stop)
+            finally:
+                if self.stops.get(key) is stop:
+                    del self.stops[key]
             self.analyses[key] = a
             self.publish(key, a)
-        loop.run_in_executor(None, lambda: a.index)  # ready for the next request
+        stop = self.index_stops[key] = threading.Event()
+        loop.run_in_executor(None, self._build_index, key, a, stop)
+        self.checks += 1
+        if self.collector is not None:
+            self.collector.cancel()
+        self.collector = loop.call_later(IDLE_GC_S, self._collect)
         return a
+
+    def _build_index(self, key: ProjectKey, a: Analysis, stop: threading.Event) -> None:
+        """In a worker: build a's index, ready for the next request; given up when an edit comes
+        (it would slow the check of that edit down, and the next analysis is the one wanted)."""
+        enabled = gc.isenabled()
+        gc.disable()
+        try:
+            built = a.build_index(stop)
+        finally:
+            if enabled:
+                gc.enable()
+        if built and self.analyses.get(key) is a:
+            self.indexed[key] = a
+
+    def _collect(self) -> None:
+        """The idle collection (the module docstring says why there is no other)."""
+        self.collector = None
+        if self.checks and not self.stops:
+            self.checks = 0
+            gc.collect()
 
     async def analysis(self, path: str) -> Analysis:
         key = self.key(path)
         a = self.analyses.get(key)
         if a is None or (path in self.overlays.texts and path not in a.sources):
-            a = await self.analyze(key)
+            while True:
+                try:
+                    a = await self.analyze(key)
+                    break
+                except CheckCancelled:
+                    continue  # an edit came: the request is answered from the check of the new text
+        return a
+
+    def ready(self, path: str) -> Analysis | None:
+        """The newest analysis of path's project whose index needs no waiting, if any."""
+        key = self.key(path)
+        a = self.analyses.get(key)
+        if a is not None and a.has_index:
+            return a
+        got = self.indexed.get(key)
+        if got is not None and (path not in self.overlays.texts or path in got.sources):
+            return got
         return a
 
     def publish(self, key: ProjectKey, a: Analysis) -> None:
@@ -210,7 +291,7 @@ def make_server(lib_path: list[str] | None = None) -> StServer:
         path = uri_to_path(params.text_document.uri)
         ls.overlays.texts[path] = params.text_document.text
         ls.key_of.pop(path, None)
-        await ls.analyze(ls.key(path))
+        await ls._analyze_quietly(ls.key(path))
 
     @server.feature(L.TEXT_DOCUMENT_DID_CHANGE)
     async def did_change(ls: StServer, params: L.DidChangeTextDocumentParams) -> None:
@@ -307,7 +388,7 @@ def make_server(lib_path: list[str] | None = None) -> StServer:
     @server.feature(L.TEXT_DOCUMENT_COMPLETION, L.CompletionOptions(trigger_characters=[".", "#", "("]))
     async def completion(ls: StServer, params: L.CompletionParams) -> L.CompletionList:
         path = uri_to_path(params.text_document.uri)
-        a = ls.analyses.get(ls.key(path)) or await ls.analysis(path)
+        a = ls.ready(path) or await ls.analysis(path)
         items = F.completion(a, path, params.position.line, params.position.character, ls.text_of(path))
         return L.CompletionList(
             is_incomplete=False,
@@ -360,4 +441,5 @@ def make_server(lib_path: list[str] | None = None) -> StServer:
 
 def main(lib_path: list[str] | None = None) -> None:
     logging.basicConfig(level=logging.WARNING, format="st lsp: %(message)s")
+    gc.disable()  # collected when idle: StServer._collect
     make_server(lib_path).start_io()

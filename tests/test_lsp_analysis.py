@@ -1,0 +1,123 @@
+"""The language server's analysis in-process: a check stopped at any of its cancel points leaves
+trees the next check gives the full answer on; a file that does not parse keeps the declarations
+its errors are not in (st/lsp/tolerant.py)."""
+
+from __future__ import annotations
+
+import threading
+
+import pytest
+
+from st.compiler.check import CheckCancelled
+from st.lsp.analysis import Analyzer
+from st.lsp.tolerant import regions
+from st.source import SourceFile
+
+LIB = """FUNCTION_BLOCK FB_Count
+VAR_INPUT up : BOOL; END_VAR
+VAR_OUTPUT n : INT; END_VAR
+VAR edge : R_TRIG; unused : INT; END_VAR
+edge(CLK := up);
+IF edge.Q THEN n := n + 1; END_IF;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_Pair
+VAR a, b : FB_Count; total : INT; END_VAR
+a(up := TRUE); b(up := FALSE);
+total := a.n + b.n;
+END_FUNCTION_BLOCK
+
+FUNCTION Fact : DINT
+VAR_INPUT k : DINT; END_VAR
+IF k <= 1 THEN Fact := 1; ELSE Fact := k * Fact(k - 1); END_IF;
+END_FUNCTION
+"""
+MAIN = """PROGRAM main
+VAR p : FB_Pair; c : FB_Count; x : DINT; s : STRING[4]; END_VAR
+p();
+c(up := x > 3);
+x := Fact(5) + c.n;
+s := 'too long';
+y := 1;
+END_PROGRAM
+"""
+
+
+def sources(lib: str = LIB) -> list[SourceFile]:
+    return [SourceFile("/p/lib.st", lib), SourceFile("/p/main.st", MAIN)]
+
+
+def answer(a) -> dict:
+    return {f: [(d.code, d.span.line, d.span.col, d.message) for d in ds] for f, ds in a.diagnostics.items()}
+
+
+class StopAt(threading.Event):
+    """Set from the n-th time it is asked on."""
+
+    def __init__(self, n: int) -> None:
+        super().__init__()
+        self.n = n
+        self.asked = 0
+
+    def is_set(self) -> bool:
+        self.asked += 1
+        return self.asked >= self.n
+
+
+def test_a_stopped_check_leaves_trees_the_next_check_answers_in_full():
+    expected = answer(Analyzer().analyze(sources()))
+    codes = sorted(c for ds in expected.values() for c, *_ in ds)
+    assert codes == ["E010", "W002", "W003", "W013"]  # y unknown, `unused`, the string cut, Fact recursive
+    points = StopAt(10**9)
+    Analyzer().analyze(sources(), points)
+    assert points.asked > 100  # between passes and between bodies (the libraries' too)
+    every_pass = range(1, 15)  # the first passes, then the bodies: every ninth
+    for n in sorted({*every_pass, *range(15, points.asked + 1, 9), points.asked}):
+        an = Analyzer()
+        with pytest.raises(CheckCancelled):
+            an.analyze(sources(), StopAt(n))
+        assert answer(an.analyze(sources())) == expected, n
+        assert answer(an.analyze(sources())) == expected, n  # and again, on what it kept
+
+
+def test_a_file_that_does_not_parse_keeps_its_other_declarations():
+    an = Analyzer()
+    before = answer(an.analyze(sources()))
+    half = LIB.replace("total := a.n + b.n;", "total := a.n + b.n;\n  a.")
+    a = an.analyze(sources(half))
+    got = answer(a)
+    assert [(c, line) for c, line, *_ in got["/p/lib.st"]] == [("W002", 4), ("E001", 14), ("W013", 18)]
+    assert got["/p/main.st"] == before["/p/main.st"]  # FB_Pair still declared: no new error there
+    assert a.cuts == {"/p/lib.st": [(8, 13)]}
+    scope = a.scope_at("/p/lib.st", 12)  # the new line, past the old block's end
+    assert scope.pou.name == "FB_Pair" and {"a", "b", "total"} <= set(scope.pou.vars)
+    # a file that never parsed has nothing to keep: the block is missing, and main.st says so
+    fresh = answer(Analyzer().analyze(sources(half)))
+    assert ("E012", 2) in [(c, line) for c, line, *_ in fresh["/p/main.st"]]
+    assert answer(an.analyze(sources())) == before
+
+
+def test_regions_nest_and_end_where_the_next_declaration_starts():
+    text = "\n".join(
+        [
+            "FUNCTION_BLOCK A",  # 0
+            "VAR x : INT; END_VAR",
+            "METHOD M",  # 2
+            "VAR_INPUT v : INT; END_VAR",
+            "x := v;",
+            "END_METHOD",  # 5
+            "END_FUNCTION_BLOCK",  # 6
+            "FUNCTION_BLOCK B",  # 7: never ended
+            "x := 1;",
+            "TYPE T : INT; END_TYPE",  # 9
+            "VAR_GLOBAL g : T; END_VAR",  # 10
+        ]
+    )
+    got = [(r.kind, r.first, r.last) for r in regions(text)]
+    assert got == [
+        ("FUNCTION_BLOCK", 0, 6),
+        ("METHOD", 2, 5),
+        ("FUNCTION_BLOCK", 7, 8),
+        ("TYPE", 9, 9),
+        ("VAR_GLOBAL", 10, 10),
+    ]
