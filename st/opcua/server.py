@@ -349,6 +349,15 @@ class Bridge:
             await node.write_attribute(
                 ua.AttributeIds.ArrayDimensions, ua.DataValue(ua.Variant(list(dims), ua.VariantType.UInt32))
             )
+        # no value before the PLC's first sample of it (a new variable after an online change, every
+        # variable at start): a client reading it meanwhile gets this status, never a made-up zero
+        await node.write_attribute(
+            ua.AttributeIds.Value,
+            ua.DataValue(
+                ua.Variant(initial, vt, Dimensions=dims if dims and len(dims) > 1 else None),
+                StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData),
+            ),
+        )
         if n["access"] == "readwrite":
             await node.set_writable()
         if n.get("enum"):
