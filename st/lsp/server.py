@@ -8,9 +8,13 @@ project runs at a time. Requests are answered from the project's last analysis a
 current text (features.py), so completion works in a statement that does not parse yet; completion
 does not wait for the newest analysis's index while the previous one has its own.
 
-Garbage: the cyclic collector is off; the server collects after IDLE_GC_S without a check (a full
-collection of a large project takes a fifth of a second, which must not fall between a keystroke
-and its diagnostics).
+Garbage: the automatic cyclic collector is off (it would run in the middle of a check and scan
+the whole project every time). The server collects itself, in the worker, whenever an analysis
+ends: its index built, or given up, or the check stopped (an edit came; the next check waits for
+its debounce anyway). After a project's first analysis what stays (the libraries' and files'
+trees, the grammar) is frozen out of the collector's sight, so a collection costs about 40 ms on
+20,000 lines (one analysis's garbage), where one every few analyses over everything took seconds;
+collecting less often makes each collection longer (bench/README.md).
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ import gc
 import logging
 import os
 import re
+import sys
 import threading
 from pathlib import Path
 from typing import Any
@@ -36,7 +41,6 @@ from .index import Target
 from .project import Overlays, ProjectKey, project_of, sources_of
 
 DEBOUNCE_S = 0.1
-IDLE_GC_S = 2.0
 _TOKEN = re.compile(r"[A-Za-z_0-9%.#]+")  # what a diagnostic without an end covers
 _SEVERITY = {Severity.ERROR: L.DiagnosticSeverity.Error, Severity.WARNING: L.DiagnosticSeverity.Warning}
 _SYMBOL_KIND = {
@@ -99,8 +103,7 @@ class StServer(LanguageServer):
         self.pending: dict[ProjectKey, asyncio.Task] = {}
         self.stops: dict[ProjectKey, threading.Event] = {}  # the running check's
         self.index_stops: dict[ProjectKey, threading.Event] = {}  # the index being built's
-        self.checks = 0  # analyses since the last collection
-        self.collector: asyncio.TimerHandle | None = None
+        self.frozen: set[ProjectKey] = set()  # projects whose first analysis was frozen
         self.published: dict[ProjectKey, set[str]] = {}
         self.key_of: dict[str, ProjectKey] = {}
 
@@ -127,9 +130,6 @@ class StServer(LanguageServer):
             stop = stops.pop(key, None)
             if stop is not None:
                 stop.set()
-        if self.collector is not None:  # not while the user types
-            self.collector.cancel()
-            self.collector = asyncio.get_running_loop().call_later(IDLE_GC_S, self._collect)
         self.pending[key] = asyncio.get_running_loop().create_task(self._later(key))
 
     async def _later(self, key: ProjectKey) -> None:
@@ -156,7 +156,7 @@ class StServer(LanguageServer):
             loop = asyncio.get_running_loop()
             stop = self.stops[key] = threading.Event()
             try:
-                a = await loop.run_in_executor(None, analyzer.analyze, sources, stop)
+                a = await loop.run_in_executor(None, self._check, analyzer, sources, stop)
             finally:
                 if self.stops.get(key) is stop:
                     del self.stops[key]
@@ -164,31 +164,28 @@ class StServer(LanguageServer):
             self.publish(key, a)
         stop = self.index_stops[key] = threading.Event()
         loop.run_in_executor(None, self._build_index, key, a, stop)
-        self.checks += 1
-        if self.collector is not None:
-            self.collector.cancel()
-        self.collector = loop.call_later(IDLE_GC_S, self._collect)
         return a
 
     def _build_index(self, key: ProjectKey, a: Analysis, stop: threading.Event) -> None:
         """In a worker: build a's index, ready for the next request; given up when an edit comes
-        (it would slow the check of that edit down, and the next analysis is the one wanted)."""
-        enabled = gc.isenabled()
-        gc.disable()
-        try:
-            built = a.build_index(stop)
-        finally:
-            if enabled:
-                gc.enable()
+        (it would slow the check of that edit down, and the next analysis is the one wanted).
+        Then the garbage (the module docstring says why here)."""
+        built = a.build_index(stop)
         if built and self.analyses.get(key) is a:
             self.indexed[key] = a
+        gc.collect()
+        if built and key not in self.frozen:
+            self.frozen.add(key)
+            gc.freeze()
 
-    def _collect(self) -> None:
-        """The idle collection (the module docstring says why there is no other)."""
-        self.collector = None
-        if self.checks and not self.stops:
-            self.checks = 0
+    @staticmethod
+    def _check(analyzer: Analyzer, sources: list, stop: threading.Event) -> Analysis:
+        """In a worker: the analysis; a stopped one's garbage collected (the module docstring)."""
+        try:
+            return analyzer.analyze(sources, stop)
+        except CheckCancelled:
             gc.collect()
+            raise
 
     async def analysis(self, path: str) -> Analysis:
         key = self.key(path)
@@ -441,5 +438,8 @@ def make_server(lib_path: list[str] | None = None) -> StServer:
 
 def main(lib_path: list[str] | None = None) -> None:
     logging.basicConfig(level=logging.WARNING, format="st lsp: %(message)s")
-    gc.disable()  # collected when idle: StServer._collect
+    gc.disable()  # the server collects: StServer._build_index
+    # a request waits for the interpreter while a check runs in its thread: hand it over every
+    # millisecond (not every 5), so that completion answers within tens of ms during a check
+    sys.setswitchinterval(0.001)
     make_server(lib_path).start_io()
