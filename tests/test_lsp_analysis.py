@@ -121,3 +121,71 @@ def test_regions_nest_and_end_where_the_next_declaration_starts():
         ("TYPE", 9, 9),
         ("VAR_GLOBAL", 10, 10),
     ]
+
+
+GVL = """{gvl 'GVL_Cell'}
+VAR_GLOBAL
+  speed : REAL := 1.5;  (* mm/s *)
+  count : DINT;
+END_VAR
+"""
+USES = """PROGRAM main
+VAR t : Tc2_Standard.TON; x : REAL; p : POINTER TO REAL; n : DINT; END_VAR
+GVL_Cell.count := GVL_Cell.count + 1;
+t(IN := TRUE, PT := T#1s);
+x := LIMIT(0.0, GVL_Cell.speed, 10.0);
+p := ADR(x);
+n := SIZEOF(x);
+END_PROGRAM
+CONFIGURATION Cell
+  RESOURCE Res0 ON PLC
+    TASK fast(INTERVAL := T#10ms, PRIORITY := 1);
+    PROGRAM inst WITH fast : main;
+  END_RESOURCE
+END_CONFIGURATION
+"""
+
+
+def names_answered():
+    from st.lsp import features as F
+
+    a = Analyzer().analyze([SourceFile("/p/gvl.st", GVL), SourceFile("/p/main.st", USES)])
+    assert answer(a) == {"/p/gvl.st": [], "/p/main.st": []}
+    lines = USES.splitlines()
+
+    def hover(needle: str, nth: int = 0, offset: int = 1) -> str | None:
+        line = [i for i, text in enumerate(lines) if needle in text][nth]
+        return F.hover(a, "/p/main.st", line, lines[line].index(needle) + offset)
+
+    return a, F, hover
+
+
+def test_hover_answers_library_functions_operators_lists_and_the_configuration():
+    a, F, hover = names_answered()
+    assert hover("LIMIT").startswith("```st\nFUNCTION LIMIT(MN : T; IN : T; MX : T) : T  (T : ANY_ELEMENTARY)\n```")
+    assert hover("ADR").startswith("```st\nADR(…) : REF_TO REAL  (an operator of the language)\n```")
+    assert hover("GVL_Cell").startswith("```st\nVAR_GLOBAL list GVL_Cell (2 variables)\n```\n\n*global variable list*")
+    assert F.definition(a, "/p/main.st", 2, 3).file == "/p/gvl.st"
+    assert "mm/s" in hover("speed")
+    assert hover("fast").startswith("```st\nTASK fast(INTERVAL := …, PRIORITY := …)\n```")
+    assert hover("inst").startswith("```st\nPROGRAM inst WITH fast : main\n```\n\n*program instance*")
+    assert hover("CONFIGURATION Cell", 0, 15).startswith("```st\nCONFIGURATION Cell\n```")
+    task = F.definition(a, "/p/main.st", 11, USES.splitlines()[11].index("fast :") + 1)
+    assert (task.name, task.line) == ("fast", 10)
+
+
+def test_completion_after_a_list_and_a_namespace():
+    a, F, _ = names_answered()
+
+    def labels(text: str) -> list[str]:
+        line = 4
+        return [i.label for i in F.completion(a, "/p/main.st", line, len(text), text_with(line, text))]
+
+    def text_with(line: int, text: str) -> str:
+        lines = USES.splitlines()
+        lines[line] = text
+        return "\n".join(lines)
+
+    assert labels("x := GVL_Cell.") == ["speed", "count"]
+    got = labels("t := Tc2_Standard.")
+    assert {"TON", "TOF", "CTU", "LIMIT", "CONCAT"} <= set(got)

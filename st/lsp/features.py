@@ -8,6 +8,7 @@ analysis's).
 
 from __future__ import annotations
 
+import os
 import re
 from dataclasses import dataclass
 from typing import Any
@@ -81,6 +82,8 @@ def describe(a: Analysis, t: Target) -> str:
         "struct": "structure",
         "enum": "enumeration",
         "type": "type",
+        "gvl": "global variable list",
+        "program_instance": "program instance",
     }.get(t.kind, t.kind)
     head = t.detail or t.name
     obj = t.obj
@@ -339,6 +342,15 @@ def _step(t: Any, indexed: bool) -> Any:
 
 def _members(a: Analysis, pou: T.POUType | None, chain: str) -> list[Item]:
     t = _resolve_chain(a, pou, chain)
+    if t is None and re.fullmatch(r"[A-Za-z_]\w*", chain.strip()):
+        gvl = a.index.gvls.get(chain.strip().lower())
+        if gvl is not None and a.project is not None:  # `GVL_Main.`: the list's variables
+            return [
+                Item(g.name, "constant" if g.constant else "global", f"VAR_GLOBAL {g.name} : {type_name(g.type)}")
+                for g in a.project.globals.values()
+                if g.span is not None and g.span.file == gvl.file and not g.name.startswith("_")
+            ]
+        return _namespace_members(a, chain.strip())
     if isinstance(t, tuple):  # `Color.` (a qualified enumeration value), a POU's name
         inner = T.unalias(t[1])
         if isinstance(inner, T.EnumType):
@@ -373,6 +385,53 @@ def _members(a: Analysis, pou: T.POUType | None, chain: str) -> list[Item]:
             p = p.base
         return out
     return []
+
+
+_NAMESPACE = re.compile(r"\{\s*namespace\s+'([A-Za-z_]\w*)'\s*\}", re.I)
+_TOP_KINDS = ("FUNCTION", "FUNCTION_BLOCK", "PROGRAM", "INTERFACE")
+
+
+def _namespace_members(a: Analysis, name: str) -> list[Item]:
+    """What `NS.` may name: a library's (st's own: Tc2_Standard, Tc2_System, …) POUs and functions,
+    or a referenced library project's (its namespace pragma comes from its .plcproj) POUs, types and
+    globals, the ones declared under that project's folder."""
+    key = name.lower()
+    project = a.project
+    if project is None:
+        return []
+    out: list[Item] = []
+    for lib in project.libraries:
+        if key in (n.lower() for n in getattr(lib, "namespaces", ())):
+            paths = {path for path, _ in getattr(lib, "sources", ())}
+            for q in project.pous.values():
+                span = getattr(q.decl, "span", None)
+                if span is not None and span.file in paths and q.owner_fb is None and q.pou_kind in _TOP_KINDS:
+                    out.append(Item(q.name, q.pou_kind.lower(), signature(q)))
+            for sig in getattr(lib, "functions", {}).values():
+                out.append(Item(sig.name, "function", f"FUNCTION {sig.name}"))
+            return out
+    folders = [
+        os.path.dirname(u.path) + os.sep
+        for u in a.units
+        if any((m := _NAMESPACE.fullmatch(p.text.strip())) and m.group(1).lower() == key for p in u.pragmas)
+    ]
+    if not folders:
+        return []
+
+    def inside(span: Any) -> bool:
+        return span is not None and any(str(span.file).startswith(f) for f in folders)
+
+    for q in project.pous.values():
+        if q.owner_fb is None and q.pou_kind in _TOP_KINDS and inside(getattr(q.decl, "span", None)):
+            out.append(Item(q.name, q.pou_kind.lower(), signature(q)))
+    for k, t in project.types.items():
+        if not isinstance(t, T.POUType) and inside(getattr(t, "span", None)):
+            out.append(Item(getattr(t, "name", k), "type", f"TYPE {getattr(t, 'name', k)}"))
+    for gs in project.global_names.values():
+        for g in gs:
+            if inside(g.span) and not g.name.startswith("_"):
+                out.append(Item(g.name, "global", f"VAR_GLOBAL {g.name} : {type_name(g.type)}"))
+    return out
 
 
 def _pins(a: Analysis, pou: T.POUType | None, callee: str, inside: str) -> list[Item]:
@@ -413,6 +472,11 @@ _TOKEN_OF = {
     "global": "variable",
     "variable": "variable",
     "instance": "variable",
+    "gvl": "namespace",
+    "configuration": "namespace",
+    "resource": "namespace",
+    "task": "variable",
+    "program_instance": "variable",
 }
 
 

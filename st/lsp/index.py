@@ -16,7 +16,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..compiler import ast as A
-from ..compiler.check import CheckCancelled
+from ..compiler.check import CheckCancelled, NativeCall
+from ..compiler.check.intrinsics import INTRINSICS
+from ..compiler.library import FuncSig
 from ..model import types as T
 from ..model.program import Project
 from ..source import SourceFile
@@ -60,6 +62,7 @@ class Index:
     occurrences: dict[str, list[Occurrence]] = field(default_factory=dict)  # file → sorted by position
     targets: list[Target] = field(default_factory=list)
     scopes: list[Scope] = field(default_factory=list)
+    gvls: dict[str, Target] = field(default_factory=dict)  # named global variable lists, by lower name
     _keys: dict[int, Target] = field(default_factory=dict)
     _starts: dict[str, list[tuple[int, int]]] = field(default_factory=dict)
 
@@ -104,6 +107,8 @@ class _Builder:
         self._enum_targets: dict[tuple[str, str], Target] = {}
         self.type_spans: dict[str, Any] = {}
         self.enum_spans: dict[tuple[str, str], Any] = {}
+        self._natives: dict[tuple[str, str], Target] = {}
+        self.gvls = self.index.gvls
 
     def lines(self, file: str) -> list[str]:
         got = self._lines.get(file)
@@ -166,6 +171,18 @@ class _Builder:
             if g.name.startswith("_") and g.pyname.startswith("_gs_"):
                 continue
             self.var(g, "")
+        for u in units:  # named global variable lists (a .TcGVL: `GVL_Main.x`)
+            name = gvl_name(u)
+            blocks = [x for x in u.items if isinstance(x, A.VarBlock)]
+            if name and blocks:
+                members = [g for g in p.globals.values() if g.span is not None and g.span.file == u.path]
+                detail = f"VAR_GLOBAL list {name} ({len(members)} variables)"
+                sp = blocks[0].span
+                gt = Target(
+                    name, "gvl", u.path, sp.line - 1, sp.col - 1, None, "", u.path not in self.user_files, detail
+                )
+                self.index.targets.append(gt)
+                self.gvls[name.lower()] = gt
 
     def pou(self, pou: T.POUType, owner: str = "") -> Target:
         kind = {"FUNCTION_BLOCK": "function_block", "PROGRAM": "program", "FUNCTION": "function"}.get(
@@ -228,6 +245,8 @@ class _Builder:
                 raise CheckCancelled
             for item in u.items:
                 self.scope(u.path, item)
+                if isinstance(item, A.Configuration):
+                    self.config_names(u.path, item)
             for node in A.walk_nodes(u.items):
                 self.node(u.path, node)
 
@@ -252,7 +271,19 @@ class _Builder:
             if t is not None:
                 self.occur(file, n.span.line - 1, n.span.col - 1, len(n.name), t)
         elif isinstance(n, A.Field):
-            t = self._sym_target(n.sym)
+            if isinstance(n.sym, T.EnumType):  # `E_State.Busy` (CODESYS): the type, then its value
+                t = self.enum_value(n.sym.name, n.name)
+                base = n.base
+                if isinstance(base, A.Name) and base.sym is None:
+                    tt = self._type_target(base.name)
+                    if tt is not None:
+                        self.occur(file, base.span.line - 1, base.span.col - 1, len(base.name), tt)
+            else:
+                t = self._sym_target(n.sym)
+                base = n.base
+                if isinstance(base, A.Name) and base.sym is None and base.name.lower() in self.gvls:
+                    gt = self.gvls[base.name.lower()]
+                    self.occur(file, base.span.line - 1, base.span.col - 1, len(base.name), gt)
             if t is not None and n.name_span is not None:
                 self.occur(file, n.name_span.line - 1, n.name_span.col - 1, len(n.name), t)
         elif isinstance(n, A.NamedType):
@@ -274,6 +305,25 @@ class _Builder:
                 line, col = self.find(file, n.span.line - 1, n.span.col - 1 + len(n.instance), n.type_name)
                 self.occur(file, line, col, len(n.type_name), t)
         elif isinstance(n, A.Call):
+            if isinstance(n.target, NativeCall) and isinstance(n.callee, A.Name) and n.callee.sym is None:
+                sig = n.target.sig
+                t = self.native(sig, n.ty)  # a standard or vendor function implemented natively
+                self.occur(file, n.callee.span.line - 1, n.callee.span.col - 1, len(n.callee.name), t)
+                params = {p.name.lower(): p for p in sig.params}
+                for arg in n.args:
+                    p = params.get(sig.aliases.get(arg.name.lower(), arg.name.lower())) if arg.name else None
+                    if p is not None:
+                        pt = self.native_param(sig, p)
+                        line, col = self.find(file, arg.span.line - 1, arg.span.col - 1, arg.name)
+                        self.occur(file, line, col, len(arg.name), pt)
+            elif (
+                isinstance(n.callee, A.Name)
+                and n.callee.sym is None
+                and n.callee.name.lower() in INTRINSICS
+                and n.target is not None
+            ):  # ADR, REF, SIZEOF, __NEW, …: the operator and what it gives here
+                t = self.intrinsic(n.callee.name.upper(), n.ty)
+                self.occur(file, n.callee.span.line - 1, n.callee.span.col - 1, len(n.callee.name), t)
             pou = getattr(n.target, "pou", None)
             if isinstance(pou, T.POUType) and pou.pou_kind == "FUNCTION" and isinstance(n.callee, A.Name):
                 if n.callee.sym is None:  # a function's name in its call (the checker binds no symbol to it)
@@ -293,6 +343,68 @@ class _Builder:
                 t = self.enum_value(n.name, ev.name, et, ev.span)
                 if t is not None and ev.span is not None:
                     self.occur(file, ev.span.line - 1, ev.span.col - 1, len(ev.name), t, True)
+
+    def native(self, sig: FuncSig, result: Any) -> Target:
+        """A natively implemented library function: its signature (a result that depends on the
+        arguments' types is shown as this call's)."""
+        res = sig.result if isinstance(sig.result, str) else type_name(result)
+        key = (sig.name.upper(), res)
+        got = self._natives.get(key)
+        if got is None:
+            groups = {p.group: p.constraint for p in sig.params if p.group}
+            params = "; ".join(f"{p.name} : {p.group or p.constraint}" for p in sig.params)
+            if sig.extensible:
+                params += "; …"
+            where = ", ".join(f"{g} : {c}" for g, c in groups.items())
+            detail = f"FUNCTION {sig.name}({params}) : {res}" + (f"  ({where})" if where else "")
+            got = self._natives[key] = Target(sig.name, "function", obj=sig, library=True, detail=detail)
+            self.index.targets.append(got)
+        return got
+
+    def intrinsic(self, name: str, result: Any) -> Target:
+        res = type_name(result) if result is not None else ""
+        if "literal" in res:  # a constant's type before it meets its use: nothing to show
+            res = ""
+        key = (name, res)
+        got = self._natives.get(key)
+        if got is None:
+            detail = f"{name}(…)" + (f" : {res}" if res else "") + "  (an operator of the language)"
+            got = self._natives[key] = Target(name, "function", library=True, detail=detail)
+            self.index.targets.append(got)
+        return got
+
+    def native_param(self, sig: FuncSig, p: Any) -> Target:
+        key = (f"{sig.name.upper()}.{p.name.upper()}", "")
+        got = self._natives.get(key)
+        if got is None:
+            detail = f"VAR_INPUT {p.name} : {p.constraint}"
+            got = self._natives[key] = Target(p.name, "variable", obj=p, owner=sig.name, library=True, detail=detail)
+            self.index.targets.append(got)
+        return got
+
+    def config_names(self, file: str, c: A.Configuration) -> None:
+        """A configuration's, its resources', tasks' and program instances' names (declarations);
+        a program instance's task."""
+        self.named(file, c, c.name, "configuration", f"CONFIGURATION {c.name}")
+        for r in c.resources:
+            self.named(file, r, r.name, "resource", f"RESOURCE {r.name} ON {r.target}")
+            tasks = {}
+            for td in r.tasks:
+                params = ", ".join(f"{k} := …" for k in td.params)
+                tasks[td.name.lower()] = self.named(file, td, td.name, "task", f"TASK {td.name}({params})")
+            for pc in r.programs:
+                detail = f"PROGRAM {pc.instance} WITH {pc.task} : {pc.type_name}"
+                self.named(file, pc, pc.instance, "program_instance", detail)
+                t = tasks.get(pc.task.lower()) if pc.task else None
+                if t is not None:
+                    line, col = self.find(file, pc.span.line - 1, pc.span.col - 1 + len(pc.instance), pc.task)
+                    self.occur(file, line, col, len(pc.task), t)
+
+    def named(self, file: str, node: Any, name: str, kind: str, detail: str) -> Target | None:
+        if not name or node.span is None:
+            return None
+        t = self.target(node, name, kind, node.span, "", detail)
+        return t
 
     def enum_value(self, type_name: str, member: str, et: Any = None, span: Any = None) -> Target | None:
         key = (type_name.lower(), member.lower())
@@ -366,6 +478,18 @@ def build_index(
         occ[:] = sorted(unique.values(), key=lambda o: (o.line, o.col))
         idx._starts[file] = [(o.line, o.col) for o in occ]
     return idx
+
+
+_GVL = re.compile(r"\{\s*gvl\s+'([A-Za-z_]\w*)'\s*\}", re.I)
+
+
+def gvl_name(u: A.Unit) -> str:
+    """The name of the global variable list a file is (`{gvl 'GVL_Main'}`: a .TcGVL), or ''."""
+    for p in getattr(u, "pragmas", ()):
+        m = _GVL.fullmatch(p.text.strip())
+        if m:
+            return m.group(1)
+    return ""
 
 
 # ---------------------------------------------------------------------- how things are shown

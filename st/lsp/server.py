@@ -44,6 +44,11 @@ DEBOUNCE_S = 0.1
 _TOKEN = re.compile(r"[A-Za-z_0-9%.#]+")  # what a diagnostic without an end covers
 _SEVERITY = {Severity.ERROR: L.DiagnosticSeverity.Error, Severity.WARNING: L.DiagnosticSeverity.Warning}
 _SYMBOL_KIND = {
+    "gvl": L.SymbolKind.Namespace,
+    "configuration": L.SymbolKind.Namespace,
+    "resource": L.SymbolKind.Namespace,
+    "task": L.SymbolKind.Event,
+    "program_instance": L.SymbolKind.Object,
     "function": L.SymbolKind.Function,
     "function_block": L.SymbolKind.Class,
     "program": L.SymbolKind.Module,
