@@ -7,7 +7,9 @@ them is committed). For each project below a server is started in the project's 
 library projects it references on `--lib`, as `st check` is given them); every source file is
 opened; then, for each name in its code (outside comments and strings; keywords and literals left
 out): hover and go to definition; per file: document symbols, semantic tokens and completion after
-the first instance of each block type followed by `.`. Counted: answers, empty answers, errors (a
+the first instance of each block type followed by `.`. Before that, each project is checked twice
+in-process with its trees kept, as the server re-checks (the second answer must be the first's).
+Counted: answers, empty answers, errors (a
 JSON-RPC error or a server that died: there must be none), diagnostics published per file beside
 `st check`'s error count for the project, and the time of each request. The names hover leaves
 unanswered are listed by how often they occur, the start of a to-do list.
@@ -185,6 +187,8 @@ class Result:
     completion_empty: int = 0
     alive: bool = True
     cold: float = 0.0
+    recheck_differs: int = 0  # projects whose second check (of the same trees) answered otherwise
+    projects: int = 0
 
     def time(self, what: str, dt: float) -> None:
         self.times.setdefault(what, []).append(dt)
@@ -208,6 +212,7 @@ async def sweep(p: Project, corpora: Path, max_names: int) -> Result:
     res = Result(p.name, files=len(files))
     if p.check:
         res.check_errors = st_check_errors(sorted({f for g in p.check for f in root.glob(g)}), libs)
+    res.projects, res.recheck_differs = recheck(root, files, libs)
     client = LanguageClient("st-lsp-sweep", "1")
     published: dict[str, list] = {}
 
@@ -311,6 +316,25 @@ async def sweep(p: Project, corpora: Path, max_names: int) -> Result:
     return res
 
 
+def recheck(root: Path, files: list[Path], libs: list[str]) -> tuple[int, int]:
+    """In this process, as the server does: each project the files make checked twice with its
+    trees kept; (projects, how many answered otherwise the second time)."""
+    from st.lsp.analysis import Analyzer
+    from st.lsp.project import Overlays, project_of, sources_of
+
+    def answer(a) -> list:
+        return sorted((p, d.code, d.span.line, d.span.col, d.message) for p, ds in a.diagnostics.items() for d in ds)
+
+    overlays = Overlays()
+    keys = {project_of(str(f), str(root), overlays) for f in files}
+    differ = 0
+    for key in keys:
+        an = Analyzer()
+        first = answer(an.analyze(sources_of(key, overlays, libs)))
+        differ += first != answer(an.analyze(sources_of(key, overlays, libs)))
+    return len(keys), differ
+
+
 async def _timed(res: Result, what: str, coro):
     t0 = time.perf_counter()
     try:
@@ -324,10 +348,10 @@ async def _timed(res: Result, what: str, coro):
 
 def report(results: list[Result]) -> None:
     print(
-        "| project | files | lines | diagnostics E / W (st check's E) | cold s | names | hover | definition |"
-        " completion after `x.` | errors | p50 / p99 ms |"
+        "| project | files | lines | diagnostics E / W (st check's E) | re-check differs | cold s | names | hover |"
+        " definition | completion after `x.` | errors | p50 / p99 ms |"
     )
-    print("|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---|")
+    print("|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---|")
     for r in results:
         every = sorted(t for ts in r.times.values() for t in ts) or [0.0]
         p99 = every[min(len(every) - 1, int(0.99 * len(every)))]
@@ -337,6 +361,7 @@ def report(results: list[Result]) -> None:
         errors = str(len(r.errors)) + ("" if r.alive else ", server died")
         print(
             f"| {r.name} | {r.files} | {r.lines} | {r.diag_errors} / {r.diag_warnings} ({r.check_errors}) | "
+            f"{r.recheck_differs} of {r.projects} | "
             f"{r.cold:.1f} | {r.names} | {hv} | {df} | {comp} | {errors} | "
             f"{statistics.median(every) * 1000:.1f} / {p99 * 1000:.0f} |"
         )

@@ -80,6 +80,55 @@ def test_a_stopped_check_leaves_trees_the_next_check_answers_in_full():
         assert answer(an.analyze(sources())) == expected, n  # and again, on what it kept
 
 
+def test_a_property_with_a_setter_checked_again():
+    """A SET accessor's input is added to its tree by the check: once (the second check of the same
+    tree said the property's name was declared twice)."""
+    oop = """FUNCTION_BLOCK FB_Buffer
+VAR _len : UDINT; END_VAR
+PROPERTY Length : UDINT
+GET
+  Length := _len;
+END_GET
+SET
+  _len := Length;
+END_SET
+END_PROPERTY
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR b : FB_Buffer; n : UDINT; END_VAR
+b.Length := 3;
+n := b.Length;
+END_PROGRAM
+"""
+    an = Analyzer()
+    first = answer(an.analyze([SourceFile("/p/oop.st", oop)]))
+    assert first == {"/p/oop.st": []}
+    assert answer(an.analyze([SourceFile("/p/oop.st", oop)])) == first
+
+
+def test_a_constant_read_as_null_checked_again():
+    """`itf <> Invalid` (a constant 0, TcLog's): NULL; a second check of the tree still finds the
+    constant used (it said W002 'never used')."""
+    src = """INTERFACE ILog
+METHOD Log : BOOL
+END_METHOD
+END_INTERFACE
+FUNCTION_BLOCK FB
+VAR_OUTPUT ok : BOOL; END_VAR
+VAR l : ILog; END_VAR
+VAR CONSTANT Invalid : UDINT := 0; END_VAR
+IF l <> Invalid THEN ok := l.Log(); END_IF;
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR f : FB; END_VAR
+f();
+END_PROGRAM
+"""
+    an = Analyzer()
+    assert answer(an.analyze([SourceFile("/p/itf.st", src)])) == {"/p/itf.st": []}
+    assert answer(an.analyze([SourceFile("/p/itf.st", src)])) == {"/p/itf.st": []}
+
+
 def test_a_file_that_does_not_parse_keeps_its_other_declarations():
     an = Analyzer()
     before = answer(an.analyze(sources()))

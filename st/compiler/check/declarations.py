@@ -491,8 +491,10 @@ class Declarations(Part):
             pr.get.return_type = pr.type
             ps.get = self._accessor(owner, pr.get, "_pg_")
         if pr.set is not None:
-            value = A.VarDecl(pr.span, [(pr.name, pr.span)], pr.type)
-            pr.set.var_blocks.insert(0, A.VarBlock(pr.span, "VAR_INPUT", [], [value]))
+            blocks = pr.set.var_blocks
+            if not (blocks and blocks[0].span is pr.span):  # (added by an earlier check of this tree)
+                value = A.VarDecl(pr.span, [(pr.name, pr.span)], pr.type)
+                blocks.insert(0, A.VarBlock(pr.span, "VAR_INPUT", [], [value]))
             ps.set = self._accessor(owner, pr.set, "_ps_")
         if ps.get is None and ps.set is None:
             self.err(Code.BAD_TYPE, pr.span, f"property {pr.name} has neither GET nor SET")

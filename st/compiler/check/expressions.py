@@ -799,9 +799,12 @@ def _zero_pointer(ctx: CheckContext, e, other) -> bool:
 
 
 def _null_at(e) -> A.Name:
-    n = A.Name(e.span, "NULL")
+    """NULL in the place of e. A constant's name stays in the tree, read as NULL: a later check of
+    the same tree (the language server's) finds the constant again, used, and reads it as NULL again."""
+    n = e if isinstance(e, A.Name) else A.Name(e.span, "NULL")
     n.sym = _NULL
     n.ty = _NULL
+    n.const = None
     return n
 
 
