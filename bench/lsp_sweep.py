@@ -216,9 +216,12 @@ async def sweep(p: Project, corpora: Path, max_names: int) -> Result:
     client = LanguageClient("st-lsp-sweep", "1")
     published: dict[str, list] = {}
 
+    last = [time.perf_counter()]
+
     @client.feature(L.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS)
     def _diags(params: L.PublishDiagnosticsParams) -> None:
         published[params.uri] = params.diagnostics
+        last[0] = time.perf_counter()
 
     @client.feature(L.WINDOW_LOG_MESSAGE)
     def _log(params: L.LogMessageParams) -> None:
@@ -251,6 +254,8 @@ async def sweep(p: Project, corpora: Path, max_names: int) -> Result:
         while len(published) < len(files) and time.perf_counter() - t0 < TIMEOUT:
             await asyncio.sleep(0.05)
         res.cold = time.perf_counter() - t0
+        while time.perf_counter() - last[0] < 2.0 and time.perf_counter() - t0 < 5 * TIMEOUT:
+            await asyncio.sleep(0.1)  # each didOpen checks the project again: its last diagnostics
         for f in files:
             for d in published.get(f.as_uri(), []):
                 if d.severity == L.DiagnosticSeverity.Error:
