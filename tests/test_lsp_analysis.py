@@ -238,3 +238,36 @@ def test_completion_after_a_list_and_a_namespace():
     assert labels("x := GVL_Cell.") == ["speed", "count"]
     got = labels("t := Tc2_Standard.")
     assert {"TON", "TOF", "CTU", "LIMIT", "CONCAT"} <= set(got)
+
+
+def test_the_names_in_an_initial_value_are_the_members_they_set():
+    """`p : Path := (pts := [(x := 1.0)])`, `m : Mover := (speed := 2.5)`: hover, definition and
+    rename reach the member (struckig's tests set a block's inputs so)."""
+    from st.lsp import features as F
+
+    src = """TYPE Pt : STRUCT x : REAL; y : REAL; END_STRUCT; END_TYPE
+TYPE Path : STRUCT name : STRING; pts : ARRAY[0..1] OF Pt; END_STRUCT; END_TYPE
+FUNCTION_BLOCK Mover
+VAR_INPUT speed : REAL; home : Pt; END_VAR
+END_FUNCTION_BLOCK
+PROGRAM main
+VAR
+  p : Path := (name := 'a', pts := [(x := 1.0, y := 2.0), (x := 3.0)]);
+  m : Mover := (speed := 2.5, home := (y := 1.0));
+END_VAR
+m();
+END_PROGRAM
+"""
+    a = Analyzer().analyze([SourceFile("/p/init.st", src)])
+    line = src.splitlines()[7]
+    assert F.hover(a, "/p/init.st", 7, line.index("pts :=") + 1).startswith("```st\npts : ARRAY[0..1] OF Pt\n```")
+    x = F.definition(a, "/p/init.st", 7, line.index("x := 3") + 1)
+    assert (x.name, x.line, x.kind) == ("x", 0, "member")
+    speed = F.definition(a, "/p/init.st", 8, src.splitlines()[8].index("speed") + 1)
+    assert (speed.name, speed.line) == ("speed", 3)
+    edits = F.rename(a, "/p/init.st", 0, src.splitlines()[0].index("x :") + 1, "px")
+    assert sorted((ln, col) for ln, col, _, _ in edits["/p/init.st"]) == [
+        (0, src.splitlines()[0].index("x :")),
+        (7, line.index("x := 1")),
+        (7, line.index("x := 3")),
+    ]

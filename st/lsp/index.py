@@ -171,6 +171,12 @@ class _Builder:
             if g.name.startswith("_") and g.pyname.startswith("_gs_"):
                 continue
             self.var(g, "")
+        owners = [*p.pous.values(), *(m for q in p.pous.values() for m in q.methods.values() if m.owner_fb is q)]
+        for owner in [*owners, None]:  # the names in initializers: `(speed := 1.5, n := 2)`
+            syms = owner.vars.values() if owner is not None else p.globals.values()
+            for v in syms:
+                if v.init is not None and v.span is not None and v.span.file in self.user_files:
+                    self.init_names(v.span.file, v.init, v.type)
         for u in units:  # named global variable lists (a .TcGVL: `GVL_Main.x`)
             name = gvl_name(u)
             blocks = [x for x in u.items if isinstance(x, A.VarBlock)]
@@ -343,6 +349,36 @@ class _Builder:
                 t = self.enum_value(n.name, ev.name, et, ev.span)
                 if t is not None and ev.span is not None:
                     self.occur(file, ev.span.line - 1, ev.span.col - 1, len(ev.name), t, True)
+
+    def init_names(self, file: str, init: Any, t: Any, depth: int = 0) -> None:
+        """Occurrences of the members an initial value names: a structure's, a block instance's
+        inputs (`otg : Otg(0.001, 3) := (MaxVelocity := [...])`), inside arrays and each other."""
+        ut = T.unalias(t) if t is not None else None
+        if ut is None or depth > 20:
+            return
+        if isinstance(init, A.CtorInit):
+            self.init_names(file, init.inner, t, depth + 1)
+        elif isinstance(init, A.ArrayInit) and isinstance(ut, T.ArrayType):
+            for item in init.items:
+                for x in item.items if isinstance(item, A.RepeatInit) else [item]:
+                    self.init_names(file, x, ut.element, depth + 1)
+        elif isinstance(init, A.StructInit):
+            for name, span, value in init.fields:
+                member: Any = None
+                if isinstance(ut, T.StructType):
+                    member = ut.members.get(name.lower())
+                elif isinstance(ut, T.POUType):
+                    p: T.POUType | None = ut
+                    while p is not None and member is None:
+                        member = p.vars.get(name.lower())
+                        p = p.base
+                if member is None:
+                    continue
+                target = self.index._keys.get(id(member)) or self._sym_target(member)
+                if target is not None and span is not None:
+                    line, col = self.find(file, span.line - 1, span.col - 1, name)
+                    self.occur(file, line, col, len(name), target)
+                self.init_names(file, value, getattr(member, "type", None), depth + 1)
 
     def native(self, sig: FuncSig, result: Any) -> Target:
         """A natively implemented library function: its signature (a result that depends on the
