@@ -8,7 +8,8 @@ the error is not in (tolerant.py). Code generation is not run: the diagnostics a
 and the checker's, which is what `st check` reports for a program that compiles.
 
 The cyclic garbage collector is off during an analysis (as during a compilation: the checker
-makes millions of objects that live until it ends); the server collects when it is idle.
+makes millions of objects that live until it ends); the server collects between analyses
+(server.py says when).
 """
 
 from __future__ import annotations

@@ -13,6 +13,7 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
+from ..compiler.check.passes.namespaces import NAMESPACE_PRAGMA
 from ..model import types as T
 from ..source import comment_beside
 from .analysis import Analysis
@@ -387,7 +388,6 @@ def _members(a: Analysis, pou: T.POUType | None, chain: str) -> list[Item]:
     return []
 
 
-_NAMESPACE = re.compile(r"\{\s*namespace\s+'([A-Za-z_]\w*)'\s*\}", re.I)
 _TOP_KINDS = ("FUNCTION", "FUNCTION_BLOCK", "PROGRAM", "INTERFACE")
 
 
@@ -413,7 +413,7 @@ def _namespace_members(a: Analysis, name: str) -> list[Item]:
     folders = [
         os.path.dirname(u.path) + os.sep
         for u in a.units
-        if any((m := _NAMESPACE.fullmatch(p.text.strip())) and m.group(1).lower() == key for p in u.pragmas)
+        if any((m := NAMESPACE_PRAGMA.fullmatch(p.text.strip())) and m.group(1).lower() == key for p in u.pragmas)
     ]
     if not folders:
         return []

@@ -18,6 +18,7 @@ from typing import Any
 from ..compiler import ast as A
 from ..compiler.check import CheckCancelled, NativeCall
 from ..compiler.check.intrinsics import INTRINSICS
+from ..compiler.check.passes.collect import gvl_name
 from ..compiler.library import FuncSig
 from ..model import types as T
 from ..model.program import Project
@@ -514,18 +515,6 @@ def build_index(
         occ[:] = sorted(unique.values(), key=lambda o: (o.line, o.col))
         idx._starts[file] = [(o.line, o.col) for o in occ]
     return idx
-
-
-_GVL = re.compile(r"\{\s*gvl\s+'([A-Za-z_]\w*)'\s*\}", re.I)
-
-
-def gvl_name(u: A.Unit) -> str:
-    """The name of the global variable list a file is (`{gvl 'GVL_Main'}`: a .TcGVL), or ''."""
-    for p in getattr(u, "pragmas", ()):
-        m = _GVL.fullmatch(p.text.strip())
-        if m:
-            return m.group(1)
-    return ""
 
 
 # ---------------------------------------------------------------------- how things are shown

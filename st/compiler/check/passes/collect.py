@@ -73,7 +73,7 @@ def _collect_globals(ctx: CheckContext, u: A.Unit, item: A.VarBlock) -> None:
         ctx.err(Code.MISPLACED_SECTION, item.span, f"{item.kind} is not allowed outside a POU")
         return
     ctx.global_blocks.append(("", item))
-    gvl = _gvl_name(u)
+    gvl = gvl_name(u)
     if gvl:
         ctx.gvl_of_block[id(item)] = gvl
         if any(_QUALIFIED_ONLY.fullmatch(p.text) for p in u.pragmas):
@@ -84,7 +84,7 @@ _QUALIFIED_ONLY = re.compile(r"\{\s*attribute\s+'qualified_only'\s*\}", re.I)
 _GVL = re.compile(r"\{\s*gvl\s+'([A-Za-z_][A-Za-z0-9_]*)'\s*\}", re.I)
 
 
-def _gvl_name(u: A.Unit) -> str:
+def gvl_name(u: A.Unit) -> str:
     """The name of the global variable list a file is (`{gvl 'GVL_Main'}`, from a .TcGVL), or ''."""
     for p in u.pragmas:
         m = _GVL.fullmatch(p.text)

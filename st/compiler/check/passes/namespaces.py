@@ -15,7 +15,7 @@ from typing import Any
 from ... import ast as A
 from ..context import CheckContext
 
-_NAMESPACE = re.compile(r"\{\s*namespace\s+'([A-Za-z_][A-Za-z0-9_]*)'\s*\}", re.I)
+NAMESPACE_PRAGMA = re.compile(r"\{\s*namespace\s+'([A-Za-z_][A-Za-z0-9_]*)'\s*\}", re.I)
 _SKIP = frozenset({"span", "ty", "const", "sym", "name_span", "end_span"})  # (a call's target: not set yet)
 _KEEP = frozenset({"__system.iqueryinterface"})  # CODESYS's root interface: known by its full name
 _fields: dict[type, tuple[str, ...]] = {}
@@ -26,7 +26,7 @@ def resolve_namespaces(ctx: CheckContext, units: list[A.Unit]) -> None:
         ctx.namespaces.update((n.lower(), n) for n in lib.namespaces)
     for u in units:
         for p in u.pragmas:
-            m = _NAMESPACE.fullmatch(p.text)
+            m = NAMESPACE_PRAGMA.fullmatch(p.text)
             if m:
                 ctx.namespaces[m.group(1).lower()] = m.group(1)
     if not ctx.namespaces:
