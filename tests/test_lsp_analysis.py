@@ -213,6 +213,8 @@ def test_hover_answers_library_functions_operators_lists_and_the_configuration()
     a, F, hover = names_answered()
     assert hover("LIMIT").startswith("```st\nFUNCTION LIMIT(MN : T; IN : T; MX : T) : T  (T : ANY_ELEMENTARY)\n```")
     assert hover("ADR").startswith("```st\nADR(…) : REF_TO REAL  (an operator of the language)\n```")
+    assert hover("Tc2_Standard").startswith("```st\nNAMESPACE Tc2_Standard  (st's iec61131 library)\n```")
+    assert hover("TON").startswith("```st\nFUNCTION_BLOCK TON(")  # the name after the qualifier
     assert hover("GVL_Cell").startswith("```st\nVAR_GLOBAL list GVL_Cell (2 variables)\n```\n\n*global variable list*")
     assert F.definition(a, "/p/main.st", 2, 3).file == "/p/gvl.st"
     assert "mm/s" in hover("speed")

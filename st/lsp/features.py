@@ -84,6 +84,7 @@ def describe(a: Analysis, t: Target) -> str:
         "enum": "enumeration",
         "type": "type",
         "gvl": "global variable list",
+        "namespace": "namespace",
         "program_instance": "program instance",
     }.get(t.kind, t.kind)
     head = t.detail or t.name
@@ -473,6 +474,7 @@ _TOKEN_OF = {
     "variable": "variable",
     "instance": "variable",
     "gvl": "namespace",
+    "namespace": "namespace",
     "configuration": "namespace",
     "resource": "namespace",
     "task": "variable",

@@ -10,6 +10,7 @@ a struct member, a method or property, an enumeration value) with where it is de
 from __future__ import annotations
 
 import bisect
+import os
 import re
 import threading
 from dataclasses import dataclass, field
@@ -19,7 +20,9 @@ from ..compiler import ast as A
 from ..compiler.check import CheckCancelled, NativeCall
 from ..compiler.check.intrinsics import INTRINSICS
 from ..compiler.check.passes.collect import gvl_name
+from ..compiler.check.passes.namespaces import NAMESPACE_PRAGMA
 from ..compiler.library import FuncSig
+from ..grammar.comments import strip_comments
 from ..model import types as T
 from ..model.program import Project
 from ..source import SourceFile
@@ -96,6 +99,7 @@ class Index:
 
 
 _WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_STRING = re.compile(r"'(?:\$.|[^'$\n])*'|\"(?:\$.|[^\"$\n])*\"")
 
 
 class _Builder:
@@ -245,6 +249,12 @@ class _Builder:
 
     # ------------------------------------------------------------------ the syntax
     def units(self, units: list[A.Unit], stop: threading.Event | None = None) -> None:
+        namespaces = self.namespaces(units)
+        qualifier = (
+            re.compile(r"(?<![\w.#'])(" + "|".join(map(re.escape, namespaces)) + r")(?=\s*\.\s*[A-Za-z_])", re.I)
+            if namespaces
+            else None
+        )
         for u in units:
             if u.path not in self.user_files:
                 continue
@@ -256,6 +266,37 @@ class _Builder:
                     self.config_names(u.path, item)
             for node in A.walk_nodes(u.items):
                 self.node(u.path, node)
+            if qualifier is not None:
+                self.qualifiers(u.path, qualifier, namespaces)
+
+    def namespaces(self, units: list[A.Unit]) -> dict[str, Target]:
+        """The namespaces code may qualify names with, lower name → target: st's libraries'
+        (`Tc2_Standard.CONCAT`) and each referenced library project's (its .plcproj's pragma)."""
+        out: dict[str, Target] = {}
+        for lib in self.project.libraries:
+            for n in getattr(lib, "namespaces", ()):
+                detail = f"NAMESPACE {n}  (st's {lib.name} library)"
+                out[n.lower()] = Target(n, "namespace", library=True, detail=detail)
+        for u in units:
+            for prag in getattr(u, "pragmas", ()):
+                m = NAMESPACE_PRAGMA.fullmatch(prag.text.strip())
+                if m and m.group(1).lower() not in out:
+                    detail = f"NAMESPACE {m.group(1)}  (the library project {os.path.basename(u.path)})"
+                    t = Target(m.group(1), "namespace", u.path, 0, 0, None, "", u.path not in self.user_files, detail)
+                    out[m.group(1).lower()] = t
+        self.index.targets.extend(out.values())
+        return out
+
+    def qualifiers(self, file: str, qualifier: re.Pattern, namespaces: dict[str, Target]) -> None:
+        """`Tc2_Standard.` in a file's code: the namespace (the checker drops qualifiers from the
+        tree, so they are found in the text, comments and strings left out)."""
+        src = self.sources.get(file)
+        if src is None:
+            return
+        taken = {(o.line, o.col) for o in self.index.occurrences.get(file, ())}  # a variable of that name
+        for line, col, name in _qualifiers_in(file, src.text, qualifier):
+            if (line, col) not in taken:
+                self.occur(file, line, col, len(name), namespaces[name.lower()])
 
     def scope(self, file: str, item: Any) -> None:
         if isinstance(item, (A.POU, A.Interface)):
@@ -515,6 +556,26 @@ def build_index(
         occ[:] = sorted(unique.values(), key=lambda o: (o.line, o.col))
         idx._starts[file] = [(o.line, o.col) for o in occ]
     return idx
+
+
+_FOUND: dict[str, tuple[str, str, list[tuple[int, int, str]]]] = {}  # file → (pattern, text, qualifiers)
+
+
+def _qualifiers_in(file: str, text: str, qualifier: re.Pattern) -> list[tuple[int, int, str]]:
+    """(line, column, namespace) of each qualifier in a file's code; kept while its text is the
+    same (a file not edited is not searched again at the next index)."""
+    got = _FOUND.get(file)
+    if got is not None and got[0] == qualifier.pattern and got[1] == text:
+        return got[2]
+    code = strip_comments(text, True)[0]
+    code = _STRING.sub(lambda m: " " * len(m.group()), code)
+    starts = [0] + [m.end() for m in re.finditer("\n", code)]
+    found = []
+    for m in qualifier.finditer(code):
+        line = bisect.bisect_right(starts, m.start()) - 1
+        found.append((line, m.start() - starts[line], m.group(1)))
+    _FOUND[file] = (qualifier.pattern, text, found)
+    return found
 
 
 # ---------------------------------------------------------------------- how things are shown

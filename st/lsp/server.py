@@ -45,6 +45,7 @@ _TOKEN = re.compile(r"[A-Za-z_0-9%.#]+")  # what a diagnostic without an end cov
 _SEVERITY = {Severity.ERROR: L.DiagnosticSeverity.Error, Severity.WARNING: L.DiagnosticSeverity.Warning}
 _SYMBOL_KIND = {
     "gvl": L.SymbolKind.Namespace,
+    "namespace": L.SymbolKind.Namespace,
     "configuration": L.SymbolKind.Namespace,
     "resource": L.SymbolKind.Namespace,
     "task": L.SymbolKind.Event,
