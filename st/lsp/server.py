@@ -9,12 +9,13 @@ current text (features.py), so completion works in a statement that does not par
 does not wait for the newest analysis's index while the previous one has its own.
 
 Garbage: the automatic cyclic collector is off (it would run in the middle of a check and scan
-the whole project every time). The server collects itself, in the worker, whenever an analysis
-ends: its index built, or given up, or the check stopped (an edit came; the next check waits for
-its debounce anyway). After a project's first analysis what stays (the libraries' and files'
-trees, the grammar) is frozen out of the collector's sight, so a collection costs about 40 ms on
-20,000 lines (one analysis's garbage), where one every few analyses over everything took seconds;
-collecting less often makes each collection longer (bench/README.md).
+the whole project every time). The server collects itself, in the worker, right after an
+analysis's diagnostics are published and before its index is built: nobody has typed since the
+check began, so no request is waiting. A check or index build that an edit stopped leaves its
+garbage for then, unless COLLECT_AFTER of them did (a keystroke asks for completion at once: a
+collection then would hold it up). After a project's first analysis what stays (the libraries'
+and files' trees, the grammar) is frozen out of the collector's sight, so a collection costs about
+40 ms on 20,000 lines, where one every few analyses over everything took seconds.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from .index import Target
 from .project import Overlays, ProjectKey, project_of, sources_of
 
 DEBOUNCE_S = 0.1
+COLLECT_AFTER = 8  # analyses stopped by edits before their garbage is collected anyway
 _TOKEN = re.compile(r"[A-Za-z_0-9%.#]+")  # what a diagnostic without an end covers
 _SEVERITY = {Severity.ERROR: L.DiagnosticSeverity.Error, Severity.WARNING: L.DiagnosticSeverity.Warning}
 _SYMBOL_KIND = {
@@ -110,6 +112,7 @@ class StServer(LanguageServer):
         self.stops: dict[ProjectKey, threading.Event] = {}  # the running check's
         self.index_stops: dict[ProjectKey, threading.Event] = {}  # the index being built's
         self.frozen: set[ProjectKey] = set()  # projects whose first analysis was frozen
+        self.uncollected = 0  # analyses stopped since the last collection
         self.published: dict[ProjectKey, set[str]] = {}
         self.key_of: dict[str, ProjectKey] = {}
 
@@ -176,21 +179,34 @@ class StServer(LanguageServer):
         """In a worker: build a's index, ready for the next request; given up when an edit comes
         (it would slow the check of that edit down, and the next analysis is the one wanted).
         Then the garbage (the module docstring says why here)."""
+        if not stop.is_set():
+            self.collect()
         built = a.build_index(stop)
         if built and self.analyses.get(key) is a:
             self.indexed[key] = a
-        gc.collect()
-        if built and key not in self.frozen:
-            self.frozen.add(key)
-            gc.freeze()
+            if key not in self.frozen:
+                self.frozen.add(key)
+                gc.collect()
+                gc.freeze()
+        elif not built:
+            self.stopped()
 
-    @staticmethod
-    def _check(analyzer: Analyzer, sources: list, stop: threading.Event) -> Analysis:
-        """In a worker: the analysis; a stopped one's garbage collected (the module docstring)."""
+    def collect(self) -> None:
+        self.uncollected = 0
+        gc.collect()
+
+    def stopped(self) -> None:
+        """A check or an index build was stopped by an edit: its garbage waits (the module docstring)."""
+        self.uncollected += 1
+        if self.uncollected >= COLLECT_AFTER:
+            self.collect()
+
+    def _check(self, analyzer: Analyzer, sources: list, stop: threading.Event) -> Analysis:
+        """In a worker: the analysis."""
         try:
             return analyzer.analyze(sources, stop)
         except CheckCancelled:
-            gc.collect()
+            self.stopped()
             raise
 
     async def analysis(self, path: str) -> Analysis:
